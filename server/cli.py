@@ -1,0 +1,121 @@
+"""The `lumipose` command line.
+
+Exit codes: 0 a fix (or success), 1 no fix (the reason is printed), 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from shared_schemas import DEMO_MAP_PATH, device_profiles
+
+EXIT_FIX, EXIT_NO_FIX, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _add_locate(commands) -> None:
+    parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
+    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
+    parser.add_argument("--json", action="store_true", help="print the contract's result as JSON")
+    parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
+    parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
+    parser.add_argument("--gravity", choices=["auto", "always", "never"], default="auto",
+                        help="use the frame's gravity vector (default: where it helps)")
+    parser.set_defaults(run=_run_locate)
+
+
+def _run_locate(args) -> int:
+    from server.ingest import FrameError, read_fixture
+    from server.pipeline import CornerMethod, PipelineOptions, locate
+    from server.pose.solve import GravityMode
+    from shared_schemas import load_map
+
+    try:
+        frame = read_fixture(args.frame)
+        beacon_map = load_map(args.map)
+    except FrameError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (OSError, ValueError) as error:
+        print(f"error: cannot read map {args.map}: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    options = PipelineOptions(
+        corner_method=CornerMethod.square if args.square_corners else CornerMethod.rounded,
+        subpixel=not args.no_subpixel,
+        gravity_mode=GravityMode(args.gravity),
+    )
+    result = locate(frame, beacon_map, options)
+    if args.json:
+        print(result.model_dump_json(by_alias=True, indent=2))
+    elif result.ok:
+        x, y, z = result.position_m
+        yaw, pitch, roll = result.yaw_pitch_roll_deg
+        print(f"position  x={x:+.4f} m  y={y:+.4f} m  z={z:+.4f} m   (beacon {result.beacon_id})")
+        print(f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
+              f"   gravity prior {'used' if result.gravity_used else 'not used'}")
+        print(f"quality   reprojection {result.reprojection_error_px:.3f} px, "
+              f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms")
+        truth = frame.meta.ground_truth
+        if truth is not None:
+            dx, dy, dz = (a - b for a, b in zip(result.position_m, truth.position_m))
+            print(f"truth     error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.2f} mm, 3D "
+                  f"{1000 * (dx * dx + dy * dy + dz * dz) ** 0.5:.2f} mm")
+        for warning in result.warnings:
+            print(f"warning   {warning}")
+    else:
+        print(f"no fix: {result.reason.value}: {result.message}")
+    return EXIT_FIX if result.ok else EXIT_NO_FIX
+
+
+def _add_fov(commands) -> None:
+    parser = commands.add_parser("fov", help="the paper's FOV and test grid (equations 1-7)")
+    parser.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    parser.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
+    parser.add_argument("--cell", type=float, default=0.05, help="grid cell side, metres")
+    parser.add_argument("--beacon-side", type=float, default=0.174, help="metres")
+    parser.add_argument("--json", action="store_true")
+    parser.set_defaults(run=_run_fov)
+
+
+def _run_fov(args) -> int:
+    from dataclasses import asdict
+
+    from server.fov import fov_grid
+
+    try:
+        grid = fov_grid(device_profiles()[args.profile], args.distance, args.cell, args.beacon_side)
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.json:
+        print(json.dumps({**asdict(grid), "points": grid.point_count}, indent=2))
+        return EXIT_FIX
+    print(f"sensor          {grid.sensor_m[0] * 1e3:.3f} mm x {grid.sensor_m[1] * 1e3:.3f} mm   (eq. 2)")
+    print(f"FOV             {grid.fov_m[0]:.3f} m x {grid.fov_m[1]:.3f} m   (eq. 3)")
+    print(f"beacon-adjusted {grid.beacon_adjusted_m[0]:.3f} m x {grid.beacon_adjusted_m[1]:.3f} m   (eq. 4)")
+    print(f"cells           {grid.cells[0]} x {grid.cells[1]}   (eq. 5-6)")
+    print(f"grid            {grid.grid_m[0]:.2f} m x {grid.grid_m[1]:.2f} m, {grid.point_count} points   (eq. 7)")
+    return EXIT_FIX
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    _add_locate(commands)
+    _add_fov(commands)
+    from simulator.cli import add_commands as add_simulator_commands
+
+    add_simulator_commands(commands)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,95 @@
+"""Frames, rotations and the beacon model shared by the pipeline and the simulator.
+
+Beacon frame B: origin at the panel centre, x_B and y_B along its edges (the map's X and Y
+turned by `yaw_deg` about +Z), z_B = +Z (up, into the ceiling). The camera sees the panel
+from below, from the negative z_B side.
+
+Model corner order (that of OpenCV's SOLVEPNP_IPPE_SQUARE, in metres, z_B = 0):
+    0: (-s/2, +s/2)   1: (+s/2, +s/2)   2: (+s/2, -s/2)   3: (-s/2, -s/2)
+Seen from below by a camera with the map's yaw, corner 0 is at the bottom left of the
+image, 1 bottom right, 2 top right, 3 top left.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from shared_schemas import Beacon, CameraIntrinsics
+
+
+def rotation_z(angle_deg: float) -> np.ndarray:
+    """3x3 rotation about +Z by `angle_deg` (counter-clockwise seen from above)."""
+    a = math.radians(angle_deg)
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_from_ypr(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
+    """R_wc = Rz(yaw) Ry(pitch) Rx(roll); all zero is a camera looking straight up."""
+    p, r = math.radians(pitch_deg), math.radians(roll_deg)
+    ry = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])
+    rx = np.array([[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]])
+    return rotation_z(yaw_deg) @ ry @ rx
+
+
+def ypr_from_rotation(rotation_wc: np.ndarray) -> tuple[float, float, float]:
+    """Inverse of `rotation_from_ypr` (degrees; pitch in [-90, 90])."""
+    r = np.asarray(rotation_wc, dtype=float)
+    pitch = math.asin(max(-1.0, min(1.0, -r[2, 0])))
+    yaw = math.atan2(r[1, 0], r[0, 0])
+    roll = math.atan2(r[2, 1], r[2, 2])
+    return math.degrees(yaw), math.degrees(pitch), math.degrees(roll)
+
+
+def camera_matrix(camera: CameraIntrinsics) -> np.ndarray:
+    """The 3x3 intrinsic matrix K of `camera`."""
+    return np.array([[camera.fx, 0.0, camera.cx], [0.0, camera.fy, camera.cy], [0.0, 0.0, 1.0]])
+
+
+def distortion_vector(camera: CameraIntrinsics) -> np.ndarray | None:
+    """OpenCV distortion coefficients, or None for an ideal pinhole."""
+    coefficients = np.asarray(camera.distortion, dtype=float)
+    return coefficients if coefficients.size and np.any(coefficients) else None
+
+
+def model_corners_m(side_m: float) -> np.ndarray:
+    """The 4 square corners in the beacon frame, shape (4, 3), in the module's corner order."""
+    h = side_m / 2.0
+    return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
+
+
+def beacon_rotation(beacon: Beacon) -> np.ndarray:
+    """R_wb: beacon frame to map frame."""
+    return rotation_z(beacon.yaw_deg)
+
+
+def beacon_to_world(beacon: Beacon, points_b: np.ndarray) -> np.ndarray:
+    """Beacon-frame points (N, 3) to map-frame points (N, 3)."""
+    return np.asarray(points_b) @ beacon_rotation(beacon).T + np.asarray(beacon.center_m)
+
+
+def rounded_square_outline_m(side_m: float, radius_m: float, points_per_arc: int = 64) -> np.ndarray:
+    """Closed outline of the rounded square in the beacon frame, shape (N, 3), z = 0.
+
+    Counter-clockwise seen from +z_B; the straight sides are the chords between arcs.
+    """
+    h = side_m / 2.0
+    inner = h - radius_m
+    outline = []
+    for k, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
+        start = math.pi / 2 * k
+        angles = np.linspace(start, start + math.pi / 2, max(points_per_arc, 2))
+        cx, cy = sx * inner, sy * inner
+        if radius_m == 0:
+            outline.append([[cx, cy, 0.0]])
+            continue
+        outline.append(np.stack([cx + radius_m * np.cos(angles), cy + radius_m * np.sin(angles),
+                                 np.zeros_like(angles)], axis=1))
+    return np.concatenate(outline, axis=0)
+
+
+def world_to_camera(points_w: np.ndarray, position_m: np.ndarray, rotation_wc: np.ndarray) -> np.ndarray:
+    """Map-frame points (N, 3) into the camera frame: X_c = R_wc^T (X_w - C)."""
+    return (np.asarray(points_w) - np.asarray(position_m)) @ np.asarray(rotation_wc)

@@ -1,0 +1,172 @@
+"""The locate pipeline: chains the stages and times each one. No vision happens here.
+
+coarse ROI -> blur -> threshold -> beacon contour -> hull / RDP / sides -> sub-pixel sides
+-> centre from the diagonals -> corner order -> pose. Every refusal becomes a result with a
+reason; only unreadable input raises (in `server.ingest`).
+"""
+
+from __future__ import annotations
+
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from enum import Enum
+
+import cv2
+import numpy as np
+
+from server.geometry import camera_matrix, distortion_vector, ypr_from_rotation
+from server.ingest import LumaFrame
+from server.pose.ordering import order_corners
+from server.pose.solve import GravityMode, PoseRules, PoseSolution, solve_pose
+from server.vision.binarize import blur, threshold
+from server.vision.contour import BlobRules, Refusal, find_beacon_blob
+from server.vision.polygon import Quad, intersect_lines, rounded_square_corners, square_corners
+from server.vision.roi import RoiRules, find_roi
+from server.vision.subpixel import EdgeRules, refine_edges
+from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult
+
+
+class CornerMethod(str, Enum):
+    rounded = "rounded"  # the paper's rounded-corner path (hull, RDP, sides)
+    square = "square"  # the paper's square-corner path (RDP at 1 %, four vertices)
+
+
+@dataclass(frozen=True)
+class PipelineOptions:
+    corner_method: CornerMethod = CornerMethod.rounded
+    subpixel: bool = True
+    gravity_mode: GravityMode = GravityMode.auto
+    gravity_sigma_deg: float = 0.1
+    beacon_id: int | None = None  # which map beacon is in view, when known from elsewhere
+    blur_kernel_px: int = 5
+    roi: RoiRules = RoiRules()
+    blobs: BlobRules = BlobRules()
+    edges: EdgeRules = EdgeRules()
+    pose: PoseRules = PoseRules()
+
+
+@dataclass
+class _Timer:
+    timing_ms: dict[str, float] = field(default_factory=dict)
+
+    @contextmanager
+    def stage(self, name: str):
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.timing_ms[name] = (time.perf_counter() - start) * 1000.0
+
+
+def _refused(refusal: Refusal, timer: _Timer, warnings: list[str] | None = None) -> LocateResult:
+    timer.timing_ms["total"] = sum(timer.timing_ms.values())
+    return LocateResult(ok=False, reason=refusal.reason, message=refusal.message,
+                        warnings=warnings or [], timing_ms=timer.timing_ms)
+
+
+def _choose_beacon(beacon_map: BeaconMap, beacon_id: int | None) -> tuple[Beacon, BeaconIdSource] | Refusal:
+    if beacon_id is not None:
+        beacon = beacon_map.beacon(beacon_id)
+        if beacon is None:
+            return Refusal(FailureReason.unknown_beacon, f"beacon {beacon_id} is not in map '{beacon_map.name}'")
+        return beacon, BeaconIdSource.vlc
+    if len(beacon_map.beacons) == 1:
+        return beacon_map.beacons[0], BeaconIdSource.single_beacon_map
+    return Refusal(
+        FailureReason.unknown_beacon,
+        f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read",
+    )
+
+
+def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | None) -> np.ndarray:
+    if distortion is None:
+        return points
+    return cv2.undistortPoints(points.reshape(-1, 1, 2), matrix, distortion, P=matrix).reshape(-1, 2)
+
+
+def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = PipelineOptions()) -> LocateResult:
+    """Position and pose of the camera that took `frame`, or the reason there is none."""
+    timer = _Timer()
+    chosen = _choose_beacon(beacon_map, options.beacon_id)
+    if isinstance(chosen, Refusal):
+        return _refused(chosen, timer)
+    beacon, id_source = chosen
+    matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
+
+    with timer.stage("roi"):
+        roi = find_roi(frame.pixels, options.roi, options.blobs)
+    if isinstance(roi, Refusal):
+        return _refused(roi, timer)
+    window = frame.pixels[roi.y0:roi.y1, roi.x0:roi.x1]
+    with timer.stage("blur"):
+        blurred = blur(window, options.blur_kernel_px)
+    with timer.stage("threshold"):
+        mask = threshold(blurred, roi.levels)
+    with timer.stage("contour"):
+        blob = find_beacon_blob(mask, options.blobs)
+    if isinstance(blob, Refusal):
+        return _refused(blob, timer)
+    with timer.stage("polygon"):
+        quad = (rounded_square_corners(blob.contour) if options.corner_method is CornerMethod.rounded
+                else square_corners(blob.contour))
+    if isinstance(quad, Refusal):
+        return _refused(quad, timer)
+
+    warnings: list[str] = []
+    origin = np.array([roi.x0, roi.y0], dtype=float)
+    with timer.stage("subpixel"):
+        edges = None
+        if options.subpixel:
+            straight = 1.0 - 2.0 * beacon.corner_radius_m / beacon.side_m
+            edges = refine_edges(window, (roi.x0, roi.y0), quad.corners, roi.levels, straight,
+                                 matrix, distortion, options.edges)
+            if edges is None:
+                warnings.append("sub-pixel sides failed: corners from the polygon stage")
+            else:
+                warnings.extend(edges.warnings)
+        corners = edges.corners if edges is not None else _undistorted(quad.corners + origin, matrix, distortion)
+    with timer.stage("center"):
+        center = intersect_lines(corners[0], corners[2], corners[1], corners[3])
+    if center is None:
+        return _refused(Refusal(FailureReason.not_four_sides, "the diagonals do not intersect"), timer, warnings)
+    ordered = order_corners(corners, beacon.yaw_deg, frame.meta.heading_deg)
+    gravity = None if frame.meta.gravity_camera is None else np.asarray(frame.meta.gravity_camera)
+    corner_sigma = edges.line_rms_px / np.sqrt(min(edges.points_per_side)) if edges is not None else 1.0
+    with timer.stage("pose"):
+        pose = solve_pose(ordered.corners, center, beacon, matrix, gravity, options.gravity_sigma_deg,
+                          options.gravity_mode, corner_sigma, options.pose)
+    if isinstance(pose, Refusal):
+        return _refused(pose, timer, warnings)
+    timer.timing_ms["total"] = sum(timer.timing_ms.values())
+    reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
+    return _result(pose, reported[:4], reported[4], beacon, id_source, ordered.rule, warnings, timer)
+
+
+def _distorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | None) -> np.ndarray:
+    """Ideal pixel coordinates back to the frame's (distorted) pixels, for reporting."""
+    if distortion is None:
+        return points
+    normalized = np.column_stack([points, np.ones(len(points))]) @ np.linalg.inv(matrix).T
+    projected, _ = cv2.projectPoints(normalized, np.zeros(3), np.zeros(3), matrix, distortion)
+    return projected.reshape(-1, 2)
+
+
+def _result(pose: PoseSolution, corners, center, beacon, id_source, rule, warnings, timer) -> LocateResult:
+    """The contract's result; `corners` and `center` in the frame's own (distorted) pixels."""
+    return LocateResult(
+        ok=True,
+        position_m=pose.position_m.tolist(),
+        rotation_wc=pose.rotation_wc.tolist(),
+        yaw_pitch_roll_deg=list(ypr_from_rotation(pose.rotation_wc)),
+        beacon_id=beacon.id,
+        beacon_id_source=id_source,
+        orientation_rule=rule,
+        corners_px=corners.tolist(),
+        center_px=center.tolist(),
+        reprojection_error_px=pose.reprojection_error_px,
+        ambiguity_ratio=pose.ambiguity_ratio,
+        gravity_used=pose.gravity_used,
+        warnings=warnings,
+        timing_ms=timer.timing_ms,
+    )

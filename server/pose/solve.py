@@ -1,0 +1,173 @@
+"""Stage 8: the camera pose from the beacon's corners and centre (paper Section III-B4).
+
+Vision only: OpenCV's SQPnP on the five points (four corners and the centre), polished
+by Levenberg-Marquardt. Beside it IPPE_SQUARE gives the two local minima a planar square
+always has; their reprojection-error ratio says how ambiguous the fix is. A high ratio
+alone is harmless when both minima put the camera in the same place (a panel seen
+face-on), so a fix is refused only when the ratio is high AND the two positions differ.
+
+Gravity prior: with the phone's gravity vector the tilt (pitch and roll) is known, so the
+rays to the five points can be turned to a level camera, where the panel's image is a
+similarity of its map outline: four unknowns (yaw, height and the camera's x, y), solved
+linearly. This beats vision when the panel is small (far away), where its image hardly
+constrains tilt; with mode "auto" the predicted tilt uncertainty of the vision fix (from
+its Jacobian) is compared with the gravity sensor's and the better one is used.
+
+All image points here are undistorted pixel coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import cv2
+import numpy as np
+
+from server.geometry import beacon_rotation, beacon_to_world, model_corners_m, rotation_z
+from server.vision.contour import Refusal
+from shared_schemas import Beacon, FailureReason
+
+
+class GravityMode(str, Enum):
+    auto = "auto"
+    always = "always"
+    never = "never"
+
+
+@dataclass(frozen=True)
+class PoseRules:
+    max_ambiguity_ratio: float = 0.2
+    max_ambiguous_disagreement_m: float = 0.005
+    corner_sigma_floor_px: float = 0.03
+
+
+@dataclass(frozen=True)
+class PoseSolution:
+    position_m: np.ndarray  # (3,) camera optical centre, map frame
+    rotation_wc: np.ndarray  # (3, 3)
+    reprojection_error_px: float  # RMS over the five points
+    ambiguity_ratio: float
+    alternative_distance_m: float  # between the two IPPE minima's camera positions
+    gravity_used: bool
+    vision_tilt_sigma_deg: float
+
+
+def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(position, R_wc) of the camera from a beacon-frame PnP solution."""
+    rotation_cb, _ = cv2.Rodrigues(rvec)
+    position_b = -rotation_cb.T @ tvec.ravel()
+    position = beacon_to_world(beacon, position_b[None, :])[0]
+    return position, beacon_rotation(beacon) @ rotation_cb.T
+
+
+def _rms(projected: np.ndarray, observed: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - observed) ** 2, axis=1))))
+
+
+def _tilt_to_level(gravity_camera: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking the measured gravity (camera frame) to map -Z."""
+    g = np.asarray(gravity_camera, dtype=float) / np.linalg.norm(gravity_camera)
+    down = np.array([0.0, 0.0, -1.0])
+    axis = np.cross(g, down)
+    sin_angle, cos_angle = np.linalg.norm(axis), float(g @ down)
+    if sin_angle < 1e-12:
+        return np.eye(3) if cos_angle > 0 else np.diag([1.0, -1.0, -1.0])
+    rotation, _ = cv2.Rodrigues(axis / sin_angle * np.arctan2(sin_angle, cos_angle))
+    return rotation
+
+
+def pose_with_gravity(
+    points_px: np.ndarray, beacon: Beacon, camera_matrix: np.ndarray, gravity_camera: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(position, R_wc) with pitch and roll fixed by gravity; points (5, 2) in model order.
+
+    With R_wc = Rz(yaw) T (T levels the camera), a ray r_c hits the ceiling plane at
+    P_xy = C_xy + h Rz(yaw) q with q = (T r_c)_xy / (T r_c)_z and h the panel's height
+    above the camera: a 2D similarity from q to the map, linear in (h cos yaw, h sin yaw, C_xy).
+    """
+    tilt = _tilt_to_level(gravity_camera)
+    rays = np.linalg.solve(camera_matrix, np.vstack([points_px.T, np.ones(len(points_px))]))
+    level = tilt @ rays
+    q = (level[:2] / level[2]).T
+    model = np.vstack([model_corners_m(beacon.side_m), np.zeros(3)])
+    world = beacon_to_world(beacon, model)
+    # [Px, Py] = [[a, -b], [b, a]] q + C_xy, with a = h cos(yaw), b = h sin(yaw)
+    design = np.zeros((2 * len(q), 4))
+    design[0::2] = np.column_stack([q[:, 0], -q[:, 1], np.ones(len(q)), np.zeros(len(q))])
+    design[1::2] = np.column_stack([q[:, 1], q[:, 0], np.zeros(len(q)), np.ones(len(q))])
+    (a, b, cx, cy), *_ = np.linalg.lstsq(design, world[:, :2].ravel(), rcond=None)
+    height = float(np.hypot(a, b))
+    yaw_deg = float(np.degrees(np.arctan2(b, a)))
+    position = np.array([cx, cy, world[0, 2] - height])
+    return position, rotation_z(yaw_deg) @ tilt
+
+
+def _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma_px: float) -> float:
+    """Predicted 1-sigma tilt error of the vision fix from its Jacobian."""
+    _, jacobian = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
+    information = jacobian[:, :6].T @ jacobian[:, :6]
+    covariance = np.linalg.pinv(information) * corner_sigma_px**2
+    return float(np.degrees(np.sqrt(np.trace(covariance[:2, :2]) / 2)))
+
+
+def solve_pose(
+    corners_px: np.ndarray,
+    center_px: np.ndarray,
+    beacon: Beacon,
+    camera_matrix: np.ndarray,
+    gravity_camera: np.ndarray | None = None,
+    gravity_sigma_deg: float = 0.1,
+    gravity_mode: GravityMode = GravityMode.auto,
+    corner_sigma_px: float = 0.03,
+    rules: PoseRules = PoseRules(),
+) -> PoseSolution | Refusal:
+    """Camera pose in the map from corners (4, 2) in model order and the centre (2,)."""
+    corners4 = model_corners_m(beacon.side_m)
+    object_points = np.vstack([corners4, np.zeros(3)])
+    image_points = np.vstack([corners_px, center_px]).astype(np.float64)
+    ok, rvec, tvec = cv2.solvePnP(object_points, image_points, camera_matrix, None, flags=cv2.SOLVEPNP_SQPNP)
+    if not ok or tvec[2, 0] <= 0:
+        return Refusal(FailureReason.pose_failed, "SQPnP found no pose with the beacon in front of the camera")
+    rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, camera_matrix, None, rvec, tvec)
+
+    count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
+        corners4, image_points[:4], camera_matrix, None, flags=cv2.SOLVEPNP_IPPE_SQUARE
+    )
+    errors = np.sort(np.asarray(errors, dtype=float).ravel())
+    ratio = float((errors[0] + 1e-9) / (errors[-1] + 1e-9)) if count > 1 else 0.0
+    positions = [_camera_in_map(beacon, r, t)[0] for r, t in zip(rvecs, tvecs)]
+    disagreement = float(np.linalg.norm(positions[0] - positions[-1]))
+
+    tilt_sigma = _vision_tilt_sigma_deg(
+        object_points, rvec, tvec, camera_matrix, max(corner_sigma_px, rules.corner_sigma_floor_px)
+    )
+    use_gravity = gravity_camera is not None and (
+        gravity_mode is GravityMode.always
+        or (gravity_mode is GravityMode.auto and tilt_sigma > gravity_sigma_deg)
+    )
+    ambiguous = ratio > rules.max_ambiguity_ratio and disagreement > rules.max_ambiguous_disagreement_m
+    if ambiguous and gravity_camera is None:
+        return Refusal(
+            FailureReason.pose_ambiguous,
+            f"two poses fit almost equally (error ratio {ratio:.2f}) and place the camera "
+            f"{disagreement * 1000:.0f} mm apart; a gravity vector would decide",
+        )
+    use_gravity = use_gravity or ambiguous
+    if use_gravity:
+        position, rotation_wc = pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera)
+        rotation_cw = rotation_wc.T @ beacon_rotation(beacon)
+        rvec, _ = cv2.Rodrigues(rotation_cw)
+        tvec = (rotation_wc.T @ (np.asarray(beacon.center_m) - position)).reshape(3, 1)
+    else:
+        position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
+    projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
+    return PoseSolution(
+        position_m=position,
+        rotation_wc=rotation_wc,
+        reprojection_error_px=_rms(projected, image_points),
+        ambiguity_ratio=ratio,
+        alternative_distance_m=disagreement,
+        gravity_used=use_gravity,
+        vision_tilt_sigma_deg=tilt_sigma,
+    )

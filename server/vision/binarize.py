@@ -1,0 +1,56 @@
+"""Stages 1-2 of the paper (Section III-B2): blur, then threshold.
+
+The level is chosen per frame from its own histogram, so it follows exposure and ambient
+light: half-way between the background (the median, since the panel covers far less than
+half of any frame it is located in) and the panel's plateau (a high percentile of the
+brightest pixels, which for an overexposed panel is the saturation level). Half-way is the
+level at which a blurred step edge crosses its true position when it is not clipped; the
+clipped-edge bias that remains is removed later, from the grey levels (`subpixel.py`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Levels:
+    """Grey levels of one frame, in DN."""
+
+    background: float
+    plateau: float
+
+    @property
+    def threshold(self) -> float:
+        return (self.background + self.plateau) / 2.0
+
+    @property
+    def contrast(self) -> float:
+        return self.plateau - self.background
+
+
+def estimate_levels(image: np.ndarray, plateau_fraction: float = 2e-4) -> Levels:
+    """Background and plateau levels of an 8-bit image from one histogram pass.
+
+    `plateau_fraction`: the share of pixels counted as "brightest"; small enough that a
+    panel covering 0.02 % of the frame still sets the plateau.
+    """
+    histogram = cv2.calcHist([image], [0], None, [256], [0, 256]).ravel()
+    cumulative = np.cumsum(histogram) / histogram.sum()
+    background = float(np.searchsorted(cumulative, 0.5))
+    plateau = float(np.searchsorted(cumulative, 1.0 - plateau_fraction))
+    return Levels(background=background, plateau=plateau)
+
+
+def blur(image: np.ndarray, kernel_px: int = 5) -> np.ndarray:
+    """Gaussian blur that removes pixel noise before thresholding (odd `kernel_px`)."""
+    return cv2.GaussianBlur(image, (kernel_px, kernel_px), 0)
+
+
+def threshold(image: np.ndarray, levels: Levels) -> np.ndarray:
+    """Binary mask (0 / 255, uint8) of the pixels brighter than the levels' mid level."""
+    _, mask = cv2.threshold(image, levels.threshold, 255, cv2.THRESH_BINARY)
+    return mask

@@ -1,0 +1,106 @@
+"""Stages 4-6 of the paper (Section III-B3): from the beacon's contour to four corners.
+
+Rounded corners (the paper's case b): convex hull (OpenCV's Sklansky), Ramer-Douglas-
+Peucker with a tolerance small enough to keep the perimeter, the polygon as linked
+segments, drop the short ones (the corner arcs: shorter than the mean), merge consecutive
+collinear ones, keep the four longest and intersect neighbours. The result is the square
+that circumscribes the rounded panel, whose corners are the model's corners.
+
+Square corners (case a): RDP at 1 % of the perimeter must leave exactly four vertices.
+
+Corners come out in the contour's cyclic order, integer-pixel accurate at best: they are
+the starting guess of the sub-pixel stage.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from server.vision.contour import Refusal
+from shared_schemas import FailureReason
+
+
+@dataclass(frozen=True)
+class PolygonRules:
+    rdp_fraction: float = 0.002  # of the hull perimeter: keeps the perimeter within ~0.1 %
+    merge_angle_deg: float = 8.0
+    min_side_share: float = 0.5  # the four sides must make up this share of the perimeter
+
+
+@dataclass(frozen=True)
+class Quad:
+    """Four corners (4, 2) float64 in cyclic order, in the contour's pixel coordinates."""
+
+    corners: np.ndarray
+
+
+def intersect_lines(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray | None:
+    """Intersection of the line p1-p2 with the line q1-q2 (None if parallel)."""
+    line_p = np.cross([*p1, 1.0], [*p2, 1.0])
+    line_q = np.cross([*q1, 1.0], [*q2, 1.0])
+    x, y, w = np.cross(line_p, line_q)
+    return None if abs(w) < 1e-12 else np.array([x / w, y / w])
+
+
+def _direction_deg(segment: np.ndarray) -> float:
+    dx, dy = segment[1] - segment[0]
+    return float(np.degrees(np.arctan2(dy, dx)))
+
+
+def _merge_collinear(segments: list[np.ndarray], max_angle_deg: float) -> list[np.ndarray]:
+    """Merge runs of consecutive segments (cyclic) whose directions differ < `max_angle_deg`."""
+
+    def collinear(a: np.ndarray, b: np.ndarray) -> bool:
+        turn = (_direction_deg(b) - _direction_deg(a) + 180.0) % 360.0 - 180.0
+        return abs(turn) < max_angle_deg
+
+    merged: list[np.ndarray] = []
+    for segment in segments:
+        if merged and collinear(merged[-1], segment):
+            merged[-1] = np.array([merged[-1][0], segment[1]])
+        else:
+            merged.append(segment)
+    if len(merged) > 1 and collinear(merged[-1], merged[0]):
+        merged[0] = np.array([merged[-1][0], merged[0][1]])
+        merged.pop()
+    return merged
+
+
+def rounded_square_corners(contour: np.ndarray, rules: PolygonRules = PolygonRules()) -> Quad | Refusal:
+    """Corners of the square circumscribing a rounded-square contour (N, 2)."""
+    hull = cv2.convexHull(contour.reshape(-1, 1, 2).astype(np.float32))
+    perimeter = cv2.arcLength(hull, True)
+    polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2)
+    segments = [np.array([polygon[i], polygon[(i + 1) % len(polygon)]]) for i in range(len(polygon))]
+    lengths = np.array([np.linalg.norm(s[1] - s[0]) for s in segments])
+    sides = [s for s, length in zip(segments, lengths) if length >= lengths.mean()]
+    sides = _merge_collinear(sides, rules.merge_angle_deg)
+    if len(sides) < 4:
+        return Refusal(FailureReason.not_four_sides, f"the outline has {len(sides)} straight sides, not 4")
+    side_lengths = np.array([np.linalg.norm(s[1] - s[0]) for s in sides])
+    longest = sorted(np.argsort(side_lengths)[-4:])  # keep the contour's cyclic order
+    if side_lengths[longest].sum() < rules.min_side_share * perimeter:
+        return Refusal(FailureReason.not_four_sides, "the four longest sides cover too little of the outline")
+    chosen = [sides[i] for i in longest]
+    corners = []
+    for previous, current in zip(chosen[-1:] + chosen[:-1], chosen):
+        corner = intersect_lines(previous[0], previous[1], current[0], current[1])
+        if corner is None:
+            return Refusal(FailureReason.not_four_sides, "two neighbouring sides are parallel")
+        corners.append(corner)
+    corners_array = np.array(corners)
+    if not cv2.isContourConvex(corners_array.astype(np.float32).reshape(-1, 1, 2)):
+        return Refusal(FailureReason.not_four_sides, "the four sides do not form a convex quadrilateral")
+    return Quad(corners=corners_array)
+
+
+def square_corners(contour: np.ndarray, rdp_fraction: float = 0.01) -> Quad | Refusal:
+    """The paper's square-corner path: RDP at 1 % of the perimeter must leave 4 vertices."""
+    closed = contour.reshape(-1, 1, 2)
+    polygon = cv2.approxPolyDP(closed, rdp_fraction * cv2.arcLength(closed, True), True).reshape(-1, 2)
+    if len(polygon) != 4:
+        return Refusal(FailureReason.not_four_sides, f"RDP left {len(polygon)} vertices, not 4")
+    return Quad(corners=polygon.astype(np.float64))

@@ -1,0 +1,260 @@
+"""Pydantic models of the Lumipose contract (`shared/spec/contract.md`).
+
+These models are the single source of truth: the JSON Schemas in `json/` are exported
+from them (`python -m shared_schemas.export`), and every other language tests against
+the golden examples in `examples/`.
+
+Conventions that bind everywhere:
+- World (map) frame: metres, right-handed, X east, Y north, Z up.
+- Camera frame: OpenCV's (x right, y down, z along the optical axis).
+- Pixel coordinates: OpenCV's, pixel centres at integers.
+- `rotation_wc` maps camera-frame vectors into the world frame.
+"""
+
+from __future__ import annotations
+
+import math
+from enum import Enum
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
+Point2 = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+FRAME_SCHEMA = "lumipose.frame/1"
+MAP_SCHEMA = "lumipose.map/1"
+RESULT_SCHEMA = "lumipose.result/1"
+
+
+def _require_finite(name: str, values: list[float]) -> None:
+    for value in values:
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite numbers, got {value}")
+
+
+class Strict(BaseModel):
+    """Base for models whose unknown fields are errors (typos must not pass silently)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class Open(BaseModel):
+    """Base for models that keep unknown fields (the contract allows extra fields)."""
+
+    model_config = ConfigDict(extra="allow")
+
+
+class CameraIntrinsics(Open):
+    """Pinhole intrinsics in pixels for one frame size, plus OpenCV distortion.
+
+    `distortion` is OpenCV's order (k1, k2, p1, p2[, k3[, k4, k5, k6]]); empty means none.
+    """
+
+    fx: float = Field(gt=0, description="focal length along x, pixels")
+    fy: float = Field(gt=0, description="focal length along y, pixels")
+    cx: float = Field(description="principal point x, pixels (pixel centres at integers)")
+    cy: float = Field(description="principal point y, pixels")
+    distortion: list[float] = Field(default_factory=list)
+    pixel_size_m: float | None = Field(default=None, gt=0)
+    focal_length_m: float | None = Field(default=None, gt=0)
+    device: str | None = None
+
+    @field_validator("fx", "fy", "cx", "cy")
+    @classmethod
+    def _finite(cls, value: float, info) -> float:
+        _require_finite(info.field_name, [value])
+        return value
+
+    @field_validator("distortion")
+    @classmethod
+    def _distortion_shape(cls, value: list[float]) -> list[float]:
+        if len(value) not in (0, 4, 5, 8):
+            raise ValueError(
+                f"distortion must have 0, 4, 5 or 8 OpenCV coefficients, got {len(value)}"
+            )
+        _require_finite("distortion", value)
+        return value
+
+
+class ProfileRef(Strict):
+    """A camera given by the name of a device profile, scaled to the frame size."""
+
+    profile: str = Field(description="device profile id, for example 'xiaomi-mi8-front'")
+
+
+class Facing(str, Enum):
+    front = "front"
+    rear = "rear"
+
+
+class DeviceProfile(Strict):
+    """A phone camera as its maker describes it, at its native output size."""
+
+    id: str
+    name: str
+    sensor: str
+    facing: Facing
+    pixel_size_m: float = Field(gt=0)
+    focal_length_m: float = Field(gt=0)
+    width: int = Field(gt=0, description="native output width, pixels")
+    height: int = Field(gt=0, description="native output height, pixels")
+    distortion: list[float] = Field(default_factory=list)
+    gravity_sigma_deg: float = Field(
+        default=0.1, ge=0, description="1-sigma tilt error of the gravity sensor at rest"
+    )
+
+
+class FrameFormat(str, Enum):
+    y8 = "Y8"
+    nv21 = "NV21"
+    i420 = "I420"
+    png = "PNG"
+
+
+class GroundTruth(Open):
+    position_m: Vec3 = Field(description="camera optical centre, map frame")
+    rotation_wc: Mat3 = Field(description="camera-to-world rotation")
+
+
+class FrameMeta(Open):
+    """The JSON that travels with every frame (a fixture's NAME.json, an upload's header)."""
+
+    schema_: Literal["lumipose.frame/1"] = Field(default=FRAME_SCHEMA, alias="schema")
+    format: FrameFormat = FrameFormat.y8
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
+    row_stride: int | None = Field(default=None, gt=0, description="bytes per row; default width")
+    camera: CameraIntrinsics | ProfileRef
+    exposure_s: float | None = Field(default=None, gt=0)
+    iso: float | None = Field(default=None, gt=0)
+    rolling_shutter_skew_s: float | None = Field(default=None, ge=0)
+    timestamp_ns: int | None = None
+    heading_deg: float | None = None
+    gravity_camera: Vec3 | None = None
+    ground_truth: GroundTruth | None = None
+
+    model_config = ConfigDict(extra="allow", populate_by_name=True)
+
+    @field_validator("heading_deg")
+    @classmethod
+    def _heading_finite(cls, value: float | None) -> float | None:
+        if value is not None:
+            _require_finite("heading_deg", [value])
+        return value
+
+    @field_validator("gravity_camera")
+    @classmethod
+    def _gravity_unit(cls, value: list[float] | None) -> list[float] | None:
+        if value is None:
+            return None
+        _require_finite("gravity_camera", value)
+        norm = math.sqrt(sum(v * v for v in value))
+        if norm < 1e-6:
+            raise ValueError("gravity_camera must not be the zero vector")
+        return [v / norm for v in value]
+
+    @model_validator(mode="after")
+    def _stride_fits(self) -> FrameMeta:
+        if self.row_stride is not None and self.row_stride < self.width:
+            raise ValueError(f"row_stride {self.row_stride} is smaller than width {self.width}")
+        return self
+
+    @property
+    def stride(self) -> int:
+        return self.row_stride or self.width
+
+
+class Beacon(Strict):
+    """A square luminous panel on the ceiling, facing down (-Z)."""
+
+    id: int = Field(ge=0, le=255, description="VLC code of the beacon")
+    center_m: Vec3
+    yaw_deg: float = 0.0
+    side_m: float = Field(gt=0, description="outer side of the rounded square")
+    corner_radius_m: float = Field(default=0.0, ge=0)
+
+    @model_validator(mode="after")
+    def _geometry(self) -> Beacon:
+        _require_finite("center_m", self.center_m)
+        _require_finite("yaw_deg", [self.yaw_deg])
+        if self.corner_radius_m * 2 >= self.side_m:
+            raise ValueError("corner_radius_m must be less than half of side_m")
+        return self
+
+
+class BeaconMap(Strict):
+    schema_: Literal["lumipose.map/1"] = Field(default=MAP_SCHEMA, alias="schema")
+    name: str
+    beacons: list[Beacon] = Field(min_length=1)
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+    @model_validator(mode="after")
+    def _unique_ids(self) -> BeaconMap:
+        ids = [b.id for b in self.beacons]
+        if len(ids) != len(set(ids)):
+            raise ValueError(f"beacon ids must be unique, got {sorted(ids)}")
+        return self
+
+    def beacon(self, beacon_id: int) -> Beacon | None:
+        return next((b for b in self.beacons if b.id == beacon_id), None)
+
+
+class FailureReason(str, Enum):
+    no_beacon = "no_beacon"
+    beacon_cut_off = "beacon_cut_off"
+    not_a_square = "not_a_square"
+    not_four_sides = "not_four_sides"
+    pose_failed = "pose_failed"
+    pose_ambiguous = "pose_ambiguous"
+    unknown_beacon = "unknown_beacon"
+
+
+class OrientationRule(str, Enum):
+    heading = "heading"
+    yaw_within_45deg = "yaw_within_45deg"
+
+
+class BeaconIdSource(str, Enum):
+    single_beacon_map = "single_beacon_map"
+    vlc = "vlc"
+
+
+class LocateResult(Strict):
+    """What the pipeline says about one frame. On failure only `reason` and `message` bind."""
+
+    schema_: Literal["lumipose.result/1"] = Field(default=RESULT_SCHEMA, alias="schema")
+    ok: bool
+    position_m: Vec3 | None = Field(default=None, description="camera optical centre, map frame")
+    rotation_wc: Mat3 | None = None
+    yaw_pitch_roll_deg: Vec3 | None = Field(
+        default=None, description="R_wc = Rz(yaw) Ry(pitch) Rx(roll); all zero = looking up"
+    )
+    beacon_id: int | None = None
+    beacon_id_source: BeaconIdSource | None = None
+    orientation_rule: OrientationRule | None = None
+    corners_px: list[Point2] | None = Field(
+        default=None, description="4 corners in the beacon model's corner order"
+    )
+    center_px: Point2 | None = None
+    reprojection_error_px: float | None = None
+    ambiguity_ratio: float | None = Field(
+        default=None, description="reprojection error of the best over the alternative pose"
+    )
+    gravity_used: bool = False
+    reason: FailureReason | None = None
+    message: str | None = None
+    warnings: list[str] = Field(default_factory=list)
+    timing_ms: dict[str, float] = Field(default_factory=dict)
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+
+class ErrorBody(Strict):
+    """A request that cannot be read at all (HTTP 4xx, CLI exit 2)."""
+
+    error: str = Field(description="machine-readable code, for example 'bad_frame'")
+    field: str | None = Field(default=None, description="the offending field, if one")
+    message: str

@@ -1,0 +1,183 @@
+"""`lumipose bench accuracy` and `lumipose bench speed`: figures, not tests.
+
+Accuracy: frames rendered at the paper's test-bench geometry (Xiaomi Mi 8 front camera,
+0.174 m panel with 0.02 m corner radius), camera positions drawn uniformly over the
+beacon-adjusted FOV (paper eq. 4) at each distance, tilts up to `max_tilt_deg`, yaw within
+the contract's +-45 degree rule, PSF and overexposure drawn per frame. Poses whose panel
+leaves the frame are drawn again (a cut-off panel is refused, and is another benchmark's
+subject). Each frame is located three ways: vision only, gravity prior always, and auto.
+
+Speed: the whole pipeline on one full-resolution frame against one `cv2.threshold` pass over
+the same frame, both timed in the same run.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from server.fov import fov_grid
+from server.geometry import rotation_from_ypr
+from server.ingest import LumaFrame
+from server.pipeline import PipelineOptions, locate
+from server.pose.solve import GravityMode
+from server.camera import intrinsics_from_profile
+from shared_schemas import Beacon, BeaconMap, device_profiles
+from simulator.fixtures import fixture_meta
+from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
+
+PROFILE_ID = "xiaomi-mi8-front"
+MODES = {"vision": GravityMode.never, "gravity": GravityMode.always, "auto": GravityMode.auto}
+
+
+@dataclass(frozen=True)
+class AccuracyConfig:
+    distance_m: float = 1.0
+    frames: int = 200
+    scale: float = 1.0  # of the profile's native resolution
+    max_tilt_deg: float = 10.0
+    max_yaw_deg: float = 40.0
+    psf_sigma_px: tuple[float, float] = (0.8, 1.5)
+    overexposure: tuple[float, float] = (2.0, 6.0)  # plateau / saturation
+    gravity_sigma_deg: float = 0.1
+    seed: int = 1
+
+
+def bench_beacon(distance_m: float) -> Beacon:
+    return Beacon(id=0, center_m=[0.0, 0.0, distance_m], yaw_deg=0.0, side_m=0.174, corner_radius_m=0.02)
+
+
+def _noisy_gravity(rotation_wc: np.ndarray, sigma_deg: float, rng: np.random.Generator) -> list[float]:
+    """Gravity (down) in the camera frame, tilted by a random error of `sigma_deg` per axis."""
+    error = rotation_from_ypr(0.0, *rng.normal(0.0, sigma_deg, 2))
+    return (rotation_wc.T @ error @ np.array([0.0, 0.0, -1.0])).tolist()
+
+
+def _draw_pose(config: AccuracyConfig, beacon: Beacon, camera, width, height, rng) -> CameraPose:
+    profile = device_profiles()[PROFILE_ID]
+    extent = fov_grid(profile, config.distance_m, 0.05, beacon.side_m).beacon_adjusted_m
+    margin_px = 8.0
+    while True:
+        xy = rng.uniform(-0.5, 0.5, 2) * extent
+        tilt = rng.uniform(0.0, config.max_tilt_deg)
+        azimuth = rng.uniform(0.0, 2 * math.pi)
+        yaw = rng.uniform(-config.max_yaw_deg, config.max_yaw_deg)
+        rotation = rotation_from_ypr(yaw, tilt * math.cos(azimuth), tilt * math.sin(azimuth))
+        pose = CameraPose(position_m=np.array([xy[0], xy[1], 0.0]), rotation_wc=rotation)
+        outline = beacon_outline_px(beacon, camera, pose)
+        inside = (outline.min(axis=0) > margin_px).all() and (outline.max(axis=0) < [width - margin_px, height - margin_px]).all()
+        if inside:
+            return pose
+
+
+def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
+    config, index = args
+    rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000)])
+    profile = device_profiles()[PROFILE_ID]
+    width, height = round(profile.width * config.scale), round(profile.height * config.scale)
+    camera = intrinsics_from_profile(profile, width, height)
+    beacon = bench_beacon(config.distance_m)
+    pose = _draw_pose(config, beacon, camera, width, height, rng)
+    sensor = SensorModel(
+        psf_sigma_px=rng.uniform(*config.psf_sigma_px),
+        plateau_dn=255.0 * rng.uniform(*config.overexposure),
+    )
+    pixels = render_frame(beacon, camera, pose, width, height, sensor, rng)
+    meta = fixture_meta(camera, width, height, pose,
+                        gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng))
+    frame = LumaFrame(pixels=pixels, meta=meta, camera=camera)
+    beacon_map = BeaconMap(name="bench", beacons=[beacon])
+    errors = {}
+    for mode, gravity_mode in MODES.items():
+        result = locate(frame, beacon_map, PipelineOptions(gravity_mode=gravity_mode,
+                                                           gravity_sigma_deg=config.gravity_sigma_deg))
+        if result.ok:
+            delta = np.subtract(result.position_m, pose.position_m)
+            errors[mode] = (float(np.hypot(*delta[:2])), float(np.linalg.norm(delta)))
+        else:
+            errors[mode] = (math.nan, math.nan, result.reason.value)
+    return {"index": index, "errors": errors}
+
+
+def summarize(errors_m: list[float]) -> dict:
+    """Mean, std, min, max, p95 (mm) and coverage (%) of 2D errors; NaN = no fix."""
+    found = np.array([e for e in errors_m if math.isfinite(e)]) * 1000.0
+    if len(found) == 0:
+        return {"coverage_pct": 0.0}
+    return {
+        "mean_mm": float(found.mean()),
+        "std_mm": float(found.std()),
+        "min_mm": float(found.min()),
+        "max_mm": float(found.max()),
+        "p95_mm": float(np.percentile(found, 95)),
+        "coverage_pct": 100.0 * len(found) / len(errors_m),
+    }
+
+
+def _progress(done: int, total: int, label: str) -> None:
+    if sys.stderr.isatty() or done == total or done % max(1, total // 10) == 0:
+        print(f"\r{label}: {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
+
+
+def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
+    """Render and locate `config.frames` frames; summaries per gravity mode."""
+    workers = workers or os.cpu_count() or 1
+    samples = []
+    label = f"accuracy at {config.distance_m:.1f} m"
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for sample in pool.map(_accuracy_sample, [(config, i) for i in range(config.frames)], chunksize=2):
+            samples.append(sample)
+            _progress(len(samples), config.frames, label)
+    summary = {}
+    for mode in MODES:
+        summary[mode] = summarize([s["errors"][mode][0] for s in samples])
+        summary[mode]["refusals"] = sorted({s["errors"][mode][2] for s in samples if len(s["errors"][mode]) > 2})
+        summary[mode]["mean_3d_mm"] = float(np.nanmean([s["errors"][mode][1] for s in samples]) * 1000.0)
+    return {"distance_m": config.distance_m, "frames": config.frames, "scale": config.scale,
+            "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
+
+
+def run_speed(repeats: int = 50, distance_m: float = 1.0, seed: int = 7) -> dict:
+    """Median pipeline time on a full-resolution frame, and its ratio to one threshold pass."""
+    profile = device_profiles()[PROFILE_ID]
+    width, height = profile.width, profile.height
+    camera = intrinsics_from_profile(profile, width, height)
+    beacon = bench_beacon(distance_m)
+    rng = np.random.default_rng(seed)
+    pose = CameraPose(position_m=np.array([0.12, -0.2, 0.0]), rotation_wc=rotation_from_ypr(10.0, 3.0, -2.0))
+    pixels = render_frame(beacon, camera, pose, width, height, SensorModel(psf_sigma_px=1.0), rng)
+    frame = LumaFrame(pixels=pixels, meta=fixture_meta(camera, width, height, pose), camera=camera)
+    beacon_map = BeaconMap(name="bench", beacons=[beacon])
+    pipeline_ms, threshold_ms, stages = [], [], []
+    locate(frame, beacon_map)  # warm-up: first calls allocate
+    for _ in range(repeats):
+        start = time.perf_counter()
+        cv2.threshold(pixels, 128, 255, cv2.THRESH_BINARY)
+        threshold_ms.append((time.perf_counter() - start) * 1000.0)
+        start = time.perf_counter()
+        result = locate(frame, beacon_map)
+        pipeline_ms.append((time.perf_counter() - start) * 1000.0)
+        stages.append(result.timing_ms)
+    if not result.ok:
+        raise RuntimeError(f"speed benchmark frame gave no fix: {result.message}")
+    median_ms = statistics.median(pipeline_ms)
+    threshold_median = statistics.median(threshold_ms)
+    return {
+        "frame": f"{width}x{height}",
+        "repeats": repeats,
+        "median_ms": median_ms,
+        "p90_ms": float(np.percentile(pipeline_ms, 90)),
+        "threshold_median_ms": threshold_median,
+        "ratio_to_threshold": median_ms / threshold_median,
+        "stage_median_ms": {k: statistics.median(s[k] for s in stages) for k in stages[0]},
+        "cv2_threads": cv2.getNumThreads(),
+        "cpu_count": os.cpu_count(),
+    }

@@ -1,0 +1,111 @@
+"""Simulator subcommands of `lumipose`: `render` and `bench ...`."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from shared_schemas import DEMO_MAP_PATH, device_profiles
+
+
+def add_commands(commands) -> None:
+    render = commands.add_parser("render", help="render a fixture (NAME.y + NAME.json) for a given pose")
+    render.add_argument("out", type=Path, help="output stem, e.g. out/frame1")
+    render.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    render.add_argument("--scale", type=float, default=1.0, help="of the profile's native resolution")
+    render.add_argument("--map", type=Path, default=DEMO_MAP_PATH)
+    render.add_argument("--beacon-id", type=int, default=None, help="default: the map's first beacon")
+    render.add_argument("--position", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("X", "Y", "Z"))
+    render.add_argument("--ypr", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("YAW", "PITCH", "ROLL"),
+                        help="camera attitude in degrees, R_wc = Rz(yaw) Ry(pitch) Rx(roll)")
+    render.add_argument("--psf", type=float, default=1.0, help="PSF sigma, pixels")
+    render.add_argument("--overexposure", type=float, default=4.0, help="panel level / saturation")
+    render.add_argument("--seed", type=int, default=0)
+    render.add_argument("--no-gravity", action="store_true", help="leave gravity_camera out of the JSON")
+    render.set_defaults(run=_run_render)
+
+    bench = commands.add_parser("bench", help="benchmarks that print figures")
+    benches = bench.add_subparsers(dest="bench", required=True)
+    accuracy = benches.add_parser("accuracy", help="position error over rendered test-bench frames")
+    accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0])
+    accuracy.add_argument("--frames", type=int, default=200)
+    accuracy.add_argument("--scale", type=float, default=1.0)
+    accuracy.add_argument("--max-tilt", type=float, default=10.0)
+    accuracy.add_argument("--gravity-sigma", type=float, default=0.1, help="gravity sensor error, degrees")
+    accuracy.add_argument("--seed", type=int, default=1)
+    accuracy.add_argument("--workers", type=int, default=None)
+    accuracy.add_argument("--json", action="store_true")
+    accuracy.set_defaults(run=_run_accuracy)
+    speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
+    speed.add_argument("--repeats", type=int, default=50)
+    speed.add_argument("--distance", type=float, default=1.0)
+    speed.add_argument("--json", action="store_true")
+    speed.set_defaults(run=_run_speed)
+
+
+def _run_render(args) -> int:
+    import numpy as np
+
+    from server.camera import intrinsics_from_profile
+    from server.geometry import rotation_from_ypr
+    from shared_schemas import load_map
+    from simulator.fixtures import fixture_meta, write_fixture
+    from simulator.render import CameraPose, SensorModel, render_frame
+
+    beacon_map = load_map(args.map)
+    beacon = beacon_map.beacon(args.beacon_id) if args.beacon_id is not None else beacon_map.beacons[0]
+    if beacon is None:
+        print(f"error: beacon {args.beacon_id} is not in {args.map}", file=sys.stderr)
+        return 2
+    profile = device_profiles()[args.profile]
+    width, height = round(profile.width * args.scale), round(profile.height * args.scale)
+    camera = intrinsics_from_profile(profile, width, height)
+    pose = CameraPose(position_m=np.array(args.position), rotation_wc=rotation_from_ypr(*args.ypr))
+    sensor = SensorModel(psf_sigma_px=args.psf, plateau_dn=255.0 * args.overexposure)
+    try:
+        pixels = render_frame(beacon, camera, pose, width, height, sensor, np.random.default_rng(args.seed))
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    gravity = None if args.no_gravity else (pose.rotation_wc.T @ [0.0, 0.0, -1.0]).tolist()
+    raw, meta = write_fixture(args.out, pixels, fixture_meta(camera, width, height, pose, gravity_camera=gravity))
+    print(f"wrote {raw} and {meta}")
+    return 0
+
+
+def _run_accuracy(args) -> int:
+    from simulator.benchmarks import AccuracyConfig, run_accuracy
+
+    reports = []
+    for distance in args.distances:
+        config = AccuracyConfig(distance_m=distance, frames=args.frames, scale=args.scale,
+                                max_tilt_deg=args.max_tilt, gravity_sigma_deg=args.gravity_sigma, seed=args.seed)
+        reports.append(run_accuracy(config, args.workers))
+    if args.json:
+        print(json.dumps({"accuracy": reports}, indent=2))
+        return 0
+    print(f"{'distance':>8} {'mode':>8} {'mean':>7} {'std':>7} {'min':>7} {'max':>7} {'p95':>7} {'cover':>6}  (2D, mm)")
+    for report in reports:
+        for mode, s in report["modes"].items():
+            if "mean_mm" not in s:
+                print(f"{report['distance_m']:>7.1f}m {mode:>8}  no fix in any frame {s['refusals']}")
+                continue
+            print(f"{report['distance_m']:>7.1f}m {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
+                  f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%")
+    return 0
+
+
+def _run_speed(args) -> int:
+    from simulator.benchmarks import run_speed
+
+    report = run_speed(args.repeats, args.distance)
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(f"frame {report['frame']}, {report['repeats']} runs, {report['cpu_count']} cores")
+    print(f"pipeline median {report['median_ms']:.2f} ms (p90 {report['p90_ms']:.2f} ms)")
+    print(f"cv2.threshold median {report['threshold_median_ms']:.2f} ms, ratio {report['ratio_to_threshold']:.2f}")
+    for stage, ms in report["stage_median_ms"].items():
+        print(f"  {stage:>10} {ms:7.3f} ms")
+    return 0

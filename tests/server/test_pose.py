@@ -1,0 +1,94 @@
+"""Pose stage: exact corners of a known pose must give that pose back (fixed seed)."""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from server.geometry import (
+    beacon_to_world,
+    camera_matrix,
+    model_corners_m,
+    rotation_from_ypr,
+    world_to_camera,
+    ypr_from_rotation,
+)
+from server.pose.ordering import order_corners
+from server.pose.solve import GravityMode, pose_with_gravity, solve_pose
+from server.vision.contour import Refusal
+from shared_schemas import Beacon, CameraIntrinsics, FailureReason, OrientationRule
+
+CAMERA = CameraIntrinsics(fx=977.78, fy=977.78, cx=484.5, cy=647.5)
+K = camera_matrix(CAMERA)
+
+
+def project(beacon: Beacon, position, rotation_wc) -> tuple[np.ndarray, np.ndarray]:
+    points = beacon_to_world(beacon, np.vstack([model_corners_m(beacon.side_m), np.zeros(3)]))
+    camera_points = world_to_camera(points, position, rotation_wc)
+    pixels, _ = cv2.projectPoints(camera_points, np.zeros(3), np.zeros(3), K, None)
+    pixels = pixels.reshape(-1, 2)
+    return pixels[:4], pixels[4]
+
+
+def gravity_of(rotation_wc) -> np.ndarray:
+    return rotation_wc.T @ np.array([0.0, 0.0, -1.0])
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_exact_corners_give_the_pose_back(seed):
+    rng = np.random.default_rng(seed)
+    beacon = Beacon(id=3, center_m=[0.4, -0.2, 2.5], yaw_deg=rng.uniform(-180, 180), side_m=0.174, corner_radius_m=0.02)
+    position = np.array([*(np.array(beacon.center_m[:2]) + rng.uniform(-0.3, 0.3, 2)), 1.2])
+    yaw = beacon.yaw_deg + rng.uniform(-40, 40)
+    rotation = rotation_from_ypr(yaw, *rng.uniform(-10, 10, 2))
+    corners, center = project(beacon, position, rotation)
+    shuffled = np.roll(corners, rng.integers(4), axis=0)[:: 1 if rng.integers(2) else -1]
+    ordered = order_corners(shuffled, beacon.yaw_deg, heading_deg=None)
+    assert ordered.rule is OrientationRule.yaw_within_45deg
+    np.testing.assert_allclose(ordered.corners, corners, atol=1e-9)
+    for mode in (GravityMode.never, GravityMode.always):
+        pose = solve_pose(ordered.corners, center, beacon, K, gravity_of(rotation), gravity_mode=mode)
+        assert not isinstance(pose, Refusal), pose
+        np.testing.assert_allclose(pose.position_m, position, atol=1e-6)
+        np.testing.assert_allclose(pose.rotation_wc, rotation, atol=1e-6)
+        assert pose.gravity_used is (mode is GravityMode.always)
+        assert pose.reprojection_error_px < 1e-6
+
+
+def test_heading_picks_the_quarter_turn():
+    beacon = Beacon(id=0, center_m=[0, 0, 1.0], yaw_deg=0.0, side_m=0.174)
+    rotation = rotation_from_ypr(120.0, 2.0, -1.0)  # outside the +-45 degree default rule
+    corners, center = project(beacon, np.zeros(3), rotation)
+    wrong = order_corners(corners, beacon.yaw_deg, heading_deg=None)
+    right = order_corners(corners, beacon.yaw_deg, heading_deg=115.0)
+    assert right.rule is OrientationRule.heading
+    np.testing.assert_allclose(right.corners, corners, atol=1e-9)
+    assert not np.allclose(wrong.corners, corners)
+    pose = solve_pose(right.corners, center, beacon, K)
+    assert abs(ypr_from_rotation(pose.rotation_wc)[0] - 120.0) < 1e-6
+
+
+def test_gravity_prior_fixes_the_tilt_it_is_given():
+    beacon = Beacon(id=0, center_m=[0, 0, 3.0], side_m=0.174)
+    rotation = rotation_from_ypr(10.0, 4.0, -3.0)
+    corners, center = project(beacon, np.array([0.3, 0.1, 0.0]), rotation)
+    tilted = rotation_from_ypr(0.0, 0.5, 0.0) @ rotation  # gravity 0.5 degree off
+    position, rotation_wc = pose_with_gravity(np.vstack([corners, center]), beacon, K, gravity_of(tilted))
+    # A 0.5 degree tilt error moves a camera 3 m below the beacon by about 3 m * tan(0.5 deg).
+    lateral = np.hypot(*(position[:2] - [0.3, 0.1]))
+    assert lateral == pytest.approx(3.0 * math.tan(math.radians(0.5)), rel=0.15)
+    np.testing.assert_allclose(rotation_wc.T @ [0, 0, -1.0], gravity_of(tilted), atol=1e-9)
+
+
+def test_ambiguous_far_square_is_refused_without_gravity_and_decided_with_it():
+    beacon = Beacon(id=0, center_m=[0, 0, 6.0], side_m=0.174)
+    rotation = rotation_from_ypr(0.0, 25.0, 0.0)
+    corners, center = project(beacon, np.array([2.6, 0.0, 0.0]), rotation)
+    rng = np.random.default_rng(0)
+    noisy = corners + rng.normal(0, 0.3, corners.shape)  # a 28 px panel measured coarsely
+    refused = solve_pose(noisy, center, beacon, K, gravity_mode=GravityMode.never)
+    assert isinstance(refused, Refusal) and refused.reason is FailureReason.pose_ambiguous
+    decided = solve_pose(noisy, center, beacon, K, gravity_camera=gravity_of(rotation))
+    assert not isinstance(decided, Refusal) and decided.gravity_used
+    assert np.linalg.norm(decided.position_m - [2.6, 0, 0]) < 0.15
