@@ -97,10 +97,6 @@ def _fit_clipped_edge(
     x = (np.nonzero(filled)[0] + np.round(distance.min() / rules.bin_px)) * rules.bin_px
     y = sums[filled] / counts[filled]
     clipped = levels.plateau >= SATURATION_DN - 1
-    if clipped:
-        # Bins near saturation are biased low by the clipped noise: leave them out.
-        keep = y < SATURATION_DN - 12.0
-        x, y = x[keep], y[keep]
     if len(x) < 8:
         return None
     background = float(np.min(y))
@@ -108,7 +104,8 @@ def _fit_clipped_edge(
 
     def residual(p: np.ndarray) -> np.ndarray:
         b, a, e, s = p
-        return b + a * ndtr((e - x) / s) - y
+        # Where the panel saturates the model clips too: the clip point pins the amplitude.
+        return np.minimum(b + a * ndtr((e - x) / s), SATURATION_DN) - y
 
     span = rules.half_window_px
     x0 = np.array([background, amplitude0, 0.0, 1.0])
@@ -118,6 +115,38 @@ def _fit_clipped_edge(
     if not fit.success:
         return None
     return float(fit.x[2]), float(fit.x[3])
+
+
+def _pixels_across_sides(image, bases, crossings, normals, valid, rules: EdgeRules):
+    """(distance, value) of the real pixels near each side's mid-level line.
+
+    Pixels, not interpolated samples: bilinear interpolation would bend the two or three
+    unclipped pixels of an overexposed edge into straight pieces and hide its shape.
+    `distance` is outward from the line through the side's crossings, in pixels.
+    """
+    distances, values = [], []
+    n_along = bases.shape[1]
+    for k in range(4):
+        side = slice(k * n_along, (k + 1) * n_along)
+        ok = valid[side]
+        if ok.sum() < 3:
+            continue
+        crossing_points = bases[k][ok] + crossings[side][ok, None] * normals[k]
+        line, _ = _line_through(crossing_points, normals[k])
+        normal, offset = line[:2], -line[2]
+        direction = np.array([-normal[1], normal[0]])
+        along = crossing_points @ direction
+        lo, hi = np.floor(crossing_points.min(axis=0) - rules.half_window_px).astype(int), \
+            np.ceil(crossing_points.max(axis=0) + rules.half_window_px).astype(int)
+        lo, hi = np.maximum(lo, 0), np.minimum(hi, [image.shape[1] - 1, image.shape[0] - 1])
+        ys, xs = np.mgrid[lo[1]:hi[1] + 1, lo[0]:hi[0] + 1]
+        centres = np.column_stack([xs.ravel(), ys.ravel()]).astype(float)
+        distance = centres @ normal - offset
+        position = centres @ direction
+        keep = (np.abs(distance) <= rules.half_window_px) & (position >= along.min()) & (position <= along.max())
+        distances.append(distance[keep])
+        values.append(image[ys.ravel()[keep], xs.ravel()[keep]])
+    return np.concatenate(distances), np.concatenate(values).astype(float)
 
 
 def _line_through(points: np.ndarray, outward: np.ndarray) -> tuple[np.ndarray, float]:
@@ -164,9 +193,7 @@ def refine_edges(
 
     warnings: list[str] = []
     pooled = np.isfinite(crossings) & np.all(np.isfinite(profiles), axis=1)
-    edge = _fit_clipped_edge(
-        (offsets[None, :] - crossings[pooled, None]).ravel(), profiles[pooled].ravel(), levels, rules
-    )
+    edge = _fit_clipped_edge(*_pixels_across_sides(image, bases, crossings, normals, pooled, rules), levels, rules)
     if edge is None:
         warnings.append("edge profile could not be fitted: sides taken at the mid level")
         edge = (0.0, float("nan"))

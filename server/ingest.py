@@ -1,0 +1,114 @@
+"""Frame ingest: raw Camera2 luma bytes (Y8 / NV21 / I420 with row stride) or 8-bit PNG.
+
+Every inconsistency is a `FrameError` naming the field and what is wrong; raw frames are
+never copied (the pixels are a strided view of the bytes).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from pydantic import ValidationError
+
+from server.camera import resolve_camera
+from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
+
+MAX_PIXELS = 100_000_000
+RAW_SUFFIXES = (".y", ".yuv", ".png")
+
+
+class FrameError(ValueError):
+    """A frame or its metadata that cannot be read; `field` is the dotted field at fault."""
+
+    def __init__(self, message: str, field: str | None = None):
+        super().__init__(message)
+        self.message = message
+        self.field = field
+
+
+@dataclass(frozen=True)
+class LumaFrame:
+    pixels: np.ndarray  # (height, width) uint8, read-only
+    meta: FrameMeta
+    camera: CameraIntrinsics
+
+
+def _reject_constant(value: str) -> float:
+    raise FrameError(f"frame metadata contains {value}, which is not a number")
+
+
+def parse_meta(text: str | bytes | dict) -> FrameMeta:
+    """Validate frame metadata; NaN and Infinity are refused."""
+    try:
+        data = text if isinstance(text, dict) else json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as error:
+        raise FrameError(f"frame metadata is not valid JSON: {error}") from None
+    try:
+        meta = FrameMeta.model_validate(data)
+    except ValidationError as error:
+        first = error.errors()[0]
+        location = [str(p) for p in first["loc"] if not str(p).startswith(("CameraIntrinsics", "ProfileRef"))]
+        field = ".".join(location) or None
+        raise FrameError(f"{field}: {first['msg']}" if field else first["msg"], field=field) from None
+    if meta.width * meta.height > MAX_PIXELS:
+        raise FrameError(f"frame {meta.width}x{meta.height} exceeds {MAX_PIXELS // 1_000_000} megapixels", field="width")
+    return meta
+
+
+def _raw_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
+    width, height, stride = meta.width, meta.height, meta.stride
+    luma_size = height * stride
+    chroma = {FrameFormat.y8: 0, FrameFormat.nv21: luma_size // 2, FrameFormat.i420: luma_size // 2}[meta.format]
+    if meta.format is not FrameFormat.y8 and (width % 2 or height % 2):
+        raise FrameError(f"{meta.format.value} needs an even width and height, got {width}x{height}", field="width")
+    expected = luma_size + chroma
+    short_last_row = expected - (stride - width)  # Camera2 may drop the last row's padding
+    if len(data) not in (expected, short_last_row):
+        raise FrameError(
+            f"frame has {len(data)} bytes but {meta.format.value} {width}x{height} with row_stride {stride} "
+            f"needs {expected}", field="row_stride" if len(data) % height == 0 else "frame")
+    buffer = np.frombuffer(data, dtype=np.uint8)
+    rows = np.lib.stride_tricks.as_strided(buffer, shape=(height, width), strides=(stride, 1), writeable=False)
+    return rows
+
+
+def _png_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
+    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise FrameError("frame is not a readable PNG", field="frame")
+    if image.dtype != np.uint8:
+        raise FrameError(f"PNG must be 8-bit, got {image.dtype}", field="frame")
+    if image.ndim != 2:
+        raise FrameError(f"PNG must be single-channel luma, got {image.shape[2]} channels", field="frame")
+    if image.shape != (meta.height, meta.width):
+        raise FrameError(f"PNG is {image.shape[1]}x{image.shape[0]} but metadata says {meta.width}x{meta.height}",
+                         field="width")
+    image.flags.writeable = False
+    return image
+
+
+def decode_frame(data: bytes | memoryview, meta: FrameMeta) -> LumaFrame:
+    """The luma plane of `data` as described by `meta`."""
+    view = memoryview(data)
+    pixels = _png_luma(view, meta) if meta.format is FrameFormat.png else _raw_luma(view, meta)
+    return LumaFrame(pixels=pixels, meta=meta, camera=resolve_camera(meta))
+
+
+def read_fixture(path: Path | str) -> LumaFrame:
+    """A recorded frame from NAME.json and its sibling NAME.y / NAME.yuv / NAME.png."""
+    path = Path(path)
+    meta_path = path.with_suffix(".json")
+    if not meta_path.is_file():
+        raise FrameError(f"no frame metadata at {meta_path}")
+    raw_paths = [path] if path.suffix in RAW_SUFFIXES else [path.with_suffix(s) for s in RAW_SUFFIXES]
+    raw_path = next((p for p in raw_paths if p.is_file()), None)
+    if raw_path is None:
+        raise FrameError(f"no frame data beside {meta_path} (looked for {', '.join(p.name for p in raw_paths)})")
+    meta = parse_meta(meta_path.read_bytes())
+    if raw_path.suffix == ".png" and meta.format is not FrameFormat.png:
+        meta = meta.model_copy(update={"format": FrameFormat.png})
+    return decode_frame(raw_path.read_bytes(), meta)

@@ -1,0 +1,127 @@
+"""A small exact renderer: a rounded-square panel through a pinhole camera.
+
+Coverage is the area of each pixel inside the projected outline, exact along x and a
+midpoint rule over `subrows` scanlines per pixel row along y; then the Gaussian PSF acts on
+the unclipped light, then shot and read noise, clipping and quantisation (the contract's
+"Physics": the clipped edge's mid level lies outside the true edge).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from server.geometry import (
+    beacon_to_world,
+    camera_matrix,
+    distortion_vector,
+    rounded_square_outline_m,
+    world_to_camera,
+)
+from shared_schemas import Beacon, CameraIntrinsics
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    background_dn: float = 8.0  # ambient light + black level
+    plateau_dn: float = 1000.0  # the panel's unclipped level; > saturation means overexposed
+    psf_sigma_px: float = 1.0
+    electrons_per_dn: float = 16.0  # shot noise variance in DN^2 = signal / electrons_per_dn
+    read_noise_dn: float = 1.5
+    saturation_dn: float = 255.0
+
+
+@dataclass(frozen=True)
+class CameraPose:
+    position_m: np.ndarray  # (3,) optical centre, map frame
+    rotation_wc: np.ndarray  # (3, 3) camera to world
+
+
+def beacon_outline_px(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, max_step_px: float = 0.5) -> np.ndarray:
+    """Closed outline (N, 2) of the panel in the frame's pixels, points <= ~max_step_px apart."""
+    coarse = rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, 16)
+    in_camera = world_to_camera(beacon_to_world(beacon, coarse), pose.position_m, pose.rotation_wc)
+    if np.any(in_camera[:, 2] <= 0):
+        raise ValueError("the beacon is not entirely in front of the camera")
+    span_px = camera.fx * beacon.side_m / in_camera[:, 2].min()
+    per_arc = max(16, int(np.pi / 2 * beacon.corner_radius_m / beacon.side_m * span_px / max_step_px))
+    outline = rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, per_arc)
+    # densify the straight sides too, so that distortion bends them
+    closed = np.vstack([outline, outline[:1]])
+    lengths_px = np.linalg.norm(np.diff(closed, axis=0), axis=1) / beacon.side_m * span_px
+    pieces = [np.linspace(a, b, max(1, int(np.ceil(n / max_step_px))), endpoint=False)
+              for a, b, n in zip(closed[:-1], closed[1:], lengths_px)]
+    dense = np.concatenate(pieces)
+    in_camera = world_to_camera(beacon_to_world(beacon, dense), pose.position_m, pose.rotation_wc)
+    pixels, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), camera_matrix(camera),
+                                  distortion_vector(camera))
+    return pixels.reshape(-1, 2)
+
+
+def coverage_map(outline_px: np.ndarray, width: int, height: int, subrows: int = 16) -> np.ndarray:
+    """Share (height, width) float32 of each pixel's area inside the closed polygon.
+
+    Pixel (j, i) covers [j - 0.5, j + 0.5) x [i - 0.5, i + 0.5). Each edge crossing a
+    scanline at x adds sign * G(x, j), G = clip(j + 0.5 - x, 0, 1) the coverage of pixel j by
+    [x, inf); summed with a difference array and a cumulative sum along the row.
+    """
+    start = outline_px
+    end = np.roll(outline_px, -1, axis=0)
+    y_min = max(-0.5, float(outline_px[:, 1].min()))
+    y_max = min(height - 0.5, float(outline_px[:, 1].max()))
+    coverage = np.zeros((height, width), np.float32)
+    if y_max <= y_min:
+        return coverage
+    first = int(np.floor((y_min + 0.5) * subrows))
+    last = int(np.ceil((y_max + 0.5) * subrows))
+    scan_y = (np.arange(first, last) + 0.5) / subrows - 0.5
+    # crossings: edge k crosses scanline y when min(y0, y1) <= y < max(y0, y1) (half-open)
+    low = np.minimum(start[:, 1], end[:, 1])
+    high = np.maximum(start[:, 1], end[:, 1])
+    lo_idx = np.searchsorted(scan_y, low, side="left")
+    hi_idx = np.searchsorted(scan_y, high, side="left")
+    counts = hi_idx - lo_idx
+    edges = np.repeat(np.arange(len(start)), counts)
+    rows = np.concatenate([np.arange(a, b) for a, b in zip(lo_idx, hi_idx) if b > a]) if counts.sum() else np.array([], int)
+    y = scan_y[rows]
+    x0, y0, x1, y1 = start[edges, 0], start[edges, 1], end[edges, 0], end[edges, 1]
+    x = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+    sign = np.where(y1 > y0, 1.0, -1.0)
+    pixel_row = np.floor(y + 0.5).astype(np.int64)
+    x = np.clip(x, -0.5, width - 0.5 - 1e-6)  # keeps k + 1 inside the row
+    k = np.floor(x + 0.5).astype(np.int64)
+    inside = k + 0.5 - x  # G(x, k)
+    cols = width + 1
+    flat = np.concatenate([pixel_row * cols + k, pixel_row * cols + k + 1])
+    weights = np.concatenate([sign * inside, sign * (1.0 - inside)]) / subrows
+    difference = np.bincount(flat, weights=weights, minlength=height * cols).reshape(height, cols)
+    accumulated = np.cumsum(difference[:, :width], axis=1)
+    return np.abs(accumulated).astype(np.float32)
+
+
+def exact_polygon_area_px(outline_px: np.ndarray) -> float:
+    x, y = outline_px[:, 0], outline_px[:, 1]
+    return 0.5 * abs(float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)))
+
+
+def render_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                 sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
+    """An 8-bit luma frame (height, width) of the panel seen from `pose`."""
+    outline = beacon_outline_px(beacon, camera, pose)
+    margin = int(np.ceil(5 * sensor.psf_sigma_px)) + 2
+    x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
+    y0 = max(0, int(np.floor(outline[:, 1].min())) - margin)
+    x1 = min(width, int(np.ceil(outline[:, 0].max())) + margin + 1)
+    y1 = min(height, int(np.ceil(outline[:, 1].max())) + margin + 1)
+    signal = np.full((height, width), sensor.background_dn, np.float32)
+    if x1 > x0 and y1 > y0:
+        local = coverage_map(outline - [x0, y0], x1 - x0, y1 - y0)
+        light = sensor.background_dn + sensor.plateau_dn * local
+        if sensor.psf_sigma_px > 0:
+            light = cv2.GaussianBlur(light, (0, 0), sensor.psf_sigma_px, borderType=cv2.BORDER_REPLICATE)
+        signal[y0:y1, x0:x1] = light
+    sigma = np.sqrt(signal / sensor.electrons_per_dn + sensor.read_noise_dn**2)
+    noisy = signal + sigma * rng.standard_normal(signal.shape, dtype=np.float32)
+    return np.clip(np.rint(noisy), 0, sensor.saturation_dn).astype(np.uint8)
