@@ -155,11 +155,13 @@ class FrameMeta(Open):
             raise ValueError("gravity_camera must not be the zero vector")
         return [v / norm for v in value]
 
-    @model_validator(mode="after")
-    def _stride_fits(self) -> FrameMeta:
-        if self.row_stride is not None and self.row_stride < self.width:
-            raise ValueError(f"row_stride {self.row_stride} is smaller than width {self.width}")
-        return self
+    @field_validator("row_stride")
+    @classmethod
+    def _stride_fits(cls, value: int | None, info) -> int | None:
+        width = info.data.get("width")
+        if value is not None and width is not None and value < width:
+            raise ValueError(f"row_stride {value} is smaller than width {width}")
+        return value
 
     @property
     def stride(self) -> int:
