@@ -78,13 +78,12 @@ def find_beacon_blob(mask: np.ndarray, rules: BlobRules = BlobRules()) -> Blob |
         if area < rules.min_area_px:
             break
         box = cv2.boundingRect(contour)
+        # A cut-off panel is not square either: say the truer thing first.
+        if _touches_border(box, mask.shape):
+            refusal = refusal or Refusal(FailureReason.beacon_cut_off, "the beacon touches the frame border")
+            continue
         problem = _shape_problem(contour, area, rules)
-        if problem is None and not _touches_border(box, mask.shape):
+        if problem is None:
             return Blob(contour=contour.reshape(-1, 2), area_px=area, bounding_box=box)
-        if refusal is None:
-            refusal = (
-                Refusal(FailureReason.not_a_square, f"the brightest blob is not the beacon: {problem}")
-                if problem is not None
-                else Refusal(FailureReason.beacon_cut_off, "the beacon touches the frame border")
-            )
+        refusal = refusal or Refusal(FailureReason.not_a_square, f"the brightest blob is not the beacon: {problem}")
     return refusal or Refusal(FailureReason.no_beacon, "no bright blob large enough to be a beacon")
