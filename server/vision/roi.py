@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from server.vision.binarize import Levels, blur, estimate_levels, threshold
+from server.vision.binarize import Levels, estimate_levels, threshold
 from server.vision.contour import BlobRules, Refusal, find_beacon_blob
 from shared_schemas import FailureReason
 
@@ -48,7 +48,9 @@ def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobR
             FailureReason.no_beacon,
             f"nothing stands out of the background (contrast {levels.contrast:.0f} DN)",
         )
-    blob = find_beacon_blob(threshold(blur(small, 3), levels), blob_rules)
+    # No blur here: it would spread a panel a few pixels from the frame edge onto the border
+    # of the small view, and at this scale the panel stands hundreds of DN above the noise.
+    blob = find_beacon_blob(threshold(small, levels), blob_rules)
     if isinstance(blob, Refusal):
         return blob
     x, y, w, h = blob.bounding_box
