@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Set up (idempotent) and locate the bundled fixture, then start the service once it exists.
+# Set up (idempotent), then run `lumipose` with the given arguments (the HTTP service is the next issue).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
