@@ -107,11 +107,20 @@ def _fit_clipped_edge(
         # Where the panel saturates the model clips too: the clip point pins the amplitude.
         return np.minimum(b + a * ndtr((e - x) / s), SATURATION_DN) - y
 
+    def jacobian(p: np.ndarray) -> np.ndarray:
+        b, a, e, s = p
+        u = (e - x) / s
+        density = np.exp(-0.5 * u * u) / np.sqrt(2 * np.pi)
+        columns = np.column_stack([np.ones_like(u), ndtr(u), a * density / s, -a * density * u / s])
+        columns[b + a * ndtr(u) >= SATURATION_DN] = 0.0  # clipped: the model does not move
+        return columns
+
     span = rules.half_window_px
     x0 = np.array([background, amplitude0, 0.0, 1.0])
     lower = [0.0, 0.2 * amplitude0, -span, 0.1]
     upper = [levels.threshold, 200.0 * amplitude0, span, span]
-    fit = least_squares(residual, x0, bounds=(lower, upper), x_scale=[10.0, amplitude0, 0.5, 0.5])
+    fit = least_squares(residual, x0, jac=jacobian, bounds=(lower, upper),
+                        x_scale=[10.0, amplitude0, 0.5, 0.5])
     if not fit.success:
         return None
     return float(fit.x[2]), float(fit.x[3])
@@ -134,18 +143,22 @@ def _pixels_across_sides(image, bases, crossings, normals, valid, rules: EdgeRul
         crossing_points = bases[k][ok] + crossings[side][ok, None] * normals[k]
         line, _ = _line_through(crossing_points, normals[k])
         normal, offset = line[:2], -line[2]
-        direction = np.array([-normal[1], normal[0]])
-        along = crossing_points @ direction
-        lo, hi = np.floor(crossing_points.min(axis=0) - rules.half_window_px).astype(int), \
-            np.ceil(crossing_points.max(axis=0) + rules.half_window_px).astype(int)
-        lo, hi = np.maximum(lo, 0), np.minimum(hi, [image.shape[1] - 1, image.shape[0] - 1])
-        ys, xs = np.mgrid[lo[1]:hi[1] + 1, lo[0]:hi[0] + 1]
-        centres = np.column_stack([xs.ravel(), ys.ravel()]).astype(float)
-        distance = centres @ normal - offset
-        position = centres @ direction
-        keep = (np.abs(distance) <= rules.half_window_px) & (position >= along.min()) & (position <= along.max())
+        # Walk the side along its main axis; at each step take the pixels across the line.
+        axis = 0 if abs(normal[1]) > abs(normal[0]) else 1  # 0: mostly horizontal side
+        lo = int(np.ceil(crossing_points[:, axis].min()))
+        hi = int(np.floor(crossing_points[:, axis].max()))
+        steps = np.arange(lo, hi + 1)
+        across_at = (offset - normal[axis] * steps) / normal[1 - axis]  # the line's other coordinate
+        band = np.arange(-int(rules.half_window_px) - 1, int(rules.half_window_px) + 2)
+        other = np.rint(across_at)[:, None].astype(int) + band[None, :]
+        main = np.broadcast_to(steps[:, None], other.shape)
+        xs, ys = (main, other) if axis == 0 else (other, main)
+        inside = (xs >= 0) & (ys >= 0) & (xs < image.shape[1]) & (ys < image.shape[0])
+        xs, ys = xs[inside], ys[inside]
+        distance = xs * normal[0] + ys * normal[1] - offset
+        keep = np.abs(distance) <= rules.half_window_px
         distances.append(distance[keep])
-        values.append(image[ys.ravel()[keep], xs.ravel()[keep]])
+        values.append(image[ys[keep], xs[keep]])
     return np.concatenate(distances), np.concatenate(values).astype(float)
 
 
