@@ -107,8 +107,17 @@ def exact_polygon_area_px(outline_px: np.ndarray) -> float:
 
 
 def render_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
-                 sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
-    """An 8-bit luma frame (height, width) of the panel seen from `pose`."""
+                 sensor: SensorModel, rng: np.random.Generator, row_gain: np.ndarray | None = None) -> np.ndarray:
+    """An 8-bit luma frame (height, width) of the panel seen from `pose`.
+
+    `row_gain` (height,) multiplies the panel's light per sensor row (a rolling shutter
+    integrating the LED waveform over each row's exposure window, see `simulator.led`); it acts
+    after the optical PSF, which happens before the sensor, and before noise and clipping.
+    """
+    if row_gain is not None:
+        row_gain = np.asarray(row_gain, dtype=np.float32)
+        if row_gain.shape != (height,) or not np.all(np.isfinite(row_gain)) or np.any(row_gain < 0):
+            raise ValueError(f"row_gain must be {height} finite non-negative values, one per row; got shape {row_gain.shape}")
     outline = beacon_outline_px(beacon, camera, pose)
     margin = int(np.ceil(5 * sensor.psf_sigma_px)) + 2
     x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
@@ -118,10 +127,12 @@ def render_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, wid
     signal = np.full((height, width), sensor.background_dn, np.float32)
     if x1 > x0 and y1 > y0:
         local = coverage_map(outline - [x0, y0], x1 - x0, y1 - y0)
-        light = sensor.background_dn + sensor.plateau_dn * local
+        panel = sensor.plateau_dn * local
         if sensor.psf_sigma_px > 0:
-            light = cv2.GaussianBlur(light, (0, 0), sensor.psf_sigma_px, borderType=cv2.BORDER_REPLICATE)
-        signal[y0:y1, x0:x1] = light
+            panel = cv2.GaussianBlur(panel, (0, 0), sensor.psf_sigma_px, borderType=cv2.BORDER_REPLICATE)
+        if row_gain is not None:
+            panel *= row_gain[y0:y1, None]
+        signal[y0:y1, x0:x1] += panel
     sigma = np.sqrt(signal / sensor.electrons_per_dn + sensor.read_noise_dn**2)
     noisy = signal + sigma * rng.standard_normal(signal.shape, dtype=np.float32)
     return np.clip(np.rint(noisy), 0, sensor.saturation_dn).astype(np.uint8)

@@ -59,3 +59,13 @@ def test_render_is_deterministic_and_saturates():
 def test_beacon_behind_the_camera_is_an_error():
     with pytest.raises(ValueError, match="front of the camera"):
         beacon_outline_px(BEACON, CAMERA, CameraPose(np.array([0, 0, 2.0]), np.eye(3)))
+
+
+def test_row_gain_scales_the_panel_per_row_and_not_the_background():
+    pose = CameraPose(np.zeros(3), np.eye(3))
+    sensor = SensorModel(background_dn=10, plateau_dn=200, psf_sigma_px=0.0, electrons_per_dn=1e9, read_noise_dn=0)
+    gain = np.where(np.arange(240) % 2 == 0, 1.0, 0.5)
+    image = render_frame(BEACON, CAMERA, pose, 320, 240, sensor, np.random.default_rng(0), row_gain=gain)
+    assert image[120, 160] == 210 and image[121, 160] == 110 and image[121, 5] == 10
+    with pytest.raises(ValueError, match="row_gain"):
+        render_frame(BEACON, CAMERA, pose, 320, 240, sensor, np.random.default_rng(0), row_gain=np.ones(10))
