@@ -37,11 +37,30 @@ class Roi:
     step: int
 
 
+def coarse_view(pixels: np.ndarray, step: int) -> np.ndarray:
+    """Every `step`-th pixel of every `step`-th row, plus the frame's last row and column.
+
+    Without the last row and column the view would end up to step - 1 pixels short of the
+    frame's far borders, and a panel just inside them would touch the view's border and be
+    refused as cut off (found on a bench frame whose panel ended 8 px from the right edge).
+    """
+    height, width = pixels.shape
+    small = pixels[::step, ::step]
+    if (width - 1) % step:
+        small = np.hstack([small, pixels[::step, -1:]])
+    if (height - 1) % step:
+        last_row = pixels[-1:, ::step]
+        if (width - 1) % step:
+            last_row = np.hstack([last_row, pixels[-1:, -1:]])
+        small = np.vstack([small, last_row])
+    return np.ascontiguousarray(small)
+
+
 def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobRules = BlobRules()) -> Roi | Refusal:
     """The beacon's region of interest in a full frame (height, width) uint8."""
     height, width = pixels.shape
     step = max(1, min(height, width) // rules.coarse_short_side_px)
-    small = np.ascontiguousarray(pixels[::step, ::step])
+    small = coarse_view(pixels, step)
     levels = estimate_levels(small)
     if levels.contrast < rules.min_contrast_dn:
         return Refusal(

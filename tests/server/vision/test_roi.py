@@ -1,0 +1,36 @@
+"""Coarse ROI stage: where the coarse view ends must not decide whether a panel is cut off."""
+
+import numpy as np
+
+from server.vision.roi import coarse_view, find_roi
+from shared_schemas import FailureReason
+
+HEIGHT, WIDTH = 1296, 970  # step 2: the frame's last row and column are not on the grid
+
+
+def panel_frame(x0: int, x1: int, y0: int = 500, y1: int = 700) -> np.ndarray:
+    pixels = np.full((HEIGHT, WIDTH), 8, np.uint8)
+    pixels[y0:y1, x0:x1] = 255
+    return pixels
+
+
+def test_coarse_view_keeps_the_last_row_and_column():
+    pixels = np.arange(HEIGHT * WIDTH, dtype=np.int64).reshape(HEIGHT, WIDTH)
+    small = coarse_view(pixels, 2)
+    assert small.shape == (649, 486)
+    assert small[-1, -1] == pixels[-1, -1] and small[0, -1] == pixels[0, -1] and small[-1, 0] == pixels[-1, 0]
+    np.testing.assert_array_equal(small[:-1, :-1], pixels[::2, ::2])
+
+
+def test_panel_one_pixel_inside_the_far_border_is_not_cut_off():
+    # the panel's last column is the coarse grid's last column, one pixel short of the border
+    roi = find_roi(panel_frame(WIDTH - 202, WIDTH - 1))
+    assert not hasattr(roi, "reason"), roi
+    assert roi.x1 == WIDTH
+    roi = find_roi(panel_frame(400, 600, HEIGHT - 202, HEIGHT - 1))
+    assert not hasattr(roi, "reason"), roi
+
+
+def test_panel_on_the_far_border_is_cut_off():
+    assert find_roi(panel_frame(WIDTH - 150, WIDTH)).reason is FailureReason.beacon_cut_off
+    assert find_roi(panel_frame(400, 600, HEIGHT - 150, HEIGHT)).reason is FailureReason.beacon_cut_off
