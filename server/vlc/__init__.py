@@ -1,0 +1,1 @@
+"""Beacon identification by visible-light communication (seed paper, Section IV-D)."""
