@@ -101,11 +101,57 @@ def _run_fov(args) -> int:
     return EXIT_FIX
 
 
+def _add_serve(commands) -> None:
+    parser = commands.add_parser("serve", help="run the HTTP service (flags override LUMIPOSE_* variables)")
+    parser.add_argument("--host", help="default 127.0.0.1; 0.0.0.0 to serve the network")
+    parser.add_argument("--port", type=int, help="default 8000")
+    parser.add_argument("--workers", type=int, help="worker processes (default 1)")
+    parser.add_argument("--map", type=Path, help="startup map (default: the bundled demo map)")
+    parser.add_argument("--data", type=Path, dest="data_dir", help="folder for maps and samples (default ./data)")
+    parser.add_argument("--api-key", help="required for writes when set")
+    parser.add_argument("--max-upload-mb", type=float, help="upload limit (default 64)")
+    parser.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
+    parser.set_defaults(run=_run_serve)
+
+
+def _run_serve(args) -> int:
+    import os
+
+    import uvicorn
+    from pydantic import ValidationError
+
+    from server.api.config import Settings
+
+    given = {name: getattr(args, name) for name in ("host", "port", "workers", "map", "data_dir", "api_key",
+                                                    "max_upload_mb") if getattr(args, name) is not None}
+    try:
+        settings = Settings(**given)
+    except ValidationError as error:
+        print(f"error: {error.errors()[0]['loc'][0]}: {error.errors()[0]['msg']}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    # Workers are separate processes: hand them the checked settings through the environment.
+    for name, value in settings.model_dump(exclude_none=True).items():
+        os.environ[f"LUMIPOSE_{name.upper()}"] = json.dumps(value) if isinstance(value, list) else str(value)
+    print(f"lumipose: serving map '{_startup_map_name(settings)}' on http://{settings.host}:{settings.port} "
+          f"(data in {settings.data_dir}, {'API key required for writes' if settings.api_key else 'no API key'})",
+          file=sys.stderr, flush=True)
+    uvicorn.run("server.api.main:app_from_environment", factory=True, host=settings.host, port=settings.port,
+                workers=settings.workers, log_level=args.log_level, timeout_keep_alive=30)
+    return EXIT_FIX
+
+
+def _startup_map_name(settings) -> str:
+    from shared_schemas import load_map
+
+    return load_map(settings.map or DEMO_MAP_PATH).name
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
     _add_locate(commands)
     _add_fov(commands)
+    _add_serve(commands)
     from simulator.cli import add_commands as add_simulator_commands
 
     add_simulator_commands(commands)

@@ -1,0 +1,48 @@
+"""Service settings: flags of `lumipose serve`, or LUMIPOSE_* environment variables."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from shared_schemas import load_map
+
+
+class Settings(BaseSettings):
+    """Checked once at start-up, so a bad map path or limit stops the service with a clear message."""
+
+    model_config = SettingsConfigDict(env_prefix="LUMIPOSE_", extra="ignore")
+
+    host: str = "127.0.0.1"
+    port: int = Field(default=8000, ge=0, le=65535)
+    workers: int = Field(default=1, ge=1)
+    map: Path | None = Field(default=None, description="startup map; default: the bundled demo map")
+    data_dir: Path = Path("data")
+    api_key: str | None = Field(default=None, description="required for writes (maps, samples) when set")
+    max_upload_mb: float = Field(default=64.0, gt=0, description="limit on the upload, compressed or not")
+    read_timeout_s: float = Field(default=30.0, gt=0, description="longest time to receive one upload")
+    pipeline_threads: int = Field(default_factory=lambda: os.cpu_count() or 1, ge=1,
+                                  description="frames located at once per worker")
+    cors_origins: list[str] = Field(default_factory=lambda: ["*"])
+
+    @field_validator("map")
+    @classmethod
+    def _map_loads(cls, value: Path | None) -> Path | None:
+        if value is not None:
+            try:
+                load_map(value)
+            except (OSError, ValueError) as error:
+                raise ValueError(f"cannot load map {value}: {error}") from None
+        return value
+
+    @field_validator("api_key")
+    @classmethod
+    def _empty_key_is_none(cls, value: str | None) -> str | None:
+        return value or None
+
+    @property
+    def max_upload_bytes(self) -> int:
+        return int(self.max_upload_mb * 1024 * 1024)

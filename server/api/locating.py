@@ -1,0 +1,34 @@
+"""Run the pipeline for an uploaded frame, off the event loop and within the core budget."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from starlette.concurrency import run_in_threadpool
+
+from server.api.deps import Services
+from server.api.upload import FrameUpload
+from server.ingest import decode_frame
+from server.pipeline import PipelineOptions, locate
+from shared_schemas import BeaconMap, LocateResult
+
+
+@dataclass(frozen=True)
+class Located:
+    result: LocateResult
+    map_name: str
+
+
+def _locate_now(upload: FrameUpload, beacon_map: BeaconMap, options: PipelineOptions) -> LocateResult:
+    return locate(decode_frame(upload.data, upload.meta), beacon_map, options)
+
+
+async def locate_upload(services: Services, upload: FrameUpload, map_name: str | None,
+                        options: PipelineOptions) -> Located:
+    """The pipeline's result for `upload` in map `map_name` (default: the active map)."""
+    name = map_name or services.maps.active_name()
+    beacon_map = services.maps.get(name)
+    async with services.pipeline_limiter:
+        result = await run_in_threadpool(_locate_now, upload, beacon_map, options)
+    services.metrics.record_result(result)
+    return Located(result=result, map_name=name)

@@ -1,0 +1,48 @@
+"""The FastAPI app: `create_app(settings)`; `lumipose serve` runs it under uvicorn."""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+import anyio
+from fastapi import FastAPI
+from fastapi.middleware.cors import CORSMiddleware
+
+from server.api.config import Settings
+from server.api.deps import Services
+from server.api.errors import install_error_handlers
+from server.api.metrics import Metrics, MetricsMiddleware
+from server.api.routes import health, locate, maps, profiles, samples
+from server.store import MapStore, SampleStore
+
+try:
+    VERSION = version("lumipose")
+except PackageNotFoundError:  # running from a source tree that was not installed
+    VERSION = "0+unknown"
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or Settings()
+    app = FastAPI(title="Lumipose", version=VERSION,
+                  description="Indoor positioning from one photo of an LED ceiling panel. "
+                              "Frames, maps and results follow the Lumipose contract (shared_schemas).")
+    metrics = Metrics()
+    app.state.services = Services(
+        settings=settings,
+        maps=MapStore(settings.data_dir, settings.map),
+        samples=SampleStore(settings.data_dir),
+        metrics=metrics,
+        pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
+    )
+    install_error_handlers(app)
+    for router in (health.router, locate.router, maps.router, profiles.router, samples.router):
+        app.include_router(router)
+    app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["*"],
+                       allow_headers=["*"], expose_headers=["X-Lumipose-Frame"])
+    app.add_middleware(MetricsMiddleware, metrics=metrics)
+    return app
+
+
+def app_from_environment() -> FastAPI:
+    """Factory for uvicorn workers: settings from LUMIPOSE_* variables (set by `lumipose serve`)."""
+    return create_app(Settings())

@@ -1,0 +1,51 @@
+"""Parameters shared by the routes that take a frame upload (locate, samples)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Header, Query, Request
+
+from server.api.deps import Services
+from server.api.upload import FRAME_HEADER, FrameUpload, receive_frame
+from server.pipeline import CornerMethod, PipelineOptions
+from server.pose.solve import GravityMode
+from shared_schemas import ErrorBody
+
+FRAME_REQUEST_BODY = {
+    "requestBody": {
+        "required": True,
+        "description": f"The frame bytes as the contract's fixture file holds them, with the frame JSON in the "
+                       f"{FRAME_HEADER} header; or multipart with 'meta' and 'frame' parts. "
+                       "Content-Encoding gzip or zstd is accepted.",
+        "content": {
+            "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
+            "image/png": {"schema": {"type": "string", "format": "binary"}},
+            "multipart/form-data": {"schema": {
+                "type": "object", "required": ["meta", "frame"],
+                "properties": {"meta": {"type": "string", "description": "frame JSON (lumipose.frame/1)"},
+                               "frame": {"type": "string", "format": "binary"}}}},
+        },
+    }
+}
+ERROR_RESPONSES = {status: {"model": ErrorBody, "description": text} for status, text in {
+    400: "unreadable frame, metadata or body", 401: "missing or wrong API key", 404: "unknown map or sample",
+    408: "upload too slow", 413: "upload too large", 415: "unsupported content type or encoding",
+    422: "invalid parameter"}.items()}
+
+FrameHeader = Annotated[str | None, Header(alias=FRAME_HEADER, description="frame JSON (lumipose.frame/1)")]
+DeviceHeader = Annotated[str | None, Header(alias="X-Lumipose-Device", max_length=128,
+                                            description="device or session id of the sender")]
+MapQuery = Annotated[str | None, Query(description="map name; default: the active map")]
+BeaconQuery = Annotated[int | None, Query(ge=0, le=255, description="the beacon in view, when known otherwise")]
+GravityQuery = Annotated[GravityMode, Query(description="use the frame's gravity vector")]
+CornersQuery = Annotated[CornerMethod, Query(description="corner method: rounded (default) or the paper's square")]
+
+
+def pipeline_options(beacon_id: int | None, gravity: GravityMode, corners: CornerMethod) -> PipelineOptions:
+    return PipelineOptions(beacon_id=beacon_id, gravity_mode=gravity, corner_method=corners)
+
+
+async def frame_upload(request: Request, services: Services, frame_header: str | None) -> FrameUpload:
+    settings = services.settings
+    return await receive_frame(request, frame_header, settings.max_upload_bytes, settings.read_timeout_s)

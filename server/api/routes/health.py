@@ -1,0 +1,25 @@
+"""Liveness and metrics, outside the versioned API."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Response
+from prometheus_client import CONTENT_TYPE_LATEST
+from starlette.concurrency import run_in_threadpool
+
+from server.api.deps import ServicesDep
+from shared_schemas.api import Health
+
+router = APIRouter(tags=["health"])
+
+
+@router.get("/healthz", response_model=Health)
+async def health(services: ServicesDep) -> Health:
+    from server.api.main import VERSION
+
+    return Health(status="ok", version=VERSION, active_map=await run_in_threadpool(services.maps.active_name))
+
+
+@router.get("/metrics", response_class=Response,
+            responses={200: {"content": {"text/plain": {}}, "description": "Prometheus text format"}})
+async def metrics(services: ServicesDep) -> Response:
+    return Response(services.metrics.exposition(), media_type=CONTENT_TYPE_LATEST)

@@ -1,0 +1,27 @@
+"""POST /v1/locate: one frame in, the contract's result out (a fix, or no fix with its reason)."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Request
+
+from server.api.deps import ServicesDep
+from server.api.locating import locate_upload
+from server.api.routes.frames import (ERROR_RESPONSES, FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
+                                      FrameHeader, GravityQuery, MapQuery, frame_upload,
+                                      pipeline_options)
+from server.pipeline import CornerMethod
+from server.pose.solve import GravityMode
+from shared_schemas import LocateResult
+
+router = APIRouter(prefix="/v1", tags=["locate"])
+
+
+@router.post("/locate", response_model=LocateResult, responses=ERROR_RESPONSES, openapi_extra=FRAME_REQUEST_BODY)
+async def locate_frame(request: Request, services: ServicesDep, frame_json: FrameHeader = None,
+                       map: MapQuery = None, beacon_id: BeaconQuery = None,
+                       gravity: GravityQuery = GravityMode.auto,
+                       corners: CornersQuery = CornerMethod.rounded) -> LocateResult:
+    """Locate the camera. 200 with `ok: false` and a `reason` when the frame holds no usable beacon."""
+    upload = await frame_upload(request, services, frame_json)
+    located = await locate_upload(services, upload, map, pipeline_options(beacon_id, gravity, corners))
+    return located.result

@@ -1,0 +1,78 @@
+"""Recorded samples: store a frame with its label, list, fetch, delete, and evaluate the set."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Query, Request, Response
+from starlette.concurrency import run_in_threadpool
+
+from server.api.deps import ServicesDep, WriteAccess
+from server.api.locating import locate_upload
+from server.api.routes.frames import (ERROR_RESPONSES, FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
+                                      DeviceHeader, FrameHeader, GravityQuery, MapQuery, frame_upload,
+                                      pipeline_options)
+from server.api.upload import FRAME_HEADER, FrameUpload
+from server.evaluation import evaluate
+from server.pipeline import CornerMethod, PipelineOptions
+from server.pose.solve import GravityMode
+from shared_schemas.api import Evaluation, SampleInfo, SampleList
+
+router = APIRouter(prefix="/v1/samples", tags=["samples"])
+
+LabelQuery = Annotated[str | None, Query(max_length=200, description="free text; 'i,j' names a grid cell")]
+
+
+@router.post("", status_code=201, response_model=SampleInfo, responses=ERROR_RESPONSES,
+             openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess])
+async def store_sample(request: Request, services: ServicesDep, frame_json: FrameHeader = None,
+                       device: DeviceHeader = None, label: LabelQuery = None, map: MapQuery = None,
+                       beacon_id: BeaconQuery = None, gravity: GravityQuery = GravityMode.auto,
+                       corners: CornersQuery = CornerMethod.rounded) -> SampleInfo:
+    """Store a frame with its label and the result it gives now (a frame without a fix is kept too)."""
+    upload = await frame_upload(request, services, frame_json)
+    located = await locate_upload(services, upload, map, pipeline_options(beacon_id, gravity, corners))
+    return await run_in_threadpool(services.samples.add, upload.data, upload.meta, located.result,
+                                   label=label, device=device, map_name=located.map_name)
+
+
+@router.get("", response_model=SampleList)
+async def list_samples(services: ServicesDep) -> SampleList:
+    return SampleList(samples=await run_in_threadpool(services.samples.all))
+
+
+@router.get("/evaluation", response_model=Evaluation, responses=ERROR_RESPONSES)
+async def evaluate_samples(services: ServicesDep, map: MapQuery = None,
+                           cell_m: Annotated[float, Query(gt=0, le=10, description="grid cell side")] = 0.05,
+                           height_m: Annotated[float, Query(ge=-100, le=100,
+                                                            description="z of the grid plane")] = 0.0,
+                           ) -> Evaluation:
+    """Re-locate every stored sample in `map` and compare with its truth (paper Table 2)."""
+    name = map or services.maps.active_name()
+    services.maps.get(name)
+    located = []
+    for sample in await run_in_threadpool(services.samples.all):
+        upload = FrameUpload(meta=sample.meta, data=await run_in_threadpool(services.samples.frame, sample.id))
+        located.append((sample, (await locate_upload(services, upload, name, PipelineOptions())).result))
+    return evaluate(name, located, cell_m, height_m)
+
+
+@router.get("/{sample_id}", response_model=SampleInfo, responses=ERROR_RESPONSES)
+async def get_sample(sample_id: str, services: ServicesDep) -> SampleInfo:
+    return await run_in_threadpool(services.samples.get, sample_id)
+
+
+@router.get("/{sample_id}/frame", response_class=Response, responses={
+    200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"},
+    **ERROR_RESPONSES})
+async def get_sample_frame(sample_id: str, services: ServicesDep) -> Response:
+    info = await run_in_threadpool(services.samples.get, sample_id)
+    data = await run_in_threadpool(services.samples.frame, sample_id)
+    return Response(data, media_type="application/octet-stream", headers={
+        FRAME_HEADER: info.meta.model_dump_json(by_alias=True, exclude_none=True)})
+
+
+@router.delete("/{sample_id}", status_code=204, responses=ERROR_RESPONSES, dependencies=[WriteAccess])
+async def delete_sample(sample_id: str, services: ServicesDep) -> Response:
+    await run_in_threadpool(services.samples.delete, sample_id)
+    return Response(status_code=204)

@@ -1,0 +1,135 @@
+"""Receive one frame: raw bytes with the frame JSON in a header, or multipart; gzip or zstd.
+
+Limits hold at every step: the declared length, the bytes received, the decompressed size
+and the time to receive them, so a huge or slow upload is refused early with a 4xx.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import zlib
+from dataclasses import dataclass
+
+import zstandard
+from starlette.datastructures import UploadFile
+from starlette.formparsers import MultiPartException, MultiPartParser
+from starlette.requests import Request
+
+from server.api.errors import ApiError
+from server.ingest import parse_meta
+from shared_schemas import FrameFormat, FrameMeta
+
+FRAME_HEADER = "X-Lumipose-Frame"
+RAW_TYPES = ("application/octet-stream", "image/png")
+MULTIPART = "multipart/form-data"
+ZSTD_PIECE = 4096
+
+
+@dataclass(frozen=True)
+class FrameUpload:
+    meta: FrameMeta
+    data: bytes  # uncompressed frame bytes as the contract's fixture file holds them
+
+
+def _too_large(limit: int) -> ApiError:
+    return ApiError(413, "too_large", f"the upload exceeds the limit of {limit} bytes", field="body")
+
+
+async def _receive(request: Request, limit: int, timeout_s: float) -> bytes:
+    declared = request.headers.get("content-length")
+    if declared is not None and declared.isdigit() and int(declared) > limit:
+        raise _too_large(limit)
+    chunks, size = [], 0
+
+    async def read_all() -> None:
+        nonlocal size
+        async for chunk in request.stream():
+            size += len(chunk)
+            if size > limit:
+                raise _too_large(limit)
+            chunks.append(chunk)
+
+    try:
+        await asyncio.wait_for(read_all(), timeout_s)
+    except asyncio.TimeoutError:
+        raise ApiError(408, "timeout", f"the upload took longer than {timeout_s:g} s", field="body") from None
+    return b"".join(chunks)
+
+
+def _unzstd(body: bytes, limit: int) -> tuple[bytes, bool]:
+    # Fed in small pieces so that a bomb is stopped a few megabytes past the limit.
+    reader, pieces, size = zstandard.ZstdDecompressor().decompressobj(), [], 0
+    for start in range(0, len(body), ZSTD_PIECE):
+        pieces.append(reader.decompress(body[start:start + ZSTD_PIECE]))
+        size += len(pieces[-1])
+        if size > limit or reader.eof:
+            break
+    return b"".join(pieces), reader.eof
+
+
+def _decompress(body: bytes, encoding: str, limit: int) -> bytes:
+    """The body without its content encoding, refusing more than `limit` bytes (zip bombs)."""
+    if encoding in ("", "identity"):
+        return body
+    try:
+        if encoding in ("gzip", "x-gzip"):
+            inflater = zlib.decompressobj(wbits=16 + zlib.MAX_WBITS)
+            data = inflater.decompress(body, limit + 1)
+            complete = inflater.eof
+        elif encoding == "zstd":
+            data, complete = _unzstd(body, limit)
+        else:
+            raise ApiError(415, "unsupported_encoding",
+                           f"Content-Encoding '{encoding}' is not supported; use gzip, zstd or none",
+                           field="Content-Encoding")
+    except (zlib.error, zstandard.ZstdError) as error:
+        raise ApiError(400, "bad_encoding", f"the body is not valid {encoding}: {error}",
+                       field="Content-Encoding") from None
+    if len(data) > limit:
+        raise _too_large(limit)
+    if not complete:
+        raise ApiError(400, "bad_encoding", f"the {encoding} stream is truncated", field="Content-Encoding")
+    return data
+
+
+async def _multipart_parts(request: Request, body: bytes) -> tuple[str, bytes]:
+    async def stream():
+        yield body
+
+    try:
+        form = await MultiPartParser(request.headers, stream(), max_files=1, max_fields=2).parse()
+    except MultiPartException as error:
+        raise ApiError(400, "bad_multipart", f"the multipart body cannot be read: {error.message}",
+                       field="body") from None
+    meta, frame = form.get("meta"), form.get("frame")
+    if meta is None or frame is None:
+        raise ApiError(400, "bad_multipart", "a multipart upload needs a 'meta' part (frame JSON) and a "
+                       "'frame' part (bytes)", field="meta" if meta is None else "frame")
+    meta_text = (await meta.read()).decode("utf-8", "replace") if isinstance(meta, UploadFile) else meta
+    frame_bytes = await frame.read() if isinstance(frame, UploadFile) else frame.encode("latin-1")
+    await form.close()
+    return meta_text, frame_bytes
+
+
+async def receive_frame(request: Request, frame_header: str | None, limit: int, timeout_s: float) -> FrameUpload:
+    """The frame of a locate or sample request; raises `ApiError` or `FrameError` on bad input."""
+    content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if content_type not in (*RAW_TYPES, MULTIPART):
+        raise ApiError(415, "unsupported_media_type",
+                       f"Content-Type '{content_type or '(none)'}' is not accepted; send "
+                       f"{', '.join(RAW_TYPES)} with the {FRAME_HEADER} header, or {MULTIPART}",
+                       field="Content-Type")
+    body = await _receive(request, limit, timeout_s)
+    body = _decompress(body, request.headers.get("content-encoding", "").strip().lower(), limit)
+    if content_type == MULTIPART:
+        meta_text, data = await _multipart_parts(request, body)
+    else:
+        meta_text = frame_header
+        if not meta_text:
+            raise ApiError(400, "missing_metadata", f"the {FRAME_HEADER} header with the frame JSON is missing",
+                           field=FRAME_HEADER)
+        data = body
+    meta = parse_meta(meta_text)
+    if content_type == "image/png" and meta.format is not FrameFormat.png:
+        meta = meta.model_copy(update={"format": FrameFormat.png})
+    return FrameUpload(meta=meta, data=data)

@@ -1,0 +1,85 @@
+"""Models of the HTTP API beyond the contract's frame, map and result: samples, maps, health.
+
+The service (`server/api/`) answers with these and the Python client (`lumipose_client`)
+reads them; `shared_schemas/openapi.json` is exported from the app that uses them.
+"""
+
+from __future__ import annotations
+
+import re
+from datetime import datetime
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from shared_schemas.models import FrameMeta, LocateResult, Vec3
+
+NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
+CELL_LABEL = re.compile(r"^\s*(-?\d+)\s*,\s*(-?\d+)\s*$")
+
+
+class Health(BaseModel):
+    status: str = Field(description="'ok' when the service can locate frames")
+    version: str
+    active_map: str
+
+
+class MapSummary(BaseModel):
+    name: str
+    beacons: int
+    active: bool
+    source: str = Field(description="'bundled', 'startup' (the --map file) or 'stored' (data folder)")
+
+
+class ActiveMap(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    name: str = Field(pattern=NAME_PATTERN)
+
+
+class SampleInfo(BaseModel):
+    """A stored frame with its label and the result it gave when it was stored."""
+
+    id: str
+    label: str | None = Field(default=None, description="free text; 'i,j' names a test-bench grid cell")
+    created: datetime
+    device: str | None = None
+    map: str = Field(description="the map the frame was located in when stored")
+    frame_bytes: int
+    meta: FrameMeta
+    result: LocateResult
+
+
+class SampleList(BaseModel):
+    samples: list[SampleInfo]
+
+
+class EvaluationRow(BaseModel):
+    id: str
+    label: str | None
+    ok: bool
+    reason: str | None = None
+    truth_m: Vec3 | None = Field(default=None, description="from ground_truth, or the label's grid cell")
+    position_m: Vec3 | None = None
+    error_2d_mm: float | None = None
+
+
+class Evaluation(BaseModel):
+    """The paper's Table 2 from stored samples: error statistics and coverage."""
+
+    map: str
+    samples: int
+    with_truth: int
+    fixes: int
+    coverage: float = Field(description="fixes / samples")
+    mean_mm: float | None = None
+    std_mm: float | None = None
+    min_mm: float | None = None
+    max_mm: float | None = None
+    rows: list[EvaluationRow]
+
+
+def cell_truth_m(label: str | None, cell_m: float, height_m: float = 0.0) -> list[float] | None:
+    """The test-bench position of a grid-cell label 'i,j' (paper Section II-B), or None."""
+    match = CELL_LABEL.match(label or "")
+    if match is None:
+        return None
+    return [int(match[1]) * cell_m, int(match[2]) * cell_m, height_m]
