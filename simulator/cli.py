@@ -25,6 +25,19 @@ def add_commands(commands) -> None:
     render.add_argument("--no-gravity", action="store_true", help="leave gravity_camera out of the JSON")
     render.set_defaults(run=_run_render)
 
+    simulate = commands.add_parser("simulate", help="render a scene's series (or one pose) into fixture files")
+    simulate.add_argument("scene", help="scene file, or a bundled scene: " + ", ".join(_bundled_scenes()))
+    simulate.add_argument("out", type=Path, help="output folder (fixtures, scene.json, map.json)")
+    simulate.add_argument("--pose", type=float, nargs=3, default=None, metavar=("X", "Y", "Z"),
+                          help="one sample at this camera position instead of the scene's series")
+    simulate.add_argument("--ypr", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("YAW", "PITCH", "ROLL"),
+                          help="with --pose: camera attitude in degrees")
+    simulate.add_argument("--limit", type=int, default=None, help="only the first N samples of the series")
+    simulate.add_argument("--scale", type=float, default=None, help="override the camera's resolution scale")
+    simulate.add_argument("--seed", type=int, default=None, help="override the scene's seed")
+    simulate.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    simulate.set_defaults(run=_run_simulate)
+
     bench = commands.add_parser("bench", help="benchmarks that print figures")
     benches = bench.add_subparsers(dest="bench", required=True)
     accuracy = benches.add_parser("accuracy", help="position error over rendered test-bench frames")
@@ -71,6 +84,42 @@ def _run_render(args) -> int:
     gravity = None if args.no_gravity else (pose.rotation_wc.T @ [0.0, 0.0, -1.0]).tolist()
     raw, meta = write_fixture(args.out, pixels, fixture_meta(camera, width, height, pose, gravity_camera=gravity))
     print(f"wrote {raw} and {meta}")
+    return 0
+
+
+def _bundled_scenes() -> list[str]:
+    from simulator.scene import SCENES_DIR
+
+    return sorted(path.stem for path in SCENES_DIR.glob("*.json"))
+
+
+def _run_simulate(args) -> int:
+    from pydantic import ValidationError
+
+    from simulator.sampling import series_poses, write_series
+    from simulator.scene import PoseSpec, PosesSeries, SeriesSpec, find_scene
+
+    try:
+        scene = find_scene(args.scene)
+        updates = {}
+        if args.seed is not None:
+            updates["seed"] = args.seed
+        if args.scale is not None:
+            updates["camera"] = scene.camera.model_copy(update={"scale": args.scale})
+        scene = scene.model_validate(scene.model_copy(update=updates).model_dump(by_alias=True))
+        if args.pose is not None:
+            series = SeriesSpec(path=PosesSeries(poses=[PoseSpec(position_m=args.pose, ypr_deg=args.ypr)]))
+            scene = scene.model_copy(update={"series": series})
+        elif args.limit is not None:
+            # the drawn attitudes become explicit poses, so scene.json reproduces exactly these samples
+            poses = [PoseSpec(position_m=list(p.position_m), ypr_deg=list(p.ypr_deg), t_s=p.t_s)
+                     for p in series_poses(scene)[: max(args.limit, 1)]]
+            scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
+        stems = write_series(scene, args.out, args.workers)
+    except (OSError, ValueError, ValidationError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    print(f"wrote {len(stems)} fixtures ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
 
 

@@ -4,6 +4,11 @@ Coverage is the area of each pixel inside the projected outline, exact along x a
 midpoint rule over `subrows` scanlines per pixel row along y; then the Gaussian PSF acts on
 the unclipped light, then shot and read noise, clipping and quantisation (the contract's
 "Physics": the clipped edge's mid level lies outside the true edge).
+
+Scenes go through `render_emitters`: any number of bright polygons (panels, a window, a lamp,
+a reflection), each with its own level, extra blur and per-row gain (rolling shutter), then
+vignetting, noise and clipping over the whole frame. Lens distortion acts through the
+projection of the densified outlines (`world_polygon_px`).
 """
 
 from __future__ import annotations
@@ -31,6 +36,17 @@ class SensorModel:
     electrons_per_dn: float = 16.0  # shot noise variance in DN^2 = signal / electrons_per_dn
     read_noise_dn: float = 1.5
     saturation_dn: float = 255.0
+    vignetting: float = 0.0  # share of the light lost at the image corner, falling off as r^2
+
+
+@dataclass(frozen=True)
+class Emitter:
+    """One bright polygon of a frame, already in the frame's pixels."""
+
+    outline_px: np.ndarray  # (N, 2) closed polygon
+    level_dn: float  # unclipped level where the polygon covers a whole pixel
+    row_gain: np.ndarray | None = None  # (height,) multiplier per sensor row, rolling shutter
+    extra_blur_px: float = 0.0  # on top of the PSF: a reflection or a diffuser is soft
 
 
 @dataclass(frozen=True)
@@ -57,6 +73,48 @@ def beacon_outline_px(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose
     in_camera = world_to_camera(beacon_to_world(beacon, dense), pose.position_m, pose.rotation_wc)
     pixels, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), camera_matrix(camera),
                                   distortion_vector(camera))
+    return pixels.reshape(-1, 2)
+
+
+NEAR_PLANE_M = 1e-3
+
+
+def _clip_near(points_c: np.ndarray) -> np.ndarray:
+    """The closed polygon (N, 3) in camera coordinates cut to z >= NEAR_PLANE_M (Sutherland-Hodgman)."""
+    kept = []
+    for a, b in zip(points_c, np.roll(points_c, -1, axis=0)):
+        a_in, b_in = a[2] >= NEAR_PLANE_M, b[2] >= NEAR_PLANE_M
+        if a_in:
+            kept.append(a)
+        if a_in != b_in:
+            t = (NEAR_PLANE_M - a[2]) / (b[2] - a[2])
+            kept.append(a + t * (b - a))
+    return np.array(kept).reshape(-1, 3)
+
+
+def world_polygon_px(points_m: np.ndarray, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                     max_step_px: float = 1.0) -> np.ndarray | None:
+    """Closed polygon (N, 3) of the map frame in the frame's (distorted) pixels, or None if unseen.
+
+    Parts behind the camera are cut off. Polygons whose pinhole image misses the frame enlarged
+    by half its size are None: far off-axis the distortion polynomial folds points back in.
+    Sides are densified to <= ~max_step_px so that distortion bends them.
+    """
+    in_camera = _clip_near(world_to_camera(np.asarray(points_m, dtype=float), pose.position_m, pose.rotation_wc))
+    if len(in_camera) < 3:
+        return None
+    matrix = camera_matrix(camera)
+    pinhole = in_camera[:, :2] / in_camera[:, 2:] * [camera.fx, camera.fy] + [camera.cx, camera.cy]
+    if (pinhole[:, 0].max() < -width / 2 or pinhole[:, 0].min() > 1.5 * width
+            or pinhole[:, 1].max() < -height / 2 or pinhole[:, 1].min() > 1.5 * height):
+        return None
+    closed = np.vstack([in_camera, in_camera[:1]])
+    ends = np.vstack([pinhole, pinhole[:1]])
+    lengths_px = np.linalg.norm(np.diff(ends, axis=0), axis=1)
+    pieces = [a + np.linspace(0.0, 1.0, max(1, int(np.ceil(n / max_step_px))), endpoint=False)[:, None] * (b - a)
+              for a, b, n in zip(closed[:-1], closed[1:], np.minimum(lengths_px, 4.0 * (width + height)))]
+    dense = np.concatenate(pieces)
+    pixels, _ = cv2.projectPoints(dense, np.zeros(3), np.zeros(3), matrix, distortion_vector(camera))
     return pixels.reshape(-1, 2)
 
 
@@ -106,6 +164,56 @@ def exact_polygon_area_px(outline_px: np.ndarray) -> float:
     return 0.5 * abs(float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)))
 
 
+def vignetting_map(width: int, height: int, vignetting: float) -> np.ndarray:
+    """Relative illumination (height, width) float32: 1 at the centre, 1 - vignetting at the corners."""
+    x = (np.arange(width, dtype=np.float32) - (width - 1) / 2) / ((width - 1) / 2 or 1)
+    y = (np.arange(height, dtype=np.float32) - (height - 1) / 2) / ((height - 1) / 2 or 1)
+    return 1.0 - vignetting * (y[:, None] ** 2 + x[None, :] ** 2) / 2.0
+
+
+def _check_row_gain(row_gain: np.ndarray | None, height: int) -> np.ndarray | None:
+    if row_gain is None:
+        return None
+    row_gain = np.asarray(row_gain, dtype=np.float32)
+    if row_gain.shape != (height,) or not np.all(np.isfinite(row_gain)) or np.any(row_gain < 0):
+        raise ValueError(f"row_gain must be {height} finite non-negative values, one per row; got shape {row_gain.shape}")
+    return row_gain
+
+
+def render_emitters(emitters: list[Emitter], width: int, height: int, sensor: SensorModel,
+                    rng: np.random.Generator) -> np.ndarray:
+    """An 8-bit luma frame (height, width): background plus every emitter, PSF, vignetting, noise.
+
+    Each emitter's coverage is blurred by the PSF (and its own extra blur) on its own bounding
+    box, scaled per row by its `row_gain` (the rolling shutter: light reaches a row only
+    during that row's exposure window, after the optics) and added to the background.
+    """
+    signal = np.full((height, width), sensor.background_dn, np.float32)
+    for emitter in emitters:
+        row_gain = _check_row_gain(emitter.row_gain, height)
+        outline = emitter.outline_px
+        sigma = float(np.hypot(sensor.psf_sigma_px, emitter.extra_blur_px))
+        margin = int(np.ceil(5 * sigma)) + 2
+        x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
+        y0 = max(0, int(np.floor(outline[:, 1].min())) - margin)
+        x1 = min(width, int(np.ceil(outline[:, 0].max())) + margin + 1)
+        y1 = min(height, int(np.ceil(outline[:, 1].max())) + margin + 1)
+        if x1 <= x0 or y1 <= y0:
+            continue
+        # the box is cut at the frame's border: blurring replicates the border, as light beyond it would
+        light = emitter.level_dn * coverage_map(outline - [x0, y0], x1 - x0, y1 - y0)
+        if sigma > 0:
+            light = cv2.GaussianBlur(light, (0, 0), sigma, borderType=cv2.BORDER_REPLICATE)
+        if row_gain is not None:
+            light *= row_gain[y0:y1, None]
+        signal[y0:y1, x0:x1] += light
+    if sensor.vignetting:
+        signal *= vignetting_map(width, height, sensor.vignetting)
+    sigma_dn = np.sqrt(signal / sensor.electrons_per_dn + sensor.read_noise_dn**2)
+    noisy = signal + sigma_dn * rng.standard_normal(signal.shape, dtype=np.float32)
+    return np.clip(np.rint(noisy), 0, sensor.saturation_dn).astype(np.uint8)
+
+
 def render_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
                  sensor: SensorModel, rng: np.random.Generator, row_gain: np.ndarray | None = None) -> np.ndarray:
     """An 8-bit luma frame (height, width) of the panel seen from `pose`.
@@ -114,25 +222,6 @@ def render_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, wid
     integrating the LED waveform over each row's exposure window, see `simulator.led`); it acts
     after the optical PSF, which happens before the sensor, and before noise and clipping.
     """
-    if row_gain is not None:
-        row_gain = np.asarray(row_gain, dtype=np.float32)
-        if row_gain.shape != (height,) or not np.all(np.isfinite(row_gain)) or np.any(row_gain < 0):
-            raise ValueError(f"row_gain must be {height} finite non-negative values, one per row; got shape {row_gain.shape}")
+    _check_row_gain(row_gain, height)
     outline = beacon_outline_px(beacon, camera, pose)
-    margin = int(np.ceil(5 * sensor.psf_sigma_px)) + 2
-    x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
-    y0 = max(0, int(np.floor(outline[:, 1].min())) - margin)
-    x1 = min(width, int(np.ceil(outline[:, 0].max())) + margin + 1)
-    y1 = min(height, int(np.ceil(outline[:, 1].max())) + margin + 1)
-    signal = np.full((height, width), sensor.background_dn, np.float32)
-    if x1 > x0 and y1 > y0:
-        local = coverage_map(outline - [x0, y0], x1 - x0, y1 - y0)
-        panel = sensor.plateau_dn * local
-        if sensor.psf_sigma_px > 0:
-            panel = cv2.GaussianBlur(panel, (0, 0), sensor.psf_sigma_px, borderType=cv2.BORDER_REPLICATE)
-        if row_gain is not None:
-            panel *= row_gain[y0:y1, None]
-        signal[y0:y1, x0:x1] += panel
-    sigma = np.sqrt(signal / sensor.electrons_per_dn + sensor.read_noise_dn**2)
-    noisy = signal + sigma * rng.standard_normal(signal.shape, dtype=np.float32)
-    return np.clip(np.rint(noisy), 0, sensor.saturation_dn).astype(np.uint8)
+    return render_emitters([Emitter(outline, sensor.plateau_dn, row_gain)], width, height, sensor, rng)

@@ -1,0 +1,183 @@
+"""Sampling: a scene's series expanded into camera poses, and rendered into fixture files.
+
+A series is one of: explicit poses, the paper's FOV grid (eqs. 1-7) under a beacon, any
+rectangular grid, or a walk (zig-zag, converging square spiral, waypoints at a speed and
+frame rate; `simulator.trajectories`). Rotation variation (fixed attitude, random tilt and yaw,
+smooth hand shake) is drawn per sample from the scene's seed, so a series is the same on any
+machine and with any number of workers.
+
+Output folder: NAME_0000.y + NAME_0000.json ... (the contract's fixtures, with ground truth and
+a `simulator` block naming the scene and sample), `scene.json` (the exact scene) and
+`map.json` (its beacon map, for `lumipose locate --map`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from server.fov import fov_grid, grid_points
+from server.geometry import rotation_from_ypr
+from shared_schemas import device_profiles
+from simulator import trajectories
+from simulator.fixtures import write_fixture
+from simulator.render import CameraPose
+from simulator.scene import (
+    FovGridSeries, GridSeries, PosesSeries, RotationSpec, Scene, SeriesSpec, TrajectorySeries, render_sample,
+)
+
+
+@dataclass(frozen=True)
+class SamplePose:
+    index: int
+    t_s: float
+    position_m: tuple[float, float, float]
+    ypr_deg: tuple[float, float, float]
+    label: str = ""  # e.g. the grid cell "(-8, 11)"
+
+    def camera_pose(self) -> CameraPose:
+        return CameraPose(np.array(self.position_m), rotation_from_ypr(*self.ypr_deg))
+
+
+def sample_rng(seed: int, index: int, stream: int) -> np.random.Generator:
+    """The generator of one sample's `stream` (0 attitude, 1 rendering): the same in any process."""
+    return np.random.default_rng([seed, index, stream])
+
+
+def fov_grid_positions(scene: Scene, series: FovGridSeries) -> tuple[np.ndarray, np.ndarray]:
+    """(labels (N, 2), positions (N, 3)) of the paper's grid under the chosen beacon."""
+    beacon = next(b for b in scene.beacons if series.beacon_id in (None, b.id))
+    distance_m = beacon.center_m[2] - series.height_m
+    if distance_m <= 0:
+        raise ValueError(f"series.path.height_m {series.height_m} is not below beacon {beacon.id}")
+    camera = scene.camera
+    if camera.profile is None:
+        raise ValueError("a fov_grid series needs a camera with a device profile (paper eq. 2: R * P)")
+    profile = device_profiles()[camera.profile]
+    updates = {k: getattr(camera, k) for k in ("pixel_size_m", "focal_length_m") if getattr(camera, k) is not None}
+    grid = fov_grid(profile.model_copy(update=updates), distance_m, series.cell_m, beacon.side_m)
+    labels, offsets = grid_points(grid)
+    positions = np.column_stack([offsets + beacon.center_m[:2], np.full(len(offsets), series.height_m)])
+    return labels, positions
+
+
+def _path_positions(scene: Scene, path) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(times (N,), positions (N, 3), labels) of a series' path, before any rotation."""
+    if isinstance(path, PosesSeries):
+        positions = np.array([p.position_m for p in path.poses], dtype=float)
+        return np.array([p.t_s for p in path.poses]), positions, [""] * len(positions)
+    if isinstance(path, FovGridSeries):
+        labels, positions = fov_grid_positions(scene, path)
+        return np.zeros(len(positions)), positions, [f"({i}, {j})" for i, j in labels]
+    if isinstance(path, GridSeries):
+        xs = np.arange(path.x_m[0], path.x_m[1] + path.x_m[2] * 1e-6, path.x_m[2])
+        ys = np.arange(path.y_m[1], path.y_m[0] - path.y_m[2] * 1e-6, -path.y_m[2])  # top row first, as the paper
+        positions = np.array([(x, y, path.height_m) for y in ys for x in xs])
+        return np.zeros(len(positions)), positions, [""] * len(positions)
+    if isinstance(path, TrajectorySeries):
+        if path.kind == "waypoints":
+            walk = trajectories.waypoints(np.array(path.points_m), path.speed_mps, path.frame_interval_s, path.height_m)
+        else:
+            make = trajectories.zigzag if path.kind == "zigzag" else trajectories.square_spiral
+            walk = make(trajectories.Area(*path.area_m), path.spacing_m, path.speed_mps, path.frame_interval_s,
+                        path.height_m)
+        return np.array([w.t_s for w in walk]), np.array([w.position_m for w in walk]), [""] * len(walk)
+    raise TypeError(f"unknown series path {type(path).__name__}")
+
+
+def _attitudes(rotation: RotationSpec, times_s: np.ndarray, positions: np.ndarray, seed: int,
+               fixed_ypr: np.ndarray | None) -> np.ndarray:
+    """(N, 3) yaw, pitch, roll in degrees for each sample."""
+    count = len(times_s)
+    ypr = np.tile([rotation.yaw_deg, rotation.pitch_deg, rotation.roll_deg], (count, 1)).astype(float)
+    if fixed_ypr is not None:
+        ypr += fixed_ypr
+    if rotation.face_walking_direction and count > 1:
+        walk = [trajectories.TimedPosition(t, p) for t, p in zip(times_s, positions)]
+        ypr[:, 0] += trajectories.walking_yaw_deg(walk)
+    for index in range(count):
+        rng = sample_rng(seed, index, 0)
+        tilt = rng.uniform(0.0, rotation.max_tilt_deg)
+        azimuth = rng.uniform(0.0, 2 * math.pi)
+        yaw = rng.uniform(-rotation.yaw_jitter_deg, rotation.yaw_jitter_deg)
+        ypr[index] += [yaw, tilt * math.cos(azimuth), tilt * math.sin(azimuth)]
+    if rotation.shake_deg > 0:
+        ypr += trajectories.hand_shake_deg(times_s, rotation.shake_deg, seed)
+    return ypr
+
+
+def series_poses(scene: Scene, series: SeriesSpec | None = None) -> list[SamplePose]:
+    """The camera poses of `series` (default: the scene's own), deterministic for the scene's seed."""
+    series = series or scene.series
+    if series is None:
+        raise ValueError("the scene has no series: give one (series.path) or a single pose")
+    times, positions, labels = _path_positions(scene, series.path)
+    fixed = (np.array([p.ypr_deg for p in series.path.poses], dtype=float)
+             if isinstance(series.path, PosesSeries) else None)
+    ypr = _attitudes(series.rotation, times, positions, scene.seed, fixed)
+    return [SamplePose(i, float(t), tuple(map(float, p)), tuple(map(float, a)), label)
+            for i, (t, p, a, label) in enumerate(zip(times, positions, ypr, labels))]
+
+
+def render_pose(scene: Scene, sample: SamplePose) -> tuple[np.ndarray, object]:
+    """(pixels, FrameMeta) of one sample; its noise depends only on the scene's seed and the index."""
+    extra = {"simulator": {"scene": "scene.json", "sample": sample.index, "seed": scene.seed, "t_s": sample.t_s,
+                           "ypr_deg": list(sample.ypr_deg), "label": sample.label}}
+    return render_sample(scene, sample.camera_pose(), sample_rng(scene.seed, sample.index, 1), sample.t_s, **extra)
+
+
+def progress(done: int, total: int, label: str, stream=sys.stderr) -> None:
+    """A one-line progress bar on a terminal; every tenth on a log."""
+    if stream.isatty():
+        filled = int(30 * done / max(total, 1))
+        print(f"\r{label} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}", end="\n" if done == total else "",
+              file=stream, flush=True)
+    elif done == total or done % max(1, total // 10) == 0:
+        print(f"{label}: {done}/{total}", file=stream, flush=True)
+
+
+def parallel_map(function: Callable, items: list, workers: int | None, label: str) -> Iterator:
+    """`function` over `items` in order, on `workers` processes (1 = in this process), with progress."""
+    workers = max(1, workers or os.cpu_count() or 1)
+    if workers == 1 or len(items) <= 1:
+        results: Iterable = map(function, items)
+        pool = None
+    else:
+        pool = ProcessPoolExecutor(max_workers=workers)
+        results = pool.map(function, items, chunksize=1)
+    try:
+        for done, result in enumerate(results, start=1):
+            progress(done, len(items), label)
+            yield result
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
+
+
+def _write_one(args: tuple[Scene, SamplePose, Path]) -> str:
+    scene, sample, out_dir = args
+    pixels, meta = render_pose(scene, sample)
+    raw, _ = write_fixture(out_dir / f"{scene.name}_{sample.index:04d}", pixels, meta)
+    return raw.stem
+
+
+def write_series(scene: Scene, out_dir: Path, workers: int | None = None) -> list[str]:
+    """Render the scene's series into `out_dir` as fixtures, with scene.json and map.json.
+
+    Returns the fixtures' stems. scene.json is the scene exactly as rendered (series and seed
+    included), so `lumipose simulate out/scene.json` makes the same files again.
+    """
+    samples = series_poses(scene)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "scene.json").write_text(scene.to_json())
+    (out_dir / "map.json").write_text(scene.beacon_map().model_dump_json(by_alias=True, indent=2) + "\n")
+    jobs = [(scene, sample, out_dir) for sample in samples]
+    return list(parallel_map(_write_one, jobs, workers, f"simulate {scene.name}"))
