@@ -1,0 +1,125 @@
+"""All beacon candidates in a frame (the paper's office has four panels; `contour.py` keeps one).
+
+Works on the same subsampled view as `roi.py`, thresholded lower (at `level_fraction` of the
+way from background to plateau) so that a short-exposure ID frame, whose panel is striped
+between the LED's low and high levels, stays one blob. Every blob goes through the shape
+rules of `contour.find_beacon_blob` on its own padded mask; blobs that touch the frame border
+are kept and flagged `cut_off` (they may still carry an ID, not a pose).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from server.vision.binarize import Levels, estimate_levels
+from server.vision.contour import BlobRules, Refusal, find_beacon_blob
+
+
+@dataclass(frozen=True)
+class CandidateRules:
+    coarse_short_side_px: int = 480
+    min_contrast_dn: float = 20.0
+    level_fraction: float = 0.2  # of plateau - background; below the LED's low level of 0.3
+    close_px: int = 3  # bridges dark stripes and noise holes in the small view
+    blobs: BlobRules = BlobRules()
+
+
+@dataclass(frozen=True)
+class BeaconBlob:
+    """One candidate panel, in full-frame pixels."""
+
+    contour_px: np.ndarray  # (N, 2) float, outer contour (coarse: `step` px resolution)
+    bounding_box: tuple[int, int, int, int]  # x, y, width, height
+    centroid_px: tuple[float, float]
+    area_px: float
+    cut_off: bool
+
+
+@dataclass(frozen=True)
+class Candidates:
+    blobs: tuple[BeaconBlob, ...]  # largest first
+    levels: Levels
+    step: int
+    rejected: tuple[str, ...]  # why other bright blobs are not beacons
+
+
+def _step(shape: tuple[int, int], rules: CandidateRules) -> int:
+    return max(1, min(shape) // rules.coarse_short_side_px)
+
+
+def candidate_mask(image: np.ndarray, levels: Levels, rules: CandidateRules) -> np.ndarray:
+    """Binary mask (uint8 0 / 255) of pixels above the candidate level, small gaps closed."""
+    level = levels.background + rules.level_fraction * levels.contrast
+    _, mask = cv2.threshold(image, level, 255, cv2.THRESH_BINARY)
+    if rules.close_px > 0:
+        kernel = np.ones((2 * rules.close_px + 1, 2 * rules.close_px + 1), np.uint8)
+        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
+    return mask
+
+
+def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules()) -> Candidates:
+    """Every beacon-shaped blob of a frame (height, width) uint8, largest first."""
+    if pixels.ndim != 2 or pixels.dtype != np.uint8:
+        raise ValueError(f"pixels must be a 2-D uint8 luma image, got {pixels.dtype} {pixels.shape}")
+    step = _step(pixels.shape, rules)
+    small = np.ascontiguousarray(pixels[::step, ::step])
+    levels = estimate_levels(small)
+    if levels.contrast < rules.min_contrast_dn:
+        return Candidates((), levels, step, ("nothing stands out of the background",))
+    mask = candidate_mask(small, levels, rules)
+    count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    blobs: list[BeaconBlob] = []
+    rejected: list[str] = []
+    for label in range(1, count):
+        x, y, w, h, area = stats[label]
+        if area < rules.blobs.min_area_px / step**2:
+            continue
+        # the component alone, padded so that the shape rules never see the frame border
+        alone = np.zeros((h + 4, w + 4), np.uint8)
+        alone[2:-2, 2:-2] = np.where(labels[y:y + h, x:x + w] == label, 255, 0)
+        shape_rules = BlobRules(min_area_px=rules.blobs.min_area_px / step**2, min_convexity=rules.blobs.min_convexity,
+                                min_rectangle_fill=rules.blobs.min_rectangle_fill, min_aspect=rules.blobs.min_aspect)
+        found = find_beacon_blob(alone, shape_rules)
+        cut_off = x <= 0 or y <= 0 or x + w >= small.shape[1] or y + h >= small.shape[0]
+        if isinstance(found, Refusal):
+            if not cut_off:  # a cut-off panel is not square either; keep it, flagged
+                rejected.append(found.message)
+                continue
+            contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
+        else:
+            contour = found.contour
+        contour_px = (contour.astype(float) - 2 + [x, y]) * step
+        blobs.append(BeaconBlob(
+            contour_px=contour_px,
+            bounding_box=(int(x * step), int(y * step), int(w * step), int(h * step)),
+            centroid_px=(float(centroids[label][0] * step), float(centroids[label][1] * step)),
+            area_px=float(area * step**2),
+            cut_off=bool(cut_off),
+        ))
+    blobs.sort(key=lambda b: b.area_px, reverse=True)
+    return Candidates(tuple(blobs), levels, step, tuple(rejected))
+
+
+def blob_mask(pixels: np.ndarray, blob: BeaconBlob, levels: Levels, rules: CandidateRules = CandidateRules(),
+              margin_px: int = 4) -> tuple[int, int, np.ndarray]:
+    """(y0, x0, mask): the blob's full-resolution mask (bool) over its box plus `margin_px`.
+
+    Only the connected component nearest the blob's centroid is kept, so a neighbouring
+    panel inside the box does not leak in.
+    """
+    x, y, w, h = blob.bounding_box
+    height, width = pixels.shape
+    x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
+    x1, y1 = min(width, x + w + margin_px + 1), min(height, y + h + margin_px + 1)
+    fine_rules = CandidateRules(level_fraction=rules.level_fraction, close_px=1)
+    mask = candidate_mask(np.ascontiguousarray(pixels[y0:y1, x0:x1]), levels, fine_rules)
+    count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if count <= 1:
+        return y0, x0, np.zeros(mask.shape, bool)
+    target = np.array(blob.centroid_px) - [x0, y0]
+    largest = 1 + np.argsort(stats[1:, cv2.CC_STAT_AREA])[::-1][:3]
+    best = min(largest, key=lambda k: float(np.hypot(*(centroids[k] - target))))
+    return y0, x0, labels == best

@@ -1,0 +1,228 @@
+"""Rolling-shutter stripe decoder: the beacon's ID from the rows of its image.
+
+A rolling shutter starts row r of a frame at t0 + r * row_time_s (row_time_s =
+rolling_shutter_skew_s / (height - 1)), so the rows across a panel sample the LED waveform
+in time: a short exposure shows the chips as horizontal stripes (docs/vlc.md).
+
+1. `read_stripes`: inside the panel's mask, shrunk by `edge_margin_px` so that the blurred
+   edges do not count, each row's mean is one sample of the waveform averaged over the row's
+   exposure; rows are grouped into bins of about a quarter chip. A row mean ignores where the
+   panel lies along the row, so tilt and the panel's outline do not matter; uneven
+   brightness along the rows averages out, and along the columns it is absorbed by a smooth
+   (quadratic) trend fitted with every hypothesis.
+2. `IdEvidence`: maximum likelihood over the candidate IDs. For every candidate, message phase
+   and LED clock error, the predicted bin values (the code box-averaged over each row's
+   exposure, exactly as the sensor does) are fitted with a free gain, offset and trend per
+   frame; the residuals give a log-likelihood, the frames' log-likelihoods add (their
+   relative phase is known from their timestamps), and the posterior of each ID sums over
+   phase and clock error. A frame holding less than one message leaves several IDs
+   plausible; the frames that follow, at other phases, settle it.
+3. The decision is confident only when the best ID's posterior reaches
+   `confident_posterior`; otherwise the best guess is reported as not confident.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from server.vlc.codec import CHIP_RATE_HZ, MAX_ID, MESSAGE_CHIPS, LedWaveform, encode
+
+
+@dataclass(frozen=True)
+class StripeRules:
+    edge_margin_px: int = 3
+    min_pixels_per_row: int = 4
+    samples_per_chip: int = 4
+    rows_per_sample_max: int = 6  # rows read per bin (evenly spread); more only cost time
+    trend_degree: int = 2  # smooth brightness change along the columns
+    phase_steps_per_chip: int = 8
+    lut_steps_per_chip: int = 64
+    max_clock_error_ppm: float = 100.0  # LED crystal against the phone's clock
+    confident_posterior: float = 0.99
+    min_samples: int = 6
+    chip_rate_hz: float = CHIP_RATE_HZ
+
+
+@dataclass(frozen=True)
+class StripeObservation:
+    """The stripe signal of one panel in one frame.
+
+    `row_offsets_s` (n, m): exposure start of the m rows read for each of the n bins,
+    relative to `timestamp_s` (the frame's first-row exposure start, camera clock).
+    """
+
+    timestamp_s: float
+    exposure_s: float
+    row_offsets_s: np.ndarray
+    values_dn: np.ndarray  # (n,) bin means
+    sigma_dn: np.ndarray  # (n,) standard error of each bin mean from the pixels' spread
+    position: np.ndarray  # (n,) bin row, scaled to [-1, 1] over the panel (trend regressor)
+    chips_seen: float  # time the panel's rows span, in chips
+
+    @property
+    def samples(self) -> int:
+        return len(self.values_dn)
+
+
+@dataclass(frozen=True)
+class IdDecision:
+    beacon_id: int | None  # the best ID, confident or not; None with no usable stripes
+    confidence: float  # its posterior probability among the candidates
+    confident: bool
+    frames: int
+    runner_up: int | None
+    chips_seen: float  # over all frames combined (with overlaps)
+    message: str
+
+
+def row_time_s(skew_s: float, height: int) -> float:
+    """Time between the exposure starts of neighbouring rows (contract: skew spans first to last row)."""
+    if height < 2:
+        raise ValueError(f"height must be at least 2 rows, got {height}")
+    if not skew_s > 0:
+        raise ValueError(f"rolling_shutter_skew_s must be positive to read stripes, got {skew_s}")
+    return skew_s / (height - 1)
+
+
+def read_stripes(pixels: np.ndarray, mask: np.ndarray, origin_yx: tuple[int, int], timestamp_s: float,
+                 row_time: float, exposure_s: float, rules: StripeRules = StripeRules()) -> StripeObservation | None:
+    """Bin means of the rows inside `mask` (bool, placed at `origin_yx` of `pixels`), or None.
+
+    None when fewer than `min_samples` bins remain after shrinking the mask.
+    """
+    if exposure_s is None or not exposure_s > 0:
+        raise ValueError(f"exposure_s must be positive to read stripes, got {exposure_s}")
+    y0, x0 = origin_yx
+    h, w = mask.shape
+    window = np.asarray(pixels[y0:y0 + h, x0:x0 + w], dtype=np.float32)
+    if rules.edge_margin_px > 0:
+        size = 2 * rules.edge_margin_px + 1
+        mask = cv2.erode(mask.astype(np.uint8), np.ones((size, size), np.uint8)).astype(bool)
+    counts = mask.sum(axis=1)
+    rows = np.flatnonzero(counts >= rules.min_pixels_per_row)
+    if len(rows) == 0:
+        return None
+    rows = np.arange(rows[0], rows[-1] + 1)  # the panel is convex: one run of rows
+    counts = np.maximum(counts[rows], 1)
+    inside = mask[rows]
+    sums = np.where(inside, window[rows], 0.0).sum(axis=1)
+    squares = np.where(inside, window[rows] ** 2, 0.0).sum(axis=1)
+    means = sums / counts
+    variances = np.maximum(squares / counts - means**2, 1.0) / counts  # of each row mean
+    chip_s = 1.0 / rules.chip_rate_hz
+    per_bin = max(1, int(round(chip_s / rules.samples_per_chip / row_time)))
+    bins = len(rows) // per_bin
+    if bins < rules.min_samples:
+        return None
+    used = bins * per_bin
+    values = means[:used].reshape(bins, per_bin).mean(axis=1)
+    sigma = np.sqrt(variances[:used].reshape(bins, per_bin).mean(axis=1) / per_bin)
+    pick = np.unique(np.linspace(0, per_bin - 1, min(per_bin, rules.rows_per_sample_max)).round().astype(int))
+    absolute_rows = (y0 + rows[:used]).reshape(bins, per_bin)[:, pick]
+    centre = absolute_rows.mean(axis=1)
+    position = (centre - centre.mean()) / max(1.0, (centre.max() - centre.min()) / 2)
+    return StripeObservation(
+        timestamp_s=float(timestamp_s), exposure_s=float(exposure_s),
+        row_offsets_s=absolute_rows * row_time, values_dn=values, sigma_dn=sigma, position=position,
+        chips_seen=float((used * row_time + exposure_s) / chip_s),
+    )
+
+
+@lru_cache(maxsize=16)
+def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int, chip_rate_hz: float) -> np.ndarray:
+    """(C, MESSAGE_CHIPS * steps) each candidate's 0/1 code box-averaged over `exposure_s`."""
+    chip_s = 1.0 / chip_rate_hz
+    times = np.arange(MESSAGE_CHIPS * steps_per_chip) * chip_s / steps_per_chip
+    table = [LedWaveform(tuple(int(c) for c in encode(i)), chip_rate_hz=chip_rate_hz, low_level=0.0)
+             .window_means(times, exposure_s) for i in candidates]
+    return np.array(table, dtype=np.float32)
+
+
+def _frame_log_likelihood(obs: StripeObservation, reference_s: float, candidates: tuple[int, ...],
+                          clock_errors_ppm: np.ndarray, rules: StripeRules) -> np.ndarray:
+    """(C, phases, clock errors) log-likelihood of one frame; relative to its best fit."""
+    lut = _lookup(candidates, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz)
+    steps = lut.shape[1]
+    chip_s = 1.0 / rules.chip_rate_hz
+    period_s = MESSAGE_CHIPS * chip_s
+    phases_s = np.arange(MESSAGE_CHIPS * rules.phase_steps_per_chip) * chip_s / rules.phase_steps_per_chip
+    # trend basis, whitened by each bin's noise; its orthonormal complement removes gain-free parts
+    weights = 1.0 / obs.sigma_dn
+    basis = np.vander(obs.position, rules.trend_degree + 1) * weights[:, None]
+    q, _ = np.linalg.qr(basis)
+    y = obs.values_dn * weights
+    y_p = y - q @ (q.T @ y)
+    result = np.empty((len(candidates), len(phases_s), len(clock_errors_ppm)), np.float64)
+    for e, ppm in enumerate(clock_errors_ppm):
+        rate = 1.0 + ppm * 1e-6
+        times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
+        index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
+        templates = lut[:, index].mean(axis=-1) * weights  # (C, P, n)
+        t_p = templates - (templates @ q) @ q.T
+        norm = np.einsum("cpn,cpn->cp", t_p, t_p)
+        along = t_p @ y_p
+        explained = np.where((along > 0) & (norm > 1e-12), along**2 / np.maximum(norm, 1e-12), 0.0)
+        result[:, :, e] = float(y_p @ y_p) - explained
+    dof = max(1, obs.samples - rules.trend_degree - 2)
+    scale = max(1.0, float(result.min()) / dof)  # residuals beyond the pixel noise: the model's own error
+    return -0.5 * result / scale
+
+
+@dataclass
+class IdEvidence:
+    """ID evidence of one panel over consecutive frames of one device (mutable accumulator)."""
+
+    candidates: tuple[int, ...] = tuple(range(MAX_ID + 1))
+    rules: StripeRules = StripeRules()
+    observations: list[StripeObservation] = field(default_factory=list)
+    max_frames: int = 16
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    def add(self, observation: StripeObservation) -> None:
+        self.observations.append(observation)
+        del self.observations[:-self.max_frames]
+
+    def _clock_errors(self) -> np.ndarray:
+        """Clock-error grid fine enough that the phase slips < 1/phase_steps chip over the span."""
+        times = [o.timestamp_s for o in self.observations]
+        span_s = max(times) - min(times)
+        chip_s = 1.0 / self.rules.chip_rate_hz
+        step_ppm = chip_s / self.rules.phase_steps_per_chip / max(span_s, 1e-9) * 1e6
+        count = int(np.floor(self.rules.max_clock_error_ppm / step_ppm))
+        return np.arange(-count, count + 1) * step_ppm
+
+    def decide(self) -> IdDecision:
+        usable = [o for o in self.observations if o.samples >= self.rules.min_samples]
+        if not usable:
+            return IdDecision(None, 0.0, False, 0, None, 0.0, "no stripes read yet")
+        reference = usable[0].timestamp_s
+        errors = self._clock_errors()
+        total = 0.0
+        setting = (reference, tuple(np.round(errors, 6)))
+        cache = {}
+        for obs in usable:
+            cached = self._cache.get(id(obs))
+            if cached is None or cached[0] is not obs or cached[1] != setting:
+                cached = (obs, setting, _frame_log_likelihood(obs, reference, self.candidates, errors, self.rules))
+            cache[id(obs)] = cached
+            total = total + cached[2]
+        self._cache = cache  # only the frames still in the window
+        flat = total.reshape(len(self.candidates), -1)
+        peak = flat.max()
+        per_id = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))
+        posterior = np.exp(per_id - per_id.max())
+        posterior /= posterior.sum()
+        order = np.argsort(posterior)[::-1]
+        best = order[0]
+        confidence = float(posterior[best])
+        confident = confidence >= self.rules.confident_posterior
+        chips = float(sum(o.chips_seen for o in usable))
+        runner = self.candidates[order[1]] if len(order) > 1 else None
+        message = (f"ID {self.candidates[best]} at posterior {confidence:.3f} from {len(usable)} frame(s), "
+                   f"{chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message")
+        return IdDecision(int(self.candidates[best]), confidence, confident, len(usable),
+                          None if runner is None else int(runner), chips, message)
