@@ -14,11 +14,14 @@ from shared_schemas.models import (
     ErrorBody,
     FailureReason,
     FrameFormat,
+    FrameKind,
     FrameMeta,
     GroundTruth,
     LocateResult,
     OrientationRule,
     ProfileRef,
+    TrackState,
+    VlcReading,
 )
 
 PACKAGE_DIR = Path(__file__).parent
@@ -50,11 +53,14 @@ __all__ = [
     "ErrorBody",
     "FailureReason",
     "FrameFormat",
+    "FrameKind",
     "FrameMeta",
     "GroundTruth",
     "LocateResult",
     "OrientationRule",
     "ProfileRef",
+    "TrackState",
+    "VlcReading",
     "device_profiles",
     "load_map",
 ]

@@ -37,13 +37,13 @@ def _require_finite(name: str, values: list[float]) -> None:
 class Strict(BaseModel):
     """Base for models whose unknown fields are errors (typos must not pass silently)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class Open(BaseModel):
     """Base for models that keep unknown fields (the contract allows extra fields)."""
 
-    model_config = ConfigDict(extra="allow")
+    model_config = ConfigDict(extra="allow", allow_inf_nan=False)
 
 
 class CameraIntrinsics(Open):
@@ -113,6 +113,13 @@ class FrameFormat(str, Enum):
     png = "PNG"
 
 
+class FrameKind(str, Enum):
+    """What a frame is for (docs/vlc.md, capture protocol)."""
+
+    pose = "pose"  # normal exposure (~10 ms): the panel's outline; any LED code is averaged away
+    id = "id"  # short exposure (<= 1/8000 s) beside a pose frame: the rolling shutter shows the code as stripes
+
+
 class GroundTruth(Open):
     position_m: Vec3 = Field(description="camera optical centre, map frame")
     rotation_wc: Mat3 = Field(description="camera-to-world rotation")
@@ -134,8 +141,13 @@ class FrameMeta(Open):
     heading_deg: float | None = None
     gravity_camera: Vec3 | None = None
     ground_truth: GroundTruth | None = None
+    frame_kind: FrameKind = Field(
+        default=FrameKind.pose,
+        description="'id' marks a short-exposure VLC frame (exposure_s <= 2e-4, needs rolling_shutter_skew_s "
+        "and timestamp_ns); its beacon IDs are read from the stripes and combined with the device's other ID frames",
+    )
 
-    model_config = ConfigDict(extra="allow", populate_by_name=True)
+    model_config = ConfigDict(extra="allow", populate_by_name=True, allow_inf_nan=False)
 
     @field_validator("heading_deg")
     @classmethod
@@ -191,7 +203,7 @@ class BeaconMap(Strict):
     name: str
     beacons: list[Beacon] = Field(min_length=1)
 
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _unique_ids(self) -> BeaconMap:
@@ -222,6 +234,27 @@ class OrientationRule(str, Enum):
 class BeaconIdSource(str, Enum):
     single_beacon_map = "single_beacon_map"
     vlc = "vlc"
+    track = "track"  # carried by the device's track: the map beacon nearest the predicted view
+
+
+class VlcReading(Strict):
+    """The beacon ID read from rolling-shutter stripes (docs/vlc.md)."""
+
+    beacon_id: int | None = Field(default=None, ge=0, le=255, description="best ID; null when no stripes were read")
+    confidence: float = Field(ge=0, le=1, description="posterior probability of beacon_id among the candidate IDs")
+    confident: bool = Field(description="confidence reached the decoder's threshold; only then is the ID used")
+    frames: int = Field(ge=0, description="ID frames combined")
+    chips_seen: float = Field(ge=0, description="message chips covered by those frames (a message is 21)")
+    candidates: int = Field(ge=1, description="number of IDs considered (the map's, or all 256)")
+
+
+class TrackState(Strict):
+    """A device's motion-filtered track at this frame; the fix itself stays in position_m."""
+
+    filtered_position_m: Vec3
+    velocity_mps: Vec3
+    outlier: bool = Field(description="the raw fix was rejected by the filter's gate")
+    beacon_id_carried: bool = Field(default=False, description="the beacon ID came from the track, not this frame")
 
 
 class LocateResult(Strict):
@@ -250,8 +283,11 @@ class LocateResult(Strict):
     message: str | None = None
     warnings: list[str] = Field(default_factory=list)
     timing_ms: dict[str, float] = Field(default_factory=dict)
+    vlc: VlcReading | None = Field(default=None, description="the ID read by VLC for this fix, when one was read")
+    beacons_in_view: int | None = Field(default=None, ge=0, description="beacon-shaped blobs seen in the frame")
+    track: TrackState | None = None
 
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
 
 
 class ErrorBody(Strict):
