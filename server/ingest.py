@@ -16,9 +16,9 @@ from pydantic import ValidationError
 
 from server.camera import resolve_camera
 from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
+from shared_schemas.fixture_files import fixture_paths
 
 MAX_PIXELS = 100_000_000
-RAW_SUFFIXES = (".y", ".yuv", ".png")
 
 
 class FrameError(ValueError):
@@ -37,14 +37,10 @@ class LumaFrame:
     camera: CameraIntrinsics
 
 
-def _reject_constant(value: str) -> float:
-    raise FrameError(f"frame metadata contains {value}, which is not a number")
-
-
 def parse_meta(text: str | bytes | dict) -> FrameMeta:
-    """Validate frame metadata; NaN and Infinity are refused."""
+    """Validate frame metadata; NaN and Infinity are refused by the models, naming the field."""
     try:
-        data = text if isinstance(text, dict) else json.loads(text, parse_constant=_reject_constant)
+        data = text if isinstance(text, dict) else json.loads(text)
     except json.JSONDecodeError as error:
         raise FrameError(f"frame metadata is not valid JSON: {error}") from None
     try:
@@ -100,14 +96,10 @@ def decode_frame(data: bytes | memoryview, meta: FrameMeta) -> LumaFrame:
 
 def read_fixture(path: Path | str) -> LumaFrame:
     """A recorded frame from NAME.json and its sibling NAME.y / NAME.yuv / NAME.png."""
-    path = Path(path)
-    meta_path = path.with_suffix(".json")
-    if not meta_path.is_file():
-        raise FrameError(f"no frame metadata at {meta_path}")
-    raw_paths = [path] if path.suffix in RAW_SUFFIXES else [path.with_suffix(s) for s in RAW_SUFFIXES]
-    raw_path = next((p for p in raw_paths if p.is_file()), None)
-    if raw_path is None:
-        raise FrameError(f"no frame data beside {meta_path} (looked for {', '.join(p.name for p in raw_paths)})")
+    try:
+        meta_path, raw_path = fixture_paths(path)
+    except FileNotFoundError as error:
+        raise FrameError(str(error)) from None
     meta = parse_meta(meta_path.read_bytes())
     if raw_path.suffix == ".png" and meta.format is not FrameFormat.png:
         meta = meta.model_copy(update={"format": FrameFormat.png})

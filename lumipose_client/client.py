@@ -1,0 +1,202 @@
+"""The endpoints are written once (`_Endpoints`); `Client` runs them with httpx.Client and
+`AsyncClient` with httpx.AsyncClient, so both always speak the same API."""
+
+from __future__ import annotations
+
+import gzip
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Generic, TypeVar
+
+import httpx
+from pydantic import BaseModel, ValidationError
+
+from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
+from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, SampleInfo, SampleList
+from shared_schemas.fixture_files import fixture_paths
+
+FRAME_HEADER = "X-Lumipose-Frame"
+T = TypeVar("T")
+
+
+class LumiposeError(Exception):
+    """The service refused a request; `body` is its ErrorBody (error code, field, message)."""
+
+    def __init__(self, status: int, body: ErrorBody):
+        super().__init__(f"HTTP {status} {body.error}: {body.message}")
+        self.status, self.body = status, body
+
+
+def read_fixture_files(path: Path | str) -> tuple[FrameMeta, bytes]:
+    """The metadata and bytes of a recorded frame (NAME.json + NAME.y / .yuv / .png)."""
+    meta_path, raw_path = fixture_paths(path)
+    return FrameMeta.model_validate_json(meta_path.read_bytes()), raw_path.read_bytes()
+
+
+@dataclass(frozen=True)
+class _Call(Generic[T]):
+    method: str
+    path: str
+    parse: Callable[[httpx.Response], T]
+    params: dict[str, Any] = field(default_factory=dict)
+    headers: dict[str, str] = field(default_factory=dict)
+    content: bytes | None = None
+    json: Any = None
+
+    def request_args(self) -> dict[str, Any]:
+        params = {name: value for name, value in self.params.items() if value is not None}
+        return dict(method=self.method, url=self.path, params=params, headers=self.headers,
+                    content=self.content, json=self.json)
+
+
+def _raise_for_error(response: httpx.Response) -> None:
+    if response.status_code < 400:
+        return
+    try:
+        body = ErrorBody.model_validate_json(response.content)
+    except ValidationError:
+        body = ErrorBody(error="http_error", message=response.text[:500] or response.reason_phrase)
+    raise LumiposeError(response.status_code, body)
+
+
+def _model(model: type[BaseModel]) -> Callable[[httpx.Response], Any]:
+    def parse(response: httpx.Response):
+        _raise_for_error(response)
+        return model.model_validate_json(response.content)
+    return parse
+
+
+def _models(model: type[BaseModel]) -> Callable[[httpx.Response], list]:
+    def parse(response: httpx.Response):
+        _raise_for_error(response)
+        return [model.model_validate(item) for item in response.json()]
+    return parse
+
+
+def _nothing(response: httpx.Response) -> None:
+    _raise_for_error(response)
+
+
+def _frame(response: httpx.Response) -> tuple[FrameMeta, bytes]:
+    _raise_for_error(response)
+    return FrameMeta.model_validate_json(response.headers[FRAME_HEADER]), response.content
+
+
+def _frame_headers(meta: FrameMeta, compress: bool) -> dict[str, str]:
+    headers = {"Content-Type": "application/octet-stream",
+               FRAME_HEADER: meta.model_dump_json(by_alias=True, exclude_none=True)}
+    if compress:
+        headers["Content-Encoding"] = "gzip"
+    return headers
+
+
+def _frame_body(data: bytes, compress: bool) -> bytes:
+    return gzip.compress(data, compresslevel=1) if compress else data  # level 1: fast, most of the gain
+
+
+class _Endpoints:
+    """Each method returns what `_run` returns: a value (Client) or an awaitable (AsyncClient)."""
+
+    def _run(self, call: _Call):  # pragma: no cover - implemented by the two clients
+        raise NotImplementedError
+
+    def health(self):
+        return self._run(_Call("GET", "/healthz", _model(Health)))
+
+    def locate(self, data: bytes, meta: FrameMeta, *, map: str | None = None, beacon_id: int | None = None,
+               gravity: str | None = None, compress: bool = True):
+        """Locate the camera of one frame: LocateResult (ok, or ok=False with a reason)."""
+        return self._run(_Call("POST", "/v1/locate", _model(LocateResult),
+                               params={"map": map, "beacon_id": beacon_id, "gravity": gravity},
+                               headers=_frame_headers(meta, compress), content=_frame_body(data, compress)))
+
+    def locate_fixture(self, path: Path | str, **options):
+        meta, data = read_fixture_files(path)
+        return self.locate(data, meta, **options)
+
+    def maps(self):
+        return self._run(_Call("GET", "/v1/maps", _models(MapSummary)))
+
+    def get_map(self, name: str):
+        return self._run(_Call("GET", f"/v1/maps/{name}", _model(BeaconMap)))
+
+    def put_map(self, beacon_map: BeaconMap):
+        return self._run(_Call("PUT", f"/v1/maps/{beacon_map.name}", _model(BeaconMap),
+                               json=beacon_map.model_dump(mode="json", by_alias=True)))
+
+    def active_map(self):
+        return self._run(_Call("GET", "/v1/maps/active", _model(ActiveMap)))
+
+    def set_active_map(self, name: str):
+        return self._run(_Call("PUT", "/v1/maps/active", _model(ActiveMap), json={"name": name}))
+
+    def profiles(self):
+        return self._run(_Call("GET", "/v1/profiles", _models(DeviceProfile)))
+
+    def store_sample(self, data: bytes, meta: FrameMeta, *, label: str | None = None, device: str | None = None,
+                     map: str | None = None, compress: bool = True):
+        headers = _frame_headers(meta, compress) | ({"X-Lumipose-Device": device} if device else {})
+        return self._run(_Call("POST", "/v1/samples", _model(SampleInfo), params={"label": label, "map": map},
+                               headers=headers, content=_frame_body(data, compress)))
+
+    def samples(self):
+        return self._run(_Call("GET", "/v1/samples", _model(SampleList)))
+
+    def sample(self, sample_id: str):
+        return self._run(_Call("GET", f"/v1/samples/{sample_id}", _model(SampleInfo)))
+
+    def sample_frame(self, sample_id: str):
+        """(FrameMeta, frame bytes) of a stored sample."""
+        return self._run(_Call("GET", f"/v1/samples/{sample_id}/frame", _frame))
+
+    def delete_sample(self, sample_id: str):
+        return self._run(_Call("DELETE", f"/v1/samples/{sample_id}", _nothing))
+
+    def evaluate_samples(self, *, map: str | None = None, cell_m: float = 0.05, height_m: float = 0.0):
+        return self._run(_Call("GET", "/v1/samples/evaluation", _model(Evaluation),
+                               params={"map": map, "cell_m": cell_m, "height_m": height_m}))
+
+
+def _auth(api_key: str | None) -> dict[str, str]:
+    return {"X-API-Key": api_key} if api_key else {}
+
+
+class Client(_Endpoints):
+    """Synchronous client; use as a context manager or call `close()`."""
+
+    def __init__(self, base_url: str, *, api_key: str | None = None, timeout_s: float = 30.0,
+                 transport: httpx.BaseTransport | None = None):
+        self._http = httpx.Client(base_url=base_url, headers=_auth(api_key), timeout=timeout_s, transport=transport)
+
+    def _run(self, call: _Call[T]) -> T:
+        return call.parse(self._http.request(**call.request_args()))
+
+    def close(self) -> None:
+        self._http.close()
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class AsyncClient(_Endpoints):
+    """Asynchronous client: the same methods, awaited."""
+
+    def __init__(self, base_url: str, *, api_key: str | None = None, timeout_s: float = 30.0,
+                 transport: httpx.AsyncBaseTransport | None = None):
+        self._http = httpx.AsyncClient(base_url=base_url, headers=_auth(api_key), timeout=timeout_s,
+                                       transport=transport)
+
+    async def _run(self, call: _Call[T]) -> T:
+        return call.parse(await self._http.request(**call.request_args()))
+
+    async def aclose(self) -> None:
+        await self._http.aclose()
+
+    async def __aenter__(self) -> AsyncClient:
+        return self
+
+    async def __aexit__(self, *exc) -> None:
+        await self.aclose()
