@@ -55,6 +55,19 @@ def add_commands(commands) -> None:
     speed.add_argument("--distance", type=float, default=1.0)
     speed.add_argument("--json", action="store_true")
     speed.set_defaults(run=_run_speed)
+    for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
+                            ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
+        grid = benches.add_parser(name, help=help_text)
+        grid.add_argument("--out", type=Path, default=Path(f"reports/{name}"), help="report folder")
+        grid.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
+        grid.add_argument("--seed", type=int, default=None, help="default: the scene file's")
+        grid.add_argument("--limit", type=int, default=None, help="only about N evenly spread grid points")
+        grid.add_argument("--workers", type=int, default=None)
+        grid.add_argument("--json", action="store_true")
+        if name == "bench-real":
+            grid.add_argument("--uncalibrated", action="store_true",
+                              help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
+        grid.set_defaults(run=_run_grid_bench, bench_name=name)
 
 
 def _run_render(args) -> int:
@@ -142,6 +155,37 @@ def _run_accuracy(args) -> int:
                 continue
             print(f"{report['distance_m']:>7.1f}m {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
                   f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%")
+    return 0
+
+
+def _print_report(report: dict, as_json: bool) -> None:
+    from simulator.reports import format_table
+
+    (Path(report.get("out", ".")) / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    if as_json:
+        print(json.dumps(report, indent=2))
+        return
+    print(format_table(report["summary"], report["title"]))
+    paper = report.get("paper")
+    if paper:
+        print(f"  paper        mean {paper['mean_mm']} mm, max {paper['max_mm']} mm, coverage {paper['coverage_pct']} %")
+    for failure in report.get("failures", [])[:20]:
+        print(f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
+              f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}")
+    for figure in report.get("figures", []):
+        print(f"  figure {figure}")
+
+
+def _run_grid_bench(args) -> int:
+    from simulator.bench_grid import RealBench, bench_grid, bench_real
+
+    if args.bench_name == "grid":
+        report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit)
+    else:
+        report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
+                            args.workers, args.limit)
+    report["out"] = str(args.out)
+    _print_report(report, args.json)
     return 0
 
 
