@@ -87,6 +87,10 @@ def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray 
 
 def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = PipelineOptions()) -> LocateResult:
     """Position and pose of the camera that took `frame`, or the reason there is none."""
+    if options.beacon_id is None and len(beacon_map.beacons) > 1:
+        from server.rooms import locate_in_room  # several beacons: IDs from the frame's stripes (docs/vlc.md)
+
+        return locate_in_room(frame, beacon_map, options)
     timer = _Timer()
     chosen = _choose_beacon(beacon_map, options.beacon_id)
     if isinstance(chosen, Refusal):

@@ -1,0 +1,159 @@
+"""Rooms with many beacons: one fix per panel in view, the best chosen, agreeing ones fused.
+
+`server.pipeline.locate` handles one panel. Here every beacon-shaped blob of the frame
+(`server.vision.beacons`) that has an ID gets its own crop (the other panels blanked to the
+background level, the principal point shifted, so OpenCV's distortion model stays exact) and
+its own `locate`. The fix of the largest complete panel is the best conditioned (the error
+of a square's pose grows with distance over its image size); the other fixes are averaged
+in, weighted by that same measure, only when they agree with it within `fuse_gate_m` (a
+panel with a wrong ID would move the fix by a beacon spacing, so it is left out, and said).
+
+`locate_in_room` is the pipeline's hook for a multi-beacon map without a given ID: it reads
+the frame's own stripes (a short-exposure frame, docs/vlc.md); the tracking session
+instead brings IDs read from the ID frames beside a pose frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from server.ingest import LumaFrame
+from server.vision.beacons import BeaconBlob, CandidateRules, find_beacon_blobs
+from server.vlc.decoder import IdEvidence, StripeRules
+from server.vlc.reader import read_id_frame
+from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult, VlcReading
+
+
+@dataclass(frozen=True)
+class RoomRules:
+    crop_margin_px: int = 48
+    fuse_gate_m: float = 0.03
+    fuse: bool = True
+    candidates: CandidateRules = CandidateRules()
+    stripes: StripeRules = StripeRules()
+
+
+@dataclass(frozen=True)
+class PanelFix:
+    blob: BeaconBlob
+    beacon: Beacon
+    source: BeaconIdSource
+    result: LocateResult
+    vlc: VlcReading | None = None
+
+
+def crop_frame(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], margin_px: int,
+               background_dn: float) -> tuple[LumaFrame, tuple[int, int]]:
+    """`frame` cut to `blob`'s box plus `margin_px`, other blobs blanked; and the crop's (x0, y0)."""
+    height, width = frame.pixels.shape
+    x, y, w, h = blob.bounding_box
+    x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
+    x1, y1 = min(width, x + w + margin_px), min(height, y + h + margin_px)
+    pixels = np.array(frame.pixels[y0:y1, x0:x1])
+    for other in others:
+        ox, oy, ow, oh = other.bounding_box
+        pad = margin_px // 4
+        ax0, ay0 = max(ox - pad - x0, 0), max(oy - pad - y0, 0)
+        ax1, ay1 = min(ox + ow + pad - x0, x1 - x0), min(oy + oh + pad - y0, y1 - y0)
+        if ax1 > ax0 and ay1 > ay0:
+            pixels[ay0:ay1, ax0:ax1] = np.uint8(round(background_dn))
+    pixels.flags.writeable = False
+    camera = frame.camera.model_copy(update={"cx": frame.camera.cx - x0, "cy": frame.camera.cy - y0})
+    meta = frame.meta.model_copy(update={"width": x1 - x0, "height": y1 - y0, "row_stride": None, "camera": camera})
+    return LumaFrame(pixels=pixels, meta=meta, camera=camera), (x0, y0)
+
+
+def locate_panel(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], beacon: Beacon, options,
+                 background_dn: float, rules: RoomRules = RoomRules()) -> LocateResult:
+    """`locate` on `blob` alone as map beacon `beacon`; pixels reported in the full frame."""
+    from server.pipeline import locate  # the pipeline imports this module for its hook
+
+    crop, (x0, y0) = crop_frame(frame, blob, others, rules.crop_margin_px, background_dn)
+    single = BeaconMap(name=f"beacon {beacon.id}", beacons=[beacon])
+    result = locate(crop, single, replace(options, beacon_id=beacon.id))
+    if not result.ok:
+        return result
+    shift = np.array([x0, y0], dtype=float)
+    return result.model_copy(update={
+        "corners_px": (np.array(result.corners_px) + shift).tolist(),
+        "center_px": (np.array(result.center_px) + shift).tolist(),
+    })
+
+
+def _conditioning(fix: PanelFix) -> float:
+    """Inverse variance proxy of a panel's fix: (image size / distance)^2."""
+    distance = float(np.linalg.norm(np.subtract(fix.result.position_m, fix.beacon.center_m)))
+    return fix.blob.area_px / max(distance, 1e-3) ** 2
+
+
+def choose_and_fuse(fixes: list[PanelFix], rules: RoomRules = RoomRules()) -> PanelFix | None:
+    """The best-conditioned fix, with the fixes that agree with it averaged in."""
+    good = [f for f in fixes if f.result.ok]
+    if not good:
+        return None
+    good.sort(key=_conditioning, reverse=True)
+    best = good[0]
+    if not rules.fuse or len(good) == 1:
+        return best
+    agree = [f for f in good if np.linalg.norm(np.subtract(f.result.position_m, best.result.position_m))
+             <= rules.fuse_gate_m]
+    disagree = [f.beacon.id for f in good if f not in agree]
+    warnings = list(best.result.warnings)
+    if disagree:
+        warnings.append(f"fixes from beacons {disagree} disagree with beacon {best.beacon.id} by more than "
+                        f"{rules.fuse_gate_m * 1000:.0f} mm and were left out")
+    if len(agree) == 1:
+        return replace(best, result=best.result.model_copy(update={"warnings": warnings}))
+    weights = np.array([_conditioning(f) for f in agree])
+    position = (weights[:, None] * np.array([f.result.position_m for f in agree])).sum(axis=0) / weights.sum()
+    warnings.append(f"position fused from beacons {[f.beacon.id for f in agree]}")
+    return replace(best, result=best.result.model_copy(update={"position_m": position.tolist(), "warnings": warnings}))
+
+
+def _refusal(reason: FailureReason, message: str, in_view: int, vlc: VlcReading | None = None) -> LocateResult:
+    return LocateResult(ok=False, reason=reason, message=message, beacons_in_view=in_view, vlc=vlc)
+
+
+def vlc_reading(evidence: IdEvidence) -> VlcReading:
+    decision = evidence.decide()
+    return VlcReading(beacon_id=decision.beacon_id, confidence=min(1.0, max(0.0, decision.confidence)),
+                      confident=decision.confident, frames=decision.frames,
+                      chips_seen=decision.chips_seen, candidates=len(evidence.candidates))
+
+
+def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options, rules: RoomRules = RoomRules()) -> LocateResult:
+    """A fix from a frame of a multi-beacon map whose IDs come from the frame's own stripes."""
+    reading = read_id_frame(frame, rules.candidates, rules.stripes)
+    if reading.problem is not None:
+        blobs = find_beacon_blobs(frame.pixels, rules.candidates).blobs
+        return _refusal(FailureReason.unknown_beacon,
+                        f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
+                        f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)",
+                        len(blobs))
+    ids = tuple(sorted(b.id for b in beacon_map.beacons))
+    background = find_beacon_blobs(frame.pixels, rules.candidates).levels.background
+    blobs = [p.blob for p in reading.panels]
+    fixes, readings = [], []
+    for panel in reading.panels:
+        if panel.observation is None:
+            continue
+        evidence = IdEvidence(candidates=ids, rules=rules.stripes)
+        evidence.add(panel.observation)
+        vlc = vlc_reading(evidence)
+        readings.append(vlc)
+        if not vlc.confident or panel.blob.cut_off:
+            continue
+        beacon = beacon_map.beacon(vlc.beacon_id)
+        result = locate_panel(frame, panel.blob, [b for b in blobs if b is not panel.blob], beacon, options,
+                              background, rules)
+        fixes.append(PanelFix(panel.blob, beacon, BeaconIdSource.vlc, result, vlc))
+    best = choose_and_fuse(fixes, rules)
+    if best is None:
+        reason = fixes[0].result.reason if fixes else FailureReason.unknown_beacon
+        message = (fixes[0].result.message if fixes else
+                   f"no complete panel with a confidently read ID among {len(blobs)} in view")
+        top = max(readings, key=lambda r: r.confidence, default=None)
+        return _refusal(reason, message, len(blobs), top)
+    return best.result.model_copy(update={"vlc": best.vlc, "beacons_in_view": len(blobs)})

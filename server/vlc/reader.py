@@ -1,0 +1,43 @@
+"""Stripes of every panel in one ID frame: blobs (server.vision.beacons) -> row signals (decoder)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from server.ingest import LumaFrame
+from server.vision.beacons import BeaconBlob, CandidateRules, blob_mask, find_beacon_blobs
+from server.vlc.capture import id_frame_problem
+from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
+
+
+@dataclass(frozen=True)
+class PanelStripes:
+    blob: BeaconBlob
+    centroid_norm: tuple[float, float]  # centroid / (width, height): comparable across frame sizes
+    observation: StripeObservation | None  # None: too few rows inside the panel
+
+
+@dataclass(frozen=True)
+class IdFrameReading:
+    panels: tuple[PanelStripes, ...]
+    problem: str | None  # why this frame cannot carry stripes, if it cannot
+
+
+def read_id_frame(frame: LumaFrame, candidates: CandidateRules = CandidateRules(),
+                  rules: StripeRules = StripeRules()) -> IdFrameReading:
+    """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included)."""
+    problem = id_frame_problem(frame, rules.chip_rate_hz)
+    if problem is not None:
+        return IdFrameReading((), problem)
+    meta = frame.meta
+    height, width = frame.pixels.shape
+    row_time = row_time_s(meta.rolling_shutter_skew_s, height)
+    found = find_beacon_blobs(frame.pixels, candidates)
+    panels = []
+    for blob in found.blobs:
+        y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
+        observation = read_stripes(frame.pixels, mask, (y0, x0), meta.timestamp_ns * 1e-9, row_time,
+                                   meta.exposure_s, rules)
+        centroid = (blob.centroid_px[0] / width, blob.centroid_px[1] / height)
+        panels.append(PanelStripes(blob, centroid, observation))
+    return IdFrameReading(tuple(panels), None)
