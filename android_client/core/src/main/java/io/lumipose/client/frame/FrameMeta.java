@@ -1,0 +1,273 @@
+package io.lumipose.client.frame;
+
+import java.util.Arrays;
+import java.util.HashSet;
+import java.util.Set;
+
+import org.json.JSONObject;
+
+import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.json.ContractException;
+import io.lumipose.client.json.Json;
+
+/**
+ * The contract's frame JSON ({@code lumipose.frame/1}) that travels with every frame.
+ * Fields the client does not know are kept and written back, as the contract asks.
+ */
+public final class FrameMeta {
+    public static final String SCHEMA = "lumipose.frame/1";
+    private static final Set<String> KNOWN = new HashSet<String>(Arrays.asList("schema", "format", "width", "height",
+            "row_stride", "camera", "exposure_s", "iso", "rolling_shutter_skew_s", "timestamp_ns", "heading_deg",
+            "gravity_camera"));
+    private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
+            "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
+
+    public final String format;
+    public final int width;
+    public final int height;
+    public final int rowStride;
+    /** Null when the camera is given by a device profile. */
+    public final Intrinsics camera;
+    /** Device profile id, null when intrinsics are given. */
+    public final String cameraProfile;
+    public final Double exposureS;
+    public final Double iso;
+    public final Double rollingShutterSkewS;
+    public final Long timestampNs;
+    public final Double headingDeg;
+    private final double[] gravityCamera;
+    private final String extrasJson;
+    private final String cameraExtrasJson;
+
+    private FrameMeta(Builder b) {
+        if (b.width <= 0) {
+            throw new ContractException("width", "must be > 0, got " + b.width);
+        }
+        if (b.height <= 0) {
+            throw new ContractException("height", "must be > 0, got " + b.height);
+        }
+        int stride = b.rowStride == null ? b.width : b.rowStride;
+        if ("Y8".equals(b.format) && stride < b.width) {
+            throw new ContractException("row_stride", "must be >= width " + b.width + ", got " + stride);
+        }
+        if ((b.camera == null) == (b.cameraProfile == null)) {
+            throw new ContractException("camera", "give either intrinsics or a device profile");
+        }
+        positiveOrNull("exposure_s", b.exposureS);
+        positiveOrNull("iso", b.iso);
+        if (b.rollingShutterSkewS != null && b.rollingShutterSkewS < 0) {
+            throw new ContractException("rolling_shutter_skew_s", "must be >= 0, got " + b.rollingShutterSkewS);
+        }
+        if (b.gravityCamera != null && b.gravityCamera.length != 3) {
+            throw new ContractException("gravity_camera", "must hold 3 numbers");
+        }
+        this.format = b.format;
+        this.width = b.width;
+        this.height = b.height;
+        this.rowStride = stride;
+        this.camera = b.camera;
+        this.cameraProfile = b.cameraProfile;
+        this.exposureS = b.exposureS;
+        this.iso = b.iso;
+        this.rollingShutterSkewS = b.rollingShutterSkewS;
+        this.timestampNs = b.timestampNs;
+        this.headingDeg = b.headingDeg;
+        this.gravityCamera = b.gravityCamera == null ? null : b.gravityCamera.clone();
+        this.extrasJson = b.extras.toString();
+        this.cameraExtrasJson = b.cameraExtras.toString();
+    }
+
+    private static void positiveOrNull(String field, Double v) {
+        if (v != null && !(v > 0)) {
+            throw new ContractException(field, "must be > 0, got " + v);
+        }
+    }
+
+    public static Builder builder(int width, int height) {
+        return new Builder(width, height);
+    }
+
+    /** Gravity (pointing down) in the camera frame, or null. */
+    public double[] gravityCamera() {
+        return gravityCamera == null ? null : gravityCamera.clone();
+    }
+
+    /** Bytes the frame file or upload body must hold. */
+    public long frameBytes() {
+        if ("Y8".equals(format)) {
+            return (long) rowStride * height;
+        }
+        if ("NV21".equals(format) || "I420".equals(format)) {
+            return (long) rowStride * height * 3 / 2;
+        }
+        return -1;
+    }
+
+    public JSONObject toJson() {
+        JSONObject o = Json.parseObject(extrasJson, "extras");
+        Json.put(o, "schema", SCHEMA);
+        Json.put(o, "format", format);
+        Json.put(o, "width", width);
+        Json.put(o, "height", height);
+        Json.put(o, "row_stride", rowStride);
+        JSONObject cam = Json.parseObject(cameraExtrasJson, "camera extras");
+        if (camera != null) {
+            Json.put(cam, "fx", camera.fx);
+            Json.put(cam, "fy", camera.fy);
+            Json.put(cam, "cx", camera.cx);
+            Json.put(cam, "cy", camera.cy);
+            Json.put(cam, "distortion", Json.array(camera.distortion()));
+            putIfSet(cam, "pixel_size_m", camera.pixelSizeM);
+            putIfSet(cam, "focal_length_m", camera.focalLengthM);
+            putIfSet(cam, "device", camera.device);
+        } else {
+            Json.put(cam, "profile", cameraProfile);
+        }
+        Json.put(o, "camera", cam);
+        putIfSet(o, "exposure_s", exposureS);
+        putIfSet(o, "iso", iso);
+        putIfSet(o, "rolling_shutter_skew_s", rollingShutterSkewS);
+        putIfSet(o, "timestamp_ns", timestampNs);
+        putIfSet(o, "heading_deg", headingDeg);
+        if (gravityCamera != null) {
+            Json.put(o, "gravity_camera", Json.array(gravityCamera));
+        }
+        return o;
+    }
+
+    /** Compact one-line ASCII JSON for the {@code X-Lumipose-Frame} header. */
+    public String toHeaderValue() {
+        return Json.asciiOnly(toJson().toString());
+    }
+
+    private static void putIfSet(JSONObject o, String key, Object v) {
+        if (v != null) {
+            Json.put(o, key, v);
+        }
+    }
+
+    public static FrameMeta fromJson(String text) {
+        return fromJson(Json.parseObject(text, "frame"));
+    }
+
+    public static FrameMeta fromJson(JSONObject o) {
+        String schema = Json.optString(o, "schema", "schema");
+        if (schema != null && !SCHEMA.equals(schema)) {
+            throw new ContractException("schema", "must be '" + SCHEMA + "', got '" + schema + "'");
+        }
+        Builder b = builder(Json.requireInt(o, "width", "width"), Json.requireInt(o, "height", "height"));
+        String format = Json.optString(o, "format", "format");
+        if (format != null) {
+            if (!Arrays.asList("Y8", "NV21", "I420", "PNG").contains(format)) {
+                throw new ContractException("format", "must be Y8, NV21, I420 or PNG, got '" + format + "'");
+            }
+            b.format = format;
+        }
+        Long stride = Json.optLong(o, "row_stride", "row_stride");
+        if (stride != null) {
+            b.rowStride(stride.intValue());
+        }
+        JSONObject cam = Json.requireObject(o, "camera", "camera");
+        String profile = Json.optString(cam, "profile", "camera.profile");
+        if (profile != null) {
+            b.cameraProfile(profile);
+        } else {
+            double[] distortion = Json.optDoubles(cam, "distortion", "camera.distortion", -1);
+            b.camera(new Intrinsics(Json.requireDouble(cam, "fx", "camera.fx"), Json.requireDouble(cam, "fy", "camera.fy"),
+                    Json.requireDouble(cam, "cx", "camera.cx"), Json.requireDouble(cam, "cy", "camera.cy"),
+                    distortion, Json.optDouble(cam, "pixel_size_m", "camera.pixel_size_m"),
+                    Json.optDouble(cam, "focal_length_m", "camera.focal_length_m"),
+                    Json.optString(cam, "device", "camera.device")));
+        }
+        b.cameraExtras = Json.extras(cam, KNOWN_CAMERA);
+        b.exposureS(Json.optDouble(o, "exposure_s", "exposure_s"));
+        b.iso(Json.optDouble(o, "iso", "iso"));
+        b.rollingShutterSkewS(Json.optDouble(o, "rolling_shutter_skew_s", "rolling_shutter_skew_s"));
+        b.timestampNs(Json.optLong(o, "timestamp_ns", "timestamp_ns"));
+        b.headingDeg(Json.optDouble(o, "heading_deg", "heading_deg"));
+        b.gravityCamera(Json.optDoubles(o, "gravity_camera", "gravity_camera", 3));
+        b.extras = Json.extras(o, KNOWN);
+        return b.build();
+    }
+
+    /** Builds a frame's JSON; width and height are required, the rest optional. */
+    public static final class Builder {
+        private String format = "Y8";
+        private final int width;
+        private final int height;
+        private Integer rowStride;
+        private Intrinsics camera;
+        private String cameraProfile;
+        private Double exposureS;
+        private Double iso;
+        private Double rollingShutterSkewS;
+        private Long timestampNs;
+        private Double headingDeg;
+        private double[] gravityCamera;
+        private JSONObject extras = new JSONObject();
+        private JSONObject cameraExtras = new JSONObject();
+
+        private Builder(int width, int height) {
+            this.width = width;
+            this.height = height;
+        }
+
+        public Builder rowStride(int v) {
+            rowStride = v;
+            return this;
+        }
+
+        public Builder camera(Intrinsics v) {
+            camera = v;
+            return this;
+        }
+
+        public Builder cameraProfile(String v) {
+            cameraProfile = v;
+            return this;
+        }
+
+        public Builder exposureS(Double v) {
+            exposureS = v;
+            return this;
+        }
+
+        public Builder iso(Double v) {
+            iso = v;
+            return this;
+        }
+
+        public Builder rollingShutterSkewS(Double v) {
+            rollingShutterSkewS = v;
+            return this;
+        }
+
+        public Builder timestampNs(Long v) {
+            timestampNs = v;
+            return this;
+        }
+
+        public Builder headingDeg(Double v) {
+            headingDeg = v;
+            return this;
+        }
+
+        public Builder gravityCamera(double[] v) {
+            gravityCamera = v == null ? null : v.clone();
+            return this;
+        }
+
+        /** An extra top-level field (the contract allows and keeps them). */
+        public Builder extra(String key, Object value) {
+            if (KNOWN.contains(key)) {
+                throw new IllegalArgumentException("'" + key + "' is a contract field, set it with its own method");
+            }
+            Json.put(extras, key, value);
+            return this;
+        }
+
+        public FrameMeta build() {
+            return new FrameMeta(this);
+        }
+    }
+}

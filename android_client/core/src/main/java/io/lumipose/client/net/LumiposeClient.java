@@ -1,0 +1,152 @@
+package io.lumipose.client.net;
+
+import java.io.ByteArrayOutputStream;
+import java.io.IOException;
+import java.io.UnsupportedEncodingException;
+import java.net.URLEncoder;
+import java.util.LinkedHashMap;
+import java.util.Map;
+import java.util.zip.GZIPOutputStream;
+
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.map.RoomMap;
+
+/**
+ * The client side of {@code lumipose serve}'s HTTP API: raw frame bytes in the body, the frame JSON
+ * in the {@code X-Lumipose-Frame} header, optionally gzip-compressed; retries with back-off on
+ * network errors and busy statuses; any other 4xx/5xx becomes a {@link ServerRejectedException}.
+ */
+public final class LumiposeClient implements FrameUploader {
+    private final ClientConfig config;
+    private final HttpTransport transport;
+    private final Sleeper sleeper;
+
+    public LumiposeClient(ClientConfig config, HttpTransport transport, Sleeper sleeper) {
+        this.config = config;
+        this.transport = transport;
+        this.sleeper = sleeper;
+    }
+
+    /** A client over HttpURLConnection with real sleeps. */
+    public static LumiposeClient create(ClientConfig config) {
+        return new LumiposeClient(config, new UrlConnectionTransport(3000, 15000), Sleeper.REAL);
+    }
+
+    @Override
+    public LocateResult upload(byte[] luma, FrameMeta meta) throws IOException, ServerRejectedException,
+            InterruptedException {
+        return locate(luma, meta);
+    }
+
+    /** POST /v1/locate. A refusal (no beacon, ...) is a result with {@code ok == false}, not an exception. */
+    public LocateResult locate(byte[] luma, FrameMeta meta) throws IOException, ServerRejectedException,
+            InterruptedException {
+        HttpReply reply = call(frameCall(config.baseUrl + "/v1/locate", luma, meta), 200);
+        return LocateResult.fromJson(reply.text());
+    }
+
+    /** POST /v1/samples?label=...: stores the frame with its label (a test-bench cell, "3,-4"). */
+    public StoredSample storeSample(String label, byte[] luma, FrameMeta meta) throws IOException,
+            ServerRejectedException, InterruptedException {
+        if (label == null || label.trim().isEmpty()) {
+            throw new IllegalArgumentException("label must not be empty");
+        }
+        HttpReply reply = call(frameCall(config.baseUrl + "/v1/samples?label=" + urlEncode(label), luma, meta), 201);
+        return StoredSample.fromJson(reply.text());
+    }
+
+    /** GET /v1/maps/{name}: the beacon map to draw. */
+    public RoomMap fetchMap(String name) throws IOException, ServerRejectedException, InterruptedException {
+        HttpReply reply = call(new HttpCall("GET", config.baseUrl + "/v1/maps/" + urlEncode(name),
+                baseHeaders(), null), 200);
+        return RoomMap.fromJson(reply.text());
+    }
+
+    /** GET /healthz once, no retries: true when the server answers 200. */
+    public boolean healthy() {
+        try {
+            return transport.send(new HttpCall("GET", config.baseUrl + "/healthz", baseHeaders(), null)).status == 200;
+        } catch (IOException e) {
+            return false;
+        }
+    }
+
+    HttpCall frameCall(String url, byte[] luma, FrameMeta meta) throws IOException {
+        if (!"Y8".equals(meta.format)) {
+            throw new IllegalArgumentException("format: the client uploads Y8 frames, got " + meta.format);
+        }
+        if (luma.length != meta.frameBytes()) {
+            throw new IllegalArgumentException("frame bytes: " + luma.length + " given, row_stride * height = "
+                    + meta.frameBytes());
+        }
+        Map<String, String> headers = baseHeaders();
+        headers.put("Content-Type", "application/octet-stream");
+        headers.put("X-Lumipose-Frame", meta.toHeaderValue());
+        byte[] body = luma;
+        if (config.gzip) {
+            headers.put("Content-Encoding", "gzip");
+            body = gzip(luma);
+        }
+        return new HttpCall("POST", url, headers, body);
+    }
+
+    private Map<String, String> baseHeaders() {
+        Map<String, String> h = new LinkedHashMap<String, String>();
+        h.put("Accept", "application/json");
+        if (config.apiKey != null) {
+            h.put("X-API-Key", config.apiKey);
+        }
+        if (config.deviceId != null) {
+            h.put("X-Lumipose-Device", config.deviceId);
+        }
+        return h;
+    }
+
+    private HttpReply call(HttpCall c, int expectedStatus) throws IOException, ServerRejectedException,
+            InterruptedException {
+        IOException lastError = null;
+        HttpReply lastReply = null;
+        for (int attempt = 1; attempt <= config.retry.maxAttempts; attempt++) {
+            if (attempt > 1) {
+                sleeper.sleep(config.retry.backoffMs(attempt - 1));
+            }
+            try {
+                lastReply = transport.send(c);
+                lastError = null;
+            } catch (IOException e) {
+                lastError = e;
+                continue;
+            }
+            if (lastReply.status == expectedStatus) {
+                return lastReply;
+            }
+            if (!RetryPolicy.retryable(lastReply.status)) {
+                break;
+            }
+        }
+        if (lastError != null) {
+            throw new IOException("no answer from " + c.url + " after " + config.retry.maxAttempts + " attempts: "
+                    + lastError.getMessage(), lastError);
+        }
+        throw ServerRejectedException.fromBody(lastReply.status, lastReply.text());
+    }
+
+    static byte[] gzip(byte[] data) throws IOException {
+        ByteArrayOutputStream out = new ByteArrayOutputStream(data.length / 4 + 64);
+        GZIPOutputStream z = new GZIPOutputStream(out);
+        try {
+            z.write(data);
+        } finally {
+            z.close();
+        }
+        return out.toByteArray();
+    }
+
+    private static String urlEncode(String s) {
+        try {
+            return URLEncoder.encode(s, "UTF-8");
+        } catch (UnsupportedEncodingException e) {
+            throw new IllegalStateException("UTF-8 is always supported", e);
+        }
+    }
+}

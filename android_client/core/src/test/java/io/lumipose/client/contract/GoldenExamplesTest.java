@@ -1,0 +1,157 @@
+package io.lumipose.client.contract;
+
+import static org.junit.jupiter.api.Assertions.assertArrayEquals;
+import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertFalse;
+import static org.junit.jupiter.api.Assertions.assertNull;
+import static org.junit.jupiter.api.Assertions.assertTrue;
+import static org.junit.jupiter.api.Assertions.fail;
+
+import java.util.HashSet;
+import java.util.Iterator;
+import java.util.Set;
+
+import org.json.JSONArray;
+import org.json.JSONObject;
+import org.junit.jupiter.api.Test;
+
+import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.camera.IntrinsicsCalculator;
+import io.lumipose.client.camera.ArrayRect;
+import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.frame.CaptureValues;
+import io.lumipose.client.frame.FrameAssembler;
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.map.RoomMap;
+import io.lumipose.client.net.LocateResult;
+import io.lumipose.client.net.ServerRejectedException;
+import io.lumipose.client.sensor.LensFacing;
+import io.lumipose.client.testutil.Repo;
+
+/** The client reads and writes exactly what shared_schemas/ (the contract's source of truth) says. */
+class GoldenExamplesTest {
+    private static final String EXAMPLES = "shared_schemas/examples/";
+
+    /** Same JSON up to number formatting (1 vs 1.0) and 1e-12 relative float noise. */
+    private static void assertSameJson(Object expected, Object actual, String path) {
+        if (expected instanceof JSONObject) {
+            if (!(actual instanceof JSONObject)) {
+                fail(path + ": expected an object, got " + actual);
+            }
+            JSONObject e = (JSONObject) expected;
+            JSONObject a = (JSONObject) actual;
+            assertEquals(e.keySet(), a.keySet(), path + " keys");
+            for (String k : e.keySet()) {
+                assertSameJson(e.get(k), a.get(k), path + "." + k);
+            }
+        } else if (expected instanceof JSONArray) {
+            JSONArray e = (JSONArray) expected;
+            JSONArray a = (JSONArray) actual;
+            assertEquals(e.length(), a.length(), path + " length");
+            for (int i = 0; i < e.length(); i++) {
+                assertSameJson(e.get(i), a.get(i), path + "[" + i + "]");
+            }
+        } else if (expected instanceof Number) {
+            double e = ((Number) expected).doubleValue();
+            double a = ((Number) actual).doubleValue();
+            assertEquals(e, a, Math.abs(e) * 1e-12, path);
+        } else {
+            assertEquals(expected, actual, path);
+        }
+    }
+
+    @Test
+    void frameExampleRoundTripsUnchanged() throws Exception {
+        for (String name : new String[] {"frame.json", "frame_profile_nv21.json"}) {
+            JSONObject golden = new JSONObject(Repo.text(EXAMPLES + name));
+            JSONObject written = FrameMeta.fromJson(golden).toJson();
+            // The client always writes row_stride and the intrinsics' distortion; the examples do too.
+            assertSameJson(golden, written, name);
+        }
+    }
+
+    @Test
+    void frameExampleFieldsReadAsTheContractMeans() throws Exception {
+        FrameMeta m = FrameMeta.fromJson(Repo.text(EXAMPLES + "frame.json"));
+        assertEquals(970, m.width);
+        assertEquals(1296, m.height);
+        assertEquals(970L * 1296, m.frameBytes());
+        assertEquals(484.5, m.camera.cx, 0);
+        assertEquals(0.01, m.exposureS, 0);
+        FrameMeta nv21 = FrameMeta.fromJson(Repo.text(EXAMPLES + "frame_profile_nv21.json"));
+        assertEquals("xiaomi-mi8-rear", nv21.cameraProfile);
+        assertNull(nv21.camera);
+        assertEquals(3072L * 4032 * 3 / 2, nv21.frameBytes());
+        assertEquals(12.5, nv21.headingDeg, 0);
+    }
+
+    @Test
+    void bundledFixtureMetadataParses() throws Exception {
+        FrameMeta m = FrameMeta.fromJson(Repo.text("tests/fixtures/bench_1m.json"));
+        assertEquals(m.frameBytes(), java.nio.file.Files.size(Repo.file("tests/fixtures/bench_1m.y")));
+    }
+
+    @Test
+    void whatTheAppSendsUsesOnlyFieldsTheJsonSchemaDeclares() throws Exception {
+        JSONObject schema = new JSONObject(Repo.text("shared_schemas/json/frame.schema.json"));
+        JSONObject cameraSchema = schema.getJSONObject("$defs").getJSONObject("CameraIntrinsics");
+        Intrinsics k = IntrinsicsCalculator.fromFocalLength(3.52, 4.6656, 3.492, new PixelSize(5184, 3880),
+                ArrayRect.ofSize(5184, 3880), new PixelSize(1296, 970), new double[] {0.01, 0, 0, 0, 0}, "test");
+        JSONObject sent = new FrameAssembler(1296, 970, k, 270, LensFacing.FRONT)
+                .assemble(new CaptureValues(10_000_000L, 100, 30_000_000L, 1L), new float[] {0, 0, 9.81f}).toJson();
+        assertDeclared(schema, sent, "frame");
+        assertDeclared(cameraSchema, sent.getJSONObject("camera"), "camera");
+    }
+
+    private static void assertDeclared(JSONObject schema, JSONObject sent, String what) {
+        Set<String> declared = new HashSet<>(schema.getJSONObject("properties").keySet());
+        for (Iterator<String> it = sent.keys(); it.hasNext(); ) {
+            String k = it.next();
+            assertTrue(declared.contains(k), what + " field '" + k + "' is not in the JSON Schema");
+        }
+        JSONArray required = schema.getJSONArray("required");
+        for (int i = 0; i < required.length(); i++) {
+            assertTrue(sent.has(required.getString(i)), what + " lacks required '" + required.getString(i) + "'");
+        }
+    }
+
+    @Test
+    void okResultExampleParses() throws Exception {
+        LocateResult r = LocateResult.fromJson(Repo.text(EXAMPLES + "result_ok.json"));
+        assertTrue(r.ok);
+        assertEquals(3, r.positionM().length);
+        assertEquals(0.15, r.positionM()[0], 0.01);
+        assertEquals(0, r.beaconId.intValue());
+        assertEquals("single_beacon_map", r.beaconIdSource);
+        assertEquals(3, r.rotationWc().length);
+        assertEquals(2, r.centerPx().length);
+        assertNull(r.reason);
+    }
+
+    @Test
+    void refusedResultExampleParses() throws Exception {
+        LocateResult r = LocateResult.fromJson(Repo.text(EXAMPLES + "result_no_fix.json"));
+        assertFalse(r.ok);
+        assertEquals("beacon_cut_off", r.reason);
+        assertNull(r.positionM());
+        assertTrue(r.message.contains("border"));
+    }
+
+    @Test
+    void errorExampleBecomesAnExceptionNamingTheField() throws Exception {
+        ServerRejectedException e = ServerRejectedException.fromBody(400, Repo.text(EXAMPLES + "error.json"));
+        assertEquals(400, e.status);
+        assertEquals("bad_frame", e.code);
+        assertEquals("row_stride", e.field);
+        assertTrue(e.getMessage().contains("1257120"));
+    }
+
+    @Test
+    void mapExamplesParse() throws Exception {
+        RoomMap office = RoomMap.fromJson(Repo.text(EXAMPLES + "map.json"));
+        assertEquals(4, office.beacons.size());
+        assertArrayEquals(new double[] {1.8, 2.7, 2.72}, office.beacon(22).centerM(), 0);
+        RoomMap demo = RoomMap.fromJson(Repo.text("shared_schemas/maps/demo.json"));
+        assertEquals(0.174, demo.beacon(0).sideM, 0);
+    }
+}

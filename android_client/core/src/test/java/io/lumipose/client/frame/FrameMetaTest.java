@@ -1,0 +1,97 @@
+package io.lumipose.client.frame;
+
+import static org.junit.jupiter.api.Assertions.assertArrayEquals;
+import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertFalse;
+import static org.junit.jupiter.api.Assertions.assertNull;
+import static org.junit.jupiter.api.Assertions.assertThrows;
+import static org.junit.jupiter.api.Assertions.assertTrue;
+
+import org.json.JSONObject;
+import org.junit.jupiter.api.Test;
+
+import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.json.ContractException;
+import io.lumipose.client.sensor.LensFacing;
+
+class FrameMetaTest {
+    private static final Intrinsics K = new Intrinsics(800, 801, 319.5, 239.5,
+            new double[] {0.1, -0.2, 0.001, 0.002, 0.03}, 1.4e-6, 4.2e-3, "Pixel 3 back");
+
+    @Test
+    void builderWritesTheContractFields() {
+        FrameMeta m = FrameMeta.builder(640, 480).camera(K).exposureS(0.01).iso(100.0)
+                .rollingShutterSkewS(0.03).timestampNs(123L).gravityCamera(new double[] {0, 0, -1}).build();
+        JSONObject o = m.toJson();
+        assertEquals("lumipose.frame/1", o.getString("schema"));
+        assertEquals("Y8", o.getString("format"));
+        assertEquals(640, o.getInt("width"));
+        assertEquals(480, o.getInt("height"));
+        assertEquals(640, o.getInt("row_stride"));
+        assertEquals(800.0, o.getJSONObject("camera").getDouble("fx"));
+        assertEquals(0.03, o.getJSONObject("camera").getJSONArray("distortion").getDouble(4));
+        assertEquals(0.01, o.getDouble("exposure_s"));
+        assertEquals(123L, o.getLong("timestamp_ns"));
+        assertEquals(-1.0, o.getJSONArray("gravity_camera").getDouble(2));
+        assertFalse(o.has("heading_deg"), "unset optional fields are left out");
+        assertEquals(640L * 480, m.frameBytes());
+    }
+
+    @Test
+    void headerValueIsOneAsciiLine() {
+        Intrinsics named = new Intrinsics(800, 800, 319.5, 239.5, null, null, null, "Caméra\nfrontale");
+        String h = FrameMeta.builder(640, 480).camera(named).build().toHeaderValue();
+        assertFalse(h.contains("\n"));
+        for (char c : h.toCharArray()) {
+            assertTrue(c >= 0x20 && c < 0x7f, "non-printable or non-ASCII char " + (int) c);
+        }
+        assertEquals("Caméra\nfrontale", new JSONObject(h).getJSONObject("camera").getString("device"));
+    }
+
+    @Test
+    void roundTripKeepsEveryFieldAndExtras() {
+        FrameMeta m = FrameMeta.builder(640, 480).rowStride(704).camera(K).headingDeg(12.5)
+                .extra("note", "bench").build();
+        FrameMeta back = FrameMeta.fromJson(m.toJson().toString());
+        assertEquals(704, back.rowStride);
+        assertEquals(12.5, back.headingDeg);
+        assertArrayEquals(K.distortion(), back.camera.distortion(), 0);
+        assertEquals("bench", back.toJson().getString("note"));
+        assertNull(back.gravityCamera());
+    }
+
+    @Test
+    void badFieldsAreNamed() {
+        assertEquals("row_stride", assertThrows(ContractException.class,
+                () -> FrameMeta.builder(640, 480).rowStride(600).camera(K).build()).field);
+        assertEquals("width", assertThrows(ContractException.class,
+                () -> FrameMeta.builder(0, 480).camera(K).build()).field);
+        assertEquals("gravity_camera", assertThrows(ContractException.class,
+                () -> FrameMeta.builder(640, 480).camera(K).gravityCamera(new double[] {0, 1}).build()).field);
+        assertEquals("camera", assertThrows(ContractException.class,
+                () -> FrameMeta.builder(640, 480).build()).field);
+        assertEquals("camera.fx", assertThrows(ContractException.class, () -> FrameMeta.fromJson(
+                "{\"width\": 4, \"height\": 4, \"camera\": {\"fy\": 1, \"cx\": 1, \"cy\": 1}}")).field);
+        assertEquals("width", assertThrows(ContractException.class, () -> FrameMeta.fromJson(
+                "{\"width\": \"4\", \"height\": 4, \"camera\": {\"profile\": \"x\"}}")).field);
+        assertEquals("schema", assertThrows(ContractException.class, () -> FrameMeta.fromJson(
+                "{\"schema\": \"lumipose.frame/2\", \"width\": 4, \"height\": 4, \"camera\": {\"profile\": \"x\"}}"))
+                .field);
+    }
+
+    @Test
+    void assemblerTurnsCaptureValuesIntoTheContractsUnits() {
+        FrameAssembler a = new FrameAssembler(640, 480, K, 270, LensFacing.FRONT);
+        FrameMeta m = a.assemble(new CaptureValues(10_000_000L, 100, 30_000_000L, 55L), new float[] {0, 0, 9.81f});
+        assertEquals(0.01, m.exposureS, 1e-15);
+        assertEquals(100.0, m.iso);
+        assertEquals(0.03, m.rollingShutterSkewS, 1e-15);
+        assertEquals(55L, m.timestampNs);
+        assertArrayEquals(new double[] {0, 0, -1}, m.gravityCamera(), 1e-12);
+        assertEquals(640, m.rowStride);
+
+        FrameMeta bare = a.assemble(new CaptureValues(null, null, null, null), null);
+        assertNull(bare.exposureS);
+        assertNull(bare.gravityCamera());
+    }
+}

@@ -1,0 +1,166 @@
+package io.lumipose.client.net;
+
+import static org.junit.jupiter.api.Assertions.assertArrayEquals;
+import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertFalse;
+import static org.junit.jupiter.api.Assertions.assertThrows;
+import static org.junit.jupiter.api.Assertions.assertTrue;
+
+import java.io.ByteArrayInputStream;
+import java.io.IOException;
+import java.util.ArrayList;
+import java.util.List;
+import java.util.zip.GZIPInputStream;
+
+import org.json.JSONObject;
+import org.junit.jupiter.api.Test;
+
+import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.frame.FrameMeta;
+
+class LumiposeClientTest {
+    static final String OK = "{\"schema\": \"lumipose.result/1\", \"ok\": true, \"position_m\": [0.1, 0.2, 0.0],"
+            + " \"beacon_id\": 0, \"gravity_used\": true}";
+    static final String SAMPLE = "{\"id\": \"abc\", \"label\": \"3,-4\", \"result\": " + OK + "}";
+    private static final FrameMeta META = FrameMeta.builder(4, 3)
+            .camera(new Intrinsics(5, 5, 1.5, 1, null, null, null, "fake")).exposureS(0.01).build();
+    private static final byte[] LUMA = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+
+    private final List<Long> sleeps = new ArrayList<>();
+    private final Sleeper recorder = sleeps::add;
+
+    private LumiposeClient client(FakeTransport t, boolean gzip, String key) {
+        return new LumiposeClient(new ClientConfig("http://127.0.0.1:8765/", key, "phone-1", gzip,
+                new RetryPolicy(3, 200, 2.0, 1000)), t, recorder);
+    }
+
+    static byte[] gunzip(byte[] z) throws IOException {
+        try (GZIPInputStream in = new GZIPInputStream(new ByteArrayInputStream(z))) {
+            return in.readAllBytes();
+        }
+    }
+
+    @Test
+    void locateSendsTheFrameAsTheApiAsks() throws Exception {
+        FakeTransport t = new FakeTransport().reply(200, OK);
+        LocateResult r = client(t, true, "secret").locate(LUMA, META);
+        assertTrue(r.ok);
+        assertArrayEquals(new double[] {0.1, 0.2, 0.0}, r.positionM(), 0);
+        HttpCall c = t.calls.get(0);
+        assertEquals("POST", c.method);
+        assertEquals("http://127.0.0.1:8765/v1/locate", c.url);
+        assertEquals("application/octet-stream", c.headers.get("Content-Type"));
+        assertEquals("gzip", c.headers.get("Content-Encoding"));
+        assertEquals("secret", c.headers.get("X-API-Key"));
+        assertEquals("phone-1", c.headers.get("X-Lumipose-Device"));
+        assertArrayEquals(LUMA, gunzip(c.body()));
+        JSONObject sent = new JSONObject(c.headers.get("X-Lumipose-Frame"));
+        assertEquals(4, sent.getInt("width"));
+        assertEquals(0.01, sent.getDouble("exposure_s"));
+    }
+
+    @Test
+    void withoutGzipOrKeyTheBodyIsRawAndNoKeyIsSent() throws Exception {
+        FakeTransport t = new FakeTransport().reply(200, OK);
+        client(t, false, "  ").locate(LUMA, META);
+        HttpCall c = t.calls.get(0);
+        assertArrayEquals(LUMA, c.body());
+        assertFalse(c.headers.containsKey("Content-Encoding"));
+        assertFalse(c.headers.containsKey("X-API-Key"));
+    }
+
+    @Test
+    void refusalIsAResultNotAnError() throws Exception {
+        FakeTransport t = new FakeTransport().reply(200,
+                "{\"ok\": false, \"reason\": \"no_beacon\", \"message\": \"nothing bright\"}");
+        LocateResult r = client(t, true, null).locate(LUMA, META);
+        assertFalse(r.ok);
+        assertEquals("no_beacon", r.reason);
+    }
+
+    @Test
+    void networkErrorsAreRetriedWithGrowingBackoff() throws Exception {
+        FakeTransport t = new FakeTransport().fail("refused").fail("reset").reply(200, OK);
+        assertTrue(client(t, true, null).locate(LUMA, META).ok);
+        assertEquals(3, t.calls.size());
+        assertEquals(List.of(200L, 400L), sleeps);
+    }
+
+    @Test
+    void busyServerIsRetriedThenItsErrorReported() throws Exception {
+        FakeTransport t = new FakeTransport().reply(503, "{}").reply(200, OK);
+        assertTrue(client(t, true, null).locate(LUMA, META).ok);
+        assertEquals(2, t.calls.size());
+
+        FakeTransport busy = new FakeTransport().reply(503, "").reply(503, "").reply(503,
+                "{\"error\": \"busy\", \"field\": null, \"message\": \"try later\"}");
+        ServerRejectedException e = assertThrows(ServerRejectedException.class,
+                () -> client(busy, true, null).locate(LUMA, META));
+        assertEquals(503, e.status);
+        assertEquals("busy", e.code);
+    }
+
+    @Test
+    void clientErrorsAreNotRetried() {
+        FakeTransport t = new FakeTransport().reply(422,
+                "{\"error\": \"invalid\", \"field\": \"camera.fx\", \"message\": \"must be > 0\"}");
+        ServerRejectedException e = assertThrows(ServerRejectedException.class,
+                () -> client(t, true, null).locate(LUMA, META));
+        assertEquals(1, t.calls.size());
+        assertEquals("camera.fx", e.field);
+        assertTrue(sleeps.isEmpty());
+    }
+
+    @Test
+    void givesUpAfterTheLastAttempt() {
+        FakeTransport t = new FakeTransport().fail("a").fail("b").fail("c");
+        IOException e = assertThrows(IOException.class, () -> client(t, true, null).locate(LUMA, META));
+        assertTrue(e.getMessage().contains("3 attempts"), e.getMessage());
+        assertEquals(3, t.calls.size());
+    }
+
+    @Test
+    void wrongByteCountIsRefusedBeforeSending() {
+        FakeTransport t = new FakeTransport();
+        IllegalArgumentException e = assertThrows(IllegalArgumentException.class,
+                () -> client(t, true, null).locate(new byte[11], META));
+        assertTrue(e.getMessage().contains("row_stride * height = 12"), e.getMessage());
+        assertTrue(t.calls.isEmpty());
+    }
+
+    @Test
+    void sampleIsStoredWithItsCellLabel() throws Exception {
+        FakeTransport t = new FakeTransport().reply(201, SAMPLE);
+        StoredSample s = client(t, true, "k").storeSample("3,-4", LUMA, META);
+        assertEquals("abc", s.id);
+        assertEquals("3,-4", s.label);
+        assertTrue(s.result.ok);
+        assertEquals("http://127.0.0.1:8765/v1/samples?label=3%2C-4", t.calls.get(0).url);
+        assertThrows(IllegalArgumentException.class, () -> client(t, true, "k").storeSample(" ", LUMA, META));
+    }
+
+    @Test
+    void mapIsFetchedByName() throws Exception {
+        FakeTransport t = new FakeTransport().reply(200, "{\"schema\": \"lumipose.map/1\", \"name\": \"demo\","
+                + " \"beacons\": [{\"id\": 0, \"center_m\": [0, 0, 1], \"side_m\": 0.174}]}");
+        assertEquals(1, client(t, true, null).fetchMap("demo").beacons.size());
+        assertEquals("GET", t.calls.get(0).method);
+        assertEquals("http://127.0.0.1:8765/v1/maps/demo", t.calls.get(0).url);
+    }
+
+    @Test
+    void configRejectsAUrlWithoutScheme() {
+        assertThrows(IllegalArgumentException.class,
+                () -> new ClientConfig("192.168.1.2:8765", null, null, true, RetryPolicy.defaults()));
+        assertEquals("https://x", new ClientConfig("https://x//", null, null, true, RetryPolicy.defaults()).baseUrl);
+    }
+
+    @Test
+    void backoffGrowsAndIsCapped() {
+        RetryPolicy p = new RetryPolicy(5, 100, 3.0, 500);
+        assertEquals(100, p.backoffMs(1));
+        assertEquals(300, p.backoffMs(2));
+        assertEquals(500, p.backoffMs(3));
+        assertThrows(IllegalArgumentException.class, () -> new RetryPolicy(0, 1, 2, 3));
+    }
+}
