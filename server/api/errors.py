@@ -19,6 +19,12 @@ from shared_schemas import ErrorBody
 
 log = logging.getLogger("lumipose.api")
 
+# Declared on every router, so the OpenAPI spec says what each 4xx body looks like.
+ERROR_RESPONSES = {status: {"model": ErrorBody, "description": text} for status, text in {
+    400: "unreadable frame, metadata or body", 401: "missing or wrong API key", 404: "unknown map or sample",
+    408: "upload too slow", 413: "upload too large", 415: "unsupported content type or encoding",
+    422: "invalid parameter"}.items()}
+
 STORE_STATUS = {"not_found": 404, "bad_name": 400, "name_mismatch": 400}
 
 

@@ -2,24 +2,17 @@
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
-
 import anyio
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 
+from server.api import VERSION
 from server.api.config import Settings
 from server.api.deps import Services
 from server.api.errors import install_error_handlers
 from server.api.metrics import Metrics, MetricsMiddleware
 from server.api.routes import health, locate, maps, profiles, samples
 from server.store import MapStore, SampleStore
-
-try:
-    VERSION = version("lumipose")
-except PackageNotFoundError:  # running from a source tree that was not installed
-    VERSION = "0+unknown"
-
 
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()

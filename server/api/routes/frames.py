@@ -10,7 +10,6 @@ from server.api.deps import Services
 from server.api.upload import FRAME_HEADER, FrameUpload, receive_frame
 from server.pipeline import CornerMethod, PipelineOptions
 from server.pose.solve import GravityMode
-from shared_schemas import ErrorBody
 
 FRAME_REQUEST_BODY = {
     "requestBody": {
@@ -28,10 +27,6 @@ FRAME_REQUEST_BODY = {
         },
     }
 }
-ERROR_RESPONSES = {status: {"model": ErrorBody, "description": text} for status, text in {
-    400: "unreadable frame, metadata or body", 401: "missing or wrong API key", 404: "unknown map or sample",
-    408: "upload too slow", 413: "upload too large", 415: "unsupported content type or encoding",
-    422: "invalid parameter"}.items()}
 
 FrameHeader = Annotated[str | None, Header(alias=FRAME_HEADER, description="frame JSON (lumipose.frame/1)")]
 DeviceHeader = Annotated[str | None, Header(alias="X-Lumipose-Device", max_length=128,

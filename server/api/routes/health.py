@@ -6,6 +6,7 @@ from fastapi import APIRouter, Response
 from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.concurrency import run_in_threadpool
 
+from server.api import VERSION
 from server.api.deps import ServicesDep
 from shared_schemas.api import Health
 
@@ -14,8 +15,6 @@ router = APIRouter(tags=["health"])
 
 @router.get("/healthz", response_model=Health)
 async def health(services: ServicesDep) -> Health:
-    from server.api.main import VERSION
-
     return Health(status="ok", version=VERSION, active_map=await run_in_threadpool(services.maps.active_name))
 
 

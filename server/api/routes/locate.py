@@ -6,17 +6,18 @@ from fastapi import APIRouter, Request
 
 from server.api.deps import ServicesDep
 from server.api.locating import locate_upload
-from server.api.routes.frames import (ERROR_RESPONSES, FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
+from server.api.errors import ERROR_RESPONSES
+from server.api.routes.frames import (FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
                                       FrameHeader, GravityQuery, MapQuery, frame_upload,
                                       pipeline_options)
 from server.pipeline import CornerMethod
 from server.pose.solve import GravityMode
 from shared_schemas import LocateResult
 
-router = APIRouter(prefix="/v1", tags=["locate"])
+router = APIRouter(prefix="/v1", tags=["locate"], responses=ERROR_RESPONSES)
 
 
-@router.post("/locate", response_model=LocateResult, responses=ERROR_RESPONSES, openapi_extra=FRAME_REQUEST_BODY)
+@router.post("/locate", response_model=LocateResult, openapi_extra=FRAME_REQUEST_BODY)
 async def locate_frame(request: Request, services: ServicesDep, frame_json: FrameHeader = None,
                        map: MapQuery = None, beacon_id: BeaconQuery = None,
                        gravity: GravityQuery = GravityMode.auto,

@@ -6,11 +6,11 @@ from fastapi import APIRouter
 from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep, WriteAccess
-from server.api.routes.frames import ERROR_RESPONSES
+from server.api.errors import ERROR_RESPONSES
 from shared_schemas import BeaconMap
 from shared_schemas.api import ActiveMap, MapSummary
 
-router = APIRouter(prefix="/v1/maps", tags=["maps"])
+router = APIRouter(prefix="/v1/maps", tags=["maps"], responses=ERROR_RESPONSES)
 
 
 @router.get("", response_model=list[MapSummary])
@@ -23,18 +23,18 @@ async def get_active_map(services: ServicesDep) -> ActiveMap:
     return ActiveMap(name=await run_in_threadpool(services.maps.active_name))
 
 
-@router.put("/active", response_model=ActiveMap, responses=ERROR_RESPONSES, dependencies=[WriteAccess])
+@router.put("/active", response_model=ActiveMap, dependencies=[WriteAccess])
 async def set_active_map(active: ActiveMap, services: ServicesDep) -> ActiveMap:
     await run_in_threadpool(services.maps.set_active, active.name)
     return active
 
 
-@router.get("/{name}", response_model=BeaconMap, responses=ERROR_RESPONSES)
+@router.get("/{name}", response_model=BeaconMap)
 async def get_map(name: str, services: ServicesDep) -> BeaconMap:
     return await run_in_threadpool(services.maps.get, name)
 
 
-@router.put("/{name}", response_model=BeaconMap, responses=ERROR_RESPONSES, dependencies=[WriteAccess])
+@router.put("/{name}", response_model=BeaconMap, dependencies=[WriteAccess])
 async def put_map(name: str, beacon_map: BeaconMap, services: ServicesDep) -> BeaconMap:
     """Replace (or create) the map `name`; the body's `name` must match."""
     return await run_in_threadpool(services.maps.put, name, beacon_map)

@@ -5,10 +5,10 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from server.api.errors import ApiError
-from server.api.routes.frames import ERROR_RESPONSES
+from server.api.errors import ERROR_RESPONSES
 from shared_schemas import DeviceProfile, device_profiles
 
-router = APIRouter(prefix="/v1/profiles", tags=["profiles"])
+router = APIRouter(prefix="/v1/profiles", tags=["profiles"], responses=ERROR_RESPONSES)
 
 
 @router.get("", response_model=list[DeviceProfile])
@@ -16,7 +16,7 @@ async def list_profiles() -> list[DeviceProfile]:
     return list(device_profiles().values())
 
 
-@router.get("/{profile_id}", response_model=DeviceProfile, responses=ERROR_RESPONSES)
+@router.get("/{profile_id}", response_model=DeviceProfile)
 async def get_profile(profile_id: str) -> DeviceProfile:
     profile = device_profiles().get(profile_id)
     if profile is None:

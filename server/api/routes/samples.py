@@ -9,7 +9,8 @@ from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep, WriteAccess
 from server.api.locating import locate_upload
-from server.api.routes.frames import (ERROR_RESPONSES, FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
+from server.api.errors import ERROR_RESPONSES
+from server.api.routes.frames import (FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
                                       DeviceHeader, FrameHeader, GravityQuery, MapQuery, frame_upload,
                                       pipeline_options)
 from server.api.upload import FRAME_HEADER, FrameUpload
@@ -18,12 +19,12 @@ from server.pipeline import CornerMethod, PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas.api import Evaluation, SampleInfo, SampleList
 
-router = APIRouter(prefix="/v1/samples", tags=["samples"])
+router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES)
 
 LabelQuery = Annotated[str | None, Query(max_length=200, description="free text; 'i,j' names a grid cell")]
 
 
-@router.post("", status_code=201, response_model=SampleInfo, responses=ERROR_RESPONSES,
+@router.post("", status_code=201, response_model=SampleInfo,
              openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess])
 async def store_sample(request: Request, services: ServicesDep, frame_json: FrameHeader = None,
                        device: DeviceHeader = None, label: LabelQuery = None, map: MapQuery = None,
@@ -41,7 +42,7 @@ async def list_samples(services: ServicesDep) -> SampleList:
     return SampleList(samples=await run_in_threadpool(services.samples.all))
 
 
-@router.get("/evaluation", response_model=Evaluation, responses=ERROR_RESPONSES)
+@router.get("/evaluation", response_model=Evaluation)
 async def evaluate_samples(services: ServicesDep, map: MapQuery = None,
                            cell_m: Annotated[float, Query(gt=0, le=10, description="grid cell side")] = 0.05,
                            height_m: Annotated[float, Query(ge=-100, le=100,
@@ -57,14 +58,13 @@ async def evaluate_samples(services: ServicesDep, map: MapQuery = None,
     return evaluate(name, located, cell_m, height_m)
 
 
-@router.get("/{sample_id}", response_model=SampleInfo, responses=ERROR_RESPONSES)
+@router.get("/{sample_id}", response_model=SampleInfo)
 async def get_sample(sample_id: str, services: ServicesDep) -> SampleInfo:
     return await run_in_threadpool(services.samples.get, sample_id)
 
 
 @router.get("/{sample_id}/frame", response_class=Response, responses={
-    200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"},
-    **ERROR_RESPONSES})
+    200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"}})
 async def get_sample_frame(sample_id: str, services: ServicesDep) -> Response:
     info = await run_in_threadpool(services.samples.get, sample_id)
     data = await run_in_threadpool(services.samples.frame, sample_id)
@@ -72,7 +72,7 @@ async def get_sample_frame(sample_id: str, services: ServicesDep) -> Response:
         FRAME_HEADER: info.meta.model_dump_json(by_alias=True, exclude_none=True)})
 
 
-@router.delete("/{sample_id}", status_code=204, responses=ERROR_RESPONSES, dependencies=[WriteAccess])
+@router.delete("/{sample_id}", status_code=204, dependencies=[WriteAccess])
 async def delete_sample(sample_id: str, services: ServicesDep) -> Response:
     await run_in_threadpool(services.samples.delete, sample_id)
     return Response(status_code=204)
