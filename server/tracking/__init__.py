@@ -1,0 +1,1 @@
+"""Per-device tracking: motion filter, ID evidence across frames, beacon hand-over."""
