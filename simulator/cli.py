@@ -68,6 +68,22 @@ def add_commands(commands) -> None:
             grid.add_argument("--uncalibrated", action="store_true",
                               help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
+    distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
+    distance.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
+    tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
+    tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees; default 0 to 15 by 2.5")
+    for sweep, name in ((distance, "distance"), (tilt, "tilt")):
+        sweep.add_argument("--out", type=Path, default=Path(f"reports/{name}"), help="report folder")
+        sweep.add_argument("--scale", type=float, default=1.0)
+        sweep.add_argument("--seed", type=int, default=None)
+        sweep.add_argument("--workers", type=int, default=None)
+        sweep.add_argument("--json", action="store_true")
+        sweep.set_defaults(run=_run_sweep, bench_name=name)
+    fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
+    fidelity.add_argument("--out", type=Path, default=Path("reports/fidelity"), help="report folder")
+    fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
+    fidelity.add_argument("--json", action="store_true")
+    fidelity.set_defaults(run=_run_fidelity)
 
 
 def _run_render(args) -> int:
@@ -186,6 +202,29 @@ def _run_grid_bench(args) -> int:
                             args.workers, args.limit)
     report["out"] = str(args.out)
     _print_report(report, args.json)
+    return 0
+
+
+def _run_sweep(args) -> int:
+    from simulator.bench_sweeps import bench_distance, bench_tilt, format_sweep
+
+    if args.bench_name == "distance":
+        report = bench_distance(args.out, args.distances, args.scale, args.seed, args.workers)
+        text = format_sweep(report, "distance_m", "m")
+    else:
+        report = bench_tilt(args.out, args.tilts, args.scale, args.seed, args.workers)
+        text = format_sweep(report, "tilt_deg", "deg")
+    (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    print(json.dumps(report, indent=2) if args.json else text + "\n  figure " + report["figures"][0])
+    return 0
+
+
+def _run_fidelity(args) -> int:
+    from simulator.bench_fidelity import bench_fidelity, format_fidelity
+
+    report = bench_fidelity(args.out, args.distances)
+    (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    print(json.dumps(report, indent=2) if args.json else format_fidelity(report) + "\n  figure " + report["figures"][0])
     return 0
 
 

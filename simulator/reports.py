@@ -132,7 +132,7 @@ def format_table(summary: dict, title: str) -> str:
     ])
 
 
-def _pyplot():
+def pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
@@ -147,7 +147,7 @@ def plot_scatter(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
     A second panel draws each error vector magnified, since millimetre errors vanish at the
     scale of the grid.
     """
-    plt = _pyplot()
+    plt = pyplot()
     true = np.array([o.true_m[:2] for o in outcomes])
     fixed = [o for o in outcomes if o.estimate_m is not None]
     estimates = np.array([o.estimate_m[:2] for o in fixed]).reshape(-1, 2)
@@ -185,7 +185,7 @@ def plot_scatter(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
 
 def plot_heatmap(outcomes: list[Outcome], path: Path, title: str, margin_m: float = OUTLIER_M) -> None:
     """Fig. 12/14: 2D error over the grid (mm); no fix is grey, outliers are clipped at the margin."""
-    plt = _pyplot()
+    plt = pyplot()
     true = np.array([o.true_m[:2] for o in outcomes])
     xs, ys = np.unique(np.round(true[:, 0], 6)), np.unique(np.round(true[:, 1], 6))
     grid = np.full((len(ys), len(xs)), np.nan)
@@ -207,7 +207,7 @@ def plot_heatmap(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
 
 def plot_sweep(rows: list[dict], key: str, path: Path, title: str, xlabel: str) -> None:
     """Mean and max 2D error (mm) and coverage (%) against `key` of each row."""
-    plt = _pyplot()
+    plt = pyplot()
     x = [row[key] for row in rows]
     figure, error_axes = plt.subplots(figsize=(8, 4.5))
     mean = [row["summary"].get("mean_mm", math.nan) for row in rows]

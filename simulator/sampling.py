@@ -80,7 +80,11 @@ def _path_positions(scene: Scene, path) -> tuple[np.ndarray, np.ndarray, list[st
         xs = np.arange(path.x_m[0], path.x_m[1] + path.x_m[2] * 1e-6, path.x_m[2])
         ys = np.arange(path.y_m[1], path.y_m[0] - path.y_m[2] * 1e-6, -path.y_m[2])  # top row first, as the paper
         positions = np.array([(x, y, path.height_m) for y in ys for x in xs])
-        return np.zeros(len(positions)), positions, [""] * len(positions)
+        # cell labels counted from the grid's centre, as the paper labels its bench
+        centre = [(path.x_m[0] + xs[-1]) / 2, (path.y_m[0] + ys[0]) / 2]
+        labels = [f"({round((x - centre[0]) / path.x_m[2])}, {round((y - centre[1]) / path.y_m[2])})"
+                  for x, y, _ in positions]
+        return np.zeros(len(positions)), positions, labels
     if isinstance(path, TrajectorySeries):
         if path.kind == "waypoints":
             walk = trajectories.waypoints(np.array(path.points_m), path.speed_mps, path.frame_interval_s, path.height_m)
