@@ -268,6 +268,7 @@ class SeriesSpec(Strict):
 class Scene(Strict):
     schema_: Literal["lumipose.scene/1"] = Field(default=SCENE_SCHEMA, alias="schema")
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
+    about: str = Field(default="", description="what the scene models and where its numbers come from")
     room: RoomSpec
     beacons: list[BeaconSpec] = Field(min_length=1)
     camera: CameraSpec = CameraSpec()
