@@ -5,15 +5,20 @@ from the image itself, in the way of AprilTag's edge refinement:
 
 1. Along the straight part of each side (away from the rounded corners) grey-level profiles
    are sampled across the edge (bilinear, 0.25 px steps), and each profile's crossing of the
-   frame's mid level is found to a fraction of a pixel.
+   frame's mid level is found to a fraction of a pixel. Profiles across the middle of each
+   rounded corner are sampled in the same pass.
 2. The crossings are undistorted (when the camera has distortion) and a line is fitted to
    each side (OpenCV's robust `fitLine`).
-3. The mid-level crossing of a *clipped* edge is not the true edge (contract, "Physics"):
-   the PSF spreads the saturated light outward, so the panel looks too big. All profiles,
-   aligned on their own crossings, are pooled into one edge profile and fitted with the
-   model of a blurred, clipped step, `min(sat, b + A * Phi((e - x) / s))`; the fitted edge
-   offset `e` moves the four lines to the true edges. For a panel that does not saturate the
-   model fits with `e` close to 0, so the same code serves both.
+3. The mid-level contour of a *clipped* panel is not its outline (contract, "Physics"): the
+   PSF spreads the saturated light outward, so the contour is the outline grown by some
+   distance D (a fraction of a pixel to a few pixels, depending on overexposure and PSF,
+   neither of which the frame tells). Growing a rounded square by D moves its sides out
+   by D and turns its corner radius r into r + D, so the corners measure D where the sides
+   cannot: in the plane of the panel (the four lines rectified to a unit square) the
+   corner crossings lie on circles of radius R = rho (1 - 2 d) + d, with rho = r / side
+   from the map and d = D in side units. The lines are then moved in by D. Nothing here
+   assumes a PSF shape; it needs the map's corner radius to be right (0.1 mm of radius is
+   ~0.35 px of D at 1 m, see docs/accuracy.md) and a corner radius of a few pixels.
 4. Neighbouring lines intersect at the corners of the circumscribed square.
 """
 
@@ -23,21 +28,21 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.special import ndtr
 
 from server.vision.binarize import Levels
 
-SATURATION_DN = 255.0
+UNIT_SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 
 
 @dataclass(frozen=True)
 class EdgeRules:
     half_window_px: float = 8.0
     step_px: float = 0.25
-    max_profiles_per_side: int = 200
+    max_profiles_per_side: int = 120
+    max_profiles_per_corner: int = 40
     corner_margin: float = 0.03  # of the side, kept clear beyond the corner arcs
-    bin_px: float = 0.1
+    arc_span_deg: float = 60.0  # middle part of each 90 degree corner arc that is measured
+    min_corner_radius_px: float = 5.0  # below this the corners cannot measure the growth
 
 
 @dataclass(frozen=True)
@@ -52,9 +57,9 @@ class EdgeFit:
     corners: np.ndarray
     lines: np.ndarray
     edge_shift_px: float
-    edge_blur_px: float
     line_rms_px: float
     points_per_side: tuple[int, ...]
+    arc_points: int
     warnings: tuple[str, ...] = ()
 
 
@@ -82,84 +87,32 @@ def _mid_level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float
     return np.where(np.isfinite(distance[rows, j]), result, np.nan)
 
 
-def _fit_clipped_edge(
-    distance: np.ndarray, value: np.ndarray, levels: Levels, rules: EdgeRules
-) -> tuple[float, float] | None:
-    """(edge offset, blur sigma) of a pooled edge profile; None when it cannot be fitted.
+def _side_profiles(corners, directions, normals, lengths, straight_fraction, rules):
+    """Base points (4, n, 2) on the straight part of each side, and their outward normals."""
+    n_along = int(np.clip(lengths.min() / 2, 12, rules.max_profiles_per_side))
+    start = (1.0 - straight_fraction) / 2 + rules.corner_margin
+    along = np.linspace(start, 1.0 - start, n_along)
+    bases = corners[:, None, :] + along[None, :, None] * (lengths[:, None, None] * directions[:, None, :])
+    return bases.reshape(-1, 2), np.repeat(normals, n_along, axis=0), n_along
 
-    `distance` is outward from each profile's own mid-level crossing, in pixels.
+
+def _arc_profiles(corners, directions, radius_px, rules):
+    """Base points and outward normals across the middle of each rounded corner (rough geometry).
+
+    Corner k joins side k - 1 (arriving) to side k (leaving); with u along side k and v back
+    along side k - 1, the arc of radius R is centre - R (cos t v + sin t u) for t in 0..90 deg.
     """
-    bins = np.round(distance / rules.bin_px).astype(np.int64)
-    bins -= bins.min()
-    counts = np.bincount(bins)
-    sums = np.bincount(bins, weights=value)
-    filled = counts >= 3
-    x = (np.nonzero(filled)[0] + np.round(distance.min() / rules.bin_px)) * rules.bin_px
-    y = sums[filled] / counts[filled]
-    clipped = levels.plateau >= SATURATION_DN - 1
-    if len(x) < 8:
-        return None
-    background = float(np.min(y))
-    amplitude0 = (SATURATION_DN - background) * (2.0 if clipped else 1.0)
-
-    def residual(p: np.ndarray) -> np.ndarray:
-        b, a, e, s = p
-        # Where the panel saturates the model clips too: the clip point pins the amplitude.
-        return np.minimum(b + a * ndtr((e - x) / s), SATURATION_DN) - y
-
-    def jacobian(p: np.ndarray) -> np.ndarray:
-        b, a, e, s = p
-        u = (e - x) / s
-        density = np.exp(-0.5 * u * u) / np.sqrt(2 * np.pi)
-        columns = np.column_stack([np.ones_like(u), ndtr(u), a * density / s, -a * density * u / s])
-        columns[b + a * ndtr(u) >= SATURATION_DN] = 0.0  # clipped: the model does not move
-        return columns
-
-    span = rules.half_window_px
-    x0 = np.array([background, amplitude0, 0.0, 1.0])
-    lower = [0.0, 0.2 * amplitude0, -span, 0.1]
-    upper = [levels.threshold, 200.0 * amplitude0, span, span]
-    fit = least_squares(residual, x0, jac=jacobian, bounds=(lower, upper),
-                        x_scale=[10.0, amplitude0, 0.5, 0.5])
-    if not fit.success:
-        return None
-    return float(fit.x[2]), float(fit.x[3])
-
-
-def _pixels_across_sides(image, bases, crossings, normals, valid, rules: EdgeRules):
-    """(distance, value) of the real pixels near each side's mid-level line.
-
-    Pixels, not interpolated samples: bilinear interpolation would bend the two or three
-    unclipped pixels of an overexposed edge into straight pieces and hide its shape.
-    `distance` is outward from the line through the side's crossings, in pixels.
-    """
-    distances, values = [], []
-    n_along = bases.shape[1]
-    for k in range(4):
-        side = slice(k * n_along, (k + 1) * n_along)
-        ok = valid[side]
-        if ok.sum() < 3:
-            continue
-        crossing_points = bases[k][ok] + crossings[side][ok, None] * normals[k]
-        line, _ = _line_through(crossing_points, normals[k])
-        normal, offset = line[:2], -line[2]
-        # Walk the side along its main axis; at each step take the pixels across the line.
-        axis = 0 if abs(normal[1]) > abs(normal[0]) else 1  # 0: mostly horizontal side
-        lo = int(np.ceil(crossing_points[:, axis].min()))
-        hi = int(np.floor(crossing_points[:, axis].max()))
-        steps = np.arange(lo, hi + 1)
-        across_at = (offset - normal[axis] * steps) / normal[1 - axis]  # the line's other coordinate
-        band = np.arange(-int(rules.half_window_px) - 1, int(rules.half_window_px) + 2)
-        other = np.rint(across_at)[:, None].astype(int) + band[None, :]
-        main = np.broadcast_to(steps[:, None], other.shape)
-        xs, ys = (main, other) if axis == 0 else (other, main)
-        inside = (xs >= 0) & (ys >= 0) & (xs < image.shape[1]) & (ys < image.shape[0])
-        xs, ys = xs[inside], ys[inside]
-        distance = xs * normal[0] + ys * normal[1] - offset
-        keep = np.abs(distance) <= rules.half_window_px
-        distances.append(distance[keep])
-        values.append(image[ys[keep], xs[keep]])
-    return np.concatenate(distances), np.concatenate(values).astype(float)
+    arc_length = np.pi / 2 * radius_px * rules.arc_span_deg / 90.0
+    n_arc = int(np.clip(arc_length, 6, rules.max_profiles_per_corner))
+    half_span = np.radians(rules.arc_span_deg) / 2
+    t = np.pi / 4 + np.linspace(-half_span, half_span, n_arc)
+    u = directions
+    v = -np.roll(directions, 1, axis=0)
+    outward = -(np.cos(t)[None, :, None] * v[:, None, :] + np.sin(t)[None, :, None] * u[:, None, :])
+    outward /= np.linalg.norm(outward, axis=2, keepdims=True)
+    centres = corners + radius_px * (u + v)
+    bases = centres[:, None, :] + radius_px * outward
+    return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
 
 
 def _line_through(points: np.ndarray, outward: np.ndarray) -> tuple[np.ndarray, float]:
@@ -171,6 +124,40 @@ def _line_through(points: np.ndarray, outward: np.ndarray) -> tuple[np.ndarray, 
     c = -float(normal @ [x0, y0])
     residuals = points @ normal + c
     return np.array([normal[0], normal[1], c]), float(np.sqrt(np.mean(residuals**2)))
+
+
+def _intersections(lines: np.ndarray) -> np.ndarray:
+    """Corner k = side k - 1 meets side k, (4, 2)."""
+    points = np.cross(np.roll(lines, 1, axis=0), lines)
+    return points[:, :2] / points[:, 2:3]
+
+
+def contour_growth(corners_px: np.ndarray, arc_points_px: list[np.ndarray], radius_fraction: float) -> float | None:
+    """How far (px, >= 0 outward) the measured contour lies outside the panel's outline.
+
+    corners_px (4, 2): corners of the square the measured sides make, cyclic order;
+    arc_points_px[k]: measured contour points on the rounded corner k; radius_fraction:
+    corner radius / side of the panel. In the unit square of the sides, a point (x, y) of
+    a corner with both axes pointing inward lies on the circle of radius R tangent to both
+    axes (centre (R, R)) when R = x + y + sqrt(2 x y) (the root on the corner side of the centre).
+    """
+    homography = cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
+    radii = []
+    for k, points in enumerate(arc_points_px):
+        if len(points) == 0:
+            continue
+        plane = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), homography).reshape(-1, 2)
+        relative = plane - UNIT_SQUARE[k]
+        x = relative @ (UNIT_SQUARE[(k + 1) % 4] - UNIT_SQUARE[k])
+        y = relative @ (UNIT_SQUARE[k - 1] - UNIT_SQUARE[k])
+        ok = (x > 0) & (y > 0)
+        radii.append(x[ok] + y[ok] + np.sqrt(2 * x[ok] * y[ok]))
+    radii = np.concatenate(radii) if radii else np.array([])
+    if len(radii) < 8:
+        return None
+    growth_units = (float(np.median(radii)) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
+    side_px = float(np.mean(np.linalg.norm(np.roll(corners_px, -1, axis=0) - corners_px, axis=1)))
+    return growth_units * side_px
 
 
 def refine_edges(
@@ -190,53 +177,60 @@ def refine_edges(
     the share of each side that is straight (1 - 2 r / side). Returns None when a side has
     too few edge points to fit.
     """
-    image = roi.astype(np.float32)
     directions, normals, lengths = _outward_normals(corners)
-    n_along = int(np.clip(lengths.min() / 2, 12, rules.max_profiles_per_side))
-    start = (1.0 - straight_fraction) / 2 + rules.corner_margin
-    along = np.linspace(start, 1.0 - start, n_along)
+    radius_fraction = (1.0 - straight_fraction) / 2
+    radius_px = radius_fraction * float(lengths.mean())
+    side_bases, side_normals, n_along = _side_profiles(corners, directions, normals, lengths, straight_fraction, rules)
+    use_arcs = radius_px >= rules.min_corner_radius_px
+    if use_arcs:
+        arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
+        bases, across = np.vstack([side_bases, arc_bases]), np.vstack([side_normals, arc_normals])
+    else:
+        bases, across, n_arc = side_bases, side_normals, 0
     offsets = np.arange(-rules.half_window_px, rules.half_window_px + 1e-9, rules.step_px)
-
-    bases = corners[:, None, :] + along[None, :, None] * (lengths[:, None, None] * directions[:, None, :])
-    samples = bases[:, :, None, :] + offsets[None, None, :, None] * normals[:, None, None, :]
-    flat = samples.reshape(-1, len(offsets), 2).astype(np.float32)
-    profiles = cv2.remap(image, flat[..., 0], flat[..., 1], cv2.INTER_LINEAR,
+    samples = (bases[:, None, :] + offsets[None, :, None] * across[:, None, :]).astype(np.float32)
+    profiles = cv2.remap(roi.astype(np.float32), samples[..., 0], samples[..., 1], cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
     crossings = _mid_level_crossings(profiles, offsets, levels.threshold)
+    valid = np.isfinite(crossings) & np.all(np.isfinite(profiles), axis=1)
 
-    warnings: list[str] = []
-    pooled = np.isfinite(crossings) & np.all(np.isfinite(profiles), axis=1)
-    edge = _fit_clipped_edge(*_pixels_across_sides(image, bases, crossings, normals, pooled, rules), levels, rules)
-    if edge is None:
-        warnings.append("edge profile could not be fitted: sides taken at the mid level")
-        edge = (0.0, float("nan"))
-    shift, blur_px = edge
-
-    points = bases.reshape(-1, 2) + crossings[:, None] * np.repeat(normals, n_along, axis=0)
-    points = points + np.asarray(roi_origin, dtype=float)
+    points = bases + crossings[:, None] * across + np.asarray(roi_origin, dtype=float)
     if distortion is not None:
         points = cv2.undistortPoints(points.reshape(-1, 1, 2), camera_matrix, distortion,
                                      P=camera_matrix).reshape(-1, 2)
     lines, rms, counts = [], [], []
     for k in range(4):
         side = slice(k * n_along, (k + 1) * n_along)
-        valid = pooled[side]
-        if valid.sum() < max(6, n_along // 3):
+        ok = valid[side]
+        if ok.sum() < max(6, n_along // 3):
             return None
-        line, line_rms = _line_through(points[side][valid], normals[k])
-        line[2] -= shift  # move the line outward by `shift` along its normal
+        line, line_rms = _line_through(points[side][ok], normals[k])
         lines.append(line)
         rms.append(line_rms)
-        counts.append(int(valid.sum()))
+        counts.append(int(ok.sum()))
     lines_array = np.array(lines)
-    corner_points = np.cross(np.roll(lines_array, 1, axis=0), lines_array)
-    refined = corner_points[:, :2] / corner_points[:, 2:3]
+
+    warnings: list[str] = []
+    shift = 0.0
+    arc_points = []
+    if use_arcs:
+        first = 4 * n_along
+        arc_points = [points[first + k * n_arc:first + (k + 1) * n_arc][valid[first + k * n_arc:first + (k + 1) * n_arc]]
+                      for k in range(4)]
+        growth = contour_growth(_intersections(lines_array), arc_points, radius_fraction)
+        if growth is None:
+            warnings.append("too few corner points: sides taken at the mid level")
+        else:
+            shift = -growth
+    else:
+        warnings.append("corner radius too small in the image to measure the clipped-edge growth")
+    lines_array[:, 2] -= shift  # move each line outward by `shift` along its normal
     return EdgeFit(
-        corners=refined,
+        corners=_intersections(lines_array),
         lines=lines_array,
         edge_shift_px=shift,
-        edge_blur_px=blur_px,
         line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
         points_per_side=tuple(counts),
+        arc_points=int(sum(len(p) for p in arc_points)),
         warnings=tuple(warnings),
     )
