@@ -152,6 +152,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_locate(commands)
     _add_fov(commands)
     _add_serve(commands)
+    from lumipose_client.cli import add_commands as add_client_commands
+
+    add_client_commands(commands)
     from simulator.cli import add_commands as add_simulator_commands
 
     add_simulator_commands(commands)

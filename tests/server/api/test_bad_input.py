@@ -7,7 +7,7 @@ import zlib
 import httpx
 import pytest
 
-from tests.server.api.conftest import UPLOAD_LIMIT_MB
+from tests.conftest import UPLOAD_LIMIT_MB
 
 FRAME_HEADER = "X-Lumipose-Frame"
 

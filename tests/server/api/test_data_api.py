@@ -6,7 +6,7 @@ import pytest
 from lumipose_client import Client, LumiposeError
 from shared_schemas import load_map
 from shared_schemas.api import cell_truth_m
-from tests.server.api.conftest import API_KEY
+from tests.conftest import API_KEY
 
 
 def _refusal(call) -> LumiposeError:

@@ -6,7 +6,7 @@ import pytest
 import schemathesis
 from schemathesis import checks
 
-from tests.server.api.conftest import API_KEY
+from tests.conftest import API_KEY
 
 EXAMPLES_PER_OPERATION = 30  # x 19 operations; `docs/reliability.md` has a longer run's figures
 

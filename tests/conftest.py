@@ -15,7 +15,7 @@ from lumipose_client import Client, read_fixture_files
 
 API_KEY = "test-key"
 UPLOAD_LIMIT_MB = 4  # small, so the 'too large' cases are cheap
-FIXTURE = Path(__file__).parents[2] / "fixtures" / "bench_1m.json"
+FIXTURE = Path(__file__).parent / "fixtures" / "bench_1m.json"
 
 
 def _free_port() -> int:

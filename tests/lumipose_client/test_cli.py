@@ -1,0 +1,27 @@
+"""`lumipose client ...` against the real server: exit codes and what it prints."""
+
+from server.cli import main
+from tests.conftest import API_KEY, FIXTURE
+
+
+def test_client_locate_prints_the_result(server_url, capsys):
+    assert main(["client", "--url", server_url, "locate", str(FIXTURE)]) == 0
+    assert '"ok": true' in capsys.readouterr().out
+
+
+def test_client_store_list_evaluate(server_url, capsys):
+    assert main(["client", "--url", server_url, "samples", "store", str(FIXTURE), "--label", "3,-2"]) == 2
+    assert "X-API-Key" in capsys.readouterr().err
+    assert main(["client", "--url", server_url, "--api-key", API_KEY, "samples", "store", str(FIXTURE),
+                 "--label", "3,-2"]) == 0
+    sample_id = capsys.readouterr().out.split()[0]
+    assert main(["client", "--url", server_url, "samples", "list"]) == 0
+    assert sample_id in capsys.readouterr().out
+    assert main(["client", "--url", server_url, "samples", "evaluate"]) == 0
+    assert "coverage 100.0 %" in capsys.readouterr().out
+    assert main(["client", "--url", server_url, "--api-key", API_KEY, "samples", "delete", sample_id]) == 0
+
+
+def test_client_without_a_server_is_a_clear_error(capsys):
+    assert main(["client", "--url", "http://127.0.0.1:9", "maps", "list"]) == 2
+    assert "cannot reach http://127.0.0.1:9" in capsys.readouterr().err
