@@ -1,0 +1,239 @@
+"""`lumipose bench office`: the paper's office walks (Section IV-D, Figs. 17-18).
+
+Scene `simulator/scenes/office.json` (its ID-frame sensor, its walk, its light pollution): four coded panels on a 2.72 m ceiling over a
+2.4 m x 3.6 m area, the phone face up at 1.32 m. A walker follows the zig-zag or the
+converging square spiral (`simulator.trajectories`) at `speed_mps`, with hand shake, the
+phone's long side along the room's Y axis. Every capture (one every `stepped_interval_s(0.5)`
+= 0.499 s, paper: 0.5 s) is one pose frame (10 ms, overexposed, the code averaged away by
+`row_gains`) and `id_frames` ID frames right after it (1/8000 s, quarter resolution), all
+rendered with every panel in view and each panel's own LED (random phase, +-50 ppm clock).
+The captures go, in order, through one `server.tracking.session.DeviceSession`, exactly as
+the service would see them. Errors are horizontal (2-D) distances of the raw fixes to the
+true optical centre; an ID error is a fix whose beacon is not the panel it was measured on.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from server.geometry import camera_matrix, rotation_from_ypr, world_to_camera
+from server.ingest import LumaFrame
+from server.tracking.session import DeviceSession
+from server.vlc.capture import message_period_s, stepped_interval_s
+from shared_schemas import Beacon, FrameKind, FrameMeta
+from simulator.render import CameraPose
+from simulator.scene import Scene, TrajectorySeries, find_scene, render_sample
+from simulator.trajectories import Area, hand_shake_deg, square_spiral, zigzag
+
+PROFILE_ID = "xiaomi-mi8-front"
+WALKS = ("zigzag", "spiral")
+
+
+@dataclass(frozen=True)
+class OfficeConfig:
+    walk: str = "zigzag"
+    scene: str = "office"
+    speed_mps: float | None = None  # None: the scene's series
+    spacing_m: float | None = None
+    shake_deg: float | None = None
+    inset_m: float = 0.0  # walk this far inside the scene's area
+    capture_interval_s: float = stepped_interval_s(0.5)
+    pose_scale: float = 0.5  # of the Mi 8 front camera's 3880 x 5184
+    pose_exposure_s: float = message_period_s()  # a whole message period: the code averages exactly away
+    id_frames: int = 2
+    id_interval_s: float = stepped_interval_s(1.0 / 30.0)
+    max_captures: int | None = None
+    seed: int = 1
+
+
+def _scenes(config: OfficeConfig):
+    """(pose-frame scene, ID-frame scene): the bundled scene's ID sensor, and a pose sensor beside it."""
+    scene = find_scene(config.scene)
+    rng = np.random.default_rng([config.seed, 99])
+    beacons = [b.model_copy(update={"vlc_phase_s": float(rng.uniform(0, 1))}) for b in scene.beacons]
+    id_scene = scene.model_copy(update={"beacons": beacons})
+    pose_sensor = scene.sensor.model_copy(update={"exposure_s": config.pose_exposure_s, "iso": 100.0})
+    pose_camera = scene.camera.model_copy(update={"scale": config.pose_scale})
+    return id_scene.model_copy(update={"sensor": pose_sensor, "camera": pose_camera}), id_scene
+
+
+def _walk(config: OfficeConfig, scene: Scene):
+    series = scene.series.path if scene.series else None
+    if not isinstance(series, TrajectorySeries) or series.area_m is None:
+        raise ValueError(f"scene '{scene.name}' has no walk area (series.path.area_m)")
+    area = Area(*series.area_m)
+    inner = Area(area.x_min_m + config.inset_m, area.y_min_m + config.inset_m,
+                 area.x_max_m - config.inset_m, area.y_max_m - config.inset_m)
+    make = {"zigzag": zigzag, "spiral": square_spiral}[config.walk]
+    path = make(inner, config.spacing_m or series.spacing_m, config.speed_mps or series.speed_mps,
+                config.capture_interval_s, series.height_m)
+    return (path[: config.max_captures] if config.max_captures else path), area
+
+
+def _pose_at(times: np.ndarray, positions: np.ndarray, t_s: float, seed: int, shake_deg: float) -> CameraPose:
+    position = np.array([np.interp(t_s, times, positions[:, k]) for k in range(3)])
+    yaw, pitch, roll = hand_shake_deg(np.array([t_s]), shake_deg, seed)[0]
+    return CameraPose(position, rotation_from_ypr(yaw, pitch, roll))
+
+
+def _true_beacon(beacons: list[Beacon], camera, pose: CameraPose, center_px) -> int:
+    centres = np.array([b.center_m for b in beacons], float)
+    in_camera = world_to_camera(centres, pose.position_m, pose.rotation_wc)
+    pixels, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), camera_matrix(camera), None)
+    gaps = np.linalg.norm(pixels.reshape(-1, 2) - np.asarray(center_px), axis=1)
+    return beacons[int(np.argmin(gaps))].id
+
+
+def _frame(scene: Scene, pose: CameraPose, t_s: float, kind: FrameKind, rng) -> LumaFrame:
+    pixels, meta = render_sample(scene, pose, rng, t_s, frame_kind=kind.value)
+    meta = FrameMeta.model_validate(meta.model_dump(by_alias=True))
+    return LumaFrame(pixels, meta, scene.camera.intrinsics())
+
+
+def run_walk(config: OfficeConfig) -> dict:
+    """Render and process one walk, capture by capture; per-capture records and a summary."""
+    pose_scene, id_scene = _scenes(config)
+    beacon_map = pose_scene.beacon_map()
+    beacons = list(beacon_map.beacons)
+    rng = np.random.default_rng([config.seed, WALKS.index(config.walk)])
+    path, _ = _walk(config, pose_scene)
+    shake = config.shake_deg if config.shake_deg is not None else pose_scene.series.rotation.shake_deg
+    times = np.array([p.t_s for p in path])
+    positions = np.array([p.position_m for p in path])
+    session = DeviceSession(beacon_map)
+    records = []
+    shake_seed = config.seed * 7919 + WALKS.index(config.walk)
+    pose_camera = pose_scene.camera.intrinsics()
+    for k, t_s in enumerate(times):
+        pose = _pose_at(times, positions, t_s, shake_seed, shake)
+        pose_frame = _frame(pose_scene, pose, t_s, FrameKind.pose, rng)
+        id_frames = []
+        for j in range(config.id_frames):
+            t_id = t_s + config.pose_exposure_s + 0.02 + j * config.id_interval_s
+            id_pose = _pose_at(times, positions, t_id, shake_seed, shake)
+            id_frames.append(_frame(id_scene, id_pose, t_id, FrameKind.id, rng))
+        result = session.locate(pose_frame, id_frames)
+        nearest = min(beacons, key=lambda b: math.hypot(b.center_m[0] - pose.position_m[0],
+                                                        b.center_m[1] - pose.position_m[1])).id
+        record = {"t_s": float(t_s), "truth_m": pose.position_m.tolist(), "ok": result.ok,
+                  "reason": None if result.ok else result.reason.value, "in_view": result.beacons_in_view,
+                  "nearest_beacon": nearest}
+        if result.ok:
+            record.update({
+                "fix_m": result.position_m, "beacon_id": result.beacon_id,
+                "source": result.beacon_id_source.value,
+                "true_beacon": _true_beacon(beacons, pose_camera, pose, result.center_px),
+                "error_mm": 1000.0 * math.hypot(result.position_m[0] - pose.position_m[0],
+                                                result.position_m[1] - pose.position_m[1]),
+                "vlc_confidence": None if result.vlc is None else result.vlc.confidence,
+            })
+        if result.track is not None:
+            record["filtered_m"] = result.track.filtered_position_m
+            record["outlier"] = result.track.outlier
+        records.append(record)
+        _progress(k + 1, len(times), config.walk)
+    return {"config": asdict(config), "summary": summarize_walk(records), "records": records,
+            "stats": asdict(session.stats)}
+
+
+def _progress(done: int, total: int, label: str) -> None:
+    if done == total or done % max(1, total // 10) == 0:
+        print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
+
+
+def _error_summary(errors: list[float]) -> dict:
+    if not errors:
+        return {"mean_mm": None, "p95_mm": None, "max_mm": None}
+    e = np.array(errors)
+    return {"mean_mm": float(e.mean()), "p95_mm": float(np.percentile(e, 95)), "max_mm": float(e.max())}
+
+
+def summarize_walk(records: list[dict]) -> dict:
+    ok = [r for r in records if r["ok"]]
+    # transitions: captures within one capture of a change of the nearest beacon
+    nearest = [r["nearest_beacon"] for r in records]
+    near_change = {i for i in range(len(records)) for j in (i - 1, i + 1)
+                   if 0 <= j < len(records) and nearest[j] != nearest[i]}
+    transition = [r for i, r in enumerate(records) if i in near_change]
+    filtered = [1000.0 * math.hypot(r["filtered_m"][0] - r["truth_m"][0], r["filtered_m"][1] - r["truth_m"][1])
+                for r in ok if "filtered_m" in r]
+    reasons: dict[str, int] = {}
+    for r in records:
+        if not r["ok"]:
+            reasons[r["reason"]] = reasons.get(r["reason"], 0) + 1
+    return {
+        "captures": len(records),
+        "coverage_pct": 100.0 * len(ok) / max(1, len(records)),
+        "fixes": _error_summary([r["error_mm"] for r in ok]),
+        "filtered": _error_summary(filtered),
+        "id_errors": sum(r["beacon_id"] != r["true_beacon"] for r in ok),
+        "ids_by_vlc": sum(r["source"] == "vlc" for r in ok),
+        "ids_carried": sum(r["source"] == "track" for r in ok),
+        "outliers": sum(bool(r.get("outlier")) for r in ok),
+        "transition_captures": len(transition),
+        "transition_coverage_pct": 100.0 * sum(r["ok"] for r in transition) / max(1, len(transition)),
+        "transition_fixes": _error_summary([r["error_mm"] for r in transition if r["ok"]]),
+        "refusals": reasons,
+    }
+
+
+def run_office(config: OfficeConfig, walks: tuple[str, ...] = WALKS, workers: int | None = None) -> list[dict]:
+    workers = min(len(walks), workers or os.cpu_count() or 1)
+    configs = [replace(config, walk=w) for w in walks]
+    if workers == 1:
+        return [run_walk(c) for c in configs]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(run_walk, configs))
+
+
+def plot_walk(report: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pose_scene, _ = _scenes(OfficeConfig(**report["config"]))
+    beacon_map = pose_scene.beacon_map()
+    _, area = _walk(OfficeConfig(**report["config"]), pose_scene)
+    colours = dict(zip(sorted(b.id for b in beacon_map.beacons), ["tab:blue", "tab:orange", "tab:green", "tab:red"]))
+    records = report["records"]
+    fig, ax = plt.subplots(figsize=(5.0, 6.6))
+    for b in beacon_map.beacons:  # each beacon's quarter of the area, softly coloured
+        qx = area.x_min_m if b.center_m[0] < 0 else 0.0
+        qy = area.y_min_m if b.center_m[1] < 0 else 0.0
+        ax.add_patch(plt.Rectangle((qx, qy), area.x_max_m, area.y_max_m, color=colours[b.id], alpha=0.08))
+        s = b.side_m
+        ax.add_patch(plt.Rectangle((b.center_m[0] - s / 2, b.center_m[1] - s / 2), s, s, color=colours[b.id]))
+        ax.annotate(f"ID {b.id}", (b.center_m[0], b.center_m[1] + 0.12), ha="center", fontsize=8)
+    truth = np.array([r["truth_m"] for r in records])
+    ax.plot(truth[:, 0], truth[:, 1], "-", color="darkorange", lw=1.0, label="true path")
+    for beacon_id, colour in colours.items():
+        fixes = np.array([r["fix_m"] for r in records if r["ok"] and r["beacon_id"] == beacon_id])
+        if len(fixes):
+            ax.plot(fixes[:, 0], fixes[:, 1], ".", color=colour, ms=4, label=f"fixes from ID {beacon_id}")
+    filtered = np.array([r["filtered_m"] for r in records if "filtered_m" in r])
+    if len(filtered):
+        ax.plot(filtered[:, 0], filtered[:, 1], "-", color="k", lw=0.6, alpha=0.7, label="filtered track")
+    missed = np.array([r["truth_m"] for r in records if not r["ok"]])
+    if len(missed):
+        ax.plot(missed[:, 0], missed[:, 1], "x", color="grey", ms=5, label="no fix")
+    s = report["summary"]
+    ax.set_title(f"{report['config']['walk']}: mean {s['fixes']['mean_mm']:.1f} mm, coverage {s['coverage_pct']:.1f} %, "
+                 f"ID errors {s['id_errors']}", fontsize=9)
+    ax.set_xlim(area.x_min_m - 0.1, area.x_max_m + 0.1)
+    ax.set_ylim(area.y_min_m - 0.1, area.y_max_m + 0.1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("X (m)")
+    ax.set_ylabel("Y (m)")
+    ax.legend(fontsize=6, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
