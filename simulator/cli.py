@@ -84,6 +84,9 @@ def add_commands(commands) -> None:
     fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
     fidelity.add_argument("--json", action="store_true")
     fidelity.set_defaults(run=_run_fidelity)
+    from simulator.vlc_cli import add_vlc_benches  # `bench vlc` and `bench office` (issue 4)
+
+    add_vlc_benches(benches)
 
 
 def _run_render(args) -> int:

@@ -1,0 +1,95 @@
+"""`lumipose bench vlc` and `lumipose bench office`: tables on stdout (or --json), PNG figures."""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+
+def add_vlc_benches(benches) -> None:
+    vlc = benches.add_parser("vlc", help="VLC ID success against distance, single frame and combined (Fig. 16)")
+    vlc.add_argument("--distances", type=float, nargs="+", default=[1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0])
+    vlc.add_argument("--sides", type=float, nargs="+", default=[0.174], help="panel sides, metres")
+    vlc.add_argument("--trials", type=int, default=100)
+    vlc.add_argument("--max-frames", type=int, default=12, help="ID frames combined at most")
+    vlc.add_argument("--exposures", type=float, nargs="+", default=None,
+                     help="exposure sweep (s) at the first distance instead of the distance sweep")
+    vlc.add_argument("--seed", type=int, default=1)
+    vlc.add_argument("--workers", type=int, default=None)
+    vlc.add_argument("--figure", type=Path, default=None, help="PNG of success against distance")
+    vlc.add_argument("--json", action="store_true")
+    vlc.set_defaults(run=_run_vlc)
+    office = benches.add_parser("office", help="the paper's office walks with four coded beacons (Figs. 17-18)")
+    office.add_argument("--walks", nargs="+", default=["zigzag", "spiral"], choices=["zigzag", "spiral"])
+    office.add_argument("--pose-scale", type=float, default=0.5, help="pose frames, of the Mi 8 front resolution")
+    office.add_argument("--id-frames", type=int, default=2, help="ID frames beside each pose frame")
+    office.add_argument("--inset", type=float, default=0.0, help="walk this far inside the area, metres")
+    office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")
+    office.add_argument("--seed", type=int, default=1)
+    office.add_argument("--workers", type=int, default=None)
+    office.add_argument("--figures", type=Path, default=None, help="folder for one PNG per walk")
+    office.add_argument("--json", action="store_true")
+    office.set_defaults(run=_run_office)
+
+
+def _run_vlc(args) -> int:
+    from simulator.bench_vlc import VlcConfig, plot_vlc, run_vlc
+
+    reports = []
+    base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed)
+    if args.exposures:
+        for side in args.sides:
+            for exposure in args.exposures:
+                config = replace(base, distance_m=args.distances[0], side_m=side, exposure_s=exposure)
+                reports.append(run_vlc(config, args.workers))
+    else:
+        for side in args.sides:
+            for distance in args.distances:
+                reports.append(run_vlc(replace(base, distance_m=distance, side_m=side), args.workers))
+    if args.figure and not args.exposures:
+        plot_vlc(reports, args.figure, "ID success, 1/8000 s ID frames, 256 candidate IDs")
+        print(f"wrote {args.figure}", file=sys.stderr)
+    if args.json:
+        print(json.dumps({"vlc": reports}, indent=2, default=float))
+        return 0
+    print(f"{'side':>6} {'dist':>5} {'exposure':>9} {'chips/fr':>8} {'single':>7} {'combined':>8} "
+          f"{'frames':>6} {'max':>4} {'wrong':>5}")
+    for r in reports:
+        s, c = r["single"], r["combined"]
+        print(f"{r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} {s['chips_per_frame']:8.1f} "
+              f"{s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} {c['max_frames_used']:4d} "
+              f"{s['confident_wrong'] + c['confident_wrong']:5d}")
+    return 0
+
+
+def _fmt(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def _run_office(args) -> int:
+    from simulator.bench_office import OfficeConfig, plot_walk, run_office
+
+    config = OfficeConfig(pose_scale=args.pose_scale, id_frames=args.id_frames, inset_m=args.inset,
+                          max_captures=args.limit, seed=args.seed)
+    reports = run_office(config, tuple(args.walks), args.workers)
+    if args.figures:
+        args.figures.mkdir(parents=True, exist_ok=True)
+        for report in reports:
+            path = args.figures / f"office-{report['config']['walk']}.png"
+            plot_walk(report, path)
+            print(f"wrote {path}", file=sys.stderr)
+    if args.json:
+        print(json.dumps({"office": [{k: r[k] for k in ("config", "summary", "stats")} for r in reports]}, indent=2))
+        return 0
+    print(f"{'walk':>7} {'captures':>8} {'cover':>6} {'mean':>6} {'p95':>6} {'max':>6} {'filt.mean':>9} "
+          f"{'ID err':>6} {'vlc':>4} {'carried':>7} {'outl':>4} {'trans.cover':>11} {'trans.mean':>10}  (2D, mm)")
+    for r in reports:
+        s = r["summary"]
+        print(f"{r['config']['walk']:>7} {s['captures']:8d} {s['coverage_pct']:5.1f}% {_fmt(s['fixes']['mean_mm']):>6} "
+              f"{_fmt(s['fixes']['p95_mm']):>6} {_fmt(s['fixes']['max_mm']):>6} {_fmt(s['filtered']['mean_mm']):>9} "
+              f"{s['id_errors']:6d} {s['ids_by_vlc']:4d} {s['ids_carried']:7d} {s['outliers']:4d} "
+              f"{s['transition_coverage_pct']:10.1f}% {_fmt(s['transition_fixes']['mean_mm']):>10}")
+        print(f"{'':>7} refusals: {s['refusals']}")
+    return 0
