@@ -18,6 +18,20 @@ public final class CaptureSettingsChooser {
     }
 
     /**
+     * {@code LENS_FOCUS_DISTANCE} for a panel at {@code distanceM}: diopters (1 / m), no nearer than
+     * the lens can focus. Null for a fixed-focus lens ({@code LENS_INFO_MINIMUM_FOCUS_DISTANCE} 0 or absent).
+     */
+    public static Float focusDiopters(double distanceM, Float minimumFocusDistanceDiopters) {
+        if (!(distanceM > 0)) {
+            throw new IllegalArgumentException("focus distance must be > 0 m, got " + distanceM);
+        }
+        if (minimumFocusDistanceDiopters == null || minimumFocusDistanceDiopters <= 0f) {
+            return null;
+        }
+        return (float) Math.min(1.0 / distanceM, minimumFocusDistanceDiopters);
+    }
+
+    /**
      * @param ranges           what the camera advertises
      * @param targetExposureNs wanted exposure, ns (for example {@link #POSITION_EXPOSURE_NS})
      * @throws UnsupportedCameraException without MANUAL_SENSOR or an exposure range

@@ -15,6 +15,7 @@ public final class FrameAssembler {
     private final int sensorOrientationDeg;
     private final LensFacing facing;
 
+    /** @param facing null for an external camera, whose attitude to the phone is unknown: no gravity is sent */
     public FrameAssembler(int width, int height, Intrinsics intrinsics, int sensorOrientationDeg, LensFacing facing) {
         if (width <= 0 || height <= 0) {
             throw new IllegalArgumentException("output size must be positive, got " + width + "x" + height);
@@ -43,7 +44,7 @@ public final class FrameAssembler {
             b.rollingShutterSkewS(values.rollingShutterSkewNs / 1e9);
         }
         b.timestampNs(values.timestampNs);
-        if (gravityDevice != null) {
+        if (gravityDevice != null && facing != null) {
             b.gravityCamera(GravityTransform.deviceToCamera(gravityDevice, sensorOrientationDeg, facing));
         }
         return b.build();

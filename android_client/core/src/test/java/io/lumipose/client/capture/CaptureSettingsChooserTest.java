@@ -73,6 +73,16 @@ class CaptureSettingsChooserTest {
     }
 
     @Test
+    void focusIsInDioptersAndNoNearerThanTheLensCan() {
+        assertEquals(1.0f, CaptureSettingsChooser.focusDiopters(1.0, 10f), 1e-6f);
+        assertEquals(0.5f, CaptureSettingsChooser.focusDiopters(2.0, 10f), 1e-6f);
+        assertEquals(4.0f, CaptureSettingsChooser.focusDiopters(0.1, 4f), 1e-6f);
+        assertNull(CaptureSettingsChooser.focusDiopters(1.0, 0f), "fixed-focus lens");
+        assertNull(CaptureSettingsChooser.focusDiopters(1.0, null));
+        assertThrows(IllegalArgumentException.class, () -> CaptureSettingsChooser.focusDiopters(0, 10f));
+    }
+
+    @Test
     void badRangesAndTargetsAreRejected() {
         assertThrows(IllegalArgumentException.class, () -> new CameraRanges(true, 10L, 5L, 100, 800, null, 0));
         assertThrows(IllegalArgumentException.class, () -> new CameraRanges(true, 1L, 5L, 800, 100, null, 0));

@@ -90,6 +90,9 @@ class FrameMetaTest {
         assertArrayEquals(new double[] {0, 0, -1}, m.gravityCamera(), 1e-12);
         assertEquals(640, m.rowStride);
 
+        FrameMeta external = new FrameAssembler(640, 480, K, 0, null)
+                .assemble(new CaptureValues(null, null, null, null), new float[] {0, 0, 9.81f});
+        assertNull(external.gravityCamera(), "an external camera's attitude is unknown");
         FrameMeta bare = a.assemble(new CaptureValues(null, null, null, null), null);
         assertNull(bare.exposureS);
         assertNull(bare.gravityCamera());

@@ -1,0 +1,74 @@
+package io.lumipose.app;
+
+import android.content.Context;
+import android.content.SharedPreferences;
+import android.os.Build;
+
+import io.lumipose.client.capture.CaptureSettingsChooser;
+import io.lumipose.client.net.ClientConfig;
+import io.lumipose.client.net.RetryPolicy;
+
+/** The settings screen's values, kept in SharedPreferences. */
+final class Prefs {
+    static final String SERVER_URL = "server_url";
+    static final String API_KEY = "api_key";
+    static final String CAMERA_ID = "camera_id";
+    static final String MAP_NAME = "map_name";
+    static final String FOCUS_DISTANCE_M = "focus_distance_m";
+    static final String MAX_MEGAPIXELS = "max_megapixels";
+    static final String ID_EXPOSURE_US = "id_exposure_us";
+    static final String BENCH_INDEX = "bench_index";
+
+    private final SharedPreferences p;
+
+    Prefs(Context context) {
+        p = context.getSharedPreferences("lumipose", Context.MODE_PRIVATE);
+    }
+
+    String serverUrl() {
+        return p.getString(SERVER_URL, "http://192.168.1.10:8000");
+    }
+
+    String apiKey() {
+        return p.getString(API_KEY, "");
+    }
+
+    /** Empty: the first back camera with MANUAL_SENSOR. */
+    String cameraId() {
+        return p.getString(CAMERA_ID, "");
+    }
+
+    String mapName() {
+        return p.getString(MAP_NAME, "test-bench");
+    }
+
+    float focusDistanceM() {
+        return p.getFloat(FOCUS_DISTANCE_M, 1.0f);
+    }
+
+    float maxMegapixels() {
+        return p.getFloat(MAX_MEGAPIXELS, 2.1f);
+    }
+
+    long idExposureNs() {
+        return p.getLong(ID_EXPOSURE_US, CaptureSettingsChooser.DEFAULT_ID_EXPOSURE_NS / 1000) * 1000;
+    }
+
+    int benchIndex() {
+        return p.getInt(BENCH_INDEX, 0);
+    }
+
+    void setBenchIndex(int index) {
+        p.edit().putInt(BENCH_INDEX, index).apply();
+    }
+
+    SharedPreferences.Editor edit() {
+        return p.edit();
+    }
+
+    /** @throws IllegalArgumentException with a readable message for a bad server URL */
+    ClientConfig clientConfig() {
+        return new ClientConfig(serverUrl(), apiKey(), Build.MANUFACTURER + " " + Build.MODEL, true,
+                RetryPolicy.defaults());
+    }
+}

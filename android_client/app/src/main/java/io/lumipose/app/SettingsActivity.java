@@ -1,0 +1,144 @@
+package io.lumipose.app;
+
+import android.app.Activity;
+import android.os.Bundle;
+import android.text.InputType;
+import android.view.View;
+import android.widget.ArrayAdapter;
+import android.widget.Button;
+import android.widget.EditText;
+import android.widget.LinearLayout;
+import android.widget.ScrollView;
+import android.widget.Spinner;
+import android.widget.TextView;
+
+import java.util.ArrayList;
+import java.util.List;
+
+import io.lumipose.client.net.LumiposeClient;
+
+/** Server URL, API key, map, camera and capture options. */
+public final class SettingsActivity extends Activity {
+    private Prefs prefs;
+    private EditText url;
+    private EditText key;
+    private EditText mapName;
+    private EditText focus;
+    private EditText megapixels;
+    private EditText idExposure;
+    private Spinner camera;
+    private final List<String> cameraIds = new ArrayList<String>();
+    private TextView status;
+
+    @Override
+    protected void onCreate(Bundle savedInstanceState) {
+        super.onCreate(savedInstanceState);
+        prefs = new Prefs(this);
+        LinearLayout form = new LinearLayout(this);
+        form.setOrientation(LinearLayout.VERTICAL);
+        form.setPadding(24, 24, 24, 24);
+        url = field(form, "Server URL (http://host:port)", prefs.serverUrl(), InputType.TYPE_TEXT_VARIATION_URI);
+        key = field(form, "API key (empty if the server has none)", prefs.apiKey(),
+                InputType.TYPE_TEXT_VARIATION_PASSWORD);
+        mapName = field(form, "Map name", prefs.mapName(), InputType.TYPE_CLASS_TEXT);
+        focus = field(form, "Distance to the panel, m (focus)", String.valueOf(prefs.focusDistanceM()),
+                InputType.TYPE_NUMBER_FLAG_DECIMAL);
+        megapixels = field(form, "Largest frame, megapixels", String.valueOf(prefs.maxMegapixels()),
+                InputType.TYPE_NUMBER_FLAG_DECIMAL);
+        idExposure = field(form, "Beacon-ID exposure, microseconds", String.valueOf(prefs.idExposureNs() / 1000),
+                InputType.TYPE_CLASS_NUMBER);
+
+        TextView cameraLabel = new TextView(this);
+        cameraLabel.setText("Camera");
+        form.addView(cameraLabel);
+        camera = new Spinner(this);
+        List<String> labels = new ArrayList<String>();
+        cameraIds.add("");
+        labels.add("Automatic (first back camera with manual exposure)");
+        int selected = 0;
+        for (String[] c : Camera2Controller.describeCameras(this)) {
+            cameraIds.add(c[0]);
+            labels.add("Camera " + c[0] + " (" + c[1] + ")");
+            if (c[0].equals(prefs.cameraId())) {
+                selected = cameraIds.size() - 1;
+            }
+        }
+        camera.setAdapter(new ArrayAdapter<String>(this, android.R.layout.simple_spinner_dropdown_item, labels));
+        camera.setSelection(selected);
+        form.addView(camera);
+
+        Button save = new Button(this);
+        save.setText("Save and test the connection");
+        save.setOnClickListener(new View.OnClickListener() {
+            @Override
+            public void onClick(View v) {
+                save();
+            }
+        });
+        form.addView(save);
+        status = new TextView(this);
+        form.addView(status);
+        ScrollView scroll = new ScrollView(this);
+        scroll.addView(form);
+        setContentView(scroll);
+    }
+
+    private EditText field(LinearLayout form, String label, String value, int inputType) {
+        TextView l = new TextView(this);
+        l.setText(label);
+        form.addView(l);
+        EditText e = new EditText(this);
+        e.setInputType(InputType.TYPE_CLASS_TEXT | inputType);
+        if (inputType == InputType.TYPE_NUMBER_FLAG_DECIMAL || inputType == InputType.TYPE_CLASS_NUMBER) {
+            e.setInputType(InputType.TYPE_CLASS_NUMBER | inputType);
+        }
+        e.setText(value);
+        form.addView(e);
+        return e;
+    }
+
+    private void save() {
+        float focusM;
+        float mp;
+        long idUs;
+        try {
+            focusM = Float.parseFloat(focus.getText().toString());
+            mp = Float.parseFloat(megapixels.getText().toString());
+            idUs = Long.parseLong(idExposure.getText().toString());
+        } catch (NumberFormatException e) {
+            status.setText("Distance, megapixels and exposure must be numbers.");
+            return;
+        }
+        if (!(focusM > 0) || !(mp > 0) || idUs <= 0) {
+            status.setText("Distance, megapixels and exposure must be positive.");
+            return;
+        }
+        prefs.edit().putString(Prefs.SERVER_URL, url.getText().toString().trim())
+                .putString(Prefs.API_KEY, key.getText().toString().trim())
+                .putString(Prefs.MAP_NAME, mapName.getText().toString().trim())
+                .putString(Prefs.CAMERA_ID, cameraIds.get(camera.getSelectedItemPosition()))
+                .putFloat(Prefs.FOCUS_DISTANCE_M, focusM).putFloat(Prefs.MAX_MEGAPIXELS, mp)
+                .putLong(Prefs.ID_EXPOSURE_US, idUs).apply();
+        final LumiposeClient client;
+        try {
+            client = LumiposeClient.create(prefs.clientConfig());
+        } catch (IllegalArgumentException e) {
+            status.setText(e.getMessage());
+            return;
+        }
+        status.setText("Saved. Testing the connection...");
+        new Thread(new Runnable() {
+            @Override
+            public void run() {
+                final boolean ok = client.healthy();
+                runOnUiThread(new Runnable() {
+                    @Override
+                    public void run() {
+                        status.setText(ok ? "Saved. The server answers." : "Saved, but the server does not answer "
+                                + "/healthz: check the URL and that the phone is on the server's network.");
+                    }
+                });
+            }
+        }, "lumipose-health").start();
+    }
+}
