@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Optional: build a signed debug APK of the Android client offline, from Maven Central and Debian's
+# packages only (no Android SDK, no Gradle): Maven compiles the modules, dx (dalvik-dx from Maven
+# Central) dexes them, Debian's aapt packages the manifest against Android 10's framework-res.apk,
+# zipalign aligns, apksigner signs with a throw-away debug key, and both tools check the result.
+#   Debian packages needed: aapt zipalign apksigner android-framework-res
+#   Output: android_client/app/target/apk/lumipose-debug.apk
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FRAMEWORK_RES=/usr/share/android-framework-res/framework-res.apk
+DX_VERSION=11.0.0_r3
+
+missing=()
+for tool in aapt zipalign apksigner; do
+    command -v "$tool" >/dev/null || missing+=("$tool")
+done
+[ -f "$FRAMEWORK_RES" ] || missing+=(android-framework-res)
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "missing Debian packages: ${missing[*]}; install them with: apt-get install ${missing[*]}" >&2
+    exit 1
+fi
+
+OUT=android_client/app/target/apk
+mkdir -p "$OUT"
+MVN=(mvn -B -ntp -q -f android_client/pom.xml)
+"${MVN[@]}" package -DskipTests
+"${MVN[@]}" org.apache.maven.plugins:maven-dependency-plugin:3.8.1:copy -N \
+    -Dartifact=com.jakewharton.android.repackaged:dalvik-dx:$DX_VERSION -DoutputDirectory="$PWD/$OUT/tools"
+rm -f "$OUT"/*.apk "$OUT"/classes.dex
+
+# Resources: the manifest and strings only (the screens are built in code, so no R class is needed).
+# The source manifest is Gradle-style (no package, no uses-sdk); aapt gets them here, as Gradle would.
+sed 's|<manifest xmlns:android="http://schemas.android.com/apk/res/android">|<manifest xmlns:android="http://schemas.android.com/apk/res/android" package="io.lumipose.app">|' \
+    android_client/app/src/main/AndroidManifest.xml > "$OUT/AndroidManifest.xml"
+grep -q 'package="io.lumipose.app"' "$OUT/AndroidManifest.xml"
+aapt package -f -M "$OUT/AndroidManifest.xml" -S android_client/app/src/main/res -I "$FRAMEWORK_RES" \
+    --min-sdk-version 28 --target-sdk-version 29 --version-code 1 --version-name 0.1.0 -F "$OUT/unsigned.apk"
+
+# Dex the app and the core; org.json and android.* come from the phone's framework.
+java -cp "$OUT/tools/dalvik-dx-$DX_VERSION.jar" com.android.dx.command.Main --dex --min-sdk-version=28 \
+    --output="$OUT/classes.dex" android_client/core/target/lumipose-client-core-*.jar \
+    android_client/app/target/lumipose-android-app-*.jar
+(cd "$OUT" && aapt add unsigned.apk classes.dex >/dev/null)
+
+zipalign -f 4 "$OUT/unsigned.apk" "$OUT/aligned.apk"
+KEYSTORE="$OUT/debug.keystore"
+[ -f "$KEYSTORE" ] || keytool -genkeypair -noprompt -keystore "$KEYSTORE" -storepass android -keypass android \
+    -alias lumipose-debug -keyalg RSA -keysize 2048 -validity 10000 -dname "CN=Lumipose debug" >/dev/null 2>&1
+apksigner sign --ks "$KEYSTORE" --ks-pass pass:android --key-pass pass:android \
+    --out "$OUT/lumipose-debug.apk" "$OUT/aligned.apk"
+rm -f "$OUT/unsigned.apk" "$OUT/aligned.apk"
+
+apksigner verify --verbose "$OUT/lumipose-debug.apk"
+aapt dump badging "$OUT/lumipose-debug.apk" | grep -E "^(package|sdkVersion|targetSdkVersion|uses-permission|launchable-activity)"
+echo "APK: $OUT/lumipose-debug.apk ($(stat -c %s "$OUT/lumipose-debug.apk") bytes)"
