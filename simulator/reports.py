@@ -192,8 +192,7 @@ def plot_heatmap(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
     for o, (x, y) in zip(outcomes, true):
         grid[np.searchsorted(ys, round(y, 6)), np.searchsorted(xs, round(x, 6))] = min(o.error_2d_m, margin_m)
     figure, axes = plt.subplots(figsize=(6.5, 7.5))
-    cmap = plt.get_cmap("viridis").copy()
-    cmap.set_bad("lightgrey")
+    cmap = plt.get_cmap("viridis").with_extremes(bad="lightgrey")
     step_x = xs[1] - xs[0] if len(xs) > 1 else 0.05
     step_y = ys[1] - ys[0] if len(ys) > 1 else 0.05
     image = axes.imshow(np.ma.masked_invalid(grid) * 1000, origin="lower", cmap=cmap,
