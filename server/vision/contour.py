@@ -69,7 +69,7 @@ def _shape_problem(contour: np.ndarray, area: float, rules: BlobRules) -> str | 
 
 def find_beacon_blob(mask: np.ndarray, rules: BlobRules = BlobRules()) -> Blob | Refusal:
     """The beacon's blob in `mask` (uint8, 0 / 255), or the reason there is none."""
-    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     candidates = sorted(
         ((cv2.contourArea(c), c) for c in contours), key=lambda item: item[0], reverse=True
     )

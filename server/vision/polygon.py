@@ -39,10 +39,14 @@ class Quad:
 
 def intersect_lines(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray | None:
     """Intersection of the line p1-p2 with the line q1-q2 (None if parallel)."""
-    line_p = np.cross([*p1, 1.0], [*p2, 1.0])
-    line_q = np.cross([*q1, 1.0], [*q2, 1.0])
-    x, y, w = np.cross(line_p, line_q)
-    return None if abs(w) < 1e-12 else np.array([x / w, y / w])
+    # Written out (Cramer's rule): np.cross costs ~20 us a call on 3-vectors.
+    (px, py), (rx, ry) = p1, np.subtract(p2, p1)
+    (qx, qy), (sx, sy) = q1, np.subtract(q2, q1)
+    denominator = float(rx * sy - ry * sx)
+    if abs(denominator) < 1e-12:
+        return None
+    t = ((qx - px) * sy - (qy - py) * sx) / denominator
+    return np.array([px + t * rx, py + t * ry], dtype=float)
 
 
 def _direction_deg(segment: np.ndarray) -> float:

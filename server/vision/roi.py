@@ -45,15 +45,16 @@ def coarse_view(pixels: np.ndarray, step: int) -> np.ndarray:
     refused as cut off (found on a bench frame whose panel ended 8 px from the right edge).
     """
     height, width = pixels.shape
-    small = pixels[::step, ::step]
-    if (width - 1) % step:
-        small = np.hstack([small, pixels[::step, -1:]])
-    if (height - 1) % step:
-        last_row = pixels[-1:, ::step]
-        if (width - 1) % step:
-            last_row = np.hstack([last_row, pixels[-1:, -1:]])
-        small = np.vstack([small, last_row])
-    return np.ascontiguousarray(small)
+    grid = pixels[::step, ::step]
+    extra_row, extra_col = int((height - 1) % step > 0), int((width - 1) % step > 0)
+    small = np.empty((grid.shape[0] + extra_row, grid.shape[1] + extra_col), pixels.dtype)
+    small[:grid.shape[0], :grid.shape[1]] = grid
+    if extra_col:
+        small[:grid.shape[0], -1] = pixels[::step, -1]
+    if extra_row:
+        small[-1, :grid.shape[1]] = pixels[-1, ::step]
+        small[-1, -1] = pixels[-1, -1]
+    return small
 
 
 def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobRules = BlobRules()) -> Roi | Refusal:

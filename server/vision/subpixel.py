@@ -16,9 +16,14 @@ from the image itself, in the way of AprilTag's edge refinement:
    by D and turns its corner radius r into r + D, so the corners measure D where the sides
    cannot: in the plane of the panel (the four lines rectified to a unit square) the
    corner crossings lie on circles of radius R = rho (1 - 2 d) + d, with rho = r / side
-   from the map and d = D in side units. The lines are then moved in by D. Nothing here
-   assumes a PSF shape; it needs the map's corner radius to be right (0.1 mm of radius is
-   ~0.35 px of D at 1 m, see docs/accuracy.md) and a corner radius of a few pixels.
+   from the map and d = D in side units. The lines are then moved in by D. This needs the
+   map's corner radius to be right (0.1 mm of radius is ~0.5 px of D at 1 m, see
+   docs/accuracy.md) and a corner radius of a few pixels, but no model of the PSF or of
+   the overexposure, except for one small term: blur rounds a curved edge's level set
+   inward by s^2 / (2 R) (s the blur, R the radius; less light reaches a point outside a
+   convex edge than outside a straight one), which the corner geometry would amplify about
+   three-fold. s is estimated from the gap between the mid- and quarter-level crossings of
+   the sides, assuming a Gaussian edge profile only for this term.
 4. Neighbouring lines intersect at the corners of the circumscribed square.
 """
 
@@ -29,9 +34,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from scipy.special import ndtr
+
 from server.vision.binarize import Levels
 
 UNIT_SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or side k + 1, k - 1
 
 
 @dataclass(frozen=True)
@@ -65,7 +73,7 @@ class EdgeFit:
 
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit directions, outward normals and lengths of the four sides of a convex quad."""
-    starts, ends = corners, np.roll(corners, -1, axis=0)
+    starts, ends = corners, corners[NEXT]
     directions = ends - starts
     lengths = np.linalg.norm(directions, axis=1)
     directions = directions / lengths[:, None]
@@ -107,7 +115,7 @@ def _arc_profiles(corners, directions, radius_px, rules):
     half_span = np.radians(rules.arc_span_deg) / 2
     t = np.pi / 4 + np.linspace(-half_span, half_span, n_arc)
     u = directions
-    v = -np.roll(directions, 1, axis=0)
+    v = -directions[PREVIOUS]
     outward = -(np.cos(t)[None, :, None] * v[:, None, :] + np.sin(t)[None, :, None] * u[:, None, :])
     outward /= np.linalg.norm(outward, axis=2, keepdims=True)
     centres = corners + radius_px * (u + v)
@@ -115,21 +123,53 @@ def _arc_profiles(corners, directions, radius_px, rules):
     return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
 
 
-def _line_through(points: np.ndarray, outward: np.ndarray) -> tuple[np.ndarray, float]:
-    """Robust line (a, b, c) through points, (a, b) pointing along `outward`; and its RMS."""
-    vx, vy, x0, y0 = cv2.fitLine(points.astype(np.float32), cv2.DIST_HUBER, 0, 0.01, 0.01).ravel()
-    normal = np.array([vy, -vx], dtype=float)
-    if normal @ outward < 0:
-        normal = -normal
-    c = -float(normal @ [x0, y0])
-    residuals = points @ normal + c
-    return np.array([normal[0], normal[1], c]), float(np.sqrt(np.mean(residuals**2)))
+def _fit_lines(points: np.ndarray, weights: np.ndarray, outward: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Total-least-squares lines of the four sides at once, one trimmed refit.
+
+    points (4, n, 2), weights (4, n) 1 for a valid crossing else 0, outward (4, 2).
+    Returns lines (4, 3) a x + b y + c = 0 with (a, b) the unit normal along `outward`,
+    and the RMS distance of the kept points. Points further than 3.5 robust sigmas (MAD)
+    from the first fit are dropped: a noise crossing must not tilt a side.
+    """
+    lines = np.zeros((4, 3))
+    for _ in range(2):
+        total = weights.sum(axis=1, keepdims=True)
+        centre = np.einsum("kn,knd->kd", weights, points) / total
+        centred = points - centre[:, None, :]
+        scatter = np.einsum("kn,kni,knj->kij", weights, centred, centred)
+        _, vectors = np.linalg.eigh(scatter)
+        normal = vectors[:, :, 0]  # smallest eigenvalue: across the side
+        normal *= np.sign(np.sum(normal * outward, axis=1))[:, None]
+        lines = np.column_stack([normal, -np.sum(normal * centre, axis=1)])
+        residuals = np.einsum("knd,kd->kn", points, normal) + lines[:, 2:3]
+        ordered = np.sort(np.where(weights > 0, np.abs(residuals), np.inf), axis=1)
+        spread = ordered[np.arange(4), (weights > 0).sum(axis=1) // 2] * 1.4826  # MAD of each side
+        weights = weights * (np.abs(residuals) <= 3.5 * np.maximum(spread, 1e-3)[:, None])
+    rms = np.sqrt(np.sum(weights * residuals**2, axis=1) / weights.sum(axis=1))
+    return lines, rms
 
 
 def _intersections(lines: np.ndarray) -> np.ndarray:
     """Corner k = side k - 1 meets side k, (4, 2)."""
-    points = np.cross(np.roll(lines, 1, axis=0), lines)
-    return points[:, :2] / points[:, 2:3]
+    (a0, b0, c0), (a1, b1, c1) = lines[PREVIOUS].T, lines.T
+    w = a0 * b1 - b0 * a1
+    return np.column_stack([(b0 * c1 - c0 * b1) / w, (c0 * a1 - a0 * c1) / w])
+
+
+def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
+    """Blur (px, PSF and pixel together) of a Gaussian edge profile from two level crossings.
+
+    With the edge at 0 the profile above background is a Phi(-x / s); the mid-level crossing
+    lies `growth_px` outside the edge and the quarter-level one (half the mid level above
+    background) `level_gap_px` further out: Phi(-(D + gap) / s) = Phi(-D / s) / 2. The ratio
+    grows with s, so s is read off a table.
+    """
+    if not (np.isfinite(level_gap_px) and level_gap_px > 0):
+        return None
+    sigmas = np.linspace(0.1, 8.0, 160)
+    growth = max(growth_px, 0.0)
+    ratio = ndtr(-(growth + level_gap_px) / sigmas) / ndtr(-growth / sigmas)
+    return float(np.interp(0.5, ratio, sigmas))
 
 
 def contour_growth(corners_px: np.ndarray, arc_points_px: list[np.ndarray], radius_fraction: float) -> float | None:
@@ -156,7 +196,7 @@ def contour_growth(corners_px: np.ndarray, arc_points_px: list[np.ndarray], radi
     if len(radii) < 8:
         return None
     growth_units = (float(np.median(radii)) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
-    side_px = float(np.mean(np.linalg.norm(np.roll(corners_px, -1, axis=0) - corners_px, axis=1)))
+    side_px = float(np.mean(np.linalg.norm(corners_px[NEXT] - corners_px, axis=1)))
     return growth_units * side_px
 
 
@@ -187,37 +227,45 @@ def refine_edges(
         bases, across = np.vstack([side_bases, arc_bases]), np.vstack([side_normals, arc_normals])
     else:
         bases, across, n_arc = side_bases, side_normals, 0
-    offsets = np.arange(-rules.half_window_px, rules.half_window_px + 1e-9, rules.step_px)
-    samples = (bases[:, None, :] + offsets[None, :, None] * across[:, None, :]).astype(np.float32)
-    profiles = cv2.remap(roi.astype(np.float32), samples[..., 0], samples[..., 1], cv2.INTER_LINEAR,
+    offsets = np.arange(-rules.half_window_px, rules.half_window_px + 1e-9, rules.step_px, dtype=np.float32)
+    bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
+    map_x = bases32[:, :1] + offsets[None, :] * across32[:, :1]  # contiguous maps: no copy in remap
+    map_y = bases32[:, 1:] + offsets[None, :] * across32[:, 1:]
+    profiles = cv2.remap(roi.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
     crossings = _mid_level_crossings(profiles, offsets, levels.threshold)
-    valid = np.isfinite(crossings) & np.all(np.isfinite(profiles), axis=1)
+    valid = np.isfinite(crossings) & np.isfinite(profiles[:, 0]) & np.isfinite(profiles[:, -1])
+    quarter_level = (levels.threshold + levels.background) / 2
+    level_gap = _mid_level_crossings(profiles[:4 * n_along], offsets, quarter_level) - crossings[:4 * n_along]
+    level_gap_px = float(np.nanmedian(level_gap)) if np.isfinite(level_gap).any() else float("nan")
 
     points = bases + crossings[:, None] * across + np.asarray(roi_origin, dtype=float)
     if distortion is not None:
         points = cv2.undistortPoints(points.reshape(-1, 1, 2), camera_matrix, distortion,
                                      P=camera_matrix).reshape(-1, 2)
-    lines, rms, counts = [], [], []
-    for k in range(4):
-        side = slice(k * n_along, (k + 1) * n_along)
-        ok = valid[side]
-        if ok.sum() < max(6, n_along // 3):
-            return None
-        line, line_rms = _line_through(points[side][ok], normals[k])
-        lines.append(line)
-        rms.append(line_rms)
-        counts.append(int(ok.sum()))
-    lines_array = np.array(lines)
+    side_valid = valid[:4 * n_along].reshape(4, n_along)
+    counts = side_valid.sum(axis=1)
+    if counts.min() < max(6, n_along // 3):
+        return None
+    side_points = np.where(side_valid[..., None], points[:4 * n_along].reshape(4, n_along, 2), 0.0)
+    lines_array, rms = _fit_lines(side_points, side_valid.astype(float), normals)
 
     warnings: list[str] = []
     shift = 0.0
     arc_points = []
     if use_arcs:
         first = 4 * n_along
-        arc_points = [points[first + k * n_arc:first + (k + 1) * n_arc][valid[first + k * n_arc:first + (k + 1) * n_arc]]
-                      for k in range(4)]
-        growth = contour_growth(_intersections(lines_array), arc_points, radius_fraction)
+        arc_valid = valid[first:].reshape(4, n_arc)
+        arc_points = [points[first:].reshape(4, n_arc, 2)[k][arc_valid[k]] for k in range(4)]
+        square = _intersections(lines_array)
+        growth = contour_growth(square, arc_points, radius_fraction)
+        blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
+        if blur_px is not None:
+            # put the corner points back where a straight edge's level would be (see above)
+            inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
+            arc_across = across[first:].reshape(4, n_arc, 2)
+            arc_points = [arc_points[k] + inward_px * arc_across[k][arc_valid[k]] for k in range(4)]
+            growth = contour_growth(square, arc_points, radius_fraction)
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")
         else:
@@ -230,7 +278,7 @@ def refine_edges(
         lines=lines_array,
         edge_shift_px=shift,
         line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
-        points_per_side=tuple(counts),
+        points_per_side=tuple(int(c) for c in counts),
         arc_points=int(sum(len(p) for p in arc_points)),
         warnings=tuple(warnings),
     )
