@@ -25,7 +25,7 @@ def add_commands(commands) -> None:
     locate = actions.add_parser("locate", help="locate one recorded frame")
     locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
     locate.add_argument("--map", help="map name (default: the active map)")
-    locate.add_argument("--no-compress", action="store_true", help="send the frame without gzip")
+    locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
     locate.set_defaults(client_run=_locate)
 
     samples = actions.add_parser("samples", help="recorded samples")
@@ -76,7 +76,8 @@ def _print(model) -> None:
 
 
 def _locate(client: Client, args) -> int:
-    result = client.locate_fixture(args.frame, map=args.map, compress=not args.no_compress)
+    result = client.locate_fixture(args.frame, map=args.map,
+                                   compress=None if args.compress == "none" else args.compress)
     _print(result)
     return 0 if result.ok else 1
 

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, Callable, Generic, TypeVar
 
 import httpx
+import zstandard
 from pydantic import BaseModel, ValidationError
 
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
@@ -82,16 +83,32 @@ def _frame(response: httpx.Response) -> tuple[FrameMeta, bytes]:
     return FrameMeta.model_validate_json(response.headers[FRAME_HEADER]), response.content
 
 
-def _frame_headers(meta: FrameMeta, compress: bool) -> dict[str, str]:
+@dataclass(frozen=True)
+class EncodedFrame:
+    """Frame bytes with their Content-Encoding, encoded once (for example to send the same frame often)."""
+
+    data: bytes
+    encoding: str | None
+
+
+def encode_frame(data: bytes, encoding: str | None = "gzip") -> EncodedFrame:
+    """gzip (level 1: fast, most of the gain on a dark luma plane), zstd, or None."""
+    if encoding == "gzip":
+        return EncodedFrame(gzip.compress(data, compresslevel=1), "gzip")
+    if encoding == "zstd":
+        return EncodedFrame(zstandard.ZstdCompressor(level=1).compress(data), "zstd")
+    if encoding is None:
+        return EncodedFrame(bytes(data), None)
+    raise ValueError(f"unknown encoding {encoding!r}: use 'gzip', 'zstd' or None")
+
+
+def _frame_request(meta: FrameMeta, frame: bytes | EncodedFrame, compress: str | None) -> dict[str, Any]:
+    encoded = frame if isinstance(frame, EncodedFrame) else encode_frame(frame, compress)
     headers = {"Content-Type": "application/octet-stream",
                FRAME_HEADER: meta.model_dump_json(by_alias=True, exclude_none=True)}
-    if compress:
-        headers["Content-Encoding"] = "gzip"
-    return headers
-
-
-def _frame_body(data: bytes, compress: bool) -> bytes:
-    return gzip.compress(data, compresslevel=1) if compress else data  # level 1: fast, most of the gain
+    if encoded.encoding:
+        headers["Content-Encoding"] = encoded.encoding
+    return {"headers": headers, "content": encoded.data}
 
 
 class _Endpoints:
@@ -103,12 +120,15 @@ class _Endpoints:
     def health(self):
         return self._run(_Call("GET", "/healthz", _model(Health)))
 
-    def locate(self, data: bytes, meta: FrameMeta, *, map: str | None = None, beacon_id: int | None = None,
-               gravity: str | None = None, compress: bool = True):
-        """Locate the camera of one frame: LocateResult (ok, or ok=False with a reason)."""
+    def locate(self, data: bytes | EncodedFrame, meta: FrameMeta, *, map: str | None = None,
+               beacon_id: int | None = None, gravity: str | None = None, compress: str | None = "gzip"):
+        """Locate the camera of one frame: LocateResult (ok, or ok=False with a reason).
+
+        `data` is sent with `compress` ('gzip', 'zstd' or None) unless it is already an EncodedFrame.
+        """
         return self._run(_Call("POST", "/v1/locate", _model(LocateResult),
                                params={"map": map, "beacon_id": beacon_id, "gravity": gravity},
-                               headers=_frame_headers(meta, compress), content=_frame_body(data, compress)))
+                               **_frame_request(meta, data, compress)))
 
     def locate_fixture(self, path: Path | str, **options):
         meta, data = read_fixture_files(path)
@@ -133,11 +153,12 @@ class _Endpoints:
     def profiles(self):
         return self._run(_Call("GET", "/v1/profiles", _models(DeviceProfile)))
 
-    def store_sample(self, data: bytes, meta: FrameMeta, *, label: str | None = None, device: str | None = None,
-                     map: str | None = None, compress: bool = True):
-        headers = _frame_headers(meta, compress) | ({"X-Lumipose-Device": device} if device else {})
+    def store_sample(self, data: bytes | EncodedFrame, meta: FrameMeta, *, label: str | None = None,
+                     device: str | None = None, map: str | None = None, compress: str | None = "gzip"):
+        request = _frame_request(meta, data, compress)
+        request["headers"] |= {"X-Lumipose-Device": device} if device else {}
         return self._run(_Call("POST", "/v1/samples", _model(SampleInfo), params={"label": label, "map": map},
-                               headers=headers, content=_frame_body(data, compress)))
+                               **request))
 
     def samples(self):
         return self._run(_Call("GET", "/v1/samples", _model(SampleList)))

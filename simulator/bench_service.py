@@ -1,0 +1,84 @@
+"""`lumipose bench load`: the service under N concurrent clients, on rendered frames of two sizes."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+
+from lumipose_client.load import LoadReport, run_load
+from lumipose_client.local_server import LocalServer
+from server.camera import intrinsics_from_profile
+from server.geometry import rotation_from_ypr
+from shared_schemas import BeaconMap, FrameMeta, device_profiles
+from simulator.benchmarks import PROFILE_ID, bench_beacon
+from simulator.fixtures import fixture_meta
+from simulator.render import CameraPose, SensorModel, render_frame
+
+FRAME_WIDTHS = {"1080p": 1080, "full": None}  # full = the profile's native 3880 x 5184
+
+
+def service_frame(width: int | None, distance_m: float = 1.0, seed: int = 3) -> tuple[FrameMeta, bytes, BeaconMap]:
+    """A rendered test-bench frame `width` pixels wide (native if None), its metadata and map."""
+    profile = device_profiles()[PROFILE_ID]
+    scale = 1.0 if width is None else width / profile.width
+    width, height = round(profile.width * scale), round(profile.height * scale)
+    camera = intrinsics_from_profile(profile, width, height)
+    pose = CameraPose(position_m=np.array([0.1, -0.15, 0.0]), rotation_wc=rotation_from_ypr(8.0, 2.0, -1.5))
+    beacon = bench_beacon(distance_m)
+    pixels = render_frame(beacon, camera, pose, width, height, SensorModel(psf_sigma_px=1.0 * scale ** 0.5 + 0.5),
+                          np.random.default_rng(seed))
+    return fixture_meta(camera, width, height, pose), pixels.tobytes(), BeaconMap(name="load-bench", beacons=[beacon])
+
+
+def run_service_load(frames: list[str], clients: list[int], seconds: float, encodings: list[str | None],
+                     workers: int = 1) -> list[LoadReport]:
+    """Each frame size against its own fresh server; every client count and encoding in turn."""
+    reports = []
+    for name in frames:
+        meta, data, beacon_map = service_frame(FRAME_WIDTHS[name])
+        with LocalServer("--workers", str(workers), "--log-level", "warning") as server:
+            map_path = server.data_dir / "maps" / f"{beacon_map.name}.json"
+            map_path.parent.mkdir(parents=True, exist_ok=True)
+            map_path.write_text(beacon_map.model_dump_json(by_alias=True))
+            for encoding in encodings:
+                for count in clients:
+                    print(f"{name}, {encoding or 'raw'}: {count} client(s) for {seconds:g} s ...",
+                          file=sys.stderr, flush=True)
+                    reports.append(run_load(server.url, name, data, meta, clients=count, seconds=seconds,
+                                            compress=encoding, server_pid=server.pid, map_name=beacon_map.name))
+    return reports
+
+
+def print_reports(reports: list[LoadReport], as_json: bool) -> None:
+    if as_json:
+        print(json.dumps([report.as_dict() for report in reports], indent=2))
+        return
+    print("| frame | body | clients | requests | errors | fixes | req/s | p50 ms | p99 ms | server ms | pipeline ms "
+          "| outside pipeline | server CPU ms | peak RSS MB |")
+    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for r in reports:
+        print(f"| {r.frame} | {r.encoding} {r.body_mb:.1f} MB | {r.clients} | {r.requests} | {r.errors} | {r.fixes} "
+              f"| {r.throughput_rps:.1f} "
+              f"| {r.p50_ms:.1f} | {r.p99_ms:.1f} | {r.server_request_ms:.1f} | {r.server_pipeline_ms:.1f} "
+              f"| {100 * r.outside_pipeline_share:.0f} % | {r.server_cpu_ms or float('nan'):.1f} "
+              f"| {r.server_peak_rss_mb or float('nan'):.0f} |")
+
+
+def add_load_command(benches) -> None:
+    load = benches.add_parser("load", help="the HTTP service under concurrent clients (starts its own server)")
+    load.add_argument("--frames", nargs="+", choices=sorted(FRAME_WIDTHS), default=["1080p", "full"])
+    load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4])
+    load.add_argument("--seconds", type=float, default=20.0, help="per client count")
+    load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
+    load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
+    load.add_argument("--json", action="store_true")
+    load.set_defaults(run=_run_load_command)
+
+
+def _run_load_command(args) -> int:
+    encodings = [None if encoding == "none" else encoding for encoding in args.encodings]
+    reports = run_service_load(args.frames, args.clients, args.seconds, encodings, args.workers)
+    print_reports(reports, args.json)
+    return 0 if all(report.errors == 0 for report in reports) else 1
