@@ -37,6 +37,7 @@ import io.lumipose.client.camera.PixelSize;
 import io.lumipose.client.capture.CameraRanges;
 import io.lumipose.client.capture.CaptureSettings;
 import io.lumipose.client.capture.CaptureSettingsChooser;
+import io.lumipose.client.capture.IdCapturePlan;
 import io.lumipose.client.capture.UnsupportedCameraException;
 import io.lumipose.client.frame.CaptureValues;
 import io.lumipose.client.frame.FrameAssembler;
@@ -49,7 +50,8 @@ import io.lumipose.client.sensor.LensFacing;
  * The only code that holds the Context and the camera. Runs Camera2 on its own HandlerThread with
  * auto-exposure and autofocus off, at the exposure, ISO and frame duration the core chose, and
  * hands out packed Y planes with their frame JSON. A camera without MANUAL_SENSOR is refused with
- * a reason instead of being used with automatic exposure.
+ * a reason instead of being used with automatic exposure. When beacon IDs are wanted it repeats a
+ * burst of one pose frame and two short-exposure ID frames (the VLC capture protocol).
  */
 final class Camera2Controller {
     /** Told what happens; every call comes on the camera thread. */
@@ -69,16 +71,20 @@ final class Camera2Controller {
     }
 
     private static final int MAX_CAPTURE_VALUES = 8;
+    private static final String ID_TAG = "id";
+    private static final int ID_FRAMES_PER_POSE = 2;
 
     private final Context context;
     private final String requestedCameraId;
     private final long targetExposureNs;
+    /** Zero: pose frames only. */
+    private final long idExposureNs;
     private final float focusDistanceM;
     private final long maxPixels;
     private final GravitySource gravity;
     private final FrameGate gate;
     private final Listener listener;
-    // Capture results by SENSOR_TIMESTAMP: the image and its result arrive separately.
+    // Capture results by SENSOR_TIMESTAMP: the image and its result arrive separately (camera thread only).
     private final Map<Long, CaptureValues> captureValues = new LinkedHashMap<Long, CaptureValues>();
 
     private HandlerThread thread;
@@ -88,12 +94,18 @@ final class Camera2Controller {
     private ImageReader reader;
     private FrameAssembler assembler;
     private CaptureSettings settings;
+    private CaptureSettings idSettings;
+    // A copied frame whose capture result has not arrived yet (both come on the camera thread).
+    private byte[] pendingLuma;
+    private long pendingTimestampNs;
+    private float[] pendingGravity;
 
-    Camera2Controller(Context context, String cameraId, long targetExposureNs, float focusDistanceM, long maxPixels,
-                      GravitySource gravity, FrameGate gate, Listener listener) {
+    Camera2Controller(Context context, String cameraId, long targetExposureNs, long idExposureNs,
+                      float focusDistanceM, long maxPixels, GravitySource gravity, FrameGate gate, Listener listener) {
         this.context = context.getApplicationContext();
         this.requestedCameraId = cameraId;
         this.targetExposureNs = targetExposureNs;
+        this.idExposureNs = idExposureNs;
         this.focusDistanceM = focusDistanceM;
         this.maxPixels = maxPixels;
         this.gravity = gravity;
@@ -235,6 +247,8 @@ final class Camera2Controller {
                     iso == null ? null : iso.getLower(), iso == null ? null : iso.getUpper(),
                     cc.get(CameraCharacteristics.SENSOR_INFO_MAX_FRAME_DURATION), minFrameNs);
             settings = CaptureSettingsChooser.choose(ranges, targetExposureNs);
+            idSettings = idExposureNs > 0 ? IdCapturePlan.choose(ranges, idExposureNs, settings,
+                    IdCapturePlan.DEFAULT_BRIGHTNESS_FRACTION) : null;
 
             final boolean correctionOff = contains(cc.get(CameraCharacteristics.DISTORTION_CORRECTION_AVAILABLE_MODES),
                     CameraMetadata.DISTORTION_CORRECTION_MODE_OFF);
@@ -257,7 +271,9 @@ final class Camera2Controller {
             }, handler);
             final String summary = "camera " + id + ", " + out + ", exposure " + settings.exposureNs / 1000 + " us, ISO "
                     + settings.sensitivityIso + ", fx " + Math.round(k.fx) + " px"
-                    + (settings.notes.isEmpty() ? "" : "; " + settings.notes);
+                    + (settings.notes.isEmpty() ? "" : "; " + settings.notes)
+                    + (idSettings == null ? "" : "; ID frames " + idSettings.exposureNs / 1000 + " us at ISO "
+                    + idSettings.sensitivityIso + (idSettings.notes.isEmpty() ? "" : " " + idSettings.notes));
             manager.openCamera(id, new CameraDevice.StateCallback() {
                 @Override
                 public void onOpened(CameraDevice device) {
@@ -326,8 +342,16 @@ final class Camera2Controller {
                         public void onConfigured(CameraCaptureSession s) {
                             session = s;
                             try {
-                                s.setRepeatingRequest(request(cc, focusDiopters, correctionOff), captureCallback,
-                                        handler);
+                                CaptureRequest pose = request(cc, focusDiopters, correctionOff, settings, null);
+                                if (idSettings == null) {
+                                    s.setRepeatingRequest(pose, captureCallback, handler);
+                                } else {
+                                    CaptureRequest id = request(cc, focusDiopters, correctionOff, idSettings, ID_TAG);
+                                    List<CaptureRequest> burst = new ArrayList<CaptureRequest>();
+                                    burst.add(pose);
+                                    burst.addAll(Collections.nCopies(ID_FRAMES_PER_POSE, id));
+                                    s.setRepeatingBurst(burst, captureCallback, handler);
+                                }
                                 listener.onStarted(summary);
                             } catch (CameraAccessException e) {
                                 listener.onError("Could not start capturing: " + e.getMessage());
@@ -344,10 +368,11 @@ final class Camera2Controller {
         }
     }
 
-    private CaptureRequest request(CameraCharacteristics cc, Float focusDiopters, boolean correctionOff)
-            throws CameraAccessException {
+    private CaptureRequest request(CameraCharacteristics cc, Float focusDiopters, boolean correctionOff,
+                                   CaptureSettings settings, Object tag) throws CameraAccessException {
         CaptureRequest.Builder b = camera.createCaptureRequest(CameraDevice.TEMPLATE_MANUAL);
         b.addTarget(reader.getSurface());
+        b.setTag(tag);
         b.set(CaptureRequest.CONTROL_MODE, CameraMetadata.CONTROL_MODE_AUTO);
         b.set(CaptureRequest.CONTROL_AE_MODE, CameraMetadata.CONTROL_AE_MODE_OFF);
         b.set(CaptureRequest.CONTROL_AF_MODE, CameraMetadata.CONTROL_AF_MODE_OFF);
@@ -380,14 +405,16 @@ final class Camera2Controller {
             if (ts == null) {
                 return;
             }
-            synchronized (captureValues) {
-                captureValues.put(ts, new CaptureValues(
-                        result.get(android.hardware.camera2.CaptureResult.SENSOR_EXPOSURE_TIME),
-                        result.get(android.hardware.camera2.CaptureResult.SENSOR_SENSITIVITY),
-                        result.get(android.hardware.camera2.CaptureResult.SENSOR_ROLLING_SHUTTER_SKEW), ts));
-                while (captureValues.size() > MAX_CAPTURE_VALUES) {
-                    captureValues.remove(captureValues.keySet().iterator().next());
-                }
+            captureValues.put(ts, new CaptureValues(
+                    result.get(android.hardware.camera2.CaptureResult.SENSOR_EXPOSURE_TIME),
+                    result.get(android.hardware.camera2.CaptureResult.SENSOR_SENSITIVITY),
+                    result.get(android.hardware.camera2.CaptureResult.SENSOR_ROLLING_SHUTTER_SKEW), ts,
+                    ID_TAG.equals(request.getTag())));
+            while (captureValues.size() > MAX_CAPTURE_VALUES) {
+                captureValues.remove(captureValues.keySet().iterator().next());
+            }
+            if (pendingLuma != null && pendingTimestampNs == ts) {
+                emit(pendingLuma, captureValues.get(ts), pendingGravity);
             }
         }
     };
@@ -404,19 +431,29 @@ final class Camera2Controller {
             Image.Plane y = image.getPlanes()[0];
             byte[] luma = LumaPlane.copy(y.getBuffer(), image.getWidth(), image.getHeight(), y.getRowStride(),
                     y.getPixelStride());
-            CaptureValues values;
-            synchronized (captureValues) {
-                values = captureValues.get(image.getTimestamp());
+            CaptureValues values = captureValues.get(image.getTimestamp());
+            if (values != null) {
+                emit(luma, values, gravity.latestGravity());
+            } else {
+                // The result (exposure used, skew, pose or ID) comes later: wait for it; a newer frame replaces this.
+                pendingLuma = luma;
+                pendingTimestampNs = image.getTimestamp();
+                pendingGravity = gravity.latestGravity();
             }
-            if (values == null) {
-                // Result not in yet: the requested values, without the skew only the result knows.
-                values = new CaptureValues(settings.exposureNs, settings.sensitivityIso, null, image.getTimestamp());
-            }
-            listener.onFrame(luma, assembler.assemble(values, gravity.latestGravity()));
         } catch (IllegalArgumentException e) {
             listener.onError("Frame dropped: " + e.getMessage());
         } finally {
             image.close();
+        }
+    }
+
+    private void emit(byte[] luma, CaptureValues values, float[] gravityDevice) {
+        pendingLuma = null;
+        pendingGravity = null;
+        try {
+            listener.onFrame(luma, assembler.assemble(values, gravityDevice));
+        } catch (IllegalArgumentException e) {
+            listener.onError("Frame dropped: " + e.getMessage());
         }
     }
 }

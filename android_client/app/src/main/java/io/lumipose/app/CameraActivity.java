@@ -41,6 +41,11 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         return CaptureSettingsChooser.POSITION_EXPOSURE_NS;
     }
 
+    /** Short-exposure beacon-ID frames beside the pose frames: 0 for none (one-beacon screens). */
+    protected long idExposureNs() {
+        return 0;
+    }
+
     @Override
     protected void onCreate(Bundle savedInstanceState) {
         super.onCreate(savedInstanceState);
@@ -84,7 +89,7 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     }
 
     private void startCamera() {
-        controller = new Camera2Controller(this, prefs.cameraId(), exposureNs(), prefs.focusDistanceM(),
+        controller = new Camera2Controller(this, prefs.cameraId(), exposureNs(), idExposureNs(), prefs.focusDistanceM(),
                 (long) (prefs.maxMegapixels() * 1e6), gravity, this, this);
         controller.start();
     }

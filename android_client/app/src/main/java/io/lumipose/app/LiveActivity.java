@@ -12,7 +12,11 @@ import io.lumipose.client.map.Track;
 import io.lumipose.client.net.LatestFrameUploader;
 import io.lumipose.client.net.LocateResult;
 
-/** Live position: frames go up one at a time (the newest wins) and the map shows the fix and the track. */
+/**
+ * Live position: frames go up one at a time (the newest wins) and the map shows the fix and the track.
+ * With "read beacon IDs" on, short-exposure ID frames are interleaved for rooms with several panels;
+ * the server combines them per device (X-Lumipose-Device).
+ */
 public final class LiveActivity extends CameraActivity implements LatestFrameUploader.Listener {
     private final Track track = new Track(200);
     private BeaconMapView mapView;
@@ -31,6 +35,11 @@ public final class LiveActivity extends CameraActivity implements LatestFrameUpl
         root.addView(mapView, new LinearLayout.LayoutParams(LinearLayout.LayoutParams.MATCH_PARENT, 0, 1f));
         root.addView(status);
         setContentView(root);
+    }
+
+    @Override
+    protected long idExposureNs() {
+        return prefs.readIds() ? prefs.idExposureNs() : 0;
     }
 
     @Override

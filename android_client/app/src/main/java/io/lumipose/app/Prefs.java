@@ -18,6 +18,7 @@ final class Prefs {
     static final String MAX_MEGAPIXELS = "max_megapixels";
     static final String ID_EXPOSURE_US = "id_exposure_us";
     static final String BENCH_INDEX = "bench_index";
+    static final String READ_IDS = "read_ids";
 
     private final SharedPreferences p;
 
@@ -52,6 +53,11 @@ final class Prefs {
 
     long idExposureNs() {
         return p.getLong(ID_EXPOSURE_US, CaptureSettingsChooser.DEFAULT_ID_EXPOSURE_NS / 1000) * 1000;
+    }
+
+    /** Interleave beacon-ID frames in live mode (rooms with several panels). */
+    boolean readIds() {
+        return p.getBoolean(READ_IDS, true);
     }
 
     int benchIndex() {

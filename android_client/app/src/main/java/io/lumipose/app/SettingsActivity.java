@@ -6,6 +6,7 @@ import android.text.InputType;
 import android.view.View;
 import android.widget.ArrayAdapter;
 import android.widget.Button;
+import android.widget.CheckBox;
 import android.widget.EditText;
 import android.widget.LinearLayout;
 import android.widget.ScrollView;
@@ -27,6 +28,7 @@ public final class SettingsActivity extends Activity {
     private EditText megapixels;
     private EditText idExposure;
     private Spinner camera;
+    private CheckBox readIds;
     private final List<String> cameraIds = new ArrayList<String>();
     private TextView status;
 
@@ -47,6 +49,11 @@ public final class SettingsActivity extends Activity {
                 InputType.TYPE_NUMBER_FLAG_DECIMAL);
         idExposure = field(form, "Beacon-ID exposure, microseconds", String.valueOf(prefs.idExposureNs() / 1000),
                 InputType.TYPE_CLASS_NUMBER);
+
+        readIds = new CheckBox(this);
+        readIds.setText("Read beacon IDs in live mode (short-exposure frames between pose frames)");
+        readIds.setChecked(prefs.readIds());
+        form.addView(readIds);
 
         TextView cameraLabel = new TextView(this);
         cameraLabel.setText("Camera");
@@ -118,7 +125,7 @@ public final class SettingsActivity extends Activity {
                 .putString(Prefs.MAP_NAME, mapName.getText().toString().trim())
                 .putString(Prefs.CAMERA_ID, cameraIds.get(camera.getSelectedItemPosition()))
                 .putFloat(Prefs.FOCUS_DISTANCE_M, focusM).putFloat(Prefs.MAX_MEGAPIXELS, mp)
-                .putLong(Prefs.ID_EXPOSURE_US, idUs).apply();
+                .putLong(Prefs.ID_EXPOSURE_US, idUs).putBoolean(Prefs.READ_IDS, readIds.isChecked()).apply();
         final LumiposeClient client;
         try {
             client = LumiposeClient.create(prefs.clientConfig());

@@ -9,11 +9,19 @@ public final class CaptureValues {
     public final Integer sensitivityIso;
     public final Long rollingShutterSkewNs;
     public final Long timestampNs;
+    /** True for a short-exposure beacon-ID frame (the request's tag says which). */
+    public final boolean idFrame;
 
     public CaptureValues(Long exposureNs, Integer sensitivityIso, Long rollingShutterSkewNs, Long timestampNs) {
+        this(exposureNs, sensitivityIso, rollingShutterSkewNs, timestampNs, false);
+    }
+
+    public CaptureValues(Long exposureNs, Integer sensitivityIso, Long rollingShutterSkewNs, Long timestampNs,
+                         boolean idFrame) {
         this.exposureNs = exposureNs;
         this.sensitivityIso = sensitivityIso;
         this.rollingShutterSkewNs = rollingShutterSkewNs;
         this.timestampNs = timestampNs;
+        this.idFrame = idFrame;
     }
 }

@@ -44,6 +44,10 @@ public final class FrameAssembler {
             b.rollingShutterSkewS(values.rollingShutterSkewNs / 1e9);
         }
         b.timestampNs(values.timestampNs);
+        if (values.idFrame) {
+            // The server reads an ID frame's stripes; it needs the exposure, skew and timestamp.
+            b.frameKind("id");
+        }
         if (gravityDevice != null && facing != null) {
             b.gravityCamera(GravityTransform.deviceToCamera(gravityDevice, sensorOrientationDeg, facing));
         }

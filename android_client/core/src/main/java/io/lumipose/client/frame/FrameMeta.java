@@ -18,7 +18,7 @@ public final class FrameMeta {
     public static final String SCHEMA = "lumipose.frame/1";
     private static final Set<String> KNOWN = new HashSet<String>(Arrays.asList("schema", "format", "width", "height",
             "row_stride", "camera", "exposure_s", "iso", "rolling_shutter_skew_s", "timestamp_ns", "heading_deg",
-            "gravity_camera"));
+            "gravity_camera", "frame_kind"));
     private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
             "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
 
@@ -36,6 +36,8 @@ public final class FrameMeta {
     public final Long timestampNs;
     public final Double headingDeg;
     private final double[] gravityCamera;
+    /** "pose" or "id" (a short-exposure VLC frame); null = not stated, which the contract reads as pose. */
+    public final String frameKind;
     private final String extrasJson;
     private final String cameraExtrasJson;
 
@@ -58,6 +60,9 @@ public final class FrameMeta {
         if (b.rollingShutterSkewS != null && b.rollingShutterSkewS < 0) {
             throw new ContractException("rolling_shutter_skew_s", "must be >= 0, got " + b.rollingShutterSkewS);
         }
+        if (b.frameKind != null && !"pose".equals(b.frameKind) && !"id".equals(b.frameKind)) {
+            throw new ContractException("frame_kind", "must be 'pose' or 'id', got '" + b.frameKind + "'");
+        }
         if (b.gravityCamera != null && b.gravityCamera.length != 3) {
             throw new ContractException("gravity_camera", "must hold 3 numbers");
         }
@@ -73,6 +78,7 @@ public final class FrameMeta {
         this.timestampNs = b.timestampNs;
         this.headingDeg = b.headingDeg;
         this.gravityCamera = b.gravityCamera == null ? null : b.gravityCamera.clone();
+        this.frameKind = b.frameKind;
         this.extrasJson = b.extras.toString();
         this.cameraExtrasJson = b.cameraExtras.toString();
     }
@@ -132,6 +138,7 @@ public final class FrameMeta {
         if (gravityCamera != null) {
             Json.put(o, "gravity_camera", Json.array(gravityCamera));
         }
+        putIfSet(o, "frame_kind", frameKind);
         return o;
     }
 
@@ -186,6 +193,7 @@ public final class FrameMeta {
         b.timestampNs(Json.optLong(o, "timestamp_ns", "timestamp_ns"));
         b.headingDeg(Json.optDouble(o, "heading_deg", "heading_deg"));
         b.gravityCamera(Json.optDoubles(o, "gravity_camera", "gravity_camera", 3));
+        b.frameKind(Json.optString(o, "frame_kind", "frame_kind"));
         b.extras = Json.extras(o, KNOWN);
         return b.build();
     }
@@ -204,6 +212,7 @@ public final class FrameMeta {
         private Long timestampNs;
         private Double headingDeg;
         private double[] gravityCamera;
+        private String frameKind;
         private JSONObject extras = new JSONObject();
         private JSONObject cameraExtras = new JSONObject();
 
@@ -254,6 +263,11 @@ public final class FrameMeta {
 
         public Builder gravityCamera(double[] v) {
             gravityCamera = v == null ? null : v.clone();
+            return this;
+        }
+
+        public Builder frameKind(String v) {
+            frameKind = v;
             return this;
         }
 

@@ -90,6 +90,13 @@ class FrameMetaTest {
         assertArrayEquals(new double[] {0, 0, -1}, m.gravityCamera(), 1e-12);
         assertEquals(640, m.rowStride);
 
+        FrameMeta id = a.assemble(new CaptureValues(125_000L, 1600, 30_000_000L, 56L, true), null);
+        assertEquals("id", id.frameKind);
+        assertEquals("id", id.toJson().getString("frame_kind"));
+        assertNull(m.frameKind, "pose frames leave frame_kind to its default");
+        assertFalse(m.toJson().has("frame_kind"));
+        assertEquals("frame_kind", assertThrows(ContractException.class,
+                () -> FrameMeta.builder(4, 4).camera(K).frameKind("video").build()).field);
         FrameMeta external = new FrameAssembler(640, 480, K, 0, null)
                 .assemble(new CaptureValues(null, null, null, null), new float[] {0, 0, 9.81f});
         assertNull(external.gravityCamera(), "an external camera's attitude is unknown");

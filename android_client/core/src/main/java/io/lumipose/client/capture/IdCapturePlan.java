@@ -1,0 +1,79 @@
+package io.lumipose.client.capture;
+
+import java.util.ArrayList;
+import java.util.List;
+
+/**
+ * Settings of the short-exposure beacon-ID (VLC) frames taken beside pose frames, after the
+ * project's capture protocol (server/vlc/capture.py): exposure at most about a third of a code chip,
+ * ISO raised so the panel stays well below clipping, and a frame interval that advances the
+ * beacon's repeating message by 0.382 of its period from one ID frame to the next, so a few
+ * consecutive frames see well-spread parts of the code.
+ */
+public final class IdCapturePlan {
+    /** The beacons' chip rate and message length (5-bit header + 8 data bits in biphase mark code). */
+    public static final double CHIP_RATE_HZ = 2500.0;
+    public static final int MESSAGE_CHIPS = 21;
+    /** (3 - sqrt 5) / 2: the phase step that spreads successive frames most evenly over the message. */
+    public static final double GOLDEN_STEP = (3.0 - Math.sqrt(5.0)) / 2.0;
+    /** ID-frame brightness as a fraction of the pose frame's (exposure x ISO); the pose frame clips ~4x over. */
+    public static final double DEFAULT_BRIGHTNESS_FRACTION = 0.2;
+
+    private IdCapturePlan() {
+    }
+
+    public static long messagePeriodNs() {
+        return Math.round(MESSAGE_CHIPS / CHIP_RATE_HZ * 1e9);
+    }
+
+    /**
+     * The frame interval nearest {@code nominalNs} that advances the message phase by
+     * {@link #GOLDEN_STEP} periods, never shorter than {@code minimumNs}.
+     */
+    public static long steppedIntervalNs(long nominalNs, long minimumNs) {
+        if (nominalNs <= 0) {
+            throw new IllegalArgumentException("nominal frame interval must be > 0 ns, got " + nominalNs);
+        }
+        double period = messagePeriodNs();
+        long whole = Math.max(0, Math.round(nominalNs / period - GOLDEN_STEP));
+        while ((whole + GOLDEN_STEP) * period < minimumNs) {
+            whole++;
+        }
+        return Math.round((whole + GOLDEN_STEP) * period);
+    }
+
+    /**
+     * @param ranges             what the camera advertises
+     * @param idExposureNs       wanted ID exposure (see {@link CaptureSettingsChooser#DEFAULT_ID_EXPOSURE_NS})
+     * @param pose               the pose frames' settings (their exposure x ISO is the reference brightness)
+     * @param brightnessFraction ID-frame brightness relative to the pose frame's, in (0, 1]
+     */
+    public static CaptureSettings choose(CameraRanges ranges, long idExposureNs, CaptureSettings pose,
+                                         double brightnessFraction) throws UnsupportedCameraException {
+        if (!(brightnessFraction > 0 && brightnessFraction <= 1)) {
+            throw new IllegalArgumentException("brightnessFraction must be in (0, 1], got " + brightnessFraction);
+        }
+        CaptureSettings base = CaptureSettingsChooser.choose(ranges, idExposureNs);
+        List<String> notes = new ArrayList<String>(base.notes);
+        long chipNs = Math.round(1e9 / CHIP_RATE_HZ);
+        if (base.exposureNs > chipNs / 2) {
+            notes.add("ID exposure " + base.exposureNs + " ns exceeds half a chip (" + chipNs / 2
+                    + " ns): the code will be smeared");
+        }
+        Integer iso = base.sensitivityIso;
+        if (iso != null && pose.sensitivityIso != null) {
+            double wanted = pose.sensitivityIso * ((double) pose.exposureNs / base.exposureNs) * brightnessFraction;
+            iso = (int) Math.round(Math.max(ranges.sensitivityMinIso, Math.min(ranges.sensitivityMaxIso, wanted)));
+            if (iso < wanted * 0.999) {
+                notes.add("ID ISO " + Math.round(wanted) + " clamped to " + iso + ": the stripes are dimmer");
+            }
+        }
+        long frameNs = steppedIntervalNs(Math.max(base.frameDurationNs, ranges.streamMinFrameDurationNs),
+                Math.max(base.exposureNs, ranges.streamMinFrameDurationNs));
+        if (ranges.maxFrameDurationNs != null && frameNs > ranges.maxFrameDurationNs) {
+            notes.add("stepped ID frame interval " + frameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION");
+            frameNs = ranges.maxFrameDurationNs;
+        }
+        return new CaptureSettings(base.exposureNs, iso, frameNs, notes);
+    }
+}
