@@ -46,15 +46,17 @@ class PanelFix:
 
 def crop_frame(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], margin_px: int,
                background_dn: float) -> tuple[LumaFrame, tuple[int, int]]:
-    """`frame` cut to `blob`'s box plus `margin_px`, other blobs blanked; and the crop's (x0, y0)."""
+    """`frame` cut to `blob`'s box plus a margin (at least the box's size), other blobs blanked; and (x0, y0)."""
     height, width = frame.pixels.shape
     x, y, w, h = blob.bounding_box
+    # the pipeline takes the crop's median as its background: the panel must stay a small part of it
+    margin_px = max(margin_px, w, h)
     x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
     x1, y1 = min(width, x + w + margin_px), min(height, y + h + margin_px)
     pixels = np.array(frame.pixels[y0:y1, x0:x1])
     for other in others:
         ox, oy, ow, oh = other.bounding_box
-        pad = margin_px // 4
+        pad = 16
         ax0, ay0 = max(ox - pad - x0, 0), max(oy - pad - y0, 0)
         ax1, ay1 = min(ox + ow + pad - x0, x1 - x0), min(oy + oh + pad - y0, y1 - y0)
         if ax1 > ax0 and ay1 > ay0:

@@ -11,7 +11,9 @@ complete panel of the pose frame the session:
    position best matches the track's prediction carries the ID over (`BeaconIdSource.track`),
    when it is unambiguous;
 4. chooses among the named panels and fuses agreeing ones (`server.rooms`), then feeds the
-   fix to the constant-velocity filter, keeping the raw fix beside the filtered one.
+   fix to the constant-velocity filter, keeping the raw fix beside the filtered one;
+5. with no complete panel, fits the visible edges of the cut-off panels the track expects
+   (`server.pose.partial`), using the contour growth measured on earlier complete panels.
 """
 
 from __future__ import annotations
@@ -19,10 +21,13 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
+from server.geometry import camera_matrix, distortion_vector, rotation_from_ypr, ypr_from_rotation
 from server.ingest import LumaFrame
 from server.pipeline import PipelineOptions
+from server.pose.partial import PartialRules, edge_points, fit_partial, measure_growth, tilt_from_gravity
 from server.rooms import PanelFix, RoomRules, choose_and_fuse, locate_panel, vlc_reading
 from server.tracking.filter import FilterRules, FilterState, predict, start, update
 from server.vision.beacons import find_beacon_blobs
@@ -37,10 +42,14 @@ class SessionRules:
     panel_gate_m: float = 0.45  # relative-position jump allowed between captures of one panel
     carry_gate_m: float = 0.30  # track prediction to the carried beacon's hypothesis
     carry_ratio: float = 2.5  # the next hypothesis must be this much farther
-    panel_timeout_s: float = 3.0
+    panel_timeout_s: float = 1.2  # a panel unseen for longer is forgotten: after a walk of one beacon spacing
+    # the relative position to the next panel repeats the old one, so old tracks must not linger
     evidence_frames: int = 16
+    partial_gate: float = 0.5  # nearest predicted panel centre / next nearest, at a blob's centroid
+    established_fixes: int = 3  # accepted fixes in a row before the track may carry or veto an ID
     room: RoomRules = RoomRules()
     motion: FilterRules = FilterRules()
+    partial: PartialRules = PartialRules()
 
 
 @dataclass
@@ -75,6 +84,9 @@ class DeviceSession:
     panels: list[PanelTrack] = field(default_factory=list)
     track: FilterState | None = None
     stats: SessionStats = field(default_factory=SessionStats)
+    accepted_in_row: int = 0
+    growths_px: list[float] = field(default_factory=list)
+    last_rotation_wc: np.ndarray | None = None
     last_seen_s: float = field(default_factory=time.monotonic)
 
     def _template(self) -> Beacon | None:
@@ -108,7 +120,10 @@ class DeviceSession:
         return panel
 
     def _carried(self, relative_m: np.ndarray, t_s: float) -> Beacon | None:
-        if self.track is None:
+        """The map beacon the track predicts for this panel, when the track is established and unambiguous."""
+        if self.track is None or self.accepted_in_row < self.rules.established_fixes:
+            return None
+        if t_s - self.track.t_s > self.rules.panel_timeout_s * 2:
             return None
         predicted = predict(self.track, t_s, self.rules.motion).position_m
         distances = sorted((float(np.linalg.norm(relative_m + b.center_m - predicted)), b.id)
@@ -162,10 +177,14 @@ class DeviceSession:
                     self.stats.conflicts += 1
                 panel.beacon_id = reading.beacon_id
             carried = self._carried(relative_m, t_s)
+            if panel.beacon_id is not None and carried is not None and carried.id != panel.beacon_id:
+                # the established track and the panel's VLC evidence disagree: the evidence may mix two
+                # panels (a mis-association), so it is dropped and the track's beacon is used
+                self.stats.conflicts += 1
+                panel.beacon_id = None
+                panel.evidence.observations.clear()
             if panel.beacon_id is not None:
                 beacon, source = self.beacon_map.beacon(panel.beacon_id), BeaconIdSource.vlc
-                if carried is not None and carried.id != beacon.id:
-                    self.stats.conflicts += 1
             elif carried is not None:
                 beacon, source = carried, BeaconIdSource.track
             else:
@@ -175,9 +194,75 @@ class DeviceSession:
                 "beacon_id_source": source})
             fixes.append(PanelFix(blob, beacon, source, result, reading))
         best = choose_and_fuse(fixes, self.rules.room)
+        level = candidates.levels.threshold
         if best is None:
+            partial = self._partial_fix(pose_frame, blobs, level, t_s)
+            if isinstance(partial, PanelFix):
+                return self._track(partial, len(blobs), t_s)
+            if partial is not None:
+                refusals.insert(0, LocateResult(ok=False, reason=FailureReason.beacon_cut_off, message=partial))
             return self._no_fix(blobs, refusals, t_s)
+        self._measure_growth(pose_frame, best, level)
         return self._track(best, len(blobs), t_s)
+
+    def _measure_growth(self, frame: LumaFrame, best: PanelFix, level: float) -> None:
+        """The clipped panel's contour growth, from a complete panel whose pose is now known."""
+        points = edge_points(frame.pixels, best.blob.bounding_box, level, self.rules.partial)
+        growth = measure_growth(best.beacon, points, best.result.position_m, best.result.rotation_wc, frame.camera)
+        if growth is not None:
+            self.growths_px = (self.growths_px + [growth])[-10:]
+        self.last_rotation_wc = np.array(best.result.rotation_wc)
+
+    def _partial_fix(self, frame: LumaFrame, blobs, level: float, t_s: float) -> PanelFix | str | None:
+        """A fix from the visible parts of panels named by the track; None when not even tried."""
+        if (not blobs or self.track is None or self.accepted_in_row < self.rules.established_fixes
+                or not self.growths_px or self.last_rotation_wc is None
+                or t_s - self.track.t_s > self.rules.panel_timeout_s * 2):
+            return None
+        gravity = frame.meta.gravity_camera
+        if gravity is None:
+            return "cut-off panels need the gravity vector"
+        predicted = predict(self.track, t_s, self.rules.motion).position_m
+        yaw = ypr_from_rotation(self.last_rotation_wc)[0]
+        pitch, roll = tilt_from_gravity(np.asarray(gravity))
+        rotation = rotation_from_ypr(yaw, pitch, roll)
+        centres = np.array([b.center_m for b in self.beacon_map.beacons], float)
+        projected, _ = cv2.projectPoints((centres - predicted) @ rotation, np.zeros(3), np.zeros(3),
+                                         camera_matrix(frame.camera), distortion_vector(frame.camera))
+        projected = projected.reshape(-1, 2)
+        panels, named = [], []
+        for blob in blobs:
+            gaps = np.linalg.norm(projected - blob.centroid_px, axis=1)
+            order = np.argsort(gaps)
+            # the nearest predicted panel names the blob when it is clearly nearer than the next one
+            if len(order) > 1 and gaps[order[0]] > self.rules.partial_gate * gaps[order[1]]:
+                continue
+            beacon = self.beacon_map.beacons[int(order[0])]
+            panels.append((beacon, edge_points(frame.pixels, blob.bounding_box, level, self.rules.partial)))
+            named.append((blob, beacon))
+        if not panels:
+            return "no panel in view where the track expects one"
+        # start where the largest named blob's centroid ray meets its panel at the predicted height
+        blob, beacon = max(named, key=lambda item: item[0].area_px)
+        ray = rotation @ np.array([(blob.centroid_px[0] - frame.camera.cx) / frame.camera.fx,
+                                   (blob.centroid_px[1] - frame.camera.cy) / frame.camera.fy, 1.0])
+        start_m = np.asarray(beacon.center_m) - ray * (beacon.center_m[2] - predicted[2]) / ray[2]
+        fit = fit_partial(panels, frame.camera, gravity, start_m, yaw, float(np.median(self.growths_px)),
+                          self.rules.partial)
+        if isinstance(fit, str):
+            return fit
+        blob, beacon = named[0]
+        centre, _ = cv2.projectPoints((np.array([beacon.center_m]) - fit.position_m) @ fit.rotation_wc,
+                                      np.zeros(3), np.zeros(3), camera_matrix(frame.camera),
+                                      distortion_vector(frame.camera))
+        result = LocateResult(
+            ok=True, position_m=fit.position_m.tolist(), rotation_wc=fit.rotation_wc.tolist(),
+            yaw_pitch_roll_deg=list(ypr_from_rotation(fit.rotation_wc)), beacon_id=beacon.id,
+            beacon_id_source=BeaconIdSource.track, center_px=centre.reshape(2).tolist(),
+            reprojection_error_px=fit.rms_px, gravity_used=True,
+            warnings=[f"pose from the visible edges of cut-off panels {[b.id for _, b in named]} "
+                      f"({fit.points} points, sigma {fit.sigma_m * 1000:.1f} mm)"])
+        return PanelFix(blob, beacon, BeaconIdSource.track, result, None)
 
     def _no_fix(self, blobs, refusals, t_s) -> LocateResult:
         if refusals:
@@ -210,6 +295,9 @@ class DeviceSession:
             step = update(self.track, t_s, fix, self.rules.motion)
             self.track, outlier = step.state, not step.accepted
             self.stats.outliers += int(outlier)
+            if step.restarted:
+                self.accepted_in_row = 0
+        self.accepted_in_row = 0 if outlier else self.accepted_in_row + 1
         state = TrackState(filtered_position_m=self.track.position_m.tolist(),
                            velocity_mps=self.track.velocity_mps.tolist(), outlier=outlier,
                            beacon_id_carried=best.source is BeaconIdSource.track)
