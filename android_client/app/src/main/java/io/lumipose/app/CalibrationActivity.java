@@ -10,18 +10,16 @@ import io.lumipose.client.calibration.AlignmentGuide;
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.map.Beacon;
 import io.lumipose.client.map.RoomMap;
-import io.lumipose.client.net.LatestFrameUploader;
 import io.lumipose.client.net.LocateResult;
 
 /**
  * Calibration mode (paper Fig. 2b): guides the user until the camera sits straight under the
  * beacon centre, so the test-bench grid can be anchored with its origin there.
  */
-public final class CalibrationActivity extends CameraActivity implements LatestFrameUploader.Listener {
+public final class CalibrationActivity extends LocatingActivity {
     private final AlignmentGuide guide = new AlignmentGuide(0.001, 0.5);
     private TextView hint;
     private TextView numbers;
-    private LatestFrameUploader uploader;
 
     @Override
     protected void buildViews() {
@@ -40,34 +38,8 @@ public final class CalibrationActivity extends CameraActivity implements LatestF
     }
 
     @Override
-    protected void onResume() {
-        super.onResume();
-        if (client != null) {
-            uploader = new LatestFrameUploader(client, network, this);
-        }
-    }
-
-    @Override
-    protected void onPause() {
-        if (uploader != null) {
-            uploader.close();
-            uploader = null;
-        }
-        super.onPause();
-    }
-
-    @Override
-    public boolean wantFrame() {
-        LatestFrameUploader u = uploader;
-        return u != null && !u.busy() && map != null;
-    }
-
-    @Override
-    protected void handleFrame(byte[] luma, FrameMeta meta) {
-        LatestFrameUploader u = uploader;
-        if (u != null) {
-            u.submit(luma, meta);
-        }
+    protected boolean ready() {
+        return map != null;
     }
 
     @Override
@@ -88,10 +60,5 @@ public final class CalibrationActivity extends CameraActivity implements LatestF
                         a.offsetXM * 1000, a.offsetYM * 1000, a.tiltDeg) : "");
             }
         });
-    }
-
-    @Override
-    public void onFailure(FrameMeta meta, Exception error) {
-        showStatus("Upload failed: " + error.getMessage());
     }
 }

@@ -4,12 +4,10 @@ import android.widget.LinearLayout;
 import android.widget.TextView;
 
 import java.util.Locale;
-import java.util.concurrent.Executor;
 
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.map.Track;
-import io.lumipose.client.net.LatestFrameUploader;
 import io.lumipose.client.net.LocateResult;
 
 /**
@@ -17,11 +15,10 @@ import io.lumipose.client.net.LocateResult;
  * With "read beacon IDs" on, short-exposure ID frames are interleaved for rooms with several panels;
  * the server combines them per device (X-Lumipose-Device).
  */
-public final class LiveActivity extends CameraActivity implements LatestFrameUploader.Listener {
+public final class LiveActivity extends LocatingActivity {
     private final Track track = new Track(200);
     private BeaconMapView mapView;
     private TextView pose;
-    private LatestFrameUploader uploader;
 
     @Override
     protected void buildViews() {
@@ -43,24 +40,6 @@ public final class LiveActivity extends CameraActivity implements LatestFrameUpl
     }
 
     @Override
-    protected void onResume() {
-        super.onResume();
-        if (client != null) {
-            final Executor net = network;
-            uploader = new LatestFrameUploader(client, net, this);
-        }
-    }
-
-    @Override
-    protected void onPause() {
-        if (uploader != null) {
-            uploader.close();
-            uploader = null;
-        }
-        super.onPause();
-    }
-
-    @Override
     protected void onMapLoaded(final RoomMap loaded) {
         runOnUiThread(new Runnable() {
             @Override
@@ -71,21 +50,10 @@ public final class LiveActivity extends CameraActivity implements LatestFrameUpl
     }
 
     @Override
-    public boolean wantFrame() {
-        LatestFrameUploader u = uploader;
-        return u != null && !u.busy();
-    }
-
-    @Override
-    protected void handleFrame(byte[] luma, FrameMeta meta) {
-        LatestFrameUploader u = uploader;
-        if (u != null) {
-            u.submit(luma, meta);
-        }
-    }
-
-    @Override
     public void onResult(FrameMeta meta, final LocateResult r) {
+        if (!r.ok && "id".equals(meta.frameKind)) {
+            return; // an ID frame feeds the server's ID evidence; its own "no fix" is no news
+        }
         if (r.ok) {
             track.add(r.positionM());
         }
@@ -106,10 +74,5 @@ public final class LiveActivity extends CameraActivity implements LatestFrameUpl
                 mapView.setTrack(track.snapshot(), p, ypr == null ? 0 : ypr[0]);
             }
         });
-    }
-
-    @Override
-    public void onFailure(FrameMeta meta, Exception error) {
-        showStatus("Upload failed: " + error.getMessage());
     }
 }

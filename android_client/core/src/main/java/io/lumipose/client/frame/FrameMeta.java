@@ -158,10 +158,7 @@ public final class FrameMeta {
     }
 
     public static FrameMeta fromJson(JSONObject o) {
-        String schema = Json.optString(o, "schema", "schema");
-        if (schema != null && !SCHEMA.equals(schema)) {
-            throw new ContractException("schema", "must be '" + SCHEMA + "', got '" + schema + "'");
-        }
+        Json.checkSchema(o, SCHEMA);
         Builder b = builder(Json.requireInt(o, "width", "width"), Json.requireInt(o, "height", "height"));
         String format = Json.optString(o, "format", "format");
         if (format != null) {

@@ -26,8 +26,12 @@ public final class Json {
         }
     }
 
-    public static JSONObject copy(JSONObject o) {
-        return parseObject(o.toString(), "object");
+    /** An absent "schema" is accepted (the contract's default); another one is refused. */
+    public static void checkSchema(JSONObject o, String expected) {
+        String schema = optString(o, "schema", "schema");
+        if (schema != null && !expected.equals(schema)) {
+            throw new ContractException("schema", "must be '" + expected + "', got '" + schema + "'");
+        }
     }
 
     public static void put(JSONObject o, String key, Object value) {

@@ -31,10 +31,7 @@ public final class RoomMap {
 
     public static RoomMap fromJson(String text) {
         JSONObject o = Json.parseObject(text, "map");
-        String schema = Json.optString(o, "schema", "schema");
-        if (schema != null && !SCHEMA.equals(schema)) {
-            throw new ContractException("schema", "must be '" + SCHEMA + "', got '" + schema + "'");
-        }
+        Json.checkSchema(o, SCHEMA);
         List<Beacon> beacons = new ArrayList<Beacon>();
         List<JSONObject> items = Json.optObjects(o, "beacons", "beacons");
         if (items.isEmpty()) {

@@ -76,10 +76,7 @@ public final class LocateResult {
     }
 
     public static LocateResult fromJson(JSONObject o) {
-        String schema = Json.optString(o, "schema", "schema");
-        if (schema != null && !SCHEMA.equals(schema)) {
-            throw new ContractException("schema", "must be '" + SCHEMA + "', got '" + schema + "'");
-        }
+        Json.checkSchema(o, SCHEMA);
         Boolean ok = Json.optBoolean(o, "ok", "ok");
         if (ok == null) {
             throw new ContractException("ok", "missing");
