@@ -29,6 +29,8 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     protected TextView status;
     protected volatile RoomMap map;
     private Camera2Controller controller;
+    // The permission dialog pauses and resumes the screen: ask once, and start the camera once.
+    private boolean permissionAsked;
 
     /** The screen's content; {@link #status} is already created. */
     protected abstract void buildViews();
@@ -71,11 +73,14 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         network = Executors.newSingleThreadExecutor();
         gravity.start();
         loadMap();
-        if (checkSelfPermission(Manifest.permission.CAMERA) != PackageManager.PERMISSION_GRANTED) {
+        if (checkSelfPermission(Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED) {
+            startCamera();
+        } else if (!permissionAsked) {
+            permissionAsked = true;
             requestPermissions(new String[] {Manifest.permission.CAMERA}, PERMISSION_REQUEST);
-            return;
+        } else {
+            showStatus("Lumipose needs the camera to see the ceiling panel: allow it in the app's settings.");
         }
-        startCamera();
     }
 
     @Override
@@ -89,6 +94,9 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     }
 
     private void startCamera() {
+        if (controller != null || network == null) {
+            return;
+        }
         controller = new Camera2Controller(this, prefs.cameraId(), exposureNs(), idExposureNs(), prefs.focusDistanceM(),
                 (long) (prefs.maxMegapixels() * 1e6), gravity, this, this);
         controller.start();

@@ -97,10 +97,15 @@ class GoldenExamplesTest {
         JSONObject cameraSchema = schema.getJSONObject("$defs").getJSONObject("CameraIntrinsics");
         Intrinsics k = IntrinsicsCalculator.fromFocalLength(3.52, 4.6656, 3.492, new PixelSize(5184, 3880),
                 ArrayRect.ofSize(5184, 3880), new PixelSize(1296, 970), new double[] {0.01, 0, 0, 0, 0}, "test");
-        JSONObject sent = new FrameAssembler(1296, 970, k, 270, LensFacing.FRONT)
-                .assemble(new CaptureValues(10_000_000L, 100, 30_000_000L, 1L), new float[] {0, 0, 9.81f}).toJson();
-        assertDeclared(schema, sent, "frame");
-        assertDeclared(cameraSchema, sent.getJSONObject("camera"), "camera");
+        FrameAssembler assembler = new FrameAssembler(1296, 970, k, 270, LensFacing.FRONT);
+        JSONObject pose = assembler.assemble(new CaptureValues(10_000_000L, 100, 30_000_000L, 1L),
+                new float[] {0, 0, 9.81f}).toJson();
+        assertDeclared(schema, pose, "frame");
+        assertDeclared(cameraSchema, pose.getJSONObject("camera"), "camera");
+        JSONObject id = assembler.assemble(new CaptureValues(125_000L, 1600, 30_000_000L, 2L, true), null).toJson();
+        assertDeclared(schema, id, "ID frame");
+        JSONArray kinds = schema.getJSONObject("$defs").getJSONObject("FrameKind").getJSONArray("enum");
+        assertTrue(kinds.toList().contains(id.getString("frame_kind")), "frame_kind values: " + kinds);
     }
 
     private static void assertDeclared(JSONObject schema, JSONObject sent, String what) {
