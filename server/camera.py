@@ -21,16 +21,26 @@ def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> 
 
 
 def resolve_camera(meta: FrameMeta) -> CameraIntrinsics:
-    """The frame's intrinsics; raises `server.ingest.FrameError` for an unknown profile."""
-    if not isinstance(meta.camera, ProfileRef):
-        return meta.camera
+    """The intrinsics of the frame's own pixels; raises `server.ingest.FrameError` for an unknown profile.
+
+    A cropped frame's camera is the full frame's with the principal point moved by the window's
+    offset, which is exact for the pinhole and for OpenCV's distortion (centred on the principal point).
+    """
+    camera = meta.camera if not isinstance(meta.camera, ProfileRef) else _profile_camera(meta.camera, meta)
+    if meta.crop is None:
+        return camera
+    return camera.model_copy(update={"cx": camera.cx - meta.crop.x, "cy": camera.cy - meta.crop.y})
+
+
+def _profile_camera(ref: ProfileRef, meta: FrameMeta) -> CameraIntrinsics:
     from server.ingest import FrameError
 
-    profile = device_profiles().get(meta.camera.profile)
+    profile = device_profiles().get(ref.profile)
     if profile is None:
-        raise FrameError(f"unknown device profile '{meta.camera.profile}'; known: {', '.join(sorted(device_profiles()))}",
+        raise FrameError(f"unknown device profile '{ref.profile}'; known: {', '.join(sorted(device_profiles()))}",
                          field="camera.profile")
-    if (meta.width > meta.height) != (profile.width > profile.height):
-        raise FrameError(f"frame {meta.width}x{meta.height} is turned against profile "
+    width, height = meta.full_size
+    if (width > height) != (profile.width > profile.height):
+        raise FrameError(f"frame {width}x{height} is turned against profile "
                          f"{profile.width}x{profile.height}", field="width")
-    return intrinsics_from_profile(profile, meta.width, meta.height)
+    return intrinsics_from_profile(profile, width, height)

@@ -125,6 +125,20 @@ class GroundTruth(Open):
     rotation_wc: Mat3 = Field(description="camera-to-world rotation")
 
 
+class Crop(Strict):
+    """The frame's pixels are a window of a larger sensor frame (a client may send only the
+    beacon's region: a 20-megapixel frame then travels as a few hundred kilobytes).
+
+    The camera (intrinsics, or a profile scaled to `full_width` x `full_height`) describes the
+    full frame; results (`corners_px`, `center_px`) are in the window's own pixels.
+    """
+
+    x: int = Field(ge=0, description="column of the window's first pixel in the full frame")
+    y: int = Field(ge=0, description="row of the window's first pixel in the full frame")
+    full_width: int = Field(gt=0)
+    full_height: int = Field(gt=0)
+
+
 class FrameMeta(Open):
     """The JSON that travels with every frame (a fixture's NAME.json, an upload's header)."""
 
@@ -141,6 +155,7 @@ class FrameMeta(Open):
     heading_deg: float | None = None
     gravity_camera: Vec3 | None = None
     ground_truth: GroundTruth | None = None
+    crop: Crop | None = Field(default=None, description="present when the pixels are a window of a larger frame")
     frame_kind: FrameKind = Field(
         default=FrameKind.pose,
         description="'id' marks a short-exposure VLC frame (exposure_s <= 2e-4, needs rolling_shutter_skew_s "
@@ -175,9 +190,22 @@ class FrameMeta(Open):
             raise ValueError(f"row_stride {value} is smaller than width {width}")
         return value
 
+    @model_validator(mode="after")
+    def _crop_inside(self) -> "FrameMeta":
+        crop = self.crop
+        if crop is not None and (crop.x + self.width > crop.full_width or crop.y + self.height > crop.full_height):
+            raise ValueError(f"crop window {self.width}x{self.height} at ({crop.x}, {crop.y}) does not fit in the "
+                             f"full frame {crop.full_width}x{crop.full_height}")
+        return self
+
     @property
     def stride(self) -> int:
         return self.row_stride or self.width
+
+    @property
+    def full_size(self) -> tuple[int, int]:
+        """(width, height) of the sensor frame the camera describes: the crop's full frame, or this one."""
+        return (self.crop.full_width, self.crop.full_height) if self.crop else (self.width, self.height)
 
 
 class Beacon(Strict):

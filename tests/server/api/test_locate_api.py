@@ -104,3 +104,13 @@ def test_metrics_count_fixes_and_reasons(server_url, client, fixture_frame):
     text = httpx.get(f"{server_url}/metrics").text
     assert 'lumipose_requests_total{route="/v1/locate",status="200"}' in text
     assert "lumipose_fixes_total" in text and "lumipose_pipeline_seconds_bucket" in text
+
+
+def test_cropped_upload_gives_the_full_frames_fix(client, fixture_frame):
+    from lumipose_client.crop import crop_frame
+
+    meta, data = fixture_frame
+    pixels = np.frombuffer(data, np.uint8).reshape(meta.height, meta.width)
+    cropped_meta, cropped = crop_frame(pixels, meta)
+    whole, window = client.locate(data, meta), client.locate(cropped, cropped_meta)
+    assert window.ok and np.allclose(window.position_m, whole.position_m, atol=1e-6)

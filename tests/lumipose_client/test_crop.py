@@ -1,0 +1,36 @@
+"""A frame cut to its beacon's window gives the same fix as the whole frame."""
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from lumipose_client.crop import crop_frame
+from server.camera import resolve_camera
+from server.ingest import decode_frame, read_fixture
+from server.pipeline import locate
+from shared_schemas import FrameMeta, load_map
+from tests.conftest import FIXTURE
+
+
+def test_cropped_frame_gives_the_same_fix_and_is_much_smaller():
+    frame = read_fixture(FIXTURE)
+    meta, data = crop_frame(frame.pixels, frame.meta)
+    assert meta.crop is not None and len(data) < frame.pixels.size / 2
+    whole, cropped = locate(frame, load_map()), locate(decode_frame(data, meta), load_map())
+    assert whole.ok and cropped.ok
+    np.testing.assert_allclose(cropped.position_m, whole.position_m, atol=1e-6)
+    np.testing.assert_allclose(np.array(cropped.corners_px) + [meta.crop.x, meta.crop.y], whole.corners_px, atol=1e-3)
+
+
+def test_profile_camera_of_a_crop_is_the_full_frames_shifted():
+    full = FrameMeta(width=3024, height=4032, camera={"profile": "xiaomi-mi8-rear"})
+    crop = FrameMeta(width=400, height=300, camera={"profile": "xiaomi-mi8-rear"},
+                     crop={"x": 1000, "y": 2000, "full_width": 3024, "full_height": 4032})
+    whole, window = resolve_camera(full), resolve_camera(crop)
+    assert window.fx == whole.fx and (window.cx, window.cy) == (whole.cx - 1000, whole.cy - 2000)
+
+
+def test_crop_must_fit_in_its_full_frame():
+    with pytest.raises(ValidationError, match="does not fit"):
+        FrameMeta(width=400, height=300, camera={"profile": "xiaomi-mi8-rear"},
+                  crop={"x": 2800, "y": 0, "full_width": 3024, "full_height": 4032})
