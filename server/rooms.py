@@ -35,7 +35,7 @@ class RoomRules:
     stripes: StripeRules = StripeRules()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # identity: fixes hold numpy arrays
 class PanelFix:
     blob: BeaconBlob
     beacon: Beacon

@@ -51,6 +51,7 @@ class PartialFix:
     rms_px: float
     sigma_m: float
     points: int
+    growth_px: float
 
 
 def tilt_from_gravity(gravity_camera: np.ndarray) -> tuple[float, float]:
@@ -147,9 +148,12 @@ def measure_growth(beacon: Beacon, points: np.ndarray, position_m, rotation_wc, 
 
 
 def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsics, gravity_camera,
-                position_guess_m, yaw_guess_deg: float, growth_px: float,
+                position_guess_m, yaw_guess_deg: float, growth_px: float | None,
                 rules: PartialRules = PartialRules()) -> PartialFix | str:
-    """Camera pose from edge points of (partly visible) panels; or why there is none."""
+    """Camera pose from edge points of (partly visible) panels; or why there is none.
+
+    `growth_px` None: the growth is fitted too (the rounded corners tell it from distance, weakly).
+    """
     panels = [(b, p) for b, p in panels if len(p) > 0]
     count = sum(len(p) for _, p in panels)
     if count < rules.min_points:
@@ -163,12 +167,12 @@ def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsic
 
     def residuals(params):
         position, rotation = unpack(params)
-        return _residuals(panels, position, rotation, camera, growth_px)
+        return _residuals(panels, position, rotation, camera, params[4] if growth_px is None else growth_px)
 
-    start = np.concatenate([[yaw_guess_deg], np.asarray(position_guess_m, float)])
+    start = np.concatenate([[yaw_guess_deg], np.asarray(position_guess_m, float), [0.0] if growth_px is None else []])
+    scale = [1.0, 0.01, 0.01, 0.01] + ([1.0] if growth_px is None else [])
     try:
-        solution = least_squares(residuals, start, loss="huber", f_scale=1.0, x_scale=[1.0, 0.01, 0.01, 0.01],
-                                 max_nfev=200)
+        solution = least_squares(residuals, start, loss="huber", f_scale=1.0, x_scale=scale, max_nfev=200)
     except (ValueError, np.linalg.LinAlgError) as error:
         return f"the partial fit failed: {error}"
     final = solution.fun
@@ -184,7 +188,7 @@ def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsic
     if sigma > rules.max_sigma_m:
         return f"the visible edges fix the position only to {sigma * 1000:.0f} mm"
     position, rotation = unpack(solution.x)
-    return PartialFix(position, rotation, rms, sigma, count)
+    return PartialFix(position, rotation, rms, sigma, count, float(solution.x[4]) if growth_px is None else growth_px)
 
 
 __all__ = ["PartialFix", "PartialRules", "edge_points", "fit_partial", "measure_growth", "tilt_from_gravity",

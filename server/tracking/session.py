@@ -167,36 +167,16 @@ class DeviceSession:
             if not relative.ok:
                 refusals.append(relative)
                 continue
-            relative_m = np.array(relative.position_m)
-            panel = self._panel_for(relative_m, t_s, claimed)
-            for observation in stripes.get(index, []):
-                panel.evidence.add(observation)
-            reading = vlc_reading(panel.evidence) if panel.evidence.observations else None
-            if reading is not None and reading.confident:
-                if panel.beacon_id is not None and panel.beacon_id != reading.beacon_id:
-                    self.stats.conflicts += 1
-                panel.beacon_id = reading.beacon_id
-            carried = self._carried(relative_m, t_s)
-            if panel.beacon_id is not None and carried is not None and carried.id != panel.beacon_id:
-                # the established track and the panel's VLC evidence disagree: the evidence may mix two
-                # panels (a mis-association), so it is dropped and the track's beacon is used
-                self.stats.conflicts += 1
-                panel.beacon_id = None
-                panel.evidence.observations.clear()
-            if panel.beacon_id is not None:
-                beacon, source = self.beacon_map.beacon(panel.beacon_id), BeaconIdSource.vlc
-            elif carried is not None:
-                beacon, source = carried, BeaconIdSource.track
-            else:
-                continue
-            result = relative.model_copy(update={
-                "position_m": (relative_m + beacon.center_m).tolist(), "beacon_id": beacon.id,
-                "beacon_id_source": source})
-            fixes.append(PanelFix(blob, beacon, source, result, reading))
+            named = self._name_panel(blob, relative, stripes.get(index, []), t_s, claimed)
+            if named is not None:
+                fixes.append(named)
         best = choose_and_fuse(fixes, self.rules.room)
         level = candidates.levels.threshold
         if best is None:
             partial = self._partial_fix(pose_frame, blobs, level, t_s)
+            if not isinstance(partial, PanelFix) and template is not None:
+                alone = self._cut_off_panels(pose_frame, blobs, stripes, level, t_s, claimed, template)
+                partial = alone if alone is not None else partial
             if isinstance(partial, PanelFix):
                 return self._track(partial, len(blobs), t_s)
             if partial is not None:
@@ -204,6 +184,69 @@ class DeviceSession:
             return self._no_fix(blobs, refusals, t_s)
         self._measure_growth(pose_frame, best, level)
         return self._track(best, len(blobs), t_s)
+
+    def _name_panel(self, blob, relative: LocateResult, observations, t_s: float, claimed: set[int]) -> PanelFix | None:
+        """The fix of a panel located relative to the template, once its beacon is named (VLC or track)."""
+        relative_m = np.array(relative.position_m)
+        panel = self._panel_for(relative_m, t_s, claimed)
+        for observation in observations:
+            panel.evidence.add(observation)
+        reading = vlc_reading(panel.evidence) if panel.evidence.observations else None
+        if reading is not None and reading.confident:
+            if panel.beacon_id is not None and panel.beacon_id != reading.beacon_id:
+                self.stats.conflicts += 1
+            panel.beacon_id = reading.beacon_id
+        carried = self._carried(relative_m, t_s)
+        if panel.beacon_id is not None and carried is not None and carried.id != panel.beacon_id:
+            # the established track and the panel's VLC evidence disagree: the evidence may mix two
+            # panels (a mis-association), so it is dropped and the track's beacon is used
+            self.stats.conflicts += 1
+            panel.beacon_id = None
+            panel.evidence.observations.clear()
+        if panel.beacon_id is not None:
+            beacon, source = self.beacon_map.beacon(panel.beacon_id), BeaconIdSource.vlc
+        elif carried is not None:
+            beacon, source = carried, BeaconIdSource.track
+        else:
+            return None
+        result = relative.model_copy(update={
+            "position_m": (relative_m + beacon.center_m).tolist(), "beacon_id": beacon.id,
+            "beacon_id_source": source})
+        return PanelFix(blob, beacon, source, result, reading)
+
+    def _cut_off_panels(self, frame: LumaFrame, blobs, stripes, level: float, t_s: float, claimed: set[int],
+                        template: Beacon) -> PanelFix | None:
+        """Each cut-off panel located alone relative to the template (its growth fitted when none is
+        known yet), then named like a complete panel: how a walk that starts between panels starts."""
+        gravity = frame.meta.gravity_camera
+        if gravity is None:
+            return None
+        pitch, roll = tilt_from_gravity(np.asarray(gravity))
+        yaw = ypr_from_rotation(self.last_rotation_wc)[0] if self.last_rotation_wc is not None else template.yaw_deg
+        rotation = rotation_from_ypr(yaw, pitch, roll)
+        growth = float(np.median(self.growths_px)) if self.growths_px else None
+        fixes = []
+        for index, blob in enumerate(blobs):
+            if not blob.cut_off:
+                continue
+            points = edge_points(frame.pixels, blob.bounding_box, level, self.rules.partial)
+            distance_m = frame.camera.fx * template.side_m / max(blob.bounding_box[2], blob.bounding_box[3], 1)
+            ray = rotation @ np.array([(blob.centroid_px[0] - frame.camera.cx) / frame.camera.fx,
+                                       (blob.centroid_px[1] - frame.camera.cy) / frame.camera.fy, 1.0])
+            start_m = -ray * distance_m / ray[2]
+            fit = fit_partial([(template, points)], frame.camera, gravity, start_m, yaw, growth, self.rules.partial)
+            if isinstance(fit, str):
+                continue
+            relative = LocateResult(
+                ok=True, position_m=fit.position_m.tolist(), rotation_wc=fit.rotation_wc.tolist(),
+                yaw_pitch_roll_deg=list(ypr_from_rotation(fit.rotation_wc)), reprojection_error_px=fit.rms_px,
+                center_px=list(blob.centroid_px), gravity_used=True,
+                warnings=[f"pose from the visible edges of a cut-off panel ({fit.points} points, "
+                          f"sigma {fit.sigma_m * 1000:.1f} mm, growth {fit.growth_px:.2f} px)"])
+            named = self._name_panel(blob, relative, stripes.get(index, []), t_s, claimed)
+            if named is not None:
+                fixes.append(named)
+        return choose_and_fuse(fixes, self.rules.room)
 
     def _measure_growth(self, frame: LumaFrame, best: PanelFix, level: float) -> None:
         """The clipped panel's contour growth, from a complete panel whose pose is now known."""

@@ -27,7 +27,7 @@ class CandidateRules:
     blobs: BlobRules = BlobRules()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # identity: blobs hold numpy arrays
 class BeaconBlob:
     """One candidate panel, in full-frame pixels."""
 
