@@ -80,6 +80,8 @@ final class Camera2Controller {
     /** Zero: pose frames only. */
     private final long idExposureNs;
     private final float focusDistanceM;
+    /** Compass bearing of the map's +X axis, deg; null: no heading is sent. */
+    private final Double mapXBearingDeg;
     private final long maxPixels;
     private final GravitySource gravity;
     private final FrameGate gate;
@@ -99,14 +101,17 @@ final class Camera2Controller {
     private byte[] pendingLuma;
     private long pendingTimestampNs;
     private float[] pendingGravity;
+    private float[] pendingRotation;
 
     Camera2Controller(Context context, String cameraId, long targetExposureNs, long idExposureNs,
-                      float focusDistanceM, long maxPixels, GravitySource gravity, FrameGate gate, Listener listener) {
+                      float focusDistanceM, Double mapXBearingDeg, long maxPixels, GravitySource gravity,
+                      FrameGate gate, Listener listener) {
         this.context = context.getApplicationContext();
         this.requestedCameraId = cameraId;
         this.targetExposureNs = targetExposureNs;
         this.idExposureNs = idExposureNs;
         this.focusDistanceM = focusDistanceM;
+        this.mapXBearingDeg = mapXBearingDeg;
         this.maxPixels = maxPixels;
         this.gravity = gravity;
         this.gate = gate;
@@ -258,7 +263,7 @@ final class Camera2Controller {
             LensFacing lensFacing = facing == null ? null : facing == CameraMetadata.LENS_FACING_FRONT
                     ? LensFacing.FRONT : facing == CameraMetadata.LENS_FACING_BACK ? LensFacing.BACK : null;
             assembler = new FrameAssembler(out.width, out.height, k, orientation == null ? 0 : orientation,
-                    lensFacing);
+                    lensFacing, mapXBearingDeg);
             final Float focus = CaptureSettingsChooser.focusDiopters(focusDistanceM,
                     cc.get(CameraCharacteristics.LENS_INFO_MINIMUM_FOCUS_DISTANCE));
 
@@ -414,7 +419,7 @@ final class Camera2Controller {
                 captureValues.remove(captureValues.keySet().iterator().next());
             }
             if (pendingLuma != null && pendingTimestampNs == ts) {
-                emit(pendingLuma, captureValues.get(ts), pendingGravity);
+                emit(pendingLuma, captureValues.get(ts), pendingGravity, pendingRotation);
             }
         }
     };
@@ -433,12 +438,13 @@ final class Camera2Controller {
                     y.getPixelStride());
             CaptureValues values = captureValues.get(image.getTimestamp());
             if (values != null) {
-                emit(luma, values, gravity.latestGravity());
+                emit(luma, values, gravity.latestGravity(), gravity.latestRotationToEnu());
             } else {
                 // The result (exposure used, skew, pose or ID) comes later: wait for it; a newer frame replaces this.
                 pendingLuma = luma;
                 pendingTimestampNs = image.getTimestamp();
                 pendingGravity = gravity.latestGravity();
+                pendingRotation = gravity.latestRotationToEnu();
             }
         } catch (IllegalArgumentException e) {
             listener.onError("Frame dropped: " + e.getMessage());
@@ -447,11 +453,12 @@ final class Camera2Controller {
         }
     }
 
-    private void emit(byte[] luma, CaptureValues values, float[] gravityDevice) {
+    private void emit(byte[] luma, CaptureValues values, float[] gravityDevice, float[] deviceToEnu) {
         pendingLuma = null;
         pendingGravity = null;
+        pendingRotation = null;
         try {
-            listener.onFrame(luma, assembler.assemble(values, gravityDevice));
+            listener.onFrame(luma, assembler.assemble(values, gravityDevice, deviceToEnu));
         } catch (IllegalArgumentException e) {
             listener.onError("Frame dropped: " + e.getMessage());
         }

@@ -98,7 +98,7 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
             return;
         }
         controller = new Camera2Controller(this, prefs.cameraId(), exposureNs(), idExposureNs(), prefs.focusDistanceM(),
-                (long) (prefs.maxMegapixels() * 1e6), gravity, this, this);
+                prefs.mapXBearingDeg(), (long) (prefs.maxMegapixels() * 1e6), gravity, this, this);
         controller.start();
     }
 

@@ -19,6 +19,7 @@ final class Prefs {
     static final String ID_EXPOSURE_US = "id_exposure_us";
     static final String BENCH_INDEX = "bench_index";
     static final String READ_IDS = "read_ids";
+    static final String MAP_X_BEARING_DEG = "map_x_bearing_deg";
 
     private final SharedPreferences p;
 
@@ -58,6 +59,19 @@ final class Prefs {
     /** Interleave beacon-ID frames in live mode (rooms with several panels). */
     boolean readIds() {
         return p.getBoolean(READ_IDS, true);
+    }
+
+    /** Compass bearing of the map's +X axis (deg clockwise from north); null when not set: no heading is sent. */
+    Double mapXBearingDeg() {
+        String v = p.getString(MAP_X_BEARING_DEG, "").trim();
+        if (v.isEmpty()) {
+            return null;
+        }
+        try {
+            return Double.valueOf(v);
+        } catch (NumberFormatException e) {
+            return null;
+        }
     }
 
     int benchIndex() {

@@ -20,6 +20,8 @@ import io.lumipose.client.net.LumiposeClient;
 
 /** Server URL, API key, map, camera and capture options. */
 public final class SettingsActivity extends Activity {
+    private static final int TEXT = InputType.TYPE_CLASS_TEXT;
+    private static final int DECIMAL = InputType.TYPE_CLASS_NUMBER | InputType.TYPE_NUMBER_FLAG_DECIMAL;
     private Prefs prefs;
     private EditText url;
     private EditText key;
@@ -27,6 +29,7 @@ public final class SettingsActivity extends Activity {
     private EditText focus;
     private EditText megapixels;
     private EditText idExposure;
+    private EditText bearing;
     private Spinner camera;
     private CheckBox readIds;
     private final List<String> cameraIds = new ArrayList<String>();
@@ -39,17 +42,18 @@ public final class SettingsActivity extends Activity {
         LinearLayout form = new LinearLayout(this);
         form.setOrientation(LinearLayout.VERTICAL);
         form.setPadding(24, 24, 24, 24);
-        url = field(form, "Server URL (http://host:port)", prefs.serverUrl(), InputType.TYPE_TEXT_VARIATION_URI);
+        url = field(form, "Server URL (http://host:port)", prefs.serverUrl(), TEXT | InputType.TYPE_TEXT_VARIATION_URI);
         key = field(form, "API key (empty if the server has none)", prefs.apiKey(),
-                InputType.TYPE_TEXT_VARIATION_PASSWORD);
-        mapName = field(form, "Map name", prefs.mapName(), InputType.TYPE_CLASS_TEXT);
-        focus = field(form, "Distance to the panel, m (focus)", String.valueOf(prefs.focusDistanceM()),
-                InputType.TYPE_NUMBER_FLAG_DECIMAL);
-        megapixels = field(form, "Largest frame, megapixels", String.valueOf(prefs.maxMegapixels()),
-                InputType.TYPE_NUMBER_FLAG_DECIMAL);
+                TEXT | InputType.TYPE_TEXT_VARIATION_PASSWORD);
+        mapName = field(form, "Map name", prefs.mapName(), TEXT);
+        focus = field(form, "Distance to the panel, m (focus)", String.valueOf(prefs.focusDistanceM()), DECIMAL);
+        megapixels = field(form, "Largest frame, megapixels", String.valueOf(prefs.maxMegapixels()), DECIMAL);
         idExposure = field(form, "Beacon-ID exposure, microseconds", String.valueOf(prefs.idExposureNs() / 1000),
                 InputType.TYPE_CLASS_NUMBER);
 
+        Double b = prefs.mapXBearingDeg();
+        bearing = field(form, "Compass bearing of the map's +X axis, deg (empty: send no heading)",
+                b == null ? "" : String.valueOf(b), DECIMAL | InputType.TYPE_NUMBER_FLAG_SIGNED);
         readIds = new CheckBox(this);
         readIds.setText("Read beacon IDs in live mode (short-exposure frames between pose frames)");
         readIds.setChecked(prefs.readIds());
@@ -95,10 +99,7 @@ public final class SettingsActivity extends Activity {
         l.setText(label);
         form.addView(l);
         EditText e = new EditText(this);
-        e.setInputType(InputType.TYPE_CLASS_TEXT | inputType);
-        if (inputType == InputType.TYPE_NUMBER_FLAG_DECIMAL || inputType == InputType.TYPE_CLASS_NUMBER) {
-            e.setInputType(InputType.TYPE_CLASS_NUMBER | inputType);
-        }
+        e.setInputType(inputType);
         e.setText(value);
         form.addView(e);
         return e;
@@ -120,12 +121,22 @@ public final class SettingsActivity extends Activity {
             status.setText("Distance, megapixels and exposure must be positive.");
             return;
         }
+        String bearingText = bearing.getText().toString().trim();
+        if (!bearingText.isEmpty()) {
+            try {
+                Double.parseDouble(bearingText);
+            } catch (NumberFormatException e) {
+                status.setText("The map bearing must be a number of degrees, or empty.");
+                return;
+            }
+        }
         prefs.edit().putString(Prefs.SERVER_URL, url.getText().toString().trim())
                 .putString(Prefs.API_KEY, key.getText().toString().trim())
                 .putString(Prefs.MAP_NAME, mapName.getText().toString().trim())
                 .putString(Prefs.CAMERA_ID, cameraIds.get(camera.getSelectedItemPosition()))
                 .putFloat(Prefs.FOCUS_DISTANCE_M, focusM).putFloat(Prefs.MAX_MEGAPIXELS, mp)
-                .putLong(Prefs.ID_EXPOSURE_US, idUs).putBoolean(Prefs.READ_IDS, readIds.isChecked()).apply();
+                .putLong(Prefs.ID_EXPOSURE_US, idUs).putBoolean(Prefs.READ_IDS, readIds.isChecked())
+                .putString(Prefs.MAP_X_BEARING_DEG, bearingText).apply();
         final LumiposeClient client;
         try {
             client = LumiposeClient.create(prefs.clientConfig());

@@ -2,6 +2,7 @@ package io.lumipose.client.frame;
 
 import io.lumipose.client.camera.Intrinsics;
 import io.lumipose.client.sensor.GravityTransform;
+import io.lumipose.client.sensor.HeadingEstimator;
 import io.lumipose.client.sensor.LensFacing;
 
 /**
@@ -14,9 +15,19 @@ public final class FrameAssembler {
     private final Intrinsics intrinsics;
     private final int sensorOrientationDeg;
     private final LensFacing facing;
+    private final Double mapXBearingDeg;
 
     /** @param facing null for an external camera, whose attitude to the phone is unknown: no gravity is sent */
     public FrameAssembler(int width, int height, Intrinsics intrinsics, int sensorOrientationDeg, LensFacing facing) {
+        this(width, height, intrinsics, sensorOrientationDeg, facing, null);
+    }
+
+    /**
+     * @param mapXBearingDeg compass bearing of the map's +X axis (deg clockwise from north), or null
+     *                       to send no heading (the server then assumes |yaw| < 45 deg to the panel)
+     */
+    public FrameAssembler(int width, int height, Intrinsics intrinsics, int sensorOrientationDeg, LensFacing facing,
+                          Double mapXBearingDeg) {
         if (width <= 0 || height <= 0) {
             throw new IllegalArgumentException("output size must be positive, got " + width + "x" + height);
         }
@@ -25,6 +36,7 @@ public final class FrameAssembler {
         this.intrinsics = intrinsics;
         this.sensorOrientationDeg = sensorOrientationDeg;
         this.facing = facing;
+        this.mapXBearingDeg = mapXBearingDeg;
     }
 
     /**
@@ -33,6 +45,14 @@ public final class FrameAssembler {
      * @return the frame JSON for a packed Y8 buffer (row_stride = width, see {@link LumaPlane})
      */
     public FrameMeta assemble(CaptureValues values, float[] gravityDevice) {
+        return assemble(values, gravityDevice, null);
+    }
+
+    /**
+     * @param deviceToEnu row-major device-to-East-North-Up rotation from the rotation-vector sensor at
+     *                    capture time, or null; used only with a map bearing
+     */
+    public FrameMeta assemble(CaptureValues values, float[] gravityDevice, float[] deviceToEnu) {
         FrameMeta.Builder b = FrameMeta.builder(width, height).rowStride(width).camera(intrinsics);
         if (values.exposureNs != null) {
             b.exposureS(values.exposureNs / 1e9);
@@ -50,6 +70,9 @@ public final class FrameAssembler {
         }
         if (gravityDevice != null && facing != null) {
             b.gravityCamera(GravityTransform.deviceToCamera(gravityDevice, sensorOrientationDeg, facing));
+        }
+        if (deviceToEnu != null && facing != null && mapXBearingDeg != null) {
+            b.headingDeg(HeadingEstimator.cameraYawDeg(deviceToEnu, sensorOrientationDeg, facing, mapXBearingDeg));
         }
         return b.build();
     }

@@ -101,6 +101,11 @@ class FrameMetaTest {
                 .assemble(new CaptureValues(null, null, null, null), new float[] {0, 0, 9.81f});
         assertNull(external.gravityCamera(), "an external camera's attitude is unknown");
         FrameMeta bare = a.assemble(new CaptureValues(null, null, null, null), null);
+        assertNull(a.assemble(new CaptureValues(null, null, null, null), null, new float[] {1, 0, 0, 0, 1, 0, 0, 0, 1})
+                .headingDeg, "no map bearing, no heading");
+        FrameAssembler withBearing = new FrameAssembler(640, 480, K, 270, LensFacing.FRONT, 90.0);
+        assertEquals(90.0, withBearing.assemble(new CaptureValues(null, null, null, null), null,
+                new float[] {1, 0, 0, 0, 1, 0, 0, 0, 1}).headingDeg, 1e-9);
         assertNull(bare.exposureS);
         assertNull(bare.gravityCamera());
     }
