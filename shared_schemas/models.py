@@ -127,7 +127,7 @@ class GroundTruth(Open):
 
 class Crop(Strict):
     """The frame's pixels are a window of a larger sensor frame (a client may send only the
-    beacon's region: a 20-megapixel frame then travels as a few hundred kilobytes).
+    beacon's region: a 20 MB frame then travels as 0.3-3 MB).
 
     The camera (intrinsics, or a profile scaled to `full_width` x `full_height`) describes the
     full frame; results (`corners_px`, `center_px`) are in the window's own pixels.

@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 
+from lumipose_client.crop import crop_frame
 from lumipose_client.load import LoadReport, run_load
 from lumipose_client.local_server import LocalServer
 from server.camera import intrinsics_from_profile
@@ -16,7 +17,7 @@ from simulator.benchmarks import PROFILE_ID, bench_beacon
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, render_frame
 
-FRAME_WIDTHS = {"1080p": 1080, "full": None}  # full = the profile's native 3880 x 5184
+FRAME_WIDTHS = {"1080p": 1080, "full": None, "full-window": None}  # full = the profile's native 3880 x 5184
 
 
 def service_frame(width: int | None, distance_m: float = 1.0, seed: int = 3) -> tuple[FrameMeta, bytes, BeaconMap]:
@@ -38,6 +39,8 @@ def run_service_load(frames: list[str], clients: list[int], seconds: float, enco
     reports = []
     for name in frames:
         meta, data, beacon_map = service_frame(FRAME_WIDTHS[name])
+        if name.endswith("-window"):  # what a client sends when it cuts the frame to the beacon's window
+            meta, data = crop_frame(np.frombuffer(data, np.uint8).reshape(meta.height, meta.width), meta)
         with LocalServer("--workers", str(workers), "--log-level", "warning") as server:
             map_path = server.data_dir / "maps" / f"{beacon_map.name}.json"
             map_path.parent.mkdir(parents=True, exist_ok=True)
@@ -68,7 +71,8 @@ def print_reports(reports: list[LoadReport], as_json: bool) -> None:
 
 def add_load_command(benches) -> None:
     load = benches.add_parser("load", help="the HTTP service under concurrent clients (starts its own server)")
-    load.add_argument("--frames", nargs="+", choices=sorted(FRAME_WIDTHS), default=["1080p", "full"])
+    load.add_argument("--frames", nargs="+", choices=sorted(FRAME_WIDTHS), default=["1080p", "full", "full-window"],
+                      help="full-window: the full frame cut to the beacon's window by the client")
     load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4])
     load.add_argument("--seconds", type=float, default=20.0, help="per client count")
     load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
