@@ -63,8 +63,11 @@ class LocateEndToEndTest {
             if (required) {
                 fail("lumipose executable not found at " + exe + " (lumipose.e2e.required=true)");
             }
-            Assumptions.abort("skipped: lumipose executable not found at " + exe
-                    + "; run scripts/android_test.sh, which sets it up");
+            String reason = "LocateEndToEndTest skipped: lumipose executable not found at " + exe
+                    + "; run scripts/android_test.sh, which sets it up";
+            // Surefire does not print a class-level abort's reason: say it here.
+            System.err.println(reason);
+            Assumptions.abort(reason);
         }
         int port;
         try (ServerSocket s = new ServerSocket(0)) {
