@@ -20,6 +20,8 @@ datasheet's pinhole without distortion, as the paper's pipeline assumed.
 
 from __future__ import annotations
 
+import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -91,7 +93,9 @@ def run_grid_bench(scene: Scene, out_dir: Path, title: str, workers: int | None 
     if limit is not None:
         samples = samples[::max(1, len(samples) // limit)][:limit]
     jobs = [reports.LocateJob(scene, sample, PipelineOptions(), pipeline_camera) for sample in samples]
+    start = time.perf_counter()
     outcomes = reports.locate_series(jobs, workers, title)
+    wall_s = time.perf_counter() - start
     summary = reports.table(outcomes)
     (out_dir / "scene.json").write_text(scene.to_json())
     reports.write_outcomes(outcomes, out_dir / "outcomes.json")
@@ -99,6 +103,7 @@ def run_grid_bench(scene: Scene, out_dir: Path, title: str, workers: int | None 
     reports.plot_scatter(outcomes, out_dir / f"{stem}-scatter.png", title)
     reports.plot_heatmap(outcomes, out_dir / f"{stem}-heatmap.png", title)
     return {"title": title, "scene": scene.name, "summary": summary, "failures": reports.failures(outcomes),
+            "wall_s": wall_s, "workers": workers or os.cpu_count(),
             "figures": [str(out_dir / f"{stem}-scatter.png"), str(out_dir / f"{stem}-heatmap.png")]}
 
 

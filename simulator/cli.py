@@ -55,6 +55,9 @@ def add_commands(commands) -> None:
     speed.add_argument("--distance", type=float, default=1.0)
     speed.add_argument("--json", action="store_true")
     speed.set_defaults(run=_run_speed)
+    from simulator.bench_service import add_load_command
+
+    add_load_command(benches)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
                             ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
         grid = benches.add_parser(name, help=help_text)
@@ -84,6 +87,11 @@ def add_commands(commands) -> None:
     fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
     fidelity.add_argument("--json", action="store_true")
     fidelity.set_defaults(run=_run_fidelity)
+    render_speed = benches.add_parser("render", help="time to render one full-resolution frame of a scene")
+    render_speed.add_argument("--scene", default="paper-bench")
+    render_speed.add_argument("--repeats", type=int, default=10)
+    render_speed.add_argument("--json", action="store_true")
+    render_speed.set_defaults(run=_run_render_speed)
     from simulator.vlc_cli import add_vlc_benches  # `bench vlc` and `bench office` (issue 4)
 
     add_vlc_benches(benches)
@@ -191,6 +199,7 @@ def _print_report(report: dict, as_json: bool) -> None:
     for failure in report.get("failures", [])[:20]:
         print(f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
               f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}")
+    print(f"  wall time    {report['wall_s']:.0f} s on {report['workers']} workers (render + locate)")
     for figure in report.get("figures", []):
         print(f"  figure {figure}")
 
@@ -228,6 +237,21 @@ def _run_fidelity(args) -> int:
     report = bench_fidelity(args.out, args.distances)
     (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else format_fidelity(report) + "\n  figure " + report["figures"][0])
+    return 0
+
+
+def _run_render_speed(args) -> int:
+    from simulator.bench_render import bench_render
+
+    report = bench_render(args.scene, args.repeats)
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(f"render {report['scene']} sample {report['sample']}, {report['frame']}, {report['repeats']} runs, "
+          f"{report['cpu_count']} cores")
+    print(f"median {report['median_ms']:.0f} ms wall (max {report['max_ms']:.0f} ms), {report['cpu_median_ms']:.0f} ms CPU; "
+          f"load average {report['load_average_1min']:.1f}")
+    print(f"for scale: one full-frame Gaussian draw takes {report['gaussian_noise_median_ms']:.0f} ms")
     return 0
 
 

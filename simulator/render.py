@@ -13,10 +13,12 @@ projection of the densified outlines (`world_polygon_px`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.special import ndtr
 
 from server.geometry import (
     beacon_to_world,
@@ -206,6 +208,30 @@ def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px:
     return fine.reshape(height, factor, width, factor).mean(axis=(1, 3))
 
 
+def _noisy_u8(signal: np.ndarray, sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
+    """Shot and read noise, rounding to whole DN and clipping to the 8-bit range."""
+    sigma_dn = np.sqrt(signal / sensor.electrons_per_dn + sensor.read_noise_dn**2)
+    noisy = signal + sigma_dn * rng.standard_normal(signal.shape, dtype=np.float32)
+    return np.clip(np.rint(noisy), 0, sensor.saturation_dn).astype(np.uint8)
+
+
+def _background_u8(shape: tuple[int, int], sensor: SensorModel, rng: np.random.Generator) -> np.ndarray:
+    """`_noisy_u8` of a flat background, drawn from its 256-level distribution (4x faster).
+
+    The rounded, clipped normal is sampled by inverse CDF from 16-bit uniforms: each level's
+    probability is right to 2^-16.
+    """
+    sigma = math.sqrt(sensor.background_dn / sensor.electrons_per_dn + sensor.read_noise_dn**2)
+    levels = np.arange(int(sensor.saturation_dn) + 1)
+    if sigma == 0:
+        cdf = (levels + 0.5 > sensor.background_dn).astype(float)
+    else:
+        cdf = ndtr((levels + 0.5 - sensor.background_dn) / sigma)
+    cdf[-1] = 1.0
+    table = np.searchsorted(cdf, (np.arange(65536) + 0.5) / 65536, side="right").astype(np.uint8)
+    return table[rng.integers(0, 65536, shape, dtype=np.uint16)]
+
+
 def render_emitters(emitters: list[Emitter], width: int, height: int, sensor: SensorModel,
                     rng: np.random.Generator) -> np.ndarray:
     """An 8-bit luma frame (height, width): background plus every emitter, PSF, vignetting, noise.
@@ -213,8 +239,10 @@ def render_emitters(emitters: list[Emitter], width: int, height: int, sensor: Se
     Each emitter's coverage is blurred by the PSF (and its own extra blur) on its own bounding
     box, scaled per row by its `row_gain` (the rolling shutter: light reaches a row only
     during that row's exposure window, after the optics) and added to the background.
+    Without vignetting the flat background outside the emitters' boxes takes a faster path
+    with the same noise statistics.
     """
-    signal = np.full((height, width), sensor.background_dn, np.float32)
+    boxes = []
     for emitter in emitters:
         row_gain = _check_row_gain(emitter.row_gain, height)
         outline = emitter.outline_px
@@ -231,12 +259,23 @@ def render_emitters(emitters: list[Emitter], width: int, height: int, sensor: Se
                                                      sensor.supersample_for(sigma))
         if row_gain is not None:
             light *= row_gain[y0:y1, None]
-        signal[y0:y1, x0:x1] += light
+        boxes.append((y0, y1, x0, x1, light))
     if sensor.vignetting:
+        signal = np.full((height, width), sensor.background_dn, np.float32)
+        for y0, y1, x0, x1, light in boxes:
+            signal[y0:y1, x0:x1] += light
         signal *= vignetting_map(width, height, sensor.vignetting)
-    sigma_dn = np.sqrt(signal / sensor.electrons_per_dn + sensor.read_noise_dn**2)
-    noisy = signal + sigma_dn * rng.standard_normal(signal.shape, dtype=np.float32)
-    return np.clip(np.rint(noisy), 0, sensor.saturation_dn).astype(np.uint8)
+        return _noisy_u8(signal, sensor, rng)
+    frame = _background_u8((height, width), sensor, rng)
+    if boxes:
+        # the union of the boxes gets the exact treatment (boxes may overlap)
+        top, bottom = min(b[0] for b in boxes), max(b[1] for b in boxes)
+        left, right = min(b[2] for b in boxes), max(b[3] for b in boxes)
+        signal = np.full((bottom - top, right - left), sensor.background_dn, np.float32)
+        for y0, y1, x0, x1, light in boxes:
+            signal[y0 - top:y1 - top, x0 - left:x1 - left] += light
+        frame[top:bottom, left:right] = _noisy_u8(signal, sensor, rng)
+    return frame
 
 
 def render_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
