@@ -64,17 +64,21 @@ def _sweep(scenes: list[tuple[float, Scene]], key: str, workers: int | None) -> 
     return rows
 
 
+def _sweep_report(rows: list[dict], key: str, out_dir: Path, name: str, title: str, xlabel: str) -> dict:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    figure = out_dir / f"{name}-sweep.png"
+    reports.plot_sweep(rows, key, figure, title, xlabel)
+    return {"title": f"{name} sweep", "rows": rows, "figures": [str(figure)]}
+
+
 def bench_distance(out_dir: Path, distances_m: list[float] | None = None, scale: float = 1.0,
                    seed: int | None = None, workers: int | None = None) -> dict:
     distances_m = distances_m or [round(1.0 + 0.1 * k, 1) for k in range(21)]
     base = grid_scene(scale, seed)
     rows = _sweep([(d, distance_scene(base, d)) for d in distances_m], "distance_m", workers)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    figure = out_dir / "distance-sweep.png"
-    reports.plot_sweep(rows, "distance_m", figure, "2D error against distance (5 x 5 grid over the FOV)",
-                       "camera to panel distance (m)")
-    return {"title": "distance sweep", "rows": rows, "figures": [str(figure)]}
+    return _sweep_report(rows, "distance_m", out_dir, "distance", "2D error against distance (5 x 5 grid over the FOV)",
+                         "camera to panel distance (m)")
 
 
 def bench_tilt(out_dir: Path, tilts_deg: list[float] | None = None, scale: float = 1.0, seed: int | None = None,
@@ -82,12 +86,8 @@ def bench_tilt(out_dir: Path, tilts_deg: list[float] | None = None, scale: float
     tilts_deg = tilts_deg or [2.5 * k for k in range(7)]
     base = grid_scene(scale, seed)
     rows = _sweep([(t, tilt_scene(base, t)) for t in tilts_deg], "tilt_deg", workers)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    figure = out_dir / "tilt-sweep.png"
-    reports.plot_sweep(rows, "tilt_deg", figure, "2D error against tilt (1 m, 3 x 3 points x 4 directions)",
-                       "camera tilt (degrees)")
-    return {"title": "tilt sweep", "rows": rows, "figures": [str(figure)]}
+    return _sweep_report(rows, "tilt_deg", out_dir, "tilt", "2D error against tilt (1 m, 3 x 3 points x 4 directions)",
+                         "camera tilt (degrees)")
 
 
 def format_sweep(report: dict, key: str, unit: str) -> str:
