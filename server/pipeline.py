@@ -136,7 +136,7 @@ def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = P
         return _refused(Refusal(FailureReason.not_four_sides, "the diagonals do not intersect"), timer, warnings)
     ordered = order_corners(corners, beacon.yaw_deg, frame.meta.heading_deg)
     gravity = None if frame.meta.gravity_camera is None else np.asarray(frame.meta.gravity_camera)
-    corner_sigma = edges.line_rms_px / np.sqrt(min(edges.points_per_side)) if edges is not None else 1.0
+    corner_sigma = edges.line_sigma_px if edges is not None else 1.0
     with timer.stage("pose"):
         pose = solve_pose(ordered.corners, center, beacon, matrix, gravity, options.gravity_sigma_deg,
                           options.gravity_mode, corner_sigma, options.pose)

@@ -6,12 +6,19 @@ always has; their reprojection-error ratio says how ambiguous the fix is. A high
 alone is harmless when both minima put the camera in the same place (a panel seen
 face-on), so a fix is refused only when the ratio is high AND the two positions differ.
 
-Gravity prior: with the phone's gravity vector the tilt (pitch and roll) is known, so the
-rays to the five points can be turned to a level camera, where the panel's image is a
-similarity of its map outline: four unknowns (yaw, height and the camera's x, y), solved
-linearly. This beats vision when the panel is small (far away), where its image hardly
-constrains tilt; with mode "auto" the predicted tilt uncertainty of the vision fix (from
-its Jacobian) is compared with the gravity sensor's and the better one is used.
+Gravity prior, two ways:
+- "always": the tilt (pitch and roll) is taken from the gravity vector as it is, so the
+  rays to the five points can be turned to a level camera, where the panel's image is a
+  similarity of its map outline: four unknowns (yaw, height and the camera's x, y), solved
+  linearly. Exact when the sensor is; its tilt error moves the fix by height x tilt.
+- "auto" (default): a maximum a posteriori fit. Gauss-Newton over the six pose
+  parameters minimises the reprojection residuals (divided by the corner noise) plus the
+  angle between predicted and measured gravity (divided by the sensor's sigma), started
+  from both the vision and the gravity solutions. Each source weighs what it knows: a
+  large, near panel fixes the tilt by perspective and gravity hardly moves it; a small,
+  far one leans on gravity. The corner noise has a floor (`corner_sigma_floor_px`) for
+  the errors that the measured line scatter does not show (pixel locking of the edge
+  crossings on sides nearly aligned with the pixel grid, ~0.05 px; lens calibration).
 
 All image points here are undistorted pixel coordinates.
 """
@@ -39,7 +46,7 @@ class GravityMode(str, Enum):
 class PoseRules:
     max_ambiguity_ratio: float = 0.2
     max_ambiguous_disagreement_m: float = 0.005
-    corner_sigma_floor_px: float = 0.03
+    corner_sigma_floor_px: float = 0.01  # unmodelled errors: lens calibration residual across the panel
 
 
 @dataclass(frozen=True)
@@ -59,6 +66,13 @@ def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[
     position_b = -rotation_cb.T @ tvec.ravel()
     position = beacon_to_world(beacon, position_b[None, :])[0]
     return position, beacon_rotation(beacon) @ rotation_cb.T
+
+
+def _beacon_in_camera(beacon: Beacon, position: np.ndarray, rotation_wc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rvec, tvec) of the beacon frame in the camera, from the camera's pose in the map."""
+    rotation_cw = rotation_wc.T @ beacon_rotation(beacon)
+    rvec, _ = cv2.Rodrigues(rotation_cw)
+    return rvec, (rotation_wc.T @ (np.asarray(beacon.center_m) - position)).reshape(3, 1)
 
 
 def _rms(projected: np.ndarray, observed: np.ndarray) -> float:
@@ -103,6 +117,68 @@ def pose_with_gravity(
     return position, rotation_z(yaw_deg) @ tilt
 
 
+def _orthonormal_pair(vector: np.ndarray) -> np.ndarray:
+    """Two unit vectors (2, 3) orthogonal to `vector` and to each other."""
+    helper = np.eye(3)[int(np.argmin(np.abs(vector)))]
+    first = np.cross(vector, helper)
+    first /= np.linalg.norm(first)
+    return np.array([first, np.cross(vector, first)])
+
+
+def _map_residuals(params, object_points, image_points, camera_matrix, across_gravity, weights):
+    """Weighted residuals (2 N + 2,) and their Jacobian (2 N + 2, 6) of the MAP fit.
+
+    params = (rvec, tvec) of the beacon frame in the camera; gravity is predicted as
+    R_cb (0, 0, -1) (the beacon frame is level) and compared across the measured one.
+    """
+    pixel_weight, gravity_weight = weights
+    projected, jacobian = cv2.projectPoints(object_points, params[:3], params[3:], camera_matrix, None)
+    image = (projected.reshape(-1) - image_points.reshape(-1)) * pixel_weight
+    rotation, rotation_jacobian = cv2.Rodrigues(params[:3])  # d R / d rvec, (3, 9) row-major R
+    down_column = -rotation[:, 2]
+    d_down = -rotation_jacobian.reshape(3, 3, 3)[:, :, 2].T  # (3 components, 3 rvec)
+    tilt = across_gravity @ down_column * gravity_weight
+    d_tilt = np.hstack([across_gravity @ d_down, np.zeros((2, 3))]) * gravity_weight
+    return np.concatenate([image, tilt]), np.vstack([jacobian[:, :6] * pixel_weight, d_tilt])
+
+
+def fuse_gravity(
+    object_points: np.ndarray,
+    image_points: np.ndarray,
+    starts: list[tuple[np.ndarray, np.ndarray]],
+    camera_matrix: np.ndarray,
+    gravity_camera: np.ndarray,
+    corner_sigma_px: float,
+    gravity_sigma_deg: float,
+    iterations: int = 8,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(rvec, tvec) minimising reprojection error / corner_sigma_px and gravity angle / sigma.
+
+    Every start (rvec, tvec) is refined by Gauss-Newton and the lowest cost wins: from the
+    vision start the prior nudges the tilt, from the gravity start it settles the ambiguity
+    of a small, far square.
+    """
+    g = np.asarray(gravity_camera, dtype=float)
+    across = _orthonormal_pair(g / np.linalg.norm(g))
+    weights = (1.0 / corner_sigma_px, 1.0 / np.radians(gravity_sigma_deg))
+    best, best_cost = None, np.inf
+    for rvec, tvec in starts:
+        params = np.concatenate([np.ravel(rvec), np.ravel(tvec)]).astype(float)
+        for _ in range(iterations):
+            residuals, jacobian = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
+            step, *_ = np.linalg.lstsq(jacobian, -residuals, rcond=None)
+            params = params + step
+            if np.abs(step).max() < 1e-9:
+                break
+        residuals, _ = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
+        cost = float(residuals @ residuals)
+        if params[5] > 0 and cost < best_cost:
+            best, best_cost = params, cost
+    if best is None:
+        raise ValueError("no start gave a pose with the beacon in front of the camera")
+    return best[:3].reshape(3, 1), best[3:].reshape(3, 1)
+
+
 def _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma_px: float) -> float:
     """Predicted 1-sigma tilt error of the vision fix from its Jacobian."""
     _, jacobian = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
@@ -139,28 +215,24 @@ def solve_pose(
     positions = [_camera_in_map(beacon, r, t)[0] for r, t in zip(rvecs, tvecs)]
     disagreement = float(np.linalg.norm(positions[0] - positions[-1]))
 
-    tilt_sigma = _vision_tilt_sigma_deg(
-        object_points, rvec, tvec, camera_matrix, max(corner_sigma_px, rules.corner_sigma_floor_px)
-    )
-    use_gravity = gravity_camera is not None and (
-        gravity_mode is GravityMode.always
-        or (gravity_mode is GravityMode.auto and tilt_sigma > gravity_sigma_deg)
-    )
+    corner_sigma = max(corner_sigma_px, rules.corner_sigma_floor_px)
+    tilt_sigma = _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma)
     ambiguous = ratio > rules.max_ambiguity_ratio and disagreement > rules.max_ambiguous_disagreement_m
-    if ambiguous and gravity_camera is None:
+    use_gravity = gravity_camera is not None and gravity_mode is not GravityMode.never
+    if ambiguous and not use_gravity:
         return Refusal(
             FailureReason.pose_ambiguous,
             f"two poses fit almost equally (error ratio {ratio:.2f}) and place the camera "
             f"{disagreement * 1000:.0f} mm apart; a gravity vector would decide",
         )
-    use_gravity = use_gravity or ambiguous
     if use_gravity:
-        position, rotation_wc = pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera)
-        rotation_cw = rotation_wc.T @ beacon_rotation(beacon)
-        rvec, _ = cv2.Rodrigues(rotation_cw)
-        tvec = (rotation_wc.T @ (np.asarray(beacon.center_m) - position)).reshape(3, 1)
-    else:
-        position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
+        level = _beacon_in_camera(beacon, *pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera))
+        if gravity_mode is GravityMode.always:
+            rvec, tvec = level
+        else:
+            rvec, tvec = fuse_gravity(object_points, image_points, [(rvec, tvec), level], camera_matrix,
+                                      gravity_camera, corner_sigma, gravity_sigma_deg)
+    position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
     projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
     return PoseSolution(
         position_m=position,

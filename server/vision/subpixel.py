@@ -66,6 +66,7 @@ class EdgeFit:
     lines: np.ndarray
     edge_shift_px: float
     line_rms_px: float
+    line_sigma_px: float  # 1-sigma error of a side's position, for the pose's weights
     points_per_side: tuple[int, ...]
     arc_points: int
     warnings: tuple[str, ...] = ()
@@ -128,7 +129,7 @@ def _fit_lines(points: np.ndarray, weights: np.ndarray, outward: np.ndarray) -> 
 
     points (4, n, 2), weights (4, n) 1 for a valid crossing else 0, outward (4, 2).
     Returns lines (4, 3) a x + b y + c = 0 with (a, b) the unit normal along `outward`,
-    and the RMS distance of the kept points. Points further than 3.5 robust sigmas (MAD)
+    the RMS distance of the kept points per side, and the sides' position error. Points further than 3.5 robust sigmas (MAD)
     from the first fit are dropped: a noise crossing must not tilt a side.
     """
     lines = np.zeros((4, 3))
@@ -146,7 +147,25 @@ def _fit_lines(points: np.ndarray, weights: np.ndarray, outward: np.ndarray) -> 
         spread = ordered[np.arange(4), (weights > 0).sum(axis=1) // 2] * 1.4826  # MAD of each side
         weights = weights * (np.abs(residuals) <= 3.5 * np.maximum(spread, 1e-3)[:, None])
     rms = np.sqrt(np.sum(weights * residuals**2, axis=1) / weights.sum(axis=1))
-    return lines, rms
+    return lines, rms, _line_offset_sigma(residuals, weights, rms)
+
+
+def _line_offset_sigma(residuals: np.ndarray, weights: np.ndarray, rms: np.ndarray, chunks: int = 8) -> float:
+    """1-sigma error (px) of a fitted side's position, noise and slow waviness together.
+
+    Noise averages out along a side (rms / sqrt(n)), but a slow wave does not: on a side
+    nearly aligned with the pixel grid the crossings' pixel-locking error drifts with the
+    edge's sub-pixel phase and bends the fitted line. The wave is what remains in the
+    means of `chunks` consecutive stretches once their own noise is taken out.
+    """
+    count = weights.sum(axis=1)
+    size = residuals.shape[1] // chunks * chunks
+    chunk_weights = weights[:, :size].reshape(4, chunks, -1).sum(axis=2)
+    chunk_sums = (weights * residuals)[:, :size].reshape(4, chunks, -1).sum(axis=2)
+    means = chunk_sums / np.maximum(chunk_weights, 1.0)
+    wave = np.sum(chunk_weights * means**2, axis=1) / np.maximum(chunk_weights.sum(axis=1), 1.0)
+    wave = np.maximum(wave - chunks * rms**2 / count, 0.0)
+    return float(np.sqrt(np.mean(rms**2 / count + wave)))
 
 
 def _intersections(lines: np.ndarray) -> np.ndarray:
@@ -231,7 +250,7 @@ def refine_edges(
     bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
     map_x = bases32[:, :1] + offsets[None, :] * across32[:, :1]  # contiguous maps: no copy in remap
     map_y = bases32[:, 1:] + offsets[None, :] * across32[:, 1:]
-    profiles = cv2.remap(roi.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
+    profiles = cv2.remap(roi.astype(np.float32), map_x, map_y, cv2.INTER_CUBIC,
                          borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
     crossings = _mid_level_crossings(profiles, offsets, levels.threshold)
     valid = np.isfinite(crossings) & np.isfinite(profiles[:, 0]) & np.isfinite(profiles[:, -1])
@@ -248,7 +267,7 @@ def refine_edges(
     if counts.min() < max(6, n_along // 3):
         return None
     side_points = np.where(side_valid[..., None], points[:4 * n_along].reshape(4, n_along, 2), 0.0)
-    lines_array, rms = _fit_lines(side_points, side_valid.astype(float), normals)
+    lines_array, rms, line_sigma = _fit_lines(side_points, side_valid.astype(float), normals)
 
     warnings: list[str] = []
     shift = 0.0
@@ -278,6 +297,7 @@ def refine_edges(
         lines=lines_array,
         edge_shift_px=shift,
         line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
+        line_sigma_px=line_sigma,
         points_per_side=tuple(int(c) for c in counts),
         arc_points=int(sum(len(p) for p in arc_points)),
         warnings=tuple(warnings),
