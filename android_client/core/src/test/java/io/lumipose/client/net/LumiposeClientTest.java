@@ -112,6 +112,16 @@ class LumiposeClientTest {
     }
 
     @Test
+    void aNonContractErrorBodyStillReadsWell() {
+        FakeTransport t = new FakeTransport().reply(404, "<html>Not Found</html>");
+        ServerRejectedException e = assertThrows(ServerRejectedException.class,
+                () -> client(t, true, null).locate(LUMA, META));
+        assertEquals(404, e.status);
+        assertEquals("http_404", e.code);
+        assertTrue(e.getMessage().contains("Not Found"), e.getMessage());
+    }
+
+    @Test
     void givesUpAfterTheLastAttempt() {
         FakeTransport t = new FakeTransport().fail("a").fail("b").fail("c");
         IOException e = assertThrows(IOException.class, () -> client(t, true, null).locate(LUMA, META));
