@@ -41,6 +41,7 @@ def add_commands(commands) -> None:
     evaluate = sample_actions.add_parser("evaluate", help="error and coverage of the stored samples")
     evaluate.add_argument("--map")
     evaluate.add_argument("--cell", type=float, default=0.05, help="grid cell side for 'i,j' labels, metres")
+    evaluate.add_argument("--plots", type=Path, help="write the paper's Figs. 13-14 (scatter, heat map) here")
     evaluate.set_defaults(client_run=_evaluate)
 
     maps = actions.add_parser("maps", help="beacon maps")
@@ -112,7 +113,26 @@ def _evaluate(client: Client, args) -> int:
     if report.mean_mm is not None:
         print(f"2D error mm: mean {report.mean_mm:.2f}  std {report.std_mm:.2f}  "
               f"min {report.min_mm:.2f}  max {report.max_mm:.2f}")
+    if args.plots:
+        for path in _plot_evaluation(report, args.plots):
+            print(f"wrote {path}")
     return 0
+
+
+def _plot_evaluation(report, folder: Path) -> list[Path]:
+    from simulator.reports import Outcome, plot_heatmap, plot_scatter
+
+    outcomes = [Outcome(index=i, label=row.label or row.id, true_m=tuple(row.truth_m),
+                        estimate_m=tuple(row.position_m) if row.ok else None, reason=row.reason, message=None,
+                        reprojection_px=None)
+                for i, row in enumerate(report.rows) if row.truth_m is not None]
+    if not outcomes:
+        raise ValueError("no stored sample has a truth (ground_truth or an 'i,j' label) to plot")
+    folder.mkdir(parents=True, exist_ok=True)
+    scatter, heatmap = folder / "samples_scatter.png", folder / "samples_heatmap.png"
+    plot_scatter(outcomes, scatter, f"stored samples, map {report.map}")
+    plot_heatmap(outcomes, heatmap, f"2D error, map {report.map}")
+    return [scatter, heatmap]
 
 
 def _list_maps(client: Client, args) -> int:

@@ -9,7 +9,7 @@ def test_client_locate_prints_the_result(server_url, capsys):
     assert '"ok": true' in capsys.readouterr().out
 
 
-def test_client_store_list_evaluate(server_url, capsys):
+def test_client_store_list_evaluate(server_url, capsys, tmp_path):
     assert main(["client", "--url", server_url, "samples", "store", str(FIXTURE), "--label", "3,-2"]) == 2
     assert "X-API-Key" in capsys.readouterr().err
     assert main(["client", "--url", server_url, "--api-key", API_KEY, "samples", "store", str(FIXTURE),
@@ -17,8 +17,10 @@ def test_client_store_list_evaluate(server_url, capsys):
     sample_id = capsys.readouterr().out.split()[0]
     assert main(["client", "--url", server_url, "samples", "list"]) == 0
     assert sample_id in capsys.readouterr().out
-    assert main(["client", "--url", server_url, "samples", "evaluate"]) == 0
+    assert main(["client", "--url", server_url, "samples", "evaluate", "--plots", str(tmp_path)]) == 0
     assert "coverage 100.0 %" in capsys.readouterr().out
+    assert (tmp_path / "samples_scatter.png").stat().st_size > 10_000
+    assert (tmp_path / "samples_heatmap.png").stat().st_size > 5_000
     assert main(["client", "--url", server_url, "--api-key", API_KEY, "samples", "delete", sample_id]) == 0
 
 
