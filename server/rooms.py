@@ -134,18 +134,18 @@ def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options, rules: Room
                         f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
                         f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)",
                         len(blobs))
-    ids = tuple(sorted(b.id for b in beacon_map.beacons))
+    ids = tuple(sorted(b.id for b in beacon_map.beacons))  # preferred, never the only candidates
     background = find_beacon_blobs(frame.pixels, rules.candidates).levels.background
     blobs = [p.blob for p in reading.panels]
     fixes, readings = [], []
     for panel in reading.panels:
         if panel.observation is None:
             continue
-        evidence = IdEvidence(candidates=ids, rules=rules.stripes)
+        evidence = IdEvidence(preferred=ids, rules=rules.stripes)
         evidence.add(panel.observation)
         vlc = vlc_reading(evidence)
         readings.append(vlc)
-        if not vlc.confident or panel.blob.cut_off:
+        if not vlc.confident or panel.blob.cut_off or beacon_map.beacon(vlc.beacon_id) is None:
             continue
         beacon = beacon_map.beacon(vlc.beacon_id)
         result = locate_panel(frame, panel.blob, [b for b in blobs if b is not panel.blob], beacon, options,

@@ -70,6 +70,7 @@ class SessionStats:
     carried_ids: int = 0
     outliers: int = 0
     conflicts: int = 0  # VLC said one beacon, the track another
+    foreign_ids: int = 0  # confident codes of beacons not in the map
 
 
 def _geometry(beacon: Beacon) -> tuple[float, float, float]:
@@ -110,7 +111,7 @@ class DeviceSession:
             if distance < best_distance:
                 best, best_distance = index, distance
         if best is None:
-            evidence = IdEvidence(candidates=tuple(sorted(b.id for b in self.beacon_map.beacons)),
+            evidence = IdEvidence(preferred=tuple(sorted(b.id for b in self.beacon_map.beacons)),
                                   rules=self.rules.room.stripes, max_frames=self.rules.evidence_frames)
             self.panels.append(PanelTrack(relative_m, t_s, evidence))
             best = len(self.panels) - 1
@@ -192,7 +193,9 @@ class DeviceSession:
         for observation in observations:
             panel.evidence.add(observation)
         reading = vlc_reading(panel.evidence) if panel.evidence.observations else None
-        if reading is not None and reading.confident:
+        if reading is not None and reading.confident and self.beacon_map.beacon(reading.beacon_id) is None:
+            self.stats.foreign_ids += 1  # a confidently read code that is not in this map: not used
+        elif reading is not None and reading.confident:
             if panel.beacon_id is not None and panel.beacon_id != reading.beacon_id:
                 self.stats.conflicts += 1
             panel.beacon_id = reading.beacon_id

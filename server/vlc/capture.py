@@ -2,7 +2,8 @@
 
 A pose frame wants a normal exposure (~10 ms, saturated panel, sharp edges); at that
 exposure the 8.4 ms message is averaged away. So the phone takes, beside each pose frame,
-one or more ID frames: same camera, exposure <= 1/8000 s (a third of a chip), ISO raised so
+one or more ID frames: same camera, exposure 1/8000 s (a third of a chip; at most one chip,
+1/2500 s), ISO raised so
 that the panel stays ~200 DN, with `frame_kind = "id"`, its own `timestamp_ns` (first-row
 exposure start) and `rolling_shutter_skew_s`. A burst of ID frames is timed so that each
 frame starts 0.382 of a message later in the message's cycle than the one before
@@ -18,7 +19,7 @@ from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS
 from shared_schemas import FrameKind
 
 ID_EXPOSURE_S = 1.0 / 8000.0
-MAX_ID_EXPOSURE_CHIPS = 0.5  # beyond half a chip the box average smears neighbouring chips
+MAX_ID_EXPOSURE_CHIPS = 1.0  # beyond one chip the box average smears neighbouring chips together
 GOLDEN_STEP = (3.0 - math.sqrt(5.0)) / 2.0  # 0.382: the most evenly spreading phase step
 
 
@@ -34,15 +35,16 @@ def stepped_interval_s(nominal_s: float, chip_rate_hz: float = CHIP_RATE_HZ) -> 
     return (max(0, round(nominal_s / period - GOLDEN_STEP)) + GOLDEN_STEP) * period
 
 
-def id_frame_problem(frame: LumaFrame, chip_rate_hz: float = CHIP_RATE_HZ) -> str | None:
+def id_frame_problem(frame: LumaFrame, chip_rate_hz: float = CHIP_RATE_HZ,
+                     max_exposure_chips: float = MAX_ID_EXPOSURE_CHIPS) -> str | None:
     """None when `frame` can carry stripes, else the sentence saying why it cannot."""
     meta = frame.meta
     if meta.rolling_shutter_skew_s is None or meta.rolling_shutter_skew_s <= 0:
         return "rolling_shutter_skew_s is missing: the row times are unknown"
     if meta.exposure_s is None:
         return "exposure_s is missing"
-    if meta.exposure_s > MAX_ID_EXPOSURE_CHIPS / chip_rate_hz:
-        return (f"exposure_s {meta.exposure_s:.2g} s is longer than {MAX_ID_EXPOSURE_CHIPS / chip_rate_hz:.2g} s: "
+    if meta.exposure_s > max_exposure_chips / chip_rate_hz:
+        return (f"exposure_s {meta.exposure_s:.2g} s is longer than {max_exposure_chips / chip_rate_hz:.2g} s: "
                 "the code is averaged away")
     if meta.timestamp_ns is None:
         return "timestamp_ns is missing: frames cannot be combined"

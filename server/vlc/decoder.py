@@ -43,8 +43,10 @@ class StripeRules:
     lut_steps_per_chip: int = 64
     max_clock_error_ppm: float = 100.0  # LED crystal against the phone's clock
     confident_posterior: float = 0.99
+    min_relative_depth: float = 0.35  # fitted chip gain / mean panel level; the code's is 0.7 to 2.3
     min_samples: int = 6
     chip_rate_hz: float = CHIP_RATE_HZ
+    max_exposure_chips: float = 1.0  # longer ID exposures are refused before decoding (server.vlc.capture)
 
 
 @dataclass(frozen=True)
@@ -156,6 +158,7 @@ def _frame_log_likelihood(obs: StripeObservation, reference_s: float, candidates
     q, _ = np.linalg.qr(basis)
     y = obs.values_dn * weights
     y_p = y - q @ (q.T @ y)
+    level = float(np.mean(obs.values_dn))
     result = np.empty((len(candidates), len(phases_s), len(clock_errors_ppm)), np.float64)
     for e, ppm in enumerate(clock_errors_ppm):
         rate = 1.0 + ppm * 1e-6
@@ -165,7 +168,11 @@ def _frame_log_likelihood(obs: StripeObservation, reference_s: float, candidates
         t_p = templates - (templates @ q) @ q.T
         norm = np.einsum("cpn,cpn->cp", t_p, t_p)
         along = t_p @ y_p
-        explained = np.where((along > 0) & (norm > 1e-12), along**2 / np.maximum(norm, 1e-12), 0.0)
+        # a hypothesis must explain stripes as deep as the LED's code makes them: a ripple of a few
+        # per cent (a long exposure, flicker, banding) fitted with a tiny gain is no reading
+        gain = along / np.maximum(norm, 1e-12)
+        plausible = (gain >= rules.min_relative_depth * level) & (norm > 1e-12)
+        explained = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
         result[:, :, e] = float(y_p @ y_p) - explained
     dof = max(1, obs.samples - rules.trend_degree - 2)
     scale = max(1.0, float(result.min()) / dof)  # residuals beyond the pixel noise: the model's own error
@@ -178,6 +185,11 @@ class IdEvidence:
 
     candidates: tuple[int, ...] = tuple(range(MAX_ID + 1))
     rules: StripeRules = StripeRules()
+    # The map's IDs are more likely than others, but never the only ones: a panel from elsewhere
+    # (or a code read wrongly) must be able to win, or the decoder names the nearest map ID with
+    # full confidence. `preferred_share` of the prior goes to `preferred`, the rest to the others.
+    preferred: tuple[int, ...] = ()
+    preferred_share: float = 0.5
     observations: list[StripeObservation] = field(default_factory=list)
     max_frames: int = 16
     _cache: dict = field(default_factory=dict, repr=False)
@@ -194,6 +206,13 @@ class IdEvidence:
         step_ppm = chip_s / self.rules.phase_steps_per_chip / max(span_s, 1e-9) * 1e6
         count = int(np.floor(self.rules.max_clock_error_ppm / step_ppm))
         return np.arange(-count, count + 1) * step_ppm
+
+    def _log_prior(self) -> np.ndarray:
+        chosen = np.isin(self.candidates, self.preferred)
+        if not chosen.any() or chosen.all():
+            return np.zeros(len(self.candidates))
+        share = np.where(chosen, self.preferred_share / chosen.sum(), (1 - self.preferred_share) / (~chosen).sum())
+        return np.log(share)
 
     def decide(self) -> IdDecision:
         usable = [o for o in self.observations if o.samples >= self.rules.min_samples]
@@ -213,7 +232,7 @@ class IdEvidence:
         self._cache = cache  # only the frames still in the window
         flat = total.reshape(len(self.candidates), -1)
         peak = flat.max()
-        per_id = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))
+        per_id = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300)) + self._log_prior()
         posterior = np.exp(per_id - per_id.max())
         posterior /= posterior.sum()
         order = np.argsort(posterior)[::-1]

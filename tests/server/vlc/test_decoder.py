@@ -1,0 +1,77 @@
+import numpy as np
+import pytest
+
+from server.vlc.decoder import IdEvidence, read_stripes, row_time_s
+from server.vlc.reader import read_id_frame
+
+
+def decide(frames, **evidence_kwargs):
+    evidence = IdEvidence(**evidence_kwargs)
+    decisions = []
+    for frame in frames:
+        panels = [p for p in read_id_frame(frame).panels if p.observation is not None]
+        assert len(panels) == 1
+        evidence.add(panels[0].observation)
+        decisions.append(evidence.decide())
+    return decisions
+
+
+@pytest.mark.parametrize("beacon_id, distance_m, exposure_s, frames", [
+    (0xA5, 1.0, 1 / 8000, 4),
+    (17, 2.0, 1 / 8000, 8),
+    (254, 3.0, 1 / 8000, 12),
+    (99, 1.5, 1 / 4000, 6),
+])
+def test_combined_frames_give_the_right_id_confidently(make_id_frames, beacon_id, distance_m, exposure_s, frames):
+    decisions = decide(make_id_frames(beacon_id, distance_m, exposure_s, frames, seed=beacon_id))
+    confident = [d for d in decisions if d.confident]
+    assert confident, decisions[-1].message
+    assert all(d.beacon_id == beacon_id for d in confident)
+    # a 0.174 m panel never holds a whole 21-chip message in one frame: one frame is not enough
+    assert not decisions[0].confident
+    assert decisions[0].chips_seen < 21
+
+
+def test_ten_millisecond_exposure_never_gives_a_confident_id(make_id_frames):
+    frames = make_id_frames(42, 1.0, 0.01, 4, seed=3)
+    # the frame itself says so: the code is averaged away
+    assert "averaged away" in read_id_frame(frames[0]).problem
+
+
+def test_long_exposure_stripes_forced_through_the_decoder_stay_unconfident(make_id_frames):
+    evidence = IdEvidence()
+    for frame in make_id_frames(42, 1.0, 0.01, 6, seed=4):
+        reading = read_id_frame(frame.__class__(frame.pixels, frame.meta.model_copy(update={"exposure_s": 1e-4}),
+                                                frame.camera))
+        evidence.add(reading.panels[0].observation)
+    assert not evidence.decide().confident
+
+
+def test_map_ids_are_preferred_but_a_foreign_panel_is_not_named_after_one(make_id_frames):
+    frames = make_id_frames(200, 1.4, 1 / 8000, 8, seed=5)
+    decisions = decide(frames, preferred=(17, 42, 99, 201))
+    assert not any(d.confident and d.beacon_id != 200 for d in decisions)
+    decisions = decide(frames, preferred=(17, 42, 99, 200))
+    assert decisions[-1].confident and decisions[-1].beacon_id == 200
+    # the map prior makes it faster than among 256 equal IDs
+    first = next(i for i, d in enumerate(decisions) if d.confident)
+    plain = decide(frames)
+    assert first <= next((i for i, d in enumerate(plain) if d.confident), len(plain))
+
+
+def test_stripes_skip_the_panel_edges_and_bin_rows():
+    pixels = np.full((200, 100), 10, np.uint8)
+    pixels[50:150, 20:80] = 200
+    mask = pixels > 100
+    obs = read_stripes(pixels, mask, (0, 0), 1.0, row_time_s(0.02, 200), 1e-4)
+    assert obs is not None
+    np.testing.assert_allclose(obs.values_dn, 200.0)
+    rows = np.rint(obs.row_offsets_s / row_time_s(0.02, 200))
+    assert rows.min() >= 53 and rows.max() <= 146  # 3-pixel margin inside the panel
+
+
+def test_bad_timing_is_named():
+    with pytest.raises(ValueError, match="rolling_shutter_skew_s"):
+        row_time_s(0.0, 100)
+    with pytest.raises(ValueError, match="exposure_s"):
+        read_stripes(np.zeros((10, 10), np.uint8), np.ones((10, 10), bool), (0, 0), 0.0, 1e-5, 0.0)
