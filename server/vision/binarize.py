@@ -46,8 +46,13 @@ def estimate_levels(image: np.ndarray, plateau_fraction: float = 2e-4) -> Levels
 
 
 def blur(image: np.ndarray, kernel_px: int = 5) -> np.ndarray:
-    """Gaussian blur that removes pixel noise before thresholding (odd `kernel_px`)."""
-    return cv2.GaussianBlur(image, (kernel_px, kernel_px), 0)
+    """Box blur that removes pixel noise before thresholding (odd `kernel_px`).
+
+    A box rather than a Gaussian: OpenCV runs it as running sums, 3-4x faster on a
+    region of interest, and being symmetric it leaves the mid level of a straight edge where
+    it was. The blurred mask only seeds the sub-pixel stage, which reads the raw pixels.
+    """
+    return cv2.blur(image, (kernel_px, kernel_px))
 
 
 def threshold(image: np.ndarray, levels: Levels) -> np.ndarray:

@@ -132,17 +132,17 @@ def _fit_lines(points: np.ndarray, weights: np.ndarray, outward: np.ndarray) -> 
     the RMS distance of the kept points per side, and the sides' position error. Points further than 3.5 robust sigmas (MAD)
     from the first fit are dropped: a noise crossing must not tilt a side.
     """
-    lines = np.zeros((4, 3))
+    x, y = points[..., 0], points[..., 1]
     for _ in range(2):
-        total = weights.sum(axis=1, keepdims=True)
-        centre = np.einsum("kn,knd->kd", weights, points) / total
-        centred = points - centre[:, None, :]
-        scatter = np.einsum("kn,kni,knj->kij", weights, centred, centred)
-        _, vectors = np.linalg.eigh(scatter)
-        normal = vectors[:, :, 0]  # smallest eigenvalue: across the side
+        total = weights.sum(axis=1)
+        cx, cy = (weights * x).sum(axis=1) / total, (weights * y).sum(axis=1) / total
+        dx, dy = x - cx[:, None], y - cy[:, None]
+        sxx, syy, sxy = (weights * dx * dx).sum(axis=1), (weights * dy * dy).sum(axis=1), (weights * dx * dy).sum(axis=1)
+        along = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the scatter's major axis
+        normal = np.column_stack([-np.sin(along), np.cos(along)])
         normal *= np.sign(np.sum(normal * outward, axis=1))[:, None]
-        lines = np.column_stack([normal, -np.sum(normal * centre, axis=1)])
-        residuals = np.einsum("knd,kd->kn", points, normal) + lines[:, 2:3]
+        lines = np.column_stack([normal, -(normal[:, 0] * cx + normal[:, 1] * cy)])
+        residuals = dx * normal[:, :1] + dy * normal[:, 1:]
         ordered = np.sort(np.where(weights > 0, np.abs(residuals), np.inf), axis=1)
         spread = ordered[np.arange(4), (weights > 0).sum(axis=1) // 2] * 1.4826  # MAD of each side
         weights = weights * (np.abs(residuals) <= 3.5 * np.maximum(spread, 1e-3)[:, None])
