@@ -14,11 +14,13 @@ Gravity prior, two ways:
 - "auto" (default): a maximum a posteriori fit. Gauss-Newton over the six pose
   parameters minimises the reprojection residuals (divided by the corner noise) plus the
   angle between predicted and measured gravity (divided by the sensor's sigma), started
-  from both the vision and the gravity solutions. Each source weighs what it knows: a
+  from the vision solution (and from the gravity one when the square is nearly ambiguous
+  or vision and gravity disagree by over 3 sigma). Each source weighs what it knows: a
   large, near panel fixes the tilt by perspective and gravity hardly moves it; a small,
-  far one leans on gravity. The corner noise has a floor (`corner_sigma_floor_px`) for
-  the errors that the measured line scatter does not show (pixel locking of the edge
-  crossings on sides nearly aligned with the pixel grid, ~0.05 px; lens calibration).
+  far one leans on gravity. The corner noise is the sides' measured position error
+  (noise, and the slow pixel-locking wave of sides nearly aligned with the pixel grid;
+  `subpixel.py`), with a floor (`corner_sigma_floor_px`) for what one frame cannot show,
+  such as the residual of the lens calibration across the panel.
 
 All image points here are undistorted pixel coordinates.
 """
@@ -145,38 +147,37 @@ def _map_residuals(params, object_points, image_points, camera_matrix, across_gr
 def fuse_gravity(
     object_points: np.ndarray,
     image_points: np.ndarray,
-    starts: list[tuple[np.ndarray, np.ndarray]],
+    start: tuple[np.ndarray, np.ndarray],
     camera_matrix: np.ndarray,
     gravity_camera: np.ndarray,
     corner_sigma_px: float,
     gravity_sigma_deg: float,
-    iterations: int = 8,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(rvec, tvec) minimising reprojection error / corner_sigma_px and gravity angle / sigma.
+    iterations: int = 6,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """(rvec, tvec, cost) minimising reprojection error / corner_sigma_px and gravity angle / sigma.
 
-    Every start (rvec, tvec) is refined by Gauss-Newton and the lowest cost wins: from the
-    vision start the prior nudges the tilt, from the gravity start it settles the ambiguity
-    of a small, far square.
+    Gauss-Newton from `start` (rvec, tvec); cost is the sum of squared weighted residuals
+    (chi-square with 2 N + 2 terms), so that two starts can be compared.
     """
     g = np.asarray(gravity_camera, dtype=float)
     across = _orthonormal_pair(g / np.linalg.norm(g))
     weights = (1.0 / corner_sigma_px, 1.0 / np.radians(gravity_sigma_deg))
-    best, best_cost = None, np.inf
-    for rvec, tvec in starts:
-        params = np.concatenate([np.ravel(rvec), np.ravel(tvec)]).astype(float)
-        for _ in range(iterations):
-            residuals, jacobian = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
-            step, *_ = np.linalg.lstsq(jacobian, -residuals, rcond=None)
-            params = params + step
-            if np.abs(step).max() < 1e-9:
-                break
-        residuals, _ = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
-        cost = float(residuals @ residuals)
-        if params[5] > 0 and cost < best_cost:
-            best, best_cost = params, cost
-    if best is None:
-        raise ValueError("no start gave a pose with the beacon in front of the camera")
-    return best[:3].reshape(3, 1), best[3:].reshape(3, 1)
+    params = np.concatenate([np.ravel(start[0]), np.ravel(start[1])]).astype(float)
+    for _ in range(iterations):
+        residuals, jacobian = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
+        step = np.linalg.solve(jacobian.T @ jacobian, -(jacobian.T @ residuals))
+        params = params + step
+        if np.abs(step).max() < 1e-8:
+            break
+    residuals, _ = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
+    return params[:3].reshape(3, 1), params[3:].reshape(3, 1), float(residuals @ residuals)
+
+
+def _gravity_angle_deg(rvec: np.ndarray, gravity_camera: np.ndarray) -> float:
+    """Angle between the gravity a pose predicts in the camera and the measured one."""
+    predicted = -cv2.Rodrigues(rvec)[0][:, 2]
+    measured = np.asarray(gravity_camera, dtype=float) / np.linalg.norm(gravity_camera)
+    return float(np.degrees(np.arccos(np.clip(predicted @ measured, -1.0, 1.0))))
 
 
 def _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma_px: float) -> float:
@@ -226,12 +227,21 @@ def solve_pose(
             f"{disagreement * 1000:.0f} mm apart; a gravity vector would decide",
         )
     if use_gravity:
-        level = _beacon_in_camera(beacon, *pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera))
+        level = lambda: _beacon_in_camera(  # noqa: E731
+            beacon, *pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera))
         if gravity_mode is GravityMode.always:
-            rvec, tvec = level
+            rvec, tvec = level()
         else:
-            rvec, tvec = fuse_gravity(object_points, image_points, [(rvec, tvec), level], camera_matrix,
-                                      gravity_camera, corner_sigma, gravity_sigma_deg)
+            fit = lambda start: fuse_gravity(object_points, image_points, start, camera_matrix,  # noqa: E731
+                                             gravity_camera, corner_sigma, gravity_sigma_deg)
+            fused = fit((rvec, tvec))
+            # Vision may sit in the wrong one of a small square's two minima: then start
+            # from gravity's tilt too and keep the better fit.
+            if ratio > rules.max_ambiguity_ratio / 4 or _gravity_angle_deg(fused[0], gravity_camera) > 3 * gravity_sigma_deg:
+                other = fit(level())
+                if other[1][2, 0] > 0 and other[2] < fused[2]:
+                    fused = other
+            rvec, tvec = fused[0], fused[1]
     position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
     projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
     return PoseSolution(

@@ -191,29 +191,26 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
     return float(np.interp(0.5, ratio, sigmas))
 
 
-def contour_growth(corners_px: np.ndarray, arc_points_px: list[np.ndarray], radius_fraction: float) -> float | None:
+def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float) -> float | None:
     """How far (px, >= 0 outward) the measured contour lies outside the panel's outline.
 
     corners_px (4, 2): corners of the square the measured sides make, cyclic order;
-    arc_points_px[k]: measured contour points on the rounded corner k; radius_fraction:
-    corner radius / side of the panel. In the unit square of the sides, a point (x, y) of
-    a corner with both axes pointing inward lies on the circle of radius R tangent to both
-    axes (centre (R, R)) when R = x + y + sqrt(2 x y) (the root on the corner side of the centre).
+    arc_points_px (4, m, 2): measured contour points on each rounded corner (NaN where a
+    profile had none); radius_fraction: corner radius / side of the panel. In the unit
+    square of the sides, a point (x, y) of a corner with both axes pointing inward lies on
+    the circle of radius R tangent to both axes (centre (R, R)) when R = x + y + sqrt(2 x y)
+    (the root on the corner side of the centre). None when fewer than 8 points are usable.
     """
     homography = cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
-    radii = []
-    for k, points in enumerate(arc_points_px):
-        if len(points) == 0:
-            continue
-        plane = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), homography).reshape(-1, 2)
-        relative = plane - UNIT_SQUARE[k]
-        x = relative @ (UNIT_SQUARE[(k + 1) % 4] - UNIT_SQUARE[k])
-        y = relative @ (UNIT_SQUARE[k - 1] - UNIT_SQUARE[k])
-        ok = (x > 0) & (y > 0)
-        radii.append(x[ok] + y[ok] + np.sqrt(2 * x[ok] * y[ok]))
-    radii = np.concatenate(radii) if radii else np.array([])
-    if len(radii) < 8:
+    shape = arc_points_px.shape
+    plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
+    relative = plane - UNIT_SQUARE[:, None, :]
+    x = np.sum(relative * (UNIT_SQUARE[NEXT] - UNIT_SQUARE)[:, None, :], axis=2)
+    y = np.sum(relative * (UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE)[:, None, :], axis=2)
+    usable = (x > 0) & (y > 0)  # NaN compares False
+    if usable.sum() < 8:
         return None
+    radii = x[usable] + y[usable] + np.sqrt(2 * x[usable] * y[usable])
     growth_units = (float(np.median(radii)) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
     side_px = float(np.mean(np.linalg.norm(corners_px[NEXT] - corners_px, axis=1)))
     return growth_units * side_px
@@ -271,19 +268,16 @@ def refine_edges(
 
     warnings: list[str] = []
     shift = 0.0
-    arc_points = []
     if use_arcs:
         first = 4 * n_along
-        arc_valid = valid[first:].reshape(4, n_arc)
-        arc_points = [points[first:].reshape(4, n_arc, 2)[k][arc_valid[k]] for k in range(4)]
+        arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
         square = _intersections(lines_array)
         growth = contour_growth(square, arc_points, radius_fraction)
         blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
         if blur_px is not None:
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
-            arc_across = across[first:].reshape(4, n_arc, 2)
-            arc_points = [arc_points[k] + inward_px * arc_across[k][arc_valid[k]] for k in range(4)]
+            arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
             growth = contour_growth(square, arc_points, radius_fraction)
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")
@@ -299,6 +293,6 @@ def refine_edges(
         line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
         line_sigma_px=line_sigma,
         points_per_side=tuple(int(c) for c in counts),
-        arc_points=int(sum(len(p) for p in arc_points)),
+        arc_points=int(valid[4 * n_along:].sum()),
         warnings=tuple(warnings),
     )

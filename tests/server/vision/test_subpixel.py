@@ -19,7 +19,7 @@ from simulator.render import CameraPose, SensorModel, render_frame
 RHO = 0.02 / 0.174  # corner radius / side of the bench panel
 
 
-def grown_corner_points(side_px: float, growth_px: float, per_corner: int = 30) -> tuple[np.ndarray, list[np.ndarray]]:
+def grown_corner_points(side_px: float, growth_px: float, per_corner: int = 30) -> tuple[np.ndarray, np.ndarray]:
     """The square of the grown outline (side + 2 D) and points on its corner arcs (radius r + D)."""
     half = side_px / 2 + growth_px
     radius = RHO * side_px + growth_px
@@ -30,7 +30,7 @@ def grown_corner_points(side_px: float, growth_px: float, per_corner: int = 30) 
         centre = corner + radius * inward
         t = np.linspace(np.radians(20), np.radians(70), per_corner)
         arcs.append(centre - radius * np.column_stack([np.cos(t), np.sin(t)]) * inward)
-    return corners, arcs
+    return corners, np.array(arcs)
 
 
 @pytest.mark.parametrize("growth_px", [0.0, 0.7, 2.5])
@@ -45,14 +45,16 @@ def test_growth_is_measured_through_perspective():
     # but in the panel's plane it is, and that is where it is measured
     homography = np.array([[1.0, 0.05, 900.0], [0.02, 0.97, 1200.0], [2e-5, -1e-5, 1.0]])
     warp = lambda p: cv2.perspectiveTransform(p.reshape(-1, 1, 2), homography).reshape(-1, 2)
-    measured = contour_growth(warp(corners), [warp(a) for a in arcs], RHO)
+    measured = contour_growth(warp(corners), warp(arcs).reshape(arcs.shape), RHO)
     side_px = np.mean(np.linalg.norm(np.roll(warp(corners), -1, axis=0) - warp(corners), axis=1))
     assert measured == pytest.approx(1.5 * side_px / 303.0, rel=1e-4)  # plane growth x mean image side
 
 
 def test_too_few_corner_points_give_no_growth():
-    corners, arcs = grown_corner_points(300.0, 1.0, per_corner=1)
+    corners, arcs = grown_corner_points(300.0, 1.0, per_corner=3)
+    arcs[1:] = np.nan  # profiles that found no crossing
     assert contour_growth(corners, arcs, RHO) is None
+    assert contour_growth(corners, grown_corner_points(300.0, 1.0, per_corner=2)[1], RHO) == pytest.approx(1.0, abs=1e-4)
 
 
 @pytest.mark.parametrize("sigma_px, growth_px", [(0.8, 0.0), (1.1, 1.3), (1.5, 2.6)])
