@@ -14,6 +14,7 @@ the starting guess of the sub-pixel stage.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -49,42 +50,43 @@ def intersect_lines(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarr
     return np.array([px + t * rx, py + t * ry], dtype=float)
 
 
-def _direction_deg(segment: np.ndarray) -> float:
-    dx, dy = segment[1] - segment[0]
-    return float(np.degrees(np.arctan2(dy, dx)))
+def _merge_collinear(starts: np.ndarray, ends: np.ndarray, max_angle_deg: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Merge runs of consecutive segments (cyclic) whose directions differ < `max_angle_deg`.
 
+    starts, ends (n, 2): the segments in order; a run is compared by its chord so far.
+    Returns (start, end) pairs.
+    """
 
-def _merge_collinear(segments: list[np.ndarray], max_angle_deg: float) -> list[np.ndarray]:
-    """Merge runs of consecutive segments (cyclic) whose directions differ < `max_angle_deg`."""
+    def direction(start, end) -> float:
+        return math.degrees(math.atan2(end[1] - start[1], end[0] - start[0]))
 
-    def collinear(a: np.ndarray, b: np.ndarray) -> bool:
-        turn = (_direction_deg(b) - _direction_deg(a) + 180.0) % 360.0 - 180.0
-        return abs(turn) < max_angle_deg
+    def collinear(a: list, b: list) -> bool:
+        return abs((direction(*b) - direction(*a) + 180.0) % 360.0 - 180.0) < max_angle_deg
 
-    merged: list[np.ndarray] = []
-    for segment in segments:
-        if merged and collinear(merged[-1], segment):
-            merged[-1] = np.array([merged[-1][0], segment[1]])
+    merged: list[list] = []
+    for start, end in zip(starts, ends):
+        if merged and collinear(merged[-1], [start, end]):
+            merged[-1][1] = end
         else:
-            merged.append(segment)
+            merged.append([start, end])
     if len(merged) > 1 and collinear(merged[-1], merged[0]):
-        merged[0] = np.array([merged[-1][0], merged[0][1]])
+        merged[0][0] = merged[-1][0]
         merged.pop()
-    return merged
+    return [(start, end) for start, end in merged]
 
 
 def rounded_square_corners(contour: np.ndarray, rules: PolygonRules = PolygonRules()) -> Quad | Refusal:
     """Corners of the square circumscribing a rounded-square contour (N, 2)."""
     hull = cv2.convexHull(contour.reshape(-1, 1, 2).astype(np.float32))
     perimeter = cv2.arcLength(hull, True)
-    polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2)
-    segments = [np.array([polygon[i], polygon[(i + 1) % len(polygon)]]) for i in range(len(polygon))]
-    lengths = np.array([np.linalg.norm(s[1] - s[0]) for s in segments])
-    sides = [s for s, length in zip(segments, lengths) if length >= lengths.mean()]
-    sides = _merge_collinear(sides, rules.merge_angle_deg)
+    polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2).astype(float)
+    following = np.roll(polygon, -1, axis=0)
+    lengths = np.hypot(*(following - polygon).T)
+    long_enough = lengths >= lengths.mean()  # the corner arcs' short segments go
+    sides = _merge_collinear(polygon[long_enough], following[long_enough], rules.merge_angle_deg)
     if len(sides) < 4:
         return Refusal(FailureReason.not_four_sides, f"the outline has {len(sides)} straight sides, not 4")
-    side_lengths = np.array([np.linalg.norm(s[1] - s[0]) for s in sides])
+    side_lengths = np.array([np.hypot(*(end - start)) for start, end in sides])
     longest = sorted(np.argsort(side_lengths)[-4:])  # keep the contour's cyclic order
     if side_lengths[longest].sum() < rules.min_side_share * perimeter:
         return Refusal(FailureReason.not_four_sides, "the four longest sides cover too little of the outline")

@@ -62,7 +62,7 @@ def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobR
     height, width = pixels.shape
     step = max(1, min(height, width) // rules.coarse_short_side_px)
     small = coarse_view(pixels, step)
-    levels = estimate_levels(small)
+    levels = estimate_levels(small[::2])  # every other row: plenty for two percentiles, half the time
     if levels.contrast < rules.min_contrast_dn:
         return Refusal(
             FailureReason.no_beacon,

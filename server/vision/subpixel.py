@@ -44,7 +44,7 @@ NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or sid
 
 @dataclass(frozen=True)
 class EdgeRules:
-    half_window_px: float = 8.0
+    half_window_px: float = 6.0
     step_px: float = 0.25
     max_profiles_per_side: int = 120
     max_profiles_per_corner: int = 40
