@@ -33,7 +33,7 @@ from server.tracking.filter import FilterRules, FilterState, predict, start, upd
 from server.vision.beacons import find_beacon_blobs
 from server.vlc.decoder import IdEvidence
 from server.vlc.reader import read_id_frame
-from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult, TrackState
+from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult, TrackState, VlcReading
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class SessionRules:
     # the relative position to the next panel repeats the old one, so old tracks must not linger
     evidence_frames: int = 16
     partial_gate: float = 0.5  # nearest predicted panel centre / next nearest, at a blob's centroid
-    established_fixes: int = 3  # accepted fixes in a row before the track may carry or veto an ID
+    established_fixes: int = 2  # accepted fixes in a row (a speed) before the track may carry or veto an ID
     room: RoomRules = RoomRules()
     motion: FilterRules = FilterRules()
     partial: PartialRules = PartialRules()
@@ -60,6 +60,7 @@ class PanelTrack:
     t_s: float
     evidence: IdEvidence
     beacon_id: int | None = None  # confidently decoded ID, kept once known
+    reading: VlcReading | None = None  # the decision that named it
 
 
 @dataclass
@@ -192,7 +193,9 @@ class DeviceSession:
         panel = self._panel_for(relative_m, t_s, claimed)
         for observation in observations:
             panel.evidence.add(observation)
-        reading = vlc_reading(panel.evidence) if panel.evidence.observations else None
+        reading = panel.reading
+        if panel.beacon_id is None and panel.evidence.observations:  # decoding stops once the ID is known
+            reading = panel.reading = vlc_reading(panel.evidence)
         if reading is not None and reading.confident and self.beacon_map.beacon(reading.beacon_id) is None:
             self.stats.foreign_ids += 1  # a confidently read code that is not in this map: not used
         elif reading is not None and reading.confident:
@@ -204,7 +207,7 @@ class DeviceSession:
             # the established track and the panel's VLC evidence disagree: the evidence may mix two
             # panels (a mis-association), so it is dropped and the track's beacon is used
             self.stats.conflicts += 1
-            panel.beacon_id = None
+            panel.beacon_id = panel.reading = None
             panel.evidence.observations.clear()
         if panel.beacon_id is not None:
             beacon, source = self.beacon_map.beacon(panel.beacon_id), BeaconIdSource.vlc

@@ -42,6 +42,7 @@ class StripeRules:
     phase_steps_per_chip: int = 8
     lut_steps_per_chip: int = 64
     max_clock_error_ppm: float = 100.0  # LED crystal against the phone's clock
+    clock_steps_per_chip: int = 4  # clock-error grid: phase slip per step over the frames' span
     confident_posterior: float = 0.99
     min_relative_depth: float = 0.35  # fitted chip gain / mean panel level; the code's is 0.7 to 2.3
     min_samples: int = 6
@@ -194,16 +195,21 @@ class IdEvidence:
     max_frames: int = 16
     _cache: dict = field(default_factory=dict, repr=False)
 
+    max_span_s: float = 2.0  # older frames are dropped: the clock-error search grows with the span
+
     def add(self, observation: StripeObservation) -> None:
         self.observations.append(observation)
         del self.observations[:-self.max_frames]
+        newest = max(o.timestamp_s for o in self.observations)
+        self.observations[:] = [o for o in self.observations if newest - o.timestamp_s <= self.max_span_s]
 
     def _clock_errors(self) -> np.ndarray:
-        """Clock-error grid fine enough that the phase slips < 1/phase_steps chip over the span."""
+        """Clock-error grid fine enough that the phase slips < 1/clock_steps chip over the span."""
         times = [o.timestamp_s for o in self.observations]
         span_s = max(times) - min(times)
         chip_s = 1.0 / self.rules.chip_rate_hz
-        step_ppm = chip_s / self.rules.phase_steps_per_chip / max(span_s, 1e-9) * 1e6
+        # a slip of a quarter chip over the span costs little: the phase grid itself is an eighth
+        step_ppm = chip_s / self.rules.clock_steps_per_chip / max(span_s, 1e-9) * 1e6
         count = int(np.floor(self.rules.max_clock_error_ppm / step_ppm))
         return np.arange(-count, count + 1) * step_ppm
 

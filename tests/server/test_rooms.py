@@ -1,0 +1,95 @@
+"""Rooms with several panels: crops, the choice and fusion of fixes, and the pipeline's multi-beacon hook."""
+
+import numpy as np
+
+from server.camera import intrinsics_from_profile
+from server.geometry import rotation_from_ypr
+from server.ingest import LumaFrame
+from server.pipeline import PipelineOptions, locate
+from server.pose.solve import GravityMode
+from server.rooms import PanelFix, choose_and_fuse, locate_panel
+from server.vision.beacons import find_beacon_blobs
+from server.vlc.codec import LedWaveform
+from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, FrameKind, LocateResult, device_profiles
+from simulator.fixtures import fixture_meta
+from simulator.led import row_gains
+from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_emitters
+
+WIDTH, HEIGHT = 970, 1296
+CAMERA = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], WIDTH, HEIGHT)
+MAP = BeaconMap(name="two", beacons=[
+    Beacon(id=17, center_m=[-0.12, -0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
+    Beacon(id=42, center_m=[0.12, 0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
+])
+POSE = CameraPose(np.array([0.02, -0.03, 0.0]), rotation_from_ypr(10.0, 2.0, -1.0))
+
+
+def two_panel_frame(level_dn=1000.0, exposure_s=0.01, seed=0, t_s=0.0) -> LumaFrame:
+    rng = np.random.default_rng(seed)
+    emitters = []
+    for beacon in MAP.beacons:
+        gain = None
+        if exposure_s < 1e-3:
+            wave = LedWaveform.for_beacon(beacon.id, phase_s=0.001 * beacon.id)
+            gain = row_gains(wave, HEIGHT, 0.03 / (HEIGHT - 1), exposure_s, t_s)
+        emitters.append(Emitter(beacon_outline_px(beacon, CAMERA, POSE), level_dn, gain))
+    pixels = render_emitters(emitters, WIDTH, HEIGHT, SensorModel(psf_sigma_px=1.0), rng)
+    gravity = (POSE.rotation_wc.T @ [0, 0, -1.0]).tolist()
+    meta = fixture_meta(CAMERA, WIDTH, HEIGHT, POSE, gravity_camera=gravity).model_copy(update={
+        "exposure_s": exposure_s, "rolling_shutter_skew_s": 0.03, "timestamp_ns": int(t_s * 1e9),
+        "frame_kind": FrameKind.id if exposure_s < 1e-3 else FrameKind.pose})
+    return LumaFrame(pixels, meta, CAMERA)
+
+
+def test_every_panel_is_found_and_located_on_its_own_crop():
+    frame = two_panel_frame()
+    found = find_beacon_blobs(frame.pixels)
+    assert len(found.blobs) == 2 and not any(b.cut_off for b in found.blobs)
+    options = PipelineOptions(gravity_mode=GravityMode.never)
+    for blob in found.blobs:
+        # which blob is which: the one left in the image is beacon 17 (x grows to the right)
+        beacon = MAP.beacons[0] if blob.centroid_px[0] < WIDTH / 2 else MAP.beacons[1]
+        others = [b for b in found.blobs if b is not blob]
+        result = locate_panel(frame, blob, others, beacon, options, found.levels.background)
+        assert result.ok, result.message
+        assert np.hypot(*(np.array(result.position_m[:2]) - POSE.position_m[:2])) < 0.004
+        # pixels are reported in the full frame, on the blob
+        assert np.hypot(*(np.array(result.center_px) - blob.centroid_px)) < 3.0
+
+
+def _fix(beacon_id, position, area):
+    beacon = next(b for b in MAP.beacons if b.id == beacon_id)
+    blob = find_beacon_blobs(two_panel_frame().pixels).blobs[0]
+    blob = type(blob)(blob.contour_px, blob.bounding_box, blob.centroid_px, area, False)
+    result = LocateResult(ok=True, position_m=list(position), beacon_id=beacon_id)
+    return PanelFix(blob, beacon, BeaconIdSource.vlc, result)
+
+
+def test_agreeing_fixes_are_fused_and_a_disagreeing_one_is_left_out_and_said():
+    best = _fix(17, [0.0, 0.0, 0.0], 5000.0)
+    close = _fix(42, [0.004, 0.0, 0.0], 4000.0)
+    far = _fix(42, [1.2, 0.0, 0.0], 3000.0)
+    fused = choose_and_fuse([best, close, far])
+    assert fused.beacon.id == 17
+    assert 0.0 < fused.result.position_m[0] < 0.004
+    assert any("left out" in w for w in fused.result.warnings)
+    assert any("fused" in w for w in fused.result.warnings)
+    assert choose_and_fuse([]) is None
+
+
+def test_a_pose_frame_of_a_multi_beacon_map_is_refused_with_the_way_out():
+    result = locate(two_panel_frame(), MAP)
+    assert not result.ok and result.reason is FailureReason.unknown_beacon
+    assert "ID frames" in result.message and result.beacons_in_view == 2
+
+
+def test_a_short_exposure_frame_is_decoded_by_the_hook():
+    # one short frame holds ~12 chips of each 21-chip message: the hook says what it read
+    result = locate(two_panel_frame(level_dn=200.0, exposure_s=1 / 8000, seed=1), MAP)
+    assert result.beacons_in_view == 2
+    if result.ok:
+        assert result.beacon_id_source is BeaconIdSource.vlc and result.vlc.confident
+        assert result.beacon_id in (17, 42)
+    else:
+        assert result.vlc is not None and result.vlc.candidates == 256
+        assert not (result.vlc.confident and result.vlc.beacon_id not in (17, 42))
