@@ -53,6 +53,7 @@ def add_commands(commands) -> None:
     speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
     speed.add_argument("--repeats", type=int, default=50)
     speed.add_argument("--distance", type=float, default=1.0)
+    speed.add_argument("--no-gravity", action="store_true", help="leave the gravity vector out (no MAP pose fit)")
     speed.add_argument("--json", action="store_true")
     speed.set_defaults(run=_run_speed)
     from simulator.bench_service import add_load_command
@@ -258,7 +259,7 @@ def _run_render_speed(args) -> int:
 def _run_speed(args) -> int:
     from simulator.benchmarks import run_speed
 
-    report = run_speed(args.repeats, args.distance)
+    report = run_speed(args.repeats, args.distance, gravity=not args.no_gravity)
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
