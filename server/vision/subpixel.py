@@ -124,13 +124,18 @@ def _arc_profiles(corners, directions, radius_px, rules):
     return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
 
 
-def _fit_lines(points: np.ndarray, weights: np.ndarray, outward: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Total-least-squares lines of the four sides at once, one trimmed refit.
+def _fit_lines(
+    points: np.ndarray, weights: np.ndarray, outward: np.ndarray, phase_points: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Total-least-squares lines of the four sides at once, one trimmed refit, pixel locking removed.
 
-    points (4, n, 2), weights (4, n) 1 for a valid crossing else 0, outward (4, 2).
+    points (4, n, 2), weights (4, n) 1 for a valid crossing else 0, outward (4, 2);
+    phase_points (4, n, 2): the same crossings in the sensor's own pixels (before
+    undistortion), for the pixel-locking term (see `_remove_pixel_locking`).
     Returns lines (4, 3) a x + b y + c = 0 with (a, b) the unit normal along `outward`,
-    the RMS distance of the kept points per side, and the sides' position error. Points further than 3.5 robust sigmas (MAD)
-    from the first fit are dropped: a noise crossing must not tilt a side.
+    the RMS distance of the kept points per side, and the sides' position error. Points
+    further than 3.5 robust sigmas (MAD) from the first fit are dropped: a noise crossing
+    must not tilt a side.
     """
     x, y = points[..., 0], points[..., 1]
     for _ in range(2):
@@ -146,8 +151,52 @@ def _fit_lines(points: np.ndarray, weights: np.ndarray, outward: np.ndarray) -> 
         ordered = np.sort(np.where(weights > 0, np.abs(residuals), np.inf), axis=1)
         spread = ordered[np.arange(4), (weights > 0).sum(axis=1) // 2] * 1.4826  # MAD of each side
         weights = weights * (np.abs(residuals) <= 3.5 * np.maximum(spread, 1e-3)[:, None])
+    if phase_points is not None:
+        lines, residuals = _remove_pixel_locking(lines, points, weights, phase_points, np.column_stack([cx, cy]))
     rms = np.sqrt(np.sum(weights * residuals**2, axis=1) / weights.sum(axis=1))
     return lines, rms, _line_offset_sigma(residuals, weights, rms)
+
+
+def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmonics: int = 2):
+    """Refit the four lines together with the crossings' pixel-locking error.
+
+    A level crossing interpolated between the pixels of a steep, clipped edge is off by a
+    periodic function L of the edge's sub-pixel phase (up to ~0.1 px either way at a PSF of
+    1 px). Along a side that runs across the pixel grid the phase turns many times and L
+    averages out; along one nearly aligned with the grid it drifts slowly and bends or
+    tilts the line. L is the same on all four sides when the phase is counted along each
+    side's outward axis (the edge profile is the same), so one Fourier series (`harmonics`
+    terms) is fitted with small turns and shifts of the four lines, linearly, and left out.
+    Returns the new lines and the residuals without L.
+    """
+    normal = lines[:, :2]
+    tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
+    axis = np.argmax(np.abs(normal), axis=1)  # 0: the side's outward axis is x
+    sign = np.sign(normal[np.arange(4), axis])
+    phase = np.mod(sign[:, None] * np.take_along_axis(phase_points, axis[:, None, None], axis=2)[..., 0], 1.0)
+    offset = points - centres[:, None, :]
+    residuals = np.einsum("knd,kd->kn", offset, normal)
+    along = np.einsum("knd,kd->kn", offset, tangent)
+    keep = weights.ravel() > 0
+    side = np.repeat(np.arange(4), points.shape[1])[keep]
+    columns = [np.zeros((keep.sum(), 8))]
+    columns[0][np.arange(keep.sum()), side] = along.ravel()[keep]  # small turn of side k
+    columns[0][np.arange(keep.sum()), 4 + side] = 1.0  # small shift of side k
+    angle = 2 * np.pi * phase.ravel()[keep]
+    for m in range(1, harmonics + 1):
+        columns.append(-np.column_stack([np.cos(m * angle), np.sin(m * angle)]))
+    design = np.hstack(columns)
+    solution, *_ = np.linalg.lstsq(design, -residuals.ravel()[keep], rcond=None)
+    turn, shift, series = solution[:4], solution[4:8], solution[8:]
+    new_normal = normal + turn[:, None] * tangent
+    scale = np.linalg.norm(new_normal, axis=1)
+    c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
+    new_lines = np.column_stack([new_normal, c]) / scale[:, None]
+    locking = np.zeros(phase.shape)
+    for m in range(1, harmonics + 1):
+        locking += series[2 * m - 2] * np.cos(2 * np.pi * m * phase) + series[2 * m - 1] * np.sin(2 * np.pi * m * phase)
+    new_residuals = np.einsum("knd,kd->kn", points, new_lines[:, :2]) + new_lines[:, 2:3] - locking
+    return new_lines, new_residuals
 
 
 def _line_offset_sigma(residuals: np.ndarray, weights: np.ndarray, rms: np.ndarray, chunks: int = 8) -> float:
@@ -257,6 +306,7 @@ def refine_edges(
     level_gap_px = float(np.nanmedian(level_gap)) if np.isfinite(level_gap).any() else float("nan")
 
     points = bases + crossings[:, None] * across + np.asarray(roi_origin, dtype=float)
+    sensor_points = points[:4 * n_along].reshape(4, n_along, 2)
     if distortion is not None:
         points = cv2.undistortPoints(points.reshape(-1, 1, 2), camera_matrix, distortion,
                                      P=camera_matrix).reshape(-1, 2)
@@ -265,7 +315,8 @@ def refine_edges(
     if counts.min() < max(6, n_along // 3):
         return None
     side_points = np.where(side_valid[..., None], points[:4 * n_along].reshape(4, n_along, 2), 0.0)
-    lines_array, rms, line_sigma = _fit_lines(side_points, side_valid.astype(float), normals)
+    lines_array, rms, line_sigma = _fit_lines(side_points, side_valid.astype(float), normals,
+                                              np.where(side_valid[..., None], sensor_points, 0.0))
 
     warnings: list[str] = []
     shift = 0.0
