@@ -12,7 +12,14 @@ from server.vision.binarize import Levels
 from server.vision.polygon import rounded_square_corners
 from server.vision.contour import find_beacon_blob
 from server.vision.binarize import blur, threshold
-from server.vision.subpixel import _line_offset_sigma, blur_sigma_px, contour_growth, refine_edges
+from server.vision.subpixel import (
+    _fit_lines,
+    _line_offset_sigma,
+    _outward_normals,
+    blur_sigma_px,
+    contour_growth,
+    refine_edges,
+)
 from shared_schemas import Beacon, device_profiles
 from simulator.render import CameraPose, SensorModel, render_frame
 
@@ -110,3 +117,32 @@ def test_refined_sides_lie_on_the_true_edges_of_a_rendered_panel(yaw_deg, overex
         on_this_side = np.sort(np.abs(distances))[:2]  # the side's two true corners
         assert on_this_side.max() < 0.06, on_this_side
     assert edges.edge_shift_px < -0.3  # an overexposed panel's mid level lies outside its edge
+
+
+def test_pixel_locking_of_grid_aligned_sides_is_fitted_out():
+    """Crossings off by a periodic function of their sub-pixel phase (as interpolated
+    crossings of a clipped edge are) bend lines that run nearly along the pixel grid; the
+    shared Fourier term takes it out."""
+    rng = np.random.default_rng(1)
+    side, tilt = 230.0, np.radians(0.3)  # a panel 3 m away, turned 0.3 degree off the grid
+    rotation = np.array([[np.cos(tilt), -np.sin(tilt)], [np.sin(tilt), np.cos(tilt)]])
+    corners = (np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * side / 2) @ rotation.T + [1500.3, 2100.6]
+    directions, normals, _ = _outward_normals(corners)
+    t = np.linspace(0.15, 0.85, 110)
+    points = corners[:, None, :] + t[None, :, None] * (np.roll(corners, -1, axis=0) - corners)[:, None, :]
+    axis = np.argmax(np.abs(normals), axis=1)
+    outward_coordinate = np.sign(normals[np.arange(4), axis])[:, None] * points[np.arange(4), :, axis]
+    locking = 0.06 * np.sin(2 * np.pi * outward_coordinate) + 0.02 * np.cos(4 * np.pi * outward_coordinate)
+    measured = points + (locking + rng.normal(0, 0.01, locking.shape))[..., None] * normals[:, None, :]
+    weights = np.ones(locking.shape)
+    plain, _, plain_sigma = _fit_lines(measured, weights, normals)
+    fitted, _, fitted_sigma = _fit_lines(measured, weights, normals, measured)
+
+    def worst_corner_error(lines):  # side k runs from corner k to corner k + 1
+        ends = np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
+        return float(np.abs(np.einsum("kjd,kd->kj", ends, lines[:, :2]) + lines[:, 2:3]).max())
+
+    # measured: 0.097 px plain, 0.011 px with the locking term (noise 0.01 px a crossing)
+    assert worst_corner_error(plain) > 0.05  # the wave tilts and shifts the plain lines
+    assert worst_corner_error(fitted) < min(0.02, worst_corner_error(plain) / 5)
+    assert plain_sigma > 2 * fitted_sigma  # and the sides' error estimate says so
