@@ -108,10 +108,19 @@ def run_grid_bench(scene: Scene, out_dir: Path, title: str, workers: int | None 
 
 
 def bench_grid(out_dir: Path, scale: float = 1.0, seed: int | None = None, workers: int | None = None,
-               limit: int | None = None) -> dict:
-    scene = grid_scene(scale, seed)
-    report = run_grid_bench(scene, out_dir, "simulated grid, 1 m, Mi 8 front", workers, limit=limit)
-    report["paper"] = PAPER_TABLE_1
+               limit: int | None = None, scene_name: str | None = None) -> dict:
+    """The paper's grid, or the series of any scene file (`scene_name`) at its own resolution."""
+    if scene_name is None:
+        scene = grid_scene(scale, seed)
+        title = "simulated grid, 1 m, Mi 8 front"
+    else:
+        scene = find_scene(scene_name)
+        if seed is not None:
+            scene = scene.model_copy(update={"seed": seed})
+        title = f"scene {scene.name}"
+    report = run_grid_bench(scene, out_dir, title, workers, limit=limit)
+    if scene_name is None:
+        report["paper"] = PAPER_TABLE_1
     return report
 
 

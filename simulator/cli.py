@@ -71,6 +71,9 @@ def add_commands(commands) -> None:
         if name == "bench-real":
             grid.add_argument("--uncalibrated", action="store_true",
                               help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
+        else:
+            grid.add_argument("--scene", default=None,
+                              help="locate the series of this scene file instead (its own resolution; --scale ignored)")
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
     distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
     distance.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
@@ -209,7 +212,11 @@ def _run_grid_bench(args) -> int:
     from simulator.bench_grid import RealBench, bench_grid, bench_real
 
     if args.bench_name == "grid":
-        report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit)
+        try:
+            report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit, args.scene)
+        except ValueError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
     else:
         report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
                             args.workers, args.limit)

@@ -68,3 +68,17 @@ def test_cli_bench_grid_writes_table_and_figures(tmp_path, capsys):
     assert (tmp_path / "paper-bench-scatter.png").stat().st_size > 10_000
     assert (tmp_path / "paper-bench-heatmap.png").stat().st_size > 10_000
     assert len(json.loads((tmp_path / "outcomes.json").read_text())) == 5
+
+
+def test_cli_bench_grid_on_any_scene_file(tmp_path, capsys):
+    bench = find_scene("paper-bench")
+    scene = bench.model_validate({**bench.model_dump(by_alias=True), "name": "mine",
+                                  "camera": {"profile": "xiaomi-mi8-front", "scale": 0.25},
+                                  "series": {"path": {"kind": "poses", "poses": [{"position_m": [0.1, 0.1, 0.0]},
+                                                                                 {"position_m": [-0.2, 0.0, 0.0]}]}}})
+    (tmp_path / "mine.json").write_text(scene.to_json())
+    assert main(["bench", "grid", "--scene", str(tmp_path / "mine.json"), "--out", str(tmp_path / "r"),
+                 "--workers", "1"]) == 0
+    report = json.loads((tmp_path / "r" / "report.json").read_text())
+    assert report["scene"] == "mine" and report["summary"]["samples"] == 2 and "paper" not in report
+    assert (tmp_path / "r" / "mine-heatmap.png").exists()
