@@ -4,11 +4,13 @@ The polygon stage gives corners good to a pixel or so. Here each side is measure
 from the image itself, in the way of AprilTag's edge refinement:
 
 1. Along the straight part of each side (away from the rounded corners) grey-level profiles
-   are sampled across the edge (bilinear, 0.25 px steps), and each profile's crossing of the
+   are sampled across the edge (bicubic, 0.25 px steps), and each profile's crossing of the
    frame's mid level is found to a fraction of a pixel. Profiles across the middle of each
    rounded corner are sampled in the same pass.
-2. The crossings are undistorted (when the camera has distortion) and a line is fitted to
-   each side (OpenCV's robust `fitLine`).
+2. The crossings are undistorted (when the camera has distortion) and the four sides are
+   fitted as lines together (total least squares, outliers trimmed), with the crossings'
+   pixel-locking error as a shared periodic term of their sub-pixel phase
+   (`_remove_pixel_locking`).
 3. The mid-level contour of a *clipped* panel is not its outline (contract, "Physics"): the
    PSF spreads the saturated light outward, so the contour is the outline grown by some
    distance D (a fraction of a pixel to a few pixels, depending on overexposure and PSF,
@@ -33,7 +35,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 from scipy.special import ndtr
 
 from server.vision.binarize import Levels
