@@ -114,14 +114,33 @@ def fidelity_row(distance_m: float, overexposure: float, profile_id: str = "xiao
             "ratio": ours / exact_length}
 
 
+def blender_row(distance_m: float, profile_id: str = "xiaomi-mi8-rear") -> dict:
+    """Top side (px) of the same view rendered by Blender's Cycles, read at its 50 % level."""
+    from simulator.blender import render_blender
+
+    profile = device_profiles()[profile_id]
+    camera = intrinsics_from_profile(profile, profile.width, profile.height)
+    beacon = Beacon(id=0, center_m=[0.0, 0.0, distance_m], side_m=0.174, corner_radius_m=0.02)
+    crop = render_blender(beacon, camera, CameraPose(np.zeros(3), np.eye(3)), profile.width, profile.height)
+    exact = exact_corners_px(beacon.side_m, distance_m, camera.fx, camera.fy, camera.cx, camera.cy)
+    straight = 1 - 2 * beacon.corner_radius_m / beacon.side_m
+    blender = measured_top_side_px(crop.radiance, 0.5, exact - crop.origin_px, straight)
+    exact_length = float(np.linalg.norm(exact[1] - exact[0]))
+    return {"distance_m": distance_m, "overexposure": "blender", "ours_px": blender, "exact_px": exact_length,
+            "ratio": blender / exact_length}
+
+
 def bench_fidelity(out_dir: Path, distances_m: list[float] | None = None,
-                   overexposures: tuple[float, ...] = (0.8, 4.0)) -> dict:
+                   overexposures: tuple[float, ...] = (0.8, 4.0), blender: bool = False) -> dict:
     distances_m = distances_m or [round(1.0 + 0.1 * k, 1) for k in range(21)]
     rows = [fidelity_row(d, o) for o in overexposures for d in distances_m]
+    if blender:
+        rows += [blender_row(d) for d in distances_m]
+        overexposures = (*overexposures, "blender")
     summary = {}
     for o in overexposures:
         ratios = np.array([r["ratio"] for r in rows if r["overexposure"] == o])
-        summary[f"{o:g}x"] = {"mean_ratio": float(ratios.mean()), "std_ratio": float(ratios.std()),
+        summary[_name(o)] = {"mean_ratio": float(ratios.mean()), "std_ratio": float(ratios.std()),
                               "min_ratio": float(ratios.min()), "max_ratio": float(ratios.max())}
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -131,6 +150,10 @@ def bench_fidelity(out_dir: Path, distances_m: list[float] | None = None,
             "rows": rows, "summary": summary, "paper": PAPER_FIG_10, "figures": [str(figure)]}
 
 
+def _name(overexposure) -> str:
+    return "Blender (Cycles), unclipped" if overexposure == "blender" else f"ours, panel {overexposure:g}x saturation"
+
+
 def _plot(rows: list[dict], overexposures, path: Path) -> None:
     from simulator.reports import pyplot
 
@@ -138,11 +161,10 @@ def _plot(rows: list[dict], overexposures, path: Path) -> None:
     figure, axes = plt.subplots(figsize=(8, 4.5))
     for o in overexposures:
         part = [r for r in rows if r["overexposure"] == o]
-        axes.plot([r["distance_m"] for r in part], [r["ratio"] for r in part], "o-",
-                  label=f"panel {o:g}x saturation")
+        axes.plot([r["distance_m"] for r in part], [r["ratio"] for r in part], "o-", label=_name(o))
     axes.axhline(PAPER_FIG_10["mean_ratio"], color="grey", linestyle="--", label="paper: real / Blender, mean")
     axes.axhline(1.0, color="black", linewidth=0.8)
-    axes.set(xlabel="distance (m)", ylabel="top side ratio", title="Simulation fidelity: ours / exact projection",
+    axes.set(xlabel="distance (m)", ylabel="top side ratio", title="Simulation fidelity: rendered / exact projection",
              ylim=(0.96, 1.02))
     axes.legend(fontsize=8)
     figure.tight_layout()
@@ -153,7 +175,8 @@ def _plot(rows: list[dict], overexposures, path: Path) -> None:
 def format_fidelity(report: dict) -> str:
     lines = [report["title"], f"{'distance':>9} {'exposure':>9} {'ours px':>10} {'exact px':>10} {'ratio':>8}"]
     for r in report["rows"]:
-        lines.append(f"{r['distance_m']:>8.1f}m {r['overexposure']:>8g}x {r['ours_px']:10.3f} {r['exact_px']:10.3f} "
+        exposure = "Blender" if r["overexposure"] == "blender" else f"{r['overexposure']:g}x"
+        lines.append(f"{r['distance_m']:>8.1f}m {exposure:>9} {r['ours_px']:10.3f} {r['exact_px']:10.3f} "
                      f"{r['ratio']:8.5f}")
     for name, s in report["summary"].items():
         lines.append(f"  {name}: mean {s['mean_ratio']:.5f}, std {s['std_ratio']:.5f}, "

@@ -89,6 +89,7 @@ def add_commands(commands) -> None:
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
     fidelity.add_argument("--out", type=Path, default=Path("reports/fidelity"), help="report folder")
     fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
+    fidelity.add_argument("--blender", action="store_true", help="also render each view with Blender (needs bpy)")
     fidelity.add_argument("--json", action="store_true")
     fidelity.set_defaults(run=_run_fidelity)
     render_speed = benches.add_parser("render", help="time to render one full-resolution frame of a scene")
@@ -242,7 +243,11 @@ def _run_sweep(args) -> int:
 def _run_fidelity(args) -> int:
     from simulator.bench_fidelity import bench_fidelity, format_fidelity
 
-    report = bench_fidelity(args.out, args.distances)
+    try:
+        report = bench_fidelity(args.out, args.distances, blender=args.blender)
+    except RuntimeError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else format_fidelity(report) + "\n  figure " + report["figures"][0])
     return 0

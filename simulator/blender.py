@@ -1,0 +1,160 @@
+"""A second, independent renderer: Blender's Cycles path tracer (the paper's simulator engine).
+
+Optional: needs `bpy` (`pip install -e ".[blender]"`; Blender 4.2 LTS runs on Python 3.11).
+It renders the same rounded panel as `simulator.render` from the same pose, as an emissive
+mesh seen by a Blender camera with the same sensor and focal length, and returns the linear
+radiance (1.0 = the panel's full level) of the pixels around the panel only (a render border:
+the rest of the frame is black and would cost most of the time). Used by
+`lumipose bench fidelity --blender` (the paper's Fig. 10 between two renderers).
+
+Conventions: Blender cameras look along their local -Z with +Y up in the image; an OpenCV
+camera looks along +Z with y down, so R_blender = R_wc diag(1, -1, -1). Blender puts the
+principal point at the image centre, which is the profiles' (w - 1) / 2, (h - 1) / 2 in
+OpenCV's pixel-centre coordinates; distortion is not rendered (Cycles' perspective camera has
+no OpenCV model), so a camera with distortion or an off-centre principal point is refused.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from server.geometry import beacon_to_world, rounded_square_outline_m
+from shared_schemas import Beacon, CameraIntrinsics
+from simulator.render import CameraPose, beacon_outline_px
+
+
+@dataclass(frozen=True)
+class BlenderSettings:
+    samples: int = 32  # per pixel; emission only, so this only smooths the pixel filter
+    filter_width_px: float = 3.0  # Cycles' Gaussian pixel filter; 1.5 (its default) is so sharp that a 50 % reading
+    # interpolated between pixels depends on the edge's sub-pixel phase (0.1 px at 3 m)
+    margin_px: int = 12
+    threads: int = 0  # 0 = Blender's choice (all cores)
+
+
+@dataclass(frozen=True)
+class BlenderCrop:
+    radiance: np.ndarray  # (h, w) float64, linear, 1.0 = the panel's level
+    origin_px: tuple[int, int]  # (x0, y0) of radiance[0, 0] in the full frame
+
+
+def _bpy():
+    try:
+        import bpy
+    except ImportError as error:  # pragma: no cover - depends on the environment
+        raise RuntimeError("the Blender renderer needs bpy: pip install -e '.[blender]' (Blender 4.2 LTS, "
+                           "Python 3.11)") from error
+    return bpy
+
+
+def _check_camera(camera: CameraIntrinsics, width: int, height: int) -> None:
+    if any(camera.distortion):
+        raise ValueError("camera.distortion: the Blender renderer draws an ideal pinhole only")
+    if abs(camera.cx - (width - 1) / 2) > 1e-6 or abs(camera.cy - (height - 1) / 2) > 1e-6:
+        raise ValueError("camera.cx, camera.cy: the Blender renderer needs the principal point at the centre")
+    if abs(camera.fx - camera.fy) > 1e-9 * camera.fx:
+        raise ValueError("camera.fy: the Blender renderer needs square pixels (fx == fy)")
+
+
+def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                   settings: BlenderSettings = BlenderSettings()) -> BlenderCrop:
+    """Linear radiance around the panel as Cycles renders it (the panel must be inside the frame)."""
+    _check_camera(camera, width, height)
+    bpy = _bpy()
+    import bmesh
+    from mathutils import Matrix
+
+    outline_px = beacon_outline_px(beacon, camera, pose)  # only to place the render border
+    x0 = max(0, int(math.floor(outline_px[:, 0].min())) - settings.margin_px)
+    y0 = max(0, int(math.floor(outline_px[:, 1].min())) - settings.margin_px)
+    x1 = min(width, int(math.ceil(outline_px[:, 0].max())) + settings.margin_px + 1)
+    y1 = min(height, int(math.ceil(outline_px[:, 1].max())) + settings.margin_px + 1)
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = settings.samples
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type = "GAUSSIAN"
+    scene.cycles.filter_width = settings.filter_width_px
+    if settings.threads:
+        scene.render.threads_mode = "FIXED"
+        scene.render.threads = settings.threads
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.view_settings.view_transform = "Raw"  # linear values in the file
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_depth = "16"
+    scene.render.image_settings.color_mode = "BW"
+    scene.world = bpy.data.worlds.new("black")
+    scene.world.use_nodes = True
+    scene.world.node_tree.nodes["Background"].inputs[1].default_value = 0.0
+
+    lens = bpy.data.cameras.new("phone")
+    lens.sensor_fit = "HORIZONTAL"
+    lens.sensor_width = 36.0
+    lens.lens = 36.0 * camera.fx / width  # the same fx in pixels, whatever the physical sizes
+    camera_object = bpy.data.objects.new("phone", lens)
+    scene.collection.objects.link(camera_object)
+    scene.camera = camera_object
+    rotation = np.asarray(pose.rotation_wc) @ np.diag([1.0, -1.0, -1.0])
+    world = np.eye(4)
+    world[:3, :3], world[:3, 3] = rotation, pose.position_m
+    camera_object.matrix_world = Matrix(world.tolist())
+
+    points = beacon_to_world(beacon, rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, 64))
+    mesh = bpy.data.meshes.new("panel")
+    builder = bmesh.new()
+    builder.faces.new([builder.verts.new(tuple(p)) for p in points])
+    builder.to_mesh(mesh)
+    builder.free()
+    material = bpy.data.materials.new("emission")
+    material.use_nodes = True
+    nodes = material.node_tree.nodes
+    nodes.clear()
+    emission = nodes.new("ShaderNodeEmission")
+    emission.inputs[1].default_value = 1.0
+    output = nodes.new("ShaderNodeOutputMaterial")
+    material.node_tree.links.new(emission.outputs[0], output.inputs[0])
+    mesh.materials.append(material)
+    scene.collection.objects.link(bpy.data.objects.new("panel", mesh))
+
+    # border in Blender's normalised coordinates, origin at the bottom left, on whole pixels
+    scene.render.use_border = True
+    scene.render.use_crop_to_border = True
+    scene.render.border_min_x, scene.render.border_max_x = x0 / width, x1 / width
+    scene.render.border_min_y, scene.render.border_max_y = 1 - y1 / height, 1 - y0 / height
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "panel.png"
+        scene.render.filepath = str(path)
+        with open(os.devnull, "w") as quiet, _redirect_stdout(quiet):
+            bpy.ops.render.render(write_still=True)
+        radiance = cv2.imread(str(path), cv2.IMREAD_UNCHANGED).astype(float) / 65535.0
+    if radiance.shape != (y1 - y0, x1 - x0):
+        raise RuntimeError(f"Blender returned a {radiance.shape} crop, expected {(y1 - y0, x1 - x0)}")
+    return BlenderCrop(radiance, (x0, y0))
+
+
+class _redirect_stdout:
+    """Blender prints a line per tile on the C-level stdout; send it elsewhere for the render."""
+
+    def __init__(self, stream):
+        self.stream = stream
+
+    def __enter__(self):
+        sys.stdout.flush()
+        self.saved = os.dup(1)
+        os.dup2(self.stream.fileno(), 1)
+
+    def __exit__(self, *exc):
+        os.dup2(self.saved, 1)
+        os.close(self.saved)
