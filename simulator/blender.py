@@ -23,7 +23,6 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from server.geometry import beacon_to_world, rounded_square_outline_m
@@ -128,17 +127,22 @@ def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, w
     mesh.materials.append(material)
     scene.collection.objects.link(bpy.data.objects.new("panel", mesh))
 
-    # border in Blender's normalised coordinates, origin at the bottom left, on whole pixels
+    # border in Blender's normalised coordinates, origin at the bottom left; a quarter pixel past
+    # each whole-pixel bound, so that rounding and truncation both land on it
     scene.render.use_border = True
     scene.render.use_crop_to_border = True
-    scene.render.border_min_x, scene.render.border_max_x = x0 / width, x1 / width
-    scene.render.border_min_y, scene.render.border_max_y = 1 - y1 / height, 1 - y0 / height
+    scene.render.border_min_x, scene.render.border_max_x = (x0 + 0.25) / width, (x1 + 0.25) / width
+    scene.render.border_min_y = (height - y1 + 0.25) / height
+    scene.render.border_max_y = (height - y0 + 0.25) / height
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "panel.png"
         scene.render.filepath = str(path)
         with open(os.devnull, "w") as quiet, _redirect_stdout(quiet):
             bpy.ops.render.render(write_still=True)
-        radiance = cv2.imread(str(path), cv2.IMREAD_UNCHANGED).astype(float) / 65535.0
+        image = bpy.data.images.load(str(path))
+        image.colorspace_settings.name = "Non-Color"  # the file holds linear values (view "Raw")
+        size_x, size_y = image.size
+        radiance = np.array(image.pixels[:], dtype=float).reshape(size_y, size_x, -1)[::-1, :, 0]
     if radiance.shape != (y1 - y0, x1 - x0):
         raise RuntimeError(f"Blender returned a {radiance.shape} crop, expected {(y1 - y0, x1 - x0)}")
     return BlenderCrop(radiance, (x0, y0))
