@@ -101,10 +101,18 @@ def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
                                                            gravity_sigma_deg=config.gravity_sigma_deg))
         if result.ok:
             delta = np.subtract(result.position_m, pose.position_m)
-            errors[mode] = (float(np.hypot(*delta[:2])), float(np.linalg.norm(delta)))
+            errors[mode] = (float(np.hypot(*delta[:2])), float(np.linalg.norm(delta)),
+                            _tilt_error_deg(np.asarray(result.rotation_wc), pose.rotation_wc))
         else:
             errors[mode] = (math.nan, math.nan, result.reason.value)
     return {"index": index, "errors": errors}
+
+
+def _tilt_error_deg(rotation_wc: np.ndarray, truth_wc: np.ndarray) -> float:
+    """Angle between the estimated and the true down direction in the camera (pitch and roll)."""
+    down = np.array([0.0, 0.0, -1.0])
+    cosine = np.clip((rotation_wc.T @ down) @ (truth_wc.T @ down), -1.0, 1.0)
+    return float(np.degrees(np.arccos(cosine)))
 
 
 def summarize(errors_m: list[float]) -> dict:
@@ -139,8 +147,14 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
     summary = {}
     for mode in MODES:
         summary[mode] = summarize([s["errors"][mode][0] for s in samples])
-        summary[mode]["refusals"] = sorted({s["errors"][mode][2] for s in samples if len(s["errors"][mode]) > 2})
+        failed = [s["errors"][mode] for s in samples if isinstance(s["errors"][mode][2], str)]
+        located = [s["errors"][mode] for s in samples if not isinstance(s["errors"][mode][2], str)]
+        summary[mode]["refusals"] = sorted({e[2] for e in failed})
         summary[mode]["mean_3d_mm"] = float(np.nanmean([s["errors"][mode][1] for s in samples]) * 1000.0)
+        tilts = [e[2] for e in located]
+        if tilts:
+            summary[mode]["mean_tilt_error_deg"] = float(np.mean(tilts))
+            summary[mode]["p95_tilt_error_deg"] = float(np.percentile(tilts, 95))
     return {"distance_m": config.distance_m, "frames": config.frames, "scale": config.scale,
             "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
 
