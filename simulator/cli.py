@@ -157,7 +157,8 @@ def _run_simulate(args) -> int:
             scene = scene.model_copy(update={"series": series})
         elif args.limit is not None:
             # the drawn attitudes become explicit poses, so scene.json reproduces exactly these samples
-            poses = [PoseSpec(position_m=list(p.position_m), ypr_deg=list(p.ypr_deg), t_s=p.t_s)
+            poses = [PoseSpec(position_m=list(p.position_m), ypr_deg=list(p.ypr_deg), t_s=p.t_s,
+                              velocity_mps=list(p.velocity_mps), angular_velocity_dps=list(p.angular_velocity_dps))
                      for p in series_poses(scene)[: max(args.limit, 1)]]
             scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
         stems = write_series(scene, args.out, args.workers)

@@ -89,6 +89,35 @@ def beacon_outline_px(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose
 NEAR_PLANE_M = 1e-3
 
 
+@dataclass(frozen=True)
+class ReadoutMotion:
+    """The camera moving while a rolling shutter reads the frame out.
+
+    Row r integrates light over [r * row_time_s, r * row_time_s + exposure_s] after the frame's
+    timestamp (the first row's exposure start); it is drawn from the pose at the middle of that
+    window, the pose at the timestamp moved by `velocity_mps` and turned by
+    `angular_velocity_dps` (both in the map frame). Blur within one row's exposure is not drawn.
+    """
+
+    velocity_mps: np.ndarray  # (3,)
+    angular_velocity_dps: np.ndarray  # (3,)
+    row_time_s: float
+    exposure_s: float
+
+    def to_camera(self, points_m: np.ndarray, pose: CameraPose, rows: np.ndarray) -> np.ndarray:
+        """Map-frame points (N, 3) in the camera frame of the rows (N,) they are seen on."""
+        tau = (rows * self.row_time_s + self.exposure_s / 2)[:, None]
+        relative = points_m - np.asarray(pose.position_m) - tau * np.asarray(self.velocity_mps)
+        omega = np.radians(np.asarray(self.angular_velocity_dps, dtype=float))
+        rate = float(np.linalg.norm(omega))
+        if rate > 0:  # undo the turn R(tau) = Rot(omega tau) R0 (Rodrigues, angle -rate * tau)
+            axis = omega / rate
+            angle = -rate * tau
+            relative = (relative * np.cos(angle) + np.cross(axis, relative) * np.sin(angle)
+                        + axis * (relative @ axis)[:, None] * (1 - np.cos(angle)))
+        return relative @ np.asarray(pose.rotation_wc)
+
+
 def _clip_near(points_c: np.ndarray) -> np.ndarray:
     """The closed polygon (N, 3) in camera coordinates cut to z >= NEAR_PLANE_M (Sutherland-Hodgman)."""
     kept = []
@@ -103,12 +132,13 @@ def _clip_near(points_c: np.ndarray) -> np.ndarray:
 
 
 def world_polygon_px(points_m: np.ndarray, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
-                     max_step_px: float = 1.0) -> np.ndarray | None:
+                     max_step_px: float = 1.0, motion: ReadoutMotion | None = None) -> np.ndarray | None:
     """Closed polygon (N, 3) of the map frame in the frame's (distorted) pixels, or None if unseen.
 
     Parts behind the camera are cut off. Polygons whose pinhole image misses the frame enlarged
     by half its size are None: far off-axis the distortion polynomial folds points back in.
-    Sides are densified to <= ~max_step_px so that distortion bends them.
+    Sides are densified to <= ~max_step_px so that distortion bends them. With `motion` each
+    point is seen from the pose of the row it lands on (found by fixed-point iteration).
     """
     in_camera = _clip_near(world_to_camera(np.asarray(points_m, dtype=float), pose.position_m, pose.rotation_wc))
     if len(in_camera) < 3:
@@ -125,7 +155,16 @@ def world_polygon_px(points_m: np.ndarray, camera: CameraIntrinsics, pose: Camer
               for a, b, n in zip(closed[:-1], closed[1:], np.minimum(lengths_px, 4.0 * (width + height)))]
     dense = np.concatenate(pieces)
     pixels, _ = cv2.projectPoints(dense, np.zeros(3), np.zeros(3), matrix, distortion_vector(camera))
-    return pixels.reshape(-1, 2)
+    pixels = pixels.reshape(-1, 2)
+    if motion is not None:
+        dense_m = dense @ np.asarray(pose.rotation_wc).T + np.asarray(pose.position_m)
+        for _ in range(4):  # a row moves the point by far less than a row per iteration
+            rows = np.clip(pixels[:, 1], 0, height - 1)
+            moved = motion.to_camera(dense_m, pose, rows)
+            moved[:, 2] = np.maximum(moved[:, 2], NEAR_PLANE_M)
+            pixels, _ = cv2.projectPoints(moved, np.zeros(3), np.zeros(3), matrix, distortion_vector(camera))
+            pixels = pixels.reshape(-1, 2)
+    return pixels
 
 
 def coverage_map(outline_px: np.ndarray, width: int, height: int, subrows: int = 16) -> np.ndarray:

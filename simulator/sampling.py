@@ -30,7 +30,8 @@ from simulator import trajectories
 from simulator.fixtures import write_fixture
 from simulator.render import CameraPose
 from simulator.scene import (
-    FovGridSeries, GridSeries, PosesSeries, RotationSpec, Scene, SeriesSpec, TrajectorySeries, render_sample,
+    FovGridSeries, GridSeries, PosesSeries, RotationSpec, Scene, SeriesSpec, TrajectorySeries, readout_motion,
+    render_sample,
 )
 
 
@@ -41,6 +42,8 @@ class SamplePose:
     position_m: tuple[float, float, float]
     ypr_deg: tuple[float, float, float]
     label: str = ""  # e.g. the grid cell "(-8, 11)"
+    velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)  # during readout, map frame
+    angular_velocity_dps: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def camera_pose(self) -> CameraPose:
         return CameraPose(np.array(self.position_m), rotation_from_ypr(*self.ypr_deg))
@@ -117,24 +120,58 @@ def _attitudes(rotation: RotationSpec, times_s: np.ndarray, positions: np.ndarra
     return ypr
 
 
+def world_rate_dps(ypr_deg: np.ndarray, ypr_rate_dps: np.ndarray) -> np.ndarray:
+    """Angular velocity (N, 3) in the map frame of R = Rz(yaw) Ry(pitch) Rx(roll) changing at `ypr_rate_dps`."""
+    rates = []
+    for (yaw, pitch, _), (d_yaw, d_pitch, d_roll) in zip(ypr_deg, ypr_rate_dps):
+        yaw_axis = np.array([0.0, 0.0, 1.0])
+        pitch_axis = rotation_from_ypr(yaw, 0.0, 0.0)[:, 1]
+        roll_axis = rotation_from_ypr(yaw, pitch, 0.0)[:, 0]
+        rates.append(d_yaw * yaw_axis + d_pitch * pitch_axis + d_roll * roll_axis)
+    return np.array(rates).reshape(-1, 3)
+
+
+def _velocities(times: np.ndarray, positions: np.ndarray, ypr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Linear (m/s) and angular (deg/s) velocity at each sample of a timed path; zero if untimed."""
+    if len(times) < 2 or np.any(np.diff(times) <= 0):
+        return np.zeros_like(positions), np.zeros_like(ypr)
+    return np.gradient(positions, times, axis=0), world_rate_dps(ypr, np.gradient(ypr, times, axis=0))
+
+
 def series_poses(scene: Scene, series: SeriesSpec | None = None) -> list[SamplePose]:
-    """The camera poses of `series` (default: the scene's own), deterministic for the scene's seed."""
+    """The camera poses of `series` (default: the scene's own), deterministic for the scene's seed.
+
+    A walk's samples carry its velocity (and the hand shake's turn rate), which the rolling
+    shutter turns into a skewed image; explicit poses carry their own.
+    """
     series = series or scene.series
     if series is None:
         raise ValueError("the scene has no series: give one (series.path) or a single pose")
     times, positions, labels = _path_positions(scene, series.path)
-    fixed = (np.array([p.ypr_deg for p in series.path.poses], dtype=float)
-             if isinstance(series.path, PosesSeries) else None)
+    explicit = isinstance(series.path, PosesSeries)
+    fixed = np.array([p.ypr_deg for p in series.path.poses], dtype=float) if explicit else None
     ypr = _attitudes(series.rotation, times, positions, scene.seed, fixed)
-    return [SamplePose(i, float(t), tuple(map(float, p)), tuple(map(float, a)), label)
-            for i, (t, p, a, label) in enumerate(zip(times, positions, ypr, labels))]
+    if explicit:
+        velocity = np.array([p.velocity_mps for p in series.path.poses], dtype=float)
+        spin = np.array([p.angular_velocity_dps for p in series.path.poses], dtype=float)
+    elif isinstance(series.path, TrajectorySeries):
+        velocity, spin = _velocities(times, positions, ypr)
+    else:
+        velocity, spin = np.zeros_like(positions), np.zeros_like(positions)
+    return [SamplePose(i, float(t), tuple(map(float, p)), tuple(map(float, a)), label, tuple(map(float, v)),
+                       tuple(map(float, w)))
+            for i, (t, p, a, label, v, w) in enumerate(zip(times, positions, ypr, labels, velocity, spin))]
 
 
 def render_pose(scene: Scene, sample: SamplePose) -> tuple[np.ndarray, object]:
     """(pixels, FrameMeta) of one sample; its noise depends only on the scene's seed and the index."""
     extra = {"simulator": {"scene": "scene.json", "sample": sample.index, "seed": scene.seed, "t_s": sample.t_s,
-                           "ypr_deg": list(sample.ypr_deg), "label": sample.label}}
-    return render_sample(scene, sample.camera_pose(), sample_rng(scene.seed, sample.index, 1), sample.t_s, **extra)
+                           "ypr_deg": list(sample.ypr_deg), "label": sample.label,
+                           "velocity_mps": list(sample.velocity_mps),
+                           "angular_velocity_dps": list(sample.angular_velocity_dps)}}
+    motion = readout_motion(scene, sample.velocity_mps, sample.angular_velocity_dps)
+    return render_sample(scene, sample.camera_pose(), sample_rng(scene.seed, sample.index, 1), sample.t_s, motion,
+                         **extra)
 
 
 def progress(done: int, total: int, label: str, stream=sys.stderr) -> None:

@@ -25,7 +25,7 @@ from server.camera import intrinsics_from_profile
 from server.geometry import beacon_to_world, rotation_from_ypr, rounded_square_outline_m
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, device_profiles
 from shared_schemas.models import Facing, Strict, Vec3
-from simulator.render import CameraPose, Emitter, SensorModel, render_emitters, world_polygon_px
+from simulator.render import CameraPose, Emitter, ReadoutMotion, SensorModel, render_emitters, world_polygon_px
 
 SCENE_SCHEMA = "lumipose.scene/1"
 SCENES_DIR = Path(__file__).parent / "scenes"
@@ -202,6 +202,8 @@ class PoseSpec(Strict):
     position_m: Vec3
     ypr_deg: Vec3 = [0.0, 0.0, 0.0]
     t_s: float = 0.0
+    velocity_mps: Vec3 = Field(default=[0.0, 0.0, 0.0], description="during readout (rolling shutter), map frame")
+    angular_velocity_dps: Vec3 = Field(default=[0.0, 0.0, 0.0], description="during readout, map frame")
 
 
 class PosesSeries(Strict):
@@ -336,7 +338,18 @@ def _row_gain(spec: BeaconSpec, sensor: SensorSpec, height: int, t_s: float) -> 
     return row_gains(waveform, height, row_time_s, sensor.exposure_s, t_s)
 
 
-def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0) -> list[Emitter]:
+def readout_motion(scene: Scene, velocity_mps=(0.0, 0.0, 0.0),
+                   angular_velocity_dps=(0.0, 0.0, 0.0)) -> ReadoutMotion | None:
+    """The rolling shutter's view of a moving camera, or None when it stands still."""
+    if not (np.any(velocity_mps) or np.any(angular_velocity_dps)) or scene.sensor.rolling_shutter_skew_s == 0:
+        return None
+    _, height = scene.camera.frame_size()
+    return ReadoutMotion(np.asarray(velocity_mps, dtype=float), np.asarray(angular_velocity_dps, dtype=float),
+                         scene.sensor.rolling_shutter_skew_s / max(height - 1, 1), scene.sensor.exposure_s)
+
+
+def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0,
+                   motion: ReadoutMotion | None = None) -> list[Emitter]:
     """Every beacon and light source that the camera at `pose` can see, in the frame's pixels."""
     camera = scene.camera.intrinsics()
     width, height = scene.camera.frame_size()
@@ -344,11 +357,12 @@ def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0) -> list[Emi
     emitters = []
     for spec in scene.beacons:
         distance_m = float(np.linalg.norm(np.subtract(spec.center_m, pose.position_m)))
-        outline = world_polygon_px(_beacon_outline_m(spec, camera, distance_m), camera, pose, width, height, 0.5)
+        outline = world_polygon_px(_beacon_outline_m(spec, camera, distance_m), camera, pose, width, height, 0.5,
+                                   motion)
         if outline is not None:
             emitters.append(Emitter(outline, spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s)))
     for light in scene.light_sources:
-        outline = world_polygon_px(light.outline_m(), camera, pose, width, height)
+        outline = world_polygon_px(light.outline_m(), camera, pose, width, height, motion=motion)
         if outline is not None:
             emitters.append(Emitter(outline, light.luminance_nits * per_nit, None, light.blur_px))
     return emitters
@@ -361,16 +375,17 @@ def gravity_in_camera(rotation_wc: np.ndarray, sigma_deg: float, rng: np.random.
 
 
 def render_sample(scene: Scene, pose: CameraPose, rng: np.random.Generator, t_s: float = 0.0,
-                  **extra) -> tuple[np.ndarray, FrameMeta]:
+                  motion: ReadoutMotion | None = None, **extra) -> tuple[np.ndarray, FrameMeta]:
     """One frame of `scene` from `pose` at time `t_s`: (pixels (height, width) uint8, metadata).
 
-    The metadata carries the true intrinsics, exposure, ISO, rolling-shutter skew, the
-    gravity sensor's reading and the ground truth; `extra` fields are kept (the contract
-    allows them).
+    `pose` is the camera's at `t_s`, the first row's exposure start (Camera2's timestamp);
+    with `motion` later rows see it moved. The metadata carries the true intrinsics, exposure,
+    ISO, rolling-shutter skew, the gravity sensor's reading and the ground truth (the pose at
+    `t_s`); `extra` fields are kept (the contract allows them).
     """
     camera = scene.camera.intrinsics()
     width, height = scene.camera.frame_size()
-    pixels = render_emitters(scene_emitters(scene, pose, t_s), width, height, scene.sensor.model(), rng)
+    pixels = render_emitters(scene_emitters(scene, pose, t_s, motion), width, height, scene.sensor.model(), rng)
     gravity = (None if scene.gravity_sigma_deg is None
                else gravity_in_camera(pose.rotation_wc, scene.gravity_sigma_deg, rng))
     meta = FrameMeta(

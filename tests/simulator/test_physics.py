@@ -89,3 +89,22 @@ def test_long_exposure_averages_the_code_away_and_a_short_one_stripes_at_its_per
     frequencies = np.fft.rfftfreq(len(striped))
     period_rows = 1 / frequencies[np.argmax(spectrum)]
     assert period_rows == pytest.approx(0.4e-3 / row_time_s, rel=0.03)
+
+
+def test_a_moving_camera_shears_the_panel_by_the_row_readout():
+    """Rolling shutter geometry: row r is seen from where the camera is at r * row_time + exposure / 2."""
+    from simulator.render import Emitter, ReadoutMotion, render_emitters, world_polygon_px
+
+    row_time_s, exposure_s, speed_mps = 0.03 / 639, 0.001, 2.0
+    motion = ReadoutMotion(np.array([speed_mps, 0.0, 0.0]), np.zeros(3), row_time_s, exposure_s)
+    pose = CameraPose(np.zeros(3), np.eye(3))
+    corners = np.array([[-0.087, -0.087, 1.0], [0.087, -0.087, 1.0], [0.087, 0.087, 1.0], [-0.087, 0.087, 1.0]])
+    outline = world_polygon_px(corners, CAMERA, pose, 480, 640, 0.5, motion)
+    sensor = SensorModel(plateau_dn=200.0, psf_sigma_px=1.0, **QUIET)
+    image = render_emitters([Emitter(outline, 200.0)], 480, 640, sensor, np.random.default_rng(0)).astype(float)
+    left = edge_points(image, 110.0, "left", (250, 390))
+    slope, offset = np.polyfit(left[:, 1], left[:, 0], 1)
+    # the camera moves +X, so the panel moves -x in later rows: x(r) = x0 - fx v (r t_row + t_exp / 2) / Z
+    assert slope == pytest.approx(-CAMERA.fx * speed_mps * row_time_s, rel=0.02)
+    expected_at_320 = CAMERA.cx - CAMERA.fx * 0.087 - CAMERA.fx * speed_mps * (320 * row_time_s + exposure_s / 2)
+    assert slope * 320 + offset == pytest.approx(expected_at_320, abs=0.05)

@@ -7,7 +7,7 @@ import pytest
 
 from server.cli import main
 from server.ingest import read_fixture
-from simulator.sampling import series_poses, write_series
+from simulator.sampling import render_pose, series_poses, write_series
 from simulator.scene import Scene, find_scene
 
 
@@ -84,3 +84,16 @@ def test_cli_simulate_bad_scene_is_exit_2(tmp_path, capsys):
     (tmp_path / "bad.json").write_text('{"name": "x", "room": {"size_m": [1, 1, -1]}, "beacons": []}')
     assert main(["simulate", str(tmp_path / "bad.json"), str(tmp_path / "out")]) == 2
     assert "size_m" in capsys.readouterr().err
+
+
+def test_a_walk_carries_its_velocity_into_the_rolling_shutter(tmp_path):
+    series = {"path": {"kind": "zigzag", "area_m": [-0.3, -0.3, 0.3, 0.3], "spacing_m": 0.3, "speed_mps": 1.0,
+                       "frame_interval_s": 0.1, "height_m": 0.0}}
+    scene = small_bench(**series)
+    poses = series_poses(scene)
+    assert poses[2].velocity_mps == pytest.approx((1.0, 0.0, 0.0))  # along the first leg, east
+    assert poses[2].angular_velocity_dps == (0.0, 0.0, 0.0)
+    moving, meta = render_pose(scene, poses[2])
+    still = render_pose(scene, poses[2].__class__(**{**poses[2].__dict__, "velocity_mps": (0.0, 0.0, 0.0)}))[0]
+    assert meta.model_extra["simulator"]["velocity_mps"] == pytest.approx([1.0, 0.0, 0.0])
+    assert not np.array_equal(moving, still)
