@@ -99,12 +99,13 @@ def run_grid_bench(scene: Scene, out_dir: Path, title: str, workers: int | None 
     summary = reports.table(outcomes)
     (out_dir / "scene.json").write_text(scene.to_json())
     reports.write_outcomes(outcomes, out_dir / "outcomes.json")
-    stem = scene.name
-    reports.plot_scatter(outcomes, out_dir / f"{stem}-scatter.png", title)
-    reports.plot_heatmap(outcomes, out_dir / f"{stem}-heatmap.png", title)
+    figures = [out_dir / f"{scene.name}-scatter.png"]
+    reports.plot_scatter(outcomes, figures[0], title)
+    if scene.series.path.kind in ("fov_grid", "grid"):  # a walk's positions make no heat map
+        figures.append(out_dir / f"{scene.name}-heatmap.png")
+        reports.plot_heatmap(outcomes, figures[1], title)
     return {"title": title, "scene": scene.name, "summary": summary, "failures": reports.failures(outcomes),
-            "wall_s": wall_s, "workers": workers or os.cpu_count(),
-            "figures": [str(out_dir / f"{stem}-scatter.png"), str(out_dir / f"{stem}-heatmap.png")]}
+            "wall_s": wall_s, "workers": workers or os.cpu_count(), "figures": [str(f) for f in figures]}
 
 
 def bench_grid(out_dir: Path, scale: float = 1.0, seed: int | None = None, workers: int | None = None,

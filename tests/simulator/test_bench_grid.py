@@ -81,4 +81,5 @@ def test_cli_bench_grid_on_any_scene_file(tmp_path, capsys):
                  "--workers", "1"]) == 0
     report = json.loads((tmp_path / "r" / "report.json").read_text())
     assert report["scene"] == "mine" and report["summary"]["samples"] == 2 and "paper" not in report
-    assert (tmp_path / "r" / "mine-heatmap.png").exists()
+    assert (tmp_path / "r" / "mine-scatter.png").exists()
+    assert not (tmp_path / "r" / "mine-heatmap.png").exists()  # explicit poses are no grid
