@@ -39,11 +39,11 @@ from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, Loc
 @dataclass(frozen=True)
 class SessionRules:
     id_frame_gate_norm: float = 0.15  # ID-frame blob to pose-frame blob, in frame widths/heights
-    panel_gate_m: float = 0.45  # relative-position jump allowed between captures of one panel
+    panel_gate_m: float = 0.6  # relative-position jump allowed between captures (0.5 s at 0.8 m/s, turning)
     carry_gate_m: float = 0.30  # track prediction to the carried beacon's hypothesis
     carry_ratio: float = 2.5  # the next hypothesis must be this much farther
-    panel_timeout_s: float = 1.2  # a panel unseen for longer is forgotten: after a walk of one beacon spacing
-    # the relative position to the next panel repeats the old one, so old tracks must not linger
+    panel_timeout_s: float = 1.2  # a panel unseen for longer is forgotten (with an established track)
+    unpredicted_timeout_s: float = 0.6  # without one: only from one capture to the next
     evidence_frames: int = 16
     partial_gate: float = 0.5  # nearest predicted panel centre / next nearest, at a blob's centroid
     established_fixes: int = 2  # accepted fixes in a row (a speed) before the track may carry or veto an ID
@@ -100,15 +100,24 @@ class DeviceSession:
         return first.model_copy(update={"center_m": [0.0, 0.0, 0.0]})
 
     def _panel_for(self, relative_m: np.ndarray, t_s: float, claimed: set[int]) -> PanelTrack:
-        shift = np.zeros(3)
-        if self.track is not None:
-            shift = self.track.velocity_mps * max(0.0, t_s - self.track.t_s)
+        """The panel track this sighting continues, or a new one.
+
+        After a walk of one beacon spacing the relative position to the next panel repeats the
+        old one: without an established track (whose velocity predicts the change) a panel is
+        only continued from the capture just before, so a walker cannot alias two panels.
+        """
+        established = self.track is not None and self.accepted_in_row >= self.rules.established_fixes
+        velocity = self.track.velocity_mps if established else np.zeros(3)
+        timeout = self.rules.panel_timeout_s if established else self.rules.unpredicted_timeout_s
         best, best_distance = None, self.rules.panel_gate_m
         for index, panel in enumerate(self.panels):
-            if index in claimed:
+            if index in claimed or t_s - panel.t_s > timeout:
                 continue
-            # the camera moved by `shift`; relative to a fixed panel so did the relative position
-            distance = float(np.linalg.norm(relative_m - (panel.relative_m + shift)))
+            # the camera moved by velocity * dt since that sighting, and so did its position relative to a
+            # fixed panel; at a turn the walker did not, so standing still counts too. A neighbouring
+            # panel is a beacon spacing (>= 1.2 m) off either way, twice the gate.
+            moved = panel.relative_m + velocity * (t_s - panel.t_s)
+            distance = min(float(np.linalg.norm(relative_m - moved)), float(np.linalg.norm(relative_m - panel.relative_m)))
             if distance < best_distance:
                 best, best_distance = index, distance
         if best is None:
