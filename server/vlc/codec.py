@@ -13,11 +13,12 @@ So inside the data no level lasts longer than 2 chips, while the header holds it
 supplies three equal chips in a row). The decoder therefore finds message starts without
 any other framing.
 
-DC balance and flicker: a 1 bit is balanced (one chip on, one off); a 0 bit is two equal
-chips whose level alternates with the bits before it, so the duty cycle of a message lies
-between 6/21 and 15/21 depending on the id. The pattern repeats at 119 Hz, above flicker
-fusion, and the LED never switches fully off (`low_level`), so a long exposure sees a steady
-panel whose brightness differs a little between ids (see `LedWaveform.mean_level`).
+DC balance and flicker: a 1 bit is balanced (one chip high, one low); a 0 bit is two equal
+chips, and because every bit starts with a transition the 0 bits alternate between high and
+low pairs. Every message has 11 or 12 high chips of 21 (checked for all 256 ids in the
+tests), so all panels are equally bright to within 1/21 in a long exposure. The pattern
+repeats at 119 Hz, above flicker fusion, and the LED never switches fully off (`low_level`),
+so the panel stays one blob even in a short exposure.
 """
 
 from __future__ import annotations

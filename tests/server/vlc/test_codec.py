@@ -29,6 +29,10 @@ def test_header_never_occurs_in_data_or_across_the_boundary():
         assert header_starts(np.concatenate([chips, chips])) == [0, MESSAGE_CHIPS]
 
 
+def test_every_message_is_nearly_dc_balanced():
+    assert {int(encode(i).sum()) for i in range(256)} <= {11, 12}
+
+
 def test_all_messages_differ_at_every_rotation():
     rotations = {tuple(np.roll(encode(i), s)): i for i in range(256) for s in range(MESSAGE_CHIPS)}
     assert len(rotations) == 256 * MESSAGE_CHIPS
