@@ -50,13 +50,19 @@ class RealBench:
     calibrated: bool = True
 
 
-def grid_scene(scale: float = 1.0, seed: int | None = None) -> Scene:
-    """The paper's simulated bench (scene file `paper-bench`), at `scale` of full resolution."""
+def grid_scene(scale: float = 1.0, seed: int | None = None, yaw_jitter_deg: float = 0.0) -> Scene:
+    """The paper's simulated bench (scene file `paper-bench`), at `scale` of full resolution.
+
+    `yaw_jitter_deg` turns the phone by a random yaw within +-jitter at each point: exactly
+    face to face (0, the paper's setup) every side of the panel runs along the pixel grid.
+    """
     scene = find_scene("paper-bench")
     updates = {"camera": scene.camera.model_copy(update={"scale": scale})}
     if seed is not None:
         updates["seed"] = seed
-    return scene.model_copy(update=updates)
+    if yaw_jitter_deg:
+        updates["series"] = scene.series.model_copy(update={"rotation": RotationSpec(yaw_jitter_deg=yaw_jitter_deg)})
+    return Scene.model_validate(scene.model_copy(update=updates).model_dump(by_alias=True))
 
 
 def real_bench_scene(bench: RealBench = RealBench(), scale: float = 1.0, seed: int | None = None) -> Scene:
@@ -109,11 +115,11 @@ def run_grid_bench(scene: Scene, out_dir: Path, title: str, workers: int | None 
 
 
 def bench_grid(out_dir: Path, scale: float = 1.0, seed: int | None = None, workers: int | None = None,
-               limit: int | None = None, scene_name: str | None = None) -> dict:
+               limit: int | None = None, scene_name: str | None = None, yaw_jitter_deg: float = 0.0) -> dict:
     """The paper's grid, or the series of any scene file (`scene_name`) at its own resolution."""
     if scene_name is None:
-        scene = grid_scene(scale, seed)
-        title = "simulated grid, 1 m, Mi 8 front"
+        scene = grid_scene(scale, seed, yaw_jitter_deg)
+        title = "simulated grid, 1 m, Mi 8 front" + (f", yaw +-{yaw_jitter_deg:g} deg" if yaw_jitter_deg else "")
     else:
         scene = find_scene(scene_name)
         if seed is not None:

@@ -74,6 +74,8 @@ def add_commands(commands) -> None:
         else:
             grid.add_argument("--scene", default=None,
                               help="locate the series of this scene file instead (its own resolution; --scale ignored)")
+            grid.add_argument("--yaw-jitter", type=float, default=0.0,
+                              help="random phone yaw within +-this many degrees (0: exactly face to face, the paper's)")
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
     distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
     distance.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
@@ -215,7 +217,7 @@ def _run_grid_bench(args) -> int:
 
     if args.bench_name == "grid":
         try:
-            report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit, args.scene)
+            report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit, args.scene, args.yaw_jitter)
         except ValueError as error:
             print(f"error: {error}", file=sys.stderr)
             return 2

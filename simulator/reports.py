@@ -21,7 +21,7 @@ from server.pipeline import PipelineOptions, locate
 from shared_schemas import CameraIntrinsics
 from simulator.benchmarks import summarize
 from simulator.sampling import SamplePose, parallel_map, render_pose
-from simulator.scene import Scene
+from simulator.scene import Scene, readout_motion
 
 OUTLIER_M = 0.05  # the paper's confidence margin: one grid cell
 
@@ -38,6 +38,15 @@ class Outcome:
     message: str | None
     reprojection_px: float | None
     warnings: tuple[str, ...] = ()
+    # a moving camera: where it was when the rolling shutter read the panel's centre row
+    at_panel_rows_m: tuple[float, float, float] | None = None
+
+    @property
+    def error_at_panel_rows_2d_m(self) -> float:
+        if self.estimate_m is None or self.at_panel_rows_m is None:
+            return math.nan
+        return float(np.hypot(self.estimate_m[0] - self.at_panel_rows_m[0],
+                              self.estimate_m[1] - self.at_panel_rows_m[1]))
 
     @property
     def error_2d_m(self) -> float:
@@ -72,7 +81,25 @@ def locate_sample(job: LocateJob) -> Outcome:
         estimate_m=tuple(result.position_m) if result.ok else None,
         reason=None if result.ok else result.reason.value, message=result.message,
         reprojection_px=result.reprojection_error_px, warnings=tuple(result.warnings),
+        at_panel_rows_m=_at_panel_rows(job.scene, job.sample, meta.camera),
     )
+
+
+def _at_panel_rows(scene: Scene, sample: SamplePose, camera: CameraIntrinsics) -> tuple[float, float, float] | None:
+    """The camera's position when the rows of the nearest panel's centre were exposed (mid-window)."""
+    motion = readout_motion(scene, sample.velocity_mps, sample.angular_velocity_dps)
+    if motion is None:
+        return None
+    pose = sample.camera_pose()
+    centres = np.array([b.center_m for b in scene.beacons], dtype=float)
+    in_camera = (centres - pose.position_m) @ pose.rotation_wc
+    ahead = in_camera[:, 2] > 0
+    if not ahead.any():
+        return None
+    nearest = in_camera[ahead][np.argmin(np.hypot(in_camera[ahead, 0], in_camera[ahead, 1]) / in_camera[ahead, 2])]
+    row = camera.fy * nearest[1] / nearest[2] + camera.cy
+    tau = row * motion.row_time_s + motion.exposure_s / 2
+    return tuple(float(v) for v in np.asarray(sample.position_m) + tau * motion.velocity_mps)
 
 
 def locate_series(jobs: list[LocateJob], workers: int | None, label: str) -> list[Outcome]:
@@ -92,6 +119,9 @@ def table(outcomes: list[Outcome], margin_m: float = OUTLIER_M) -> dict:
         "mean_3d_mm": float(np.nanmean([o.error_3d_m if o.error_2d_m <= margin_m else math.nan
                                         for o in outcomes]) * 1000) if summary.get("mean_mm") is not None else None,
     })
+    if any(o.at_panel_rows_m is not None for o in outcomes):
+        summary["at_panel_rows"] = summarize([e if e <= margin_m else math.nan
+                                              for e in (o.error_at_panel_rows_2d_m for o in outcomes)])
     return summary
 
 
@@ -129,7 +159,15 @@ def format_table(summary: dict, title: str) -> str:
         f"  coverage     {summary['coverage_pct']:8.2f} %  ({summary['samples']} samples, "
         f"{summary['no_fix']} without a fix, {summary['outliers']} outliers > {OUTLIER_M * 1000:.0f} mm)",
         f"  refusals     {summary['refusals'] or 'none'}",
-    ])
+    ] + _panel_rows_line(summary))
+
+
+def _panel_rows_line(summary: dict) -> list[str]:
+    rows = summary.get("at_panel_rows")
+    if not rows or "mean_mm" not in rows:
+        return []
+    return [f"  against the pose when the panel's rows were read: mean {rows['mean_mm']:.3f} mm, "
+            f"max {rows['max_mm']:.3f} mm (a moving camera's rolling shutter)"]
 
 
 def pyplot():
