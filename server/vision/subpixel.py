@@ -187,7 +187,10 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     for m in range(1, harmonics + 1):
         columns.append(-np.column_stack([np.cos(m * angle), np.sin(m * angle)]))
     design = np.hstack(columns)
-    solution, *_ = np.linalg.lstsq(design, -residuals.ravel()[keep], rcond=None)
+    # Normal equations with einsum, not lstsq: LAPACK's least squares wakes OpenBLAS's threads,
+    # which then spin on a 2-core machine and stall every stage after them by milliseconds.
+    normal_matrix = np.einsum("ni,nj->ij", design, design)
+    solution = np.linalg.solve(normal_matrix, -np.einsum("ni,n->i", design, residuals.ravel()[keep]))
     turn, shift, series = solution[:4], solution[4:8], solution[8:]
     new_normal = normal + turn[:, None] * tangent
     scale = np.linalg.norm(new_normal, axis=1)
