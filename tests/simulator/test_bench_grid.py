@@ -83,3 +83,22 @@ def test_cli_bench_grid_on_any_scene_file(tmp_path, capsys):
     assert report["scene"] == "mine" and report["summary"]["samples"] == 2 and "paper" not in report
     assert (tmp_path / "r" / "mine-scatter.png").exists()
     assert not (tmp_path / "r" / "mine-heatmap.png").exists()  # explicit poses are no grid
+
+
+def test_yaw_jitter_turns_the_phone_within_its_bound_only():
+    yaw = np.array([p.ypr_deg for p in series_poses(grid_scene(yaw_jitter_deg=1.0))])
+    assert np.abs(yaw[:, 0]).max() <= 1.0 and np.ptp(yaw[:, 0]) > 1.5 and not yaw[:, 1:].any()
+
+
+def test_a_moving_camera_is_also_compared_with_where_it_was_when_the_panel_was_read():
+    from simulator.reports import LocateJob, locate_sample
+
+    walk = find_scene("walk-one-panel")
+    walk = walk.model_copy(update={"camera": walk.camera.model_copy(update={"scale": 0.25})})
+    sample = series_poses(walk)[2]  # on the first leg, 0.8 m/s east
+    outcome = locate_sample(LocateJob(walk, sample))
+    seen = (np.array([0.0, 0.0, 2.72]) - sample.position_m) @ sample.camera_pose().rotation_wc  # panel, camera frame
+    row = walk.camera.intrinsics().cy + 977.78 * seen[1] / seen[2]
+    tau = row * 0.03 / 1295 + 0.001 / 2
+    assert outcome.at_panel_rows_m[0] == pytest.approx(sample.position_m[0] + 0.8 * tau, abs=1e-4)
+    assert math.isfinite(table([outcome])["at_panel_rows"].get("mean_mm", math.nan)) or outcome.estimate_m is None
