@@ -1,7 +1,8 @@
 """Constant-velocity Kalman filter over 3-D camera positions, with an outlier gate.
 
 State (x, y, z, vx, vy, vz) in the map frame (m, m/s). The process noise is white
-acceleration of `accel_sigma_mps2` (a walker turning a corner or stopping); a fix whose
+acceleration of `accel_sigma_mps2` (a walker turning a corner or stopping); the velocity gain
+is capped so that the speed does not ring after a turn (see `update`); a fix whose
 innovation exceeds the chi-square gate (3 dof) is an outlier: it is reported, not fused.
 After `max_outliers` outliers in a row the track is restarted from the newest fix, since
 then the track, not the fixes, is more likely wrong.
@@ -87,6 +88,15 @@ def update(state: FilterState, t_s: float, fix_m: np.ndarray, rules: FilterRules
         return FilterStep(FilterState(predicted.t_s, predicted.mean, predicted.covariance,
                                       predicted.outliers_in_row + 1), False, False, d2)
     gain = predicted.covariance @ _H.T @ np.linalg.inv(s)
+    # With fixes far more precise than a walker is predictable, the optimal velocity gain tends to
+    # 2 / dt (an alpha-beta filter with beta -> 2): the speed then rings from step to step after a
+    # turn. Capped at the position gain / dt (beta <= 1: the speed follows the fixes' differences);
+    # the Joseph form keeps the covariance right for this gain.
+    dt = max(predicted.t_s - state.t_s, 1e-3)
+    cap = np.abs(np.diag(gain[:3])) / dt
+    rows = np.abs(gain[3:]) > cap[:, None]
+    gain[3:] = np.where(rows, np.sign(gain[3:]) * cap[:, None], gain[3:])
     mean = predicted.mean + gain @ innovation
-    covariance = (np.eye(6) - gain @ _H) @ predicted.covariance
+    keep = np.eye(6) - gain @ _H
+    covariance = keep @ predicted.covariance @ keep.T + gain @ (rules.fix_sigma_m**2 * np.eye(3)) @ gain.T
     return FilterStep(FilterState(predicted.t_s, mean, 0.5 * (covariance + covariance.T), 0), True, False, d2)
