@@ -167,7 +167,7 @@ def plot_vlc(reports: list[dict], path, title: str) -> None:
     ax.set_ylim(-5, 105)
     ax.grid(alpha=0.3)
     ax.set_title(title)
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=7, loc="center right")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
