@@ -121,10 +121,13 @@ def pose_with_gravity(
 
 def _orthonormal_pair(vector: np.ndarray) -> np.ndarray:
     """Two unit vectors (2, 3) orthogonal to `vector` and to each other."""
-    helper = np.eye(3)[int(np.argmin(np.abs(vector)))]
-    first = np.cross(vector, helper)
+    x, y, z = vector
+    # the cross product with the axis least aligned with `vector`, written out (np.cross is slow)
+    first = np.array([0.0, z, -y]) if abs(x) <= min(abs(y), abs(z)) else (
+        np.array([-z, 0.0, x]) if abs(y) <= abs(z) else np.array([y, -x, 0.0]))
     first /= np.linalg.norm(first)
-    return np.array([first, np.cross(vector, first)])
+    fx, fy, fz = first
+    return np.array([first, [y * fz - z * fy, z * fx - x * fz, x * fy - y * fx]])
 
 
 def _map_residuals(params, object_points, image_points, camera_matrix, across_gravity, weights):
