@@ -190,7 +190,7 @@ class IdEvidence:
     # (or a code read wrongly) must be able to win, or the decoder names the nearest map ID with
     # full confidence. `preferred_share` of the prior goes to `preferred`, the rest to the others.
     preferred: tuple[int, ...] = ()
-    preferred_share: float = 0.5
+    preferred_share: float = 0.9
     observations: list[StripeObservation] = field(default_factory=list)
     max_frames: int = 16
     _cache: dict = field(default_factory=dict, repr=False)
