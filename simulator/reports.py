@@ -75,7 +75,12 @@ def locate_sample(job: LocateJob) -> Outcome:
     camera = job.pipeline_camera or meta.camera
     if job.pipeline_camera is not None:
         meta = meta.model_copy(update={"camera": camera})
-    result = locate(LumaFrame(pixels=pixels, meta=meta, camera=camera), job.scene.beacon_map(), job.options)
+    try:
+        result = locate(LumaFrame(pixels=pixels, meta=meta, camera=camera), job.scene.beacon_map(), job.options)
+    except Exception as error:  # a crash is a finding of the benchmark, not the end of it
+        return Outcome(index=job.sample.index, label=job.sample.label, true_m=job.sample.position_m,
+                       estimate_m=None, reason="pipeline_error", message=f"{type(error).__name__}: {error}"[:300],
+                       reprojection_px=None)
     return Outcome(
         index=job.sample.index, label=job.sample.label, true_m=job.sample.position_m,
         estimate_m=tuple(result.position_m) if result.ok else None,

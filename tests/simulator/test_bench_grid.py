@@ -102,3 +102,16 @@ def test_a_moving_camera_is_also_compared_with_where_it_was_when_the_panel_was_r
     tau = row * 0.03 / 1295 + 0.001 / 2
     assert outcome.at_panel_rows_m[0] == pytest.approx(sample.position_m[0] + 0.8 * tau, abs=1e-4)
     assert math.isfinite(table([outcome])["at_panel_rows"].get("mean_mm", math.nan)) or outcome.estimate_m is None
+
+
+def test_a_pipeline_crash_is_recorded_not_raised(monkeypatch):
+    from simulator import reports
+
+    def broken(*args, **kwargs):
+        raise ArithmeticError("nan somewhere")
+
+    monkeypatch.setattr(reports, "locate", broken)
+    scene = grid_scene(scale=0.1)
+    outcome = reports.locate_sample(reports.LocateJob(scene, series_poses(scene)[0]))
+    assert outcome.reason == "pipeline_error" and "nan somewhere" in outcome.message
+    assert table([outcome])["refusals"] == {"pipeline_error": 1}
