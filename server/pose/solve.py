@@ -183,6 +183,30 @@ def _gravity_angle_deg(rvec: np.ndarray, gravity_camera: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip(predicted @ measured, -1.0, 1.0))))
 
 
+def _level_start(image_points, beacon: Beacon, camera_matrix, gravity_camera) -> tuple[np.ndarray, np.ndarray]:
+    """(rvec, tvec) of the closed-form pose with the sensor's tilt."""
+    return _beacon_in_camera(beacon, *pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera))
+
+
+def _map_pose(object_points, image_points, vision, beacon, camera_matrix, gravity_camera,
+              corner_sigma_px: float, gravity_sigma_deg: float, try_level: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The MAP fit from the vision pose; also from the sensor's tilt when `try_level` or when
+    the two disagree by over 3 sigma (vision may sit in the wrong one of a small square's two
+    minima). The lower cost wins; a fit that puts the beacon behind the camera never does."""
+    def fit(start):
+        return fuse_gravity(object_points, image_points, start, camera_matrix, gravity_camera,
+                            corner_sigma_px, gravity_sigma_deg)
+
+    candidates = [fit(vision)]
+    if try_level or _gravity_angle_deg(candidates[0][0], gravity_camera) > 3 * gravity_sigma_deg:
+        candidates.append(fit(_level_start(image_points, beacon, camera_matrix, gravity_camera)))
+    in_front = [c for c in candidates if c[1][2, 0] > 0]
+    if not in_front:
+        return vision
+    best = min(in_front, key=lambda c: c[2])
+    return best[0], best[1]
+
+
 def _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma_px: float) -> float:
     """Predicted 1-sigma tilt error of the vision fix from its Jacobian."""
     _, jacobian = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
@@ -229,22 +253,11 @@ def solve_pose(
             f"two poses fit almost equally (error ratio {ratio:.2f}) and place the camera "
             f"{disagreement * 1000:.0f} mm apart; a gravity vector would decide",
         )
-    if use_gravity:
-        level = lambda: _beacon_in_camera(  # noqa: E731
-            beacon, *pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera))
-        if gravity_mode is GravityMode.always:
-            rvec, tvec = level()
-        else:
-            fit = lambda start: fuse_gravity(object_points, image_points, start, camera_matrix,  # noqa: E731
-                                             gravity_camera, corner_sigma, gravity_sigma_deg)
-            fused = fit((rvec, tvec))
-            # Vision may sit in the wrong one of a small square's two minima: then start
-            # from gravity's tilt too and keep the better fit.
-            if ratio > rules.max_ambiguity_ratio / 4 or _gravity_angle_deg(fused[0], gravity_camera) > 3 * gravity_sigma_deg:
-                other = fit(level())
-                if other[1][2, 0] > 0 and other[2] < fused[2]:
-                    fused = other
-            rvec, tvec = fused[0], fused[1]
+    if use_gravity and gravity_mode is GravityMode.always:
+        rvec, tvec = _level_start(image_points, beacon, camera_matrix, gravity_camera)
+    elif use_gravity:
+        rvec, tvec = _map_pose(object_points, image_points, (rvec, tvec), beacon, camera_matrix, gravity_camera,
+                               corner_sigma, gravity_sigma_deg, try_level=ratio > rules.max_ambiguity_ratio / 4)
     position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
     projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
     return PoseSolution(
