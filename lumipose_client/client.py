@@ -121,14 +121,17 @@ class _Endpoints:
         return self._run(_Call("GET", "/healthz", _model(Health)))
 
     def locate(self, data: bytes | EncodedFrame, meta: FrameMeta, *, map: str | None = None,
-               beacon_id: int | None = None, gravity: str | None = None, compress: str | None = "gzip"):
+               beacon_id: int | None = None, gravity: str | None = None, compress: str | None = "gzip",
+               device: str | None = None):
         """Locate the camera of one frame: LocateResult (ok, or ok=False with a reason).
 
         `data` is sent with `compress` ('gzip', 'zstd' or None) unless it is already an EncodedFrame.
+        With `device`, the frame joins that device's session on the server (ID frames, tracking).
         """
+        request = _frame_request(meta, data, compress)
+        request["headers"] |= {"X-Lumipose-Device": device} if device else {}
         return self._run(_Call("POST", "/v1/locate", _model(LocateResult),
-                               params={"map": map, "beacon_id": beacon_id, "gravity": gravity},
-                               **_frame_request(meta, data, compress)))
+                               params={"map": map, "beacon_id": beacon_id, "gravity": gravity}, **request))
 
     def locate_fixture(self, path: Path | str, **options):
         meta, data = read_fixture_files(path)

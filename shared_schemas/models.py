@@ -252,6 +252,7 @@ class FailureReason(str, Enum):
     pose_failed = "pose_failed"
     pose_ambiguous = "pose_ambiguous"
     unknown_beacon = "unknown_beacon"
+    id_frame = "id_frame"  # an ID frame kept for the device's next capture: no fix of its own (docs/vlc.md)
 
 
 class OrientationRule(str, Enum):

@@ -10,6 +10,7 @@ import anyio
 from fastapi import Depends, Header, Request
 
 from server.api.config import Settings
+from server.api.devices import Devices
 from server.api.errors import ApiError
 from server.api.metrics import Metrics
 from server.store import MapStore, SampleStore
@@ -23,6 +24,7 @@ class Services:
     maps: MapStore
     samples: SampleStore
     metrics: Metrics
+    devices: Devices  # per-process: see docs/deployment.md
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
 
 

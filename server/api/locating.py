@@ -19,16 +19,21 @@ class Located:
     map_name: str
 
 
-def _locate_now(upload: FrameUpload, beacon_map: BeaconMap, options: PipelineOptions) -> LocateResult:
-    return locate(decode_frame(upload.data, upload.meta), beacon_map, options)
+def _locate_now(services: Services, upload: FrameUpload, beacon_map: BeaconMap, options: PipelineOptions,
+                device: str | None) -> LocateResult:
+    frame = decode_frame(upload.data, upload.meta)
+    if device is None:
+        return locate(frame, beacon_map, options)
+    return services.devices.locate(device, frame, beacon_map, options)
 
 
 async def locate_upload(services: Services, upload: FrameUpload, map_name: str | None,
-                        options: PipelineOptions) -> Located:
-    """The pipeline's result for `upload` in map `map_name` (default: the active map)."""
+                        options: PipelineOptions, device: str | None = None) -> Located:
+    """The result for `upload` in map `map_name` (default: the active map); with a `device`, in its
+    session (tracking, ID frames combined) when the map has several beacons."""
     name = map_name or services.maps.active_name()
     beacon_map = services.maps.get(name)
     async with services.pipeline_limiter:
-        result = await run_in_threadpool(_locate_now, upload, beacon_map, options)
+        result = await run_in_threadpool(_locate_now, services, upload, beacon_map, options, device)
     services.metrics.record_result(result)
     return Located(result=result, map_name=name)

@@ -1,0 +1,55 @@
+"""A phone walking the paper's office through the real server: ID frames and pose frames uploaded
+separately with X-Lumipose-Device, combined by the device's session (rendered, fixed seed)."""
+
+import numpy as np
+import pytest
+
+from lumipose_client import Client
+from lumipose_client.local_server import LocalServer
+from simulator.bench_office import OfficeConfig, _frame, _pose_at, _scenes, _true_beacon, _walk
+from shared_schemas import FrameKind
+
+
+def _upload(client: Client, frame, device: str | None, map_name: str):
+    return client.locate(np.ascontiguousarray(frame.pixels).tobytes(), frame.meta, map=map_name, compress=None,
+                         **({"device": device} if device else {}))
+
+
+@pytest.fixture(scope="module")
+def roomy_server_url():
+    with LocalServer("--log-level", "warning") as server:  # the default upload limit: pose frames are 5 MB
+        yield server.url
+    assert "Traceback" not in server.log(), server.log()
+
+
+def test_a_walk_gets_fixes_with_the_right_ids_and_a_track(roomy_server_url):
+    config = OfficeConfig(walk="zigzag", max_captures=5, pose_scale=0.5, seed=2)
+    pose_scene, id_scene = _scenes(config)
+    beacon_map = pose_scene.beacon_map()
+    path, _ = _walk(config, pose_scene)
+    times = np.array([p.t_s for p in path])
+    positions = np.array([p.position_m for p in path])
+    rng = np.random.default_rng(5)
+    fixes, id_answers = [], []
+    with Client(roomy_server_url) as client:
+        client.put_map(beacon_map)
+        for t_s in times:
+            for j in range(config.id_frames):
+                t_id = t_s + config.pose_exposure_s + 0.02 + j * config.id_interval_s
+                id_frame = _frame(id_scene, _pose_at(times, positions, t_id, 3, 0.5), t_id, FrameKind.id, rng)
+                id_answers.append(_upload(client, id_frame, "phone-7", beacon_map.name))
+            pose = _pose_at(times, positions, t_s, 3, 0.5)
+            result = _upload(client, _frame(pose_scene, pose, t_s, FrameKind.pose, rng), "phone-7", beacon_map.name)
+            if result.ok:
+                truth = _true_beacon(list(beacon_map.beacons), pose_scene.camera.intrinsics(), pose, result.center_px)
+                fixes.append((result, truth, 1000 * np.hypot(*np.subtract(result.position_m[:2], pose.position_m[:2]))))
+        stateless = _upload(client, _frame(pose_scene, pose, t_s, FrameKind.pose, rng), None, beacon_map.name)
+
+    assert all(not a.ok and a.reason.value == "id_frame" and "kept" in a.message for a in id_answers)
+    assert len(fixes) >= 3, "the session gave too few fixes"
+    assert all(result.beacon_id == truth for result, truth, _ in fixes)
+    assert all(result.track is not None and result.beacon_id_source.value in ("vlc", "track")
+               for result, _, _ in fixes)
+    assert np.mean([error for _, _, error in fixes]) < 10.0
+    # without a device the 8.4 ms pose frame alone carries no ID in a room of four beacons
+    assert not stateless.ok and stateless.reason.value == "unknown_beacon"
