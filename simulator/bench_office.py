@@ -48,7 +48,7 @@ class OfficeConfig:
     capture_interval_s: float = stepped_interval_s(0.5)
     pose_scale: float = 0.5  # of the Mi 8 front camera's 3880 x 5184
     pose_exposure_s: float = message_period_s()  # a whole message period: the code averages exactly away
-    id_frames: int = 2
+    id_frames: int = 3
     id_interval_s: float = stepped_interval_s(1.0 / 30.0)
     max_captures: int | None = None
     seed: int = 1
