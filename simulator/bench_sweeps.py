@@ -18,17 +18,19 @@ from shared_schemas import device_profiles
 from simulator import reports
 from simulator.bench_grid import grid_scene
 from simulator.sampling import series_poses
-from simulator.scene import GridSeries, PoseSpec, PosesSeries, Scene, SeriesSpec
+from simulator.scene import GridSeries, PoseSpec, PosesSeries, RotationSpec, Scene, SeriesSpec
 
 
-def distance_scene(base: Scene, distance_m: float, points_per_side: int = 5) -> Scene:
-    """The bench with the panel `distance_m` above the camera and a grid over the FOV."""
+def distance_scene(base: Scene, distance_m: float, points_per_side: int = 5, yaw_jitter_deg: float = 0.0) -> Scene:
+    """The bench with the panel `distance_m` above the camera and a grid over the FOV (random
+    yaw within +-`yaw_jitter_deg`; 0 = exactly face to face)."""
     beacon = base.beacons[0]
     profile = device_profiles()[base.camera.profile]
     extent = fov_grid(profile, distance_m, 0.05, beacon.side_m).beacon_adjusted_m
     half = [0.45 * e for e in extent]
     steps = [2 * h / (points_per_side - 1) for h in half]
-    series = SeriesSpec(path=GridSeries(x_m=[-half[0], half[0], steps[0]], y_m=[-half[1], half[1], steps[1]]))
+    series = SeriesSpec(path=GridSeries(x_m=[-half[0], half[0], steps[0]], y_m=[-half[1], half[1], steps[1]]),
+                        rotation=RotationSpec(yaw_jitter_deg=yaw_jitter_deg))
     room = base.room.model_copy(update={"size_m": [4.0, 4.0, distance_m + 0.5], "origin_m": [-2.0, -2.0, 0.0]})
     moved = beacon.model_copy(update={"center_m": [0.0, 0.0, distance_m]})
     return Scene.model_validate({**base.model_dump(by_alias=True), "name": f"distance-{distance_m:.1f}m",
@@ -73,12 +75,14 @@ def _sweep_report(rows: list[dict], key: str, out_dir: Path, name: str, title: s
 
 
 def bench_distance(out_dir: Path, distances_m: list[float] | None = None, scale: float = 1.0,
-                   seed: int | None = None, workers: int | None = None) -> dict:
+                   seed: int | None = None, workers: int | None = None, yaw_jitter_deg: float = 0.0) -> dict:
     distances_m = distances_m or [round(1.0 + 0.1 * k, 1) for k in range(21)]
     base = grid_scene(scale, seed)
-    rows = _sweep([(d, distance_scene(base, d)) for d in distances_m], "distance_m", workers)
-    return _sweep_report(rows, "distance_m", out_dir, "distance", "2D error against distance (5 x 5 grid over the FOV)",
-                         "camera to panel distance (m)")
+    rows = _sweep([(d, distance_scene(base, d, yaw_jitter_deg=yaw_jitter_deg)) for d in distances_m], "distance_m",
+                  workers)
+    title = "2D error against distance (5 x 5 grid over the FOV" + (
+        f", yaw +-{yaw_jitter_deg:g} deg)" if yaw_jitter_deg else ", face to face)")
+    return _sweep_report(rows, "distance_m", out_dir, "distance", title, "camera to panel distance (m)")
 
 
 def bench_tilt(out_dir: Path, tilts_deg: list[float] | None = None, scale: float = 1.0, seed: int | None = None,

@@ -79,6 +79,8 @@ def add_commands(commands) -> None:
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
     distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
     distance.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
+    distance.add_argument("--yaw-jitter", type=float, default=0.0,
+                          help="random phone yaw within +-this many degrees (0: exactly face to face)")
     tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
     tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees; default 0 to 15 by 2.5")
     for sweep, name in ((distance, "distance"), (tilt, "tilt")):
@@ -233,7 +235,7 @@ def _run_sweep(args) -> int:
     from simulator.bench_sweeps import bench_distance, bench_tilt, format_sweep
 
     if args.bench_name == "distance":
-        report = bench_distance(args.out, args.distances, args.scale, args.seed, args.workers)
+        report = bench_distance(args.out, args.distances, args.scale, args.seed, args.workers, args.yaw_jitter)
         text = format_sweep(report, "distance_m", "m")
     else:
         report = bench_tilt(args.out, args.tilts, args.scale, args.seed, args.workers)
