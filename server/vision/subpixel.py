@@ -174,32 +174,30 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
     axis = np.argmax(np.abs(normal), axis=1)  # 0: the side's outward axis is x
     sign = np.sign(normal[np.arange(4), axis])
-    phase = np.mod(sign[:, None] * np.take_along_axis(phase_points, axis[:, None, None], axis=2)[..., 0], 1.0)
+    phase = np.mod(sign[:, None] * phase_points[np.arange(4), :, axis], 1.0)
     offset = points - centres[:, None, :]
-    residuals = np.einsum("knd,kd->kn", offset, normal)
-    along = np.einsum("knd,kd->kn", offset, tangent)
-    keep = weights.ravel() > 0
-    side = np.repeat(np.arange(4), points.shape[1])[keep]
-    columns = [np.zeros((keep.sum(), 8))]
-    columns[0][np.arange(keep.sum()), side] = along.ravel()[keep]  # small turn of side k
-    columns[0][np.arange(keep.sum()), 4 + side] = 1.0  # small shift of side k
-    angle = 2 * np.pi * phase.ravel()[keep]
+    residuals = offset[..., 0] * normal[:, :1] + offset[..., 1] * normal[:, 1:]
+    # columns: a small turn of each side (4), a shift of each side (4), the series (2 per harmonic)
+    design = np.zeros(points.shape[:2] + (8 + 2 * harmonics,))
+    sides = np.arange(4)
+    design[sides, :, sides] = offset[..., 0] * tangent[:, :1] + offset[..., 1] * tangent[:, 1:]
+    design[sides, :, 4 + sides] = 1.0
+    angle = 2 * np.pi * phase
     for m in range(1, harmonics + 1):
-        columns.append(-np.column_stack([np.cos(m * angle), np.sin(m * angle)]))
-    design = np.hstack(columns)
+        design[..., 6 + 2 * m] = -np.cos(m * angle)
+        design[..., 7 + 2 * m] = -np.sin(m * angle)
     # Normal equations with einsum, not lstsq: LAPACK's least squares wakes OpenBLAS's threads,
     # which then spin on a 2-core machine and stall every stage after them by milliseconds.
-    normal_matrix = np.einsum("ni,nj->ij", design, design)
-    solution = np.linalg.solve(normal_matrix, -np.einsum("ni,n->i", design, residuals.ravel()[keep]))
-    turn, shift, series = solution[:4], solution[4:8], solution[8:]
+    weighted = design * weights[..., None]
+    normal_matrix = np.einsum("kni,knj->ij", weighted, design)
+    solution = np.linalg.solve(normal_matrix, -np.einsum("kni,kn->i", weighted, residuals))
+    turn, shift = solution[:4], solution[4:8]
     new_normal = normal + turn[:, None] * tangent
     scale = np.linalg.norm(new_normal, axis=1)
     c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
     new_lines = np.column_stack([new_normal, c]) / scale[:, None]
-    locking = np.zeros(phase.shape)
-    for m in range(1, harmonics + 1):
-        locking += series[2 * m - 2] * np.cos(2 * np.pi * m * phase) + series[2 * m - 1] * np.sin(2 * np.pi * m * phase)
-    new_residuals = np.einsum("knd,kd->kn", points, new_lines[:, :2]) + new_lines[:, 2:3] - locking
+    locking = -np.einsum("kni,i->kn", design[..., 8:], solution[8:])
+    new_residuals = points[..., 0] * new_lines[:, :1] + points[..., 1] * new_lines[:, 1:2] + new_lines[:, 2:3] - locking
     return new_lines, new_residuals
 
 
