@@ -48,8 +48,8 @@ class OfficeConfig:
     capture_interval_s: float = stepped_interval_s(0.5)
     pose_scale: float = 0.5  # of the Mi 8 front camera's 3880 x 5184
     pose_exposure_s: float = message_period_s()  # a whole message period: the code averages exactly away
-    id_frames: int = 3
-    id_interval_s: float = stepped_interval_s(1.0 / 30.0)
+    id_frames: int = 4
+    id_interval_s: float = stepped_interval_s(1.0 / 30.0, step=0.25)  # 4 frames tile the message
     max_captures: int | None = None
     seed: int = 1
 

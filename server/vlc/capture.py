@@ -27,12 +27,18 @@ def message_period_s(chip_rate_hz: float = CHIP_RATE_HZ) -> float:
     return MESSAGE_CHIPS / chip_rate_hz
 
 
-def stepped_interval_s(nominal_s: float, chip_rate_hz: float = CHIP_RATE_HZ) -> float:
-    """The frame interval nearest `nominal_s` that advances the message phase by 0.382 period."""
+def stepped_interval_s(nominal_s: float, step: float = GOLDEN_STEP, chip_rate_hz: float = CHIP_RATE_HZ) -> float:
+    """The frame interval nearest `nominal_s` that advances the message phase by `step` of a period.
+
+    0.382 (golden ratio) spreads any number of frames evenly; 1/n tiles the message exactly
+    with a burst of n frames that each see at least 1/n of it.
+    """
     if not nominal_s > 0:
         raise ValueError(f"nominal_s must be positive, got {nominal_s}")
+    if not 0 < step < 1:
+        raise ValueError(f"step must be a fraction of a period in (0, 1), got {step}")
     period = message_period_s(chip_rate_hz)
-    return (max(0, round(nominal_s / period - GOLDEN_STEP)) + GOLDEN_STEP) * period
+    return (max(0, round(nominal_s / period - step)) + step) * period
 
 
 def id_frame_problem(frame: LumaFrame, chip_rate_hz: float = CHIP_RATE_HZ,

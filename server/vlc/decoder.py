@@ -180,6 +180,11 @@ def _frame_log_likelihood(obs: StripeObservation, reference_s: float, candidates
     return -0.5 * result / scale
 
 
+def _normalised(log_weights: np.ndarray) -> np.ndarray:
+    weights = np.exp(log_weights - log_weights.max())
+    return weights / weights.sum()
+
+
 @dataclass
 class IdEvidence:
     """ID evidence of one panel over consecutive frames of one device (mutable accumulator)."""
@@ -213,6 +218,30 @@ class IdEvidence:
         count = int(np.floor(self.rules.max_clock_error_ppm / step_ppm))
         return np.arange(-count, count + 1) * step_ppm
 
+    def unseen_chips(self, observations: list[StripeObservation] | None = None) -> float:
+        """The longest part of the message's cycle that no frame saw, in chips (frames' relative phase is known)."""
+        observations = self.observations if observations is None else observations
+        if not observations:
+            return float(MESSAGE_CHIPS)
+        period = MESSAGE_CHIPS / self.rules.chip_rate_hz
+        cells = MESSAGE_CHIPS * 16
+        seen = np.zeros(cells, bool)
+        reference = observations[0].timestamp_s
+        for obs in observations:
+            start = obs.timestamp_s - reference + float(obs.row_offsets_s.min())
+            end = obs.timestamp_s - reference + float(obs.row_offsets_s.max()) + obs.exposure_s
+            first = int(np.ceil(start / period * cells))
+            last = int(np.floor(end / period * cells))
+            if last - first + 1 >= cells:
+                return 0.0
+            seen[np.arange(first, last + 1) % cells] = True
+        if seen.all():
+            return 0.0
+        # longest circular run of unseen cells
+        rolled = np.roll(~seen, -int(np.argmax(seen)))  # start on a seen cell
+        runs = np.diff(np.flatnonzero(np.diff(np.concatenate([[0], rolled.astype(int), [0]]))))[::2]
+        return float(runs.max()) / 16 if len(runs) else 0.0
+
     def _log_prior(self) -> np.ndarray:
         chosen = np.isin(self.candidates, self.preferred)
         if not chosen.any() or chosen.all():
@@ -238,13 +267,18 @@ class IdEvidence:
         self._cache = cache  # only the frames still in the window
         flat = total.reshape(len(self.candidates), -1)
         peak = flat.max()
-        per_id = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300)) + self._log_prior()
-        posterior = np.exp(per_id - per_id.max())
-        posterior /= posterior.sum()
+        evidence = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))
+        posterior = _normalised(evidence + self._log_prior())
         order = np.argsort(posterior)[::-1]
         best = order[0]
         confidence = float(posterior[best])
-        confident = confidence >= self.rules.confident_posterior
+        # The map prior may only settle what noise leaves open, never what no frame has seen: with
+        # part of the message unseen, a foreign panel (ID 200) is indistinguishable from a map ID
+        # differing only there (201). So: either the data alone decides, or no more than one chip
+        # in a row went unseen (BMC's transition at every bit start then tells the missing chip).
+        plain = float(_normalised(evidence)[best])
+        threshold = self.rules.confident_posterior
+        confident = confidence >= threshold and (plain >= threshold or self.unseen_chips(usable) <= 1.0)
         chips = float(sum(o.chips_seen for o in usable))
         runner = self.candidates[order[1]] if len(order) > 1 else None
         message = (f"ID {self.candidates[best]} at posterior {confidence:.3f} from {len(usable)} frame(s), "
