@@ -75,3 +75,33 @@ def test_bad_timing_is_named():
         row_time_s(0.0, 100)
     with pytest.raises(ValueError, match="exposure_s"):
         read_stripes(np.zeros((10, 10), np.uint8), np.ones((10, 10), bool), (0, 0), 0.0, 1e-5, 0.0)
+
+
+def _observation(t_s, rows, row_time=1e-5, exposure_s=1e-4):
+    from server.vlc.decoder import StripeObservation
+
+    n = len(rows)
+    return StripeObservation(t_s, exposure_s, np.array(rows, float)[:, None] * row_time, np.zeros(n), np.ones(n),
+                             np.zeros(n), 1.0)
+
+
+def test_unseen_chips_follow_the_frames_relative_phase():
+    evidence = IdEvidence()
+    evidence.add(_observation(0.0, [0, 40]))  # 0.4 ms of row starts + 0.1 ms exposure = 1.25 chips
+    assert evidence.unseen_chips() == pytest.approx(21 - 1.25, abs=0.1)
+    evidence.add(_observation(0.0042, [0, 40]))  # half a message later
+    assert evidence.unseen_chips() == pytest.approx(9.25, abs=0.1)
+    evidence.add(_observation(0.0084 * 7, [0, 840]))  # a whole message seven periods later
+    assert evidence.unseen_chips() == 0.0
+
+
+def test_burst_timing_tiles_the_message():
+    from server.vlc.capture import message_period_s, stepped_interval_s
+
+    period = message_period_s()
+    for step in (0.25, 0.382):
+        interval = stepped_interval_s(1 / 30, step=step)
+        assert abs(interval - 1 / 30) < period
+        assert (interval / period) % 1 == pytest.approx(step, abs=1e-9)
+    with pytest.raises(ValueError, match="step"):
+        stepped_interval_s(0.5, step=1.0)
