@@ -216,7 +216,7 @@ def plot_scatter(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
                               delta[:, 0], delta[:, 1], shown * 1000, angles="xy", scale_units="xy", scale=1,
                               cmap="viridis", width=0.004)
         figure.colorbar(quiver, ax=right, label="2D error (mm)", shrink=0.8)
-        right.set(title=f"error vectors x{scale_m:.0f}", xlabel="X (m)", aspect="equal")
+        right.set(title=f"error vectors x{scale_m:.3g}", xlabel="X (m)", aspect="equal")
         right.set_xlim(left.get_xlim())
         right.set_ylim(left.get_ylim())
     if len(missing):
