@@ -29,7 +29,7 @@ from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
 from server.geometry import (beacon_to_world, camera_matrix, distortion_vector, rotation_from_ypr,
-                             rounded_square_outline_m, ypr_from_rotation)
+                             rounded_square_outline_m)
 from shared_schemas import Beacon, CameraIntrinsics
 
 
@@ -190,6 +190,3 @@ def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsic
     position, rotation = unpack(solution.x)
     return PartialFix(position, rotation, rms, sigma, count, float(solution.x[4]) if growth_px is None else growth_px)
 
-
-__all__ = ["PartialFix", "PartialRules", "edge_points", "fit_partial", "measure_growth", "tilt_from_gravity",
-           "ypr_from_rotation"]
