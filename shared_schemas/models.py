@@ -207,6 +207,17 @@ class FrameMeta(Open):
         """(width, height) of the sensor frame the camera describes: the crop's full frame, or this one."""
         return (self.crop.full_width, self.crop.full_height) if self.crop else (self.width, self.height)
 
+    @property
+    def full_offset(self) -> tuple[int, int]:
+        """(column, row) of this frame's first pixel in the full frame: the crop's, or (0, 0)."""
+        return (self.crop.x, self.crop.y) if self.crop else (0, 0)
+
+    def fraction_of_full_frame(self, x_px: float, y_px: float) -> tuple[float, float]:
+        """A pixel of this frame as a fraction of the full frame's width and height, comparable
+        between frames of other sizes or crops of the same camera."""
+        (width, height), (column, row) = self.full_size, self.full_offset
+        return (x_px + column) / width, (y_px + row) / height
+
 
 class Beacon(Strict):
     """A square luminous panel on the ceiling, facing down (-Z)."""

@@ -154,15 +154,14 @@ class DeviceSession:
         candidates = find_beacon_blobs(pose_frame.pixels, self.rules.room.candidates)
         blobs = list(candidates.blobs)
         template = self._template()
-        height, width = pose_frame.pixels.shape
         # stripes of each ID frame, attached to the nearest pose-frame blob
         stripes: dict[int, list] = {}
         for frame in id_frames:
             for panel in read_id_frame(frame, self.rules.room.candidates, self.rules.room.stripes).panels:
                 if panel.observation is None or not blobs:
                     continue
-                gaps = [np.hypot(panel.centroid_norm[0] - b.centroid_px[0] / width,
-                                 panel.centroid_norm[1] - b.centroid_px[1] / height) for b in blobs]
+                gaps = [np.hypot(*np.subtract(panel.centroid_norm,
+                                              pose_frame.meta.fraction_of_full_frame(*b.centroid_px))) for b in blobs]
                 nearest = int(np.argmin(gaps))
                 if gaps[nearest] <= self.rules.id_frame_gate_norm:
                     stripes.setdefault(nearest, []).append(panel.observation)

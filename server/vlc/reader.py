@@ -13,7 +13,7 @@ from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row
 @dataclass(frozen=True)
 class PanelStripes:
     blob: BeaconBlob
-    centroid_norm: tuple[float, float]  # centroid / (width, height): comparable across frame sizes
+    centroid_norm: tuple[float, float]  # fraction of the full frame: comparable across frame sizes and crops
     observation: StripeObservation | None  # None: too few rows inside the panel
 
 
@@ -30,14 +30,14 @@ def read_id_frame(frame: LumaFrame, candidates: CandidateRules = CandidateRules(
     if problem is not None:
         return IdFrameReading((), problem)
     meta = frame.meta
-    height, width = frame.pixels.shape
-    row_time = row_time_s(meta.rolling_shutter_skew_s, height)
+    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.full_size[1])  # the sensor's rows, crop or not
+    first_row_s = meta.timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
     found = find_beacon_blobs(frame.pixels, candidates)
     panels = []
     for blob in found.blobs:
         y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
-        observation = read_stripes(frame.pixels, mask, (y0, x0), meta.timestamp_ns * 1e-9, row_time,
+        observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time,
                                    meta.exposure_s, rules)
-        centroid = (blob.centroid_px[0] / width, blob.centroid_px[1] / height)
+        centroid = meta.fraction_of_full_frame(*blob.centroid_px)
         panels.append(PanelStripes(blob, centroid, observation))
     return IdFrameReading(tuple(panels), None)
