@@ -72,7 +72,7 @@ final class Camera2Controller {
 
     private static final int MAX_CAPTURE_VALUES = 8;
     private static final String ID_TAG = "id";
-    private static final int ID_FRAMES_PER_POSE = 2;
+    private static final int ID_FRAMES_PER_POSE = IdCapturePlan.BURST_FRAMES;
 
     private final Context context;
     private final String requestedCameraId;

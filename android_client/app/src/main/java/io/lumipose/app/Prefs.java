@@ -7,6 +7,7 @@ import android.os.Build;
 import io.lumipose.client.capture.CaptureSettingsChooser;
 import io.lumipose.client.net.ClientConfig;
 import io.lumipose.client.net.RetryPolicy;
+import java.util.UUID;
 
 /** The settings screen's values, kept in SharedPreferences. */
 final class Prefs {
@@ -20,6 +21,7 @@ final class Prefs {
     static final String BENCH_INDEX = "bench_index";
     static final String READ_IDS = "read_ids";
     static final String MAP_X_BEARING_DEG = "map_x_bearing_deg";
+    static final String INSTALL_ID = "install_id";
 
     private final SharedPreferences p;
 
@@ -88,7 +90,19 @@ final class Prefs {
 
     /** @throws IllegalArgumentException with a readable message for a bad server URL */
     ClientConfig clientConfig() {
-        return new ClientConfig(serverUrl(), apiKey(), Build.MANUFACTURER + " " + Build.MODEL, true,
-                RetryPolicy.defaults());
+        return new ClientConfig(serverUrl(), apiKey(), deviceId(), true, RetryPolicy.defaults());
+    }
+
+    /**
+     * X-Lumipose-Device: the server keeps one tracking session per value, so two phones of the same
+     * model must differ; a random id made once per installation, after the model for the logs.
+     */
+    String deviceId() {
+        String id = p.getString(INSTALL_ID, null);
+        if (id == null) {
+            id = UUID.randomUUID().toString().substring(0, 8);
+            p.edit().putString(INSTALL_ID, id).apply();
+        }
+        return Build.MANUFACTURER + " " + Build.MODEL + " " + id;
     }
 }

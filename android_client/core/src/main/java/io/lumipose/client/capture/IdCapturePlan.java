@@ -6,16 +6,20 @@ import java.util.List;
 /**
  * Settings of the short-exposure beacon-ID (VLC) frames taken beside pose frames, after the
  * project's capture protocol (server/vlc/capture.py): exposure at most about a third of a code chip,
- * ISO raised so the panel stays well below clipping, and a frame interval that advances the
- * beacon's repeating message by 0.382 of its period from one ID frame to the next, so a few
- * consecutive frames see well-spread parts of the code.
+ * ISO raised so the panel stays well below clipping, and a burst of {@link #BURST_FRAMES} frames
+ * whose interval advances the beacon's repeating message by {@link #BURST_STEP} of its period from
+ * one ID frame to the next, so together they see the whole code (docs/vlc.md).
  */
 public final class IdCapturePlan {
     /** The beacons' chip rate and message length (5-bit header + 8 data bits in biphase mark code). */
     public static final double CHIP_RATE_HZ = 2500.0;
     public static final int MESSAGE_CHIPS = 21;
-    /** (3 - sqrt 5) / 2: the phase step that spreads successive frames most evenly over the message. */
+    /** (3 - sqrt 5) / 2: the phase step that spreads any number of frames most evenly over the message. */
     public static final double GOLDEN_STEP = (3.0 - Math.sqrt(5.0)) / 2.0;
+    /** ID frames after each pose frame; with {@link #BURST_STEP} they tile the message (server's office bench). */
+    public static final int BURST_FRAMES = 4;
+    /** A quarter message from one ID frame of a burst to the next. */
+    public static final double BURST_STEP = 1.0 / BURST_FRAMES;
     /** ID-frame brightness as a fraction of the pose frame's (exposure x ISO); the pose frame clips ~4x over. */
     public static final double DEFAULT_BRIGHTNESS_FRACTION = 0.2;
 
@@ -28,18 +32,21 @@ public final class IdCapturePlan {
 
     /**
      * The frame interval nearest {@code nominalNs} that advances the message phase by
-     * {@link #GOLDEN_STEP} periods, never shorter than {@code minimumNs}.
+     * {@code step} periods (in (0, 1)), never shorter than {@code minimumNs}.
      */
-    public static long steppedIntervalNs(long nominalNs, long minimumNs) {
+    public static long steppedIntervalNs(long nominalNs, long minimumNs, double step) {
         if (nominalNs <= 0) {
             throw new IllegalArgumentException("nominal frame interval must be > 0 ns, got " + nominalNs);
         }
+        if (!(step > 0 && step < 1)) {
+            throw new IllegalArgumentException("step must be a fraction of a period in (0, 1), got " + step);
+        }
         double period = messagePeriodNs();
-        long whole = Math.max(0, Math.round(nominalNs / period - GOLDEN_STEP));
-        while ((whole + GOLDEN_STEP) * period < minimumNs) {
+        long whole = Math.max(0, Math.round(nominalNs / period - step));
+        while ((whole + step) * period < minimumNs) {
             whole++;
         }
-        return Math.round((whole + GOLDEN_STEP) * period);
+        return Math.round((whole + step) * period);
     }
 
     /**
@@ -69,7 +76,7 @@ public final class IdCapturePlan {
             }
         }
         long frameNs = steppedIntervalNs(Math.max(base.frameDurationNs, ranges.streamMinFrameDurationNs),
-                Math.max(base.exposureNs, ranges.streamMinFrameDurationNs));
+                Math.max(base.exposureNs, ranges.streamMinFrameDurationNs), BURST_STEP);
         if (ranges.maxFrameDurationNs != null && frameNs > ranges.maxFrameDurationNs) {
             notes.add("stepped ID frame interval " + frameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION");
             frameNs = ranges.maxFrameDurationNs;

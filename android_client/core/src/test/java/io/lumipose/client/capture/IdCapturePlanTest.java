@@ -18,7 +18,7 @@ class IdCapturePlanTest {
     @Test
     void intervalAdvancesThePhaseByTheGoldenStep() {
         // 33.3 ms / 8.4 ms - 0.382 = 3.59 -> 4 whole periods + 0.382.
-        long ns = IdCapturePlan.steppedIntervalNs(33_333_333L, 33_333_333L);
+        long ns = IdCapturePlan.steppedIntervalNs(33_333_333L, 33_333_333L, IdCapturePlan.GOLDEN_STEP);
         assertEquals(Math.round((4 + (3 - Math.sqrt(5)) / 2) * 8_400_000L), ns);
         double phase = (ns / 8_400_000.0) % 1.0;
         assertEquals(0.381966, phase, 1e-6);
@@ -28,9 +28,10 @@ class IdCapturePlanTest {
     @Test
     void intervalNeverUndercutsTheStreamMinimum() {
         // Nominal 30 ms rounds down to 3.382 periods = 28.4 ms, below a 30 ms minimum: one more period.
-        long ns = IdCapturePlan.steppedIntervalNs(30_000_000L, 30_000_000L);
+        long ns = IdCapturePlan.steppedIntervalNs(30_000_000L, 30_000_000L, IdCapturePlan.GOLDEN_STEP);
         assertEquals(Math.round(4.381966011250105 * 8_400_000L), ns);
-        assertThrows(IllegalArgumentException.class, () -> IdCapturePlan.steppedIntervalNs(0, 0));
+        assertThrows(IllegalArgumentException.class, () -> IdCapturePlan.steppedIntervalNs(0, 0, 0.25));
+        assertThrows(IllegalArgumentException.class, () -> IdCapturePlan.steppedIntervalNs(30_000_000L, 0, 1.0));
     }
 
     @Test
@@ -41,7 +42,9 @@ class IdCapturePlanTest {
         assertEquals(125_000L, id.exposureNs);
         // 100 ISO x (10 ms / 0.125 ms) x 0.2 = 1600.
         assertEquals(1600, id.sensitivityIso);
-        assertEquals(0.381966, (id.frameDurationNs / 8_400_000.0) % 1.0, 1e-6);
+        // A burst of 4 frames a quarter message apart: 4.25 periods = 35.70 ms at 30 fps (docs/vlc.md).
+        assertEquals(35_700_000L, id.frameDurationNs);
+        assertEquals(4, IdCapturePlan.BURST_FRAMES);
         assertTrue(id.notes.isEmpty(), id.notes.toString());
     }
 
