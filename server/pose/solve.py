@@ -215,6 +215,39 @@ def _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigm
     return float(np.degrees(np.sqrt(np.trace(covariance[:2, :2]) / 2)))
 
 
+def _ippe_square_minima(corners4, image_corners, camera_matrix) -> list[tuple[float, np.ndarray, np.ndarray]]:
+    """IPPE_SQUARE's local minima (reprojection error, rvec, tvec), best first; non-finite ones dropped."""
+    count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
+        corners4, image_corners, camera_matrix, None, flags=cv2.SOLVEPNP_IPPE_SQUARE
+    )
+    minima = [(float(e), r, t) for e, r, t in zip(np.ravel(errors)[:count], rvecs, tvecs)
+              if np.isfinite(e) and np.all(np.isfinite(r)) and np.all(np.isfinite(t))]
+    return sorted(minima, key=lambda m: m[0])
+
+
+def _square_ambiguity(corners4, image_corners, beacon: Beacon, camera_matrix,
+                      nudge_px: float = 1e-3) -> tuple[float, float]:
+    """(error ratio of IPPE_SQUARE's two minima, distance between their camera positions, m).
+
+    IPPE_SQUARE's closed form divides zero by zero (NaN poses, NaN errors) when the image of
+    the square is exactly square and axis-aligned, a face-to-face view with the sides along
+    the pixel grid (distance bench at 1.7 m, point (1, 0)). There the ratio is a limit, so
+    it is taken a thousandth of a pixel away (a tenth of the corners' noise floor), which
+    gives the same minima as any nearby view. If IPPE still finds fewer than two finite
+    minima, no second pose was found: ratio and distance 0, as for a single solution.
+    """
+    minima = _ippe_square_minima(corners4, image_corners, camera_matrix)
+    if len(minima) < 2:
+        nudged = image_corners + np.array([[nudge_px, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+        minima = _ippe_square_minima(corners4, nudged, camera_matrix)
+    if len(minima) < 2:
+        return 0.0, 0.0
+    (first, r0, t0), (last, r1, t1) = minima[0], minima[-1]
+    ratio = (first + 1e-9) / (last + 1e-9)
+    positions = [_camera_in_map(beacon, r, t)[0] for r, t in ((r0, t0), (r1, t1))]
+    return float(ratio), float(np.linalg.norm(positions[0] - positions[1]))
+
+
 def solve_pose(
     corners_px: np.ndarray,
     center_px: np.ndarray,
@@ -235,13 +268,7 @@ def solve_pose(
         return Refusal(FailureReason.pose_failed, "SQPnP found no pose with the beacon in front of the camera")
     rvec, tvec = cv2.solvePnPRefineLM(object_points, image_points, camera_matrix, None, rvec, tvec)
 
-    count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
-        corners4, image_points[:4], camera_matrix, None, flags=cv2.SOLVEPNP_IPPE_SQUARE
-    )
-    errors = np.sort(np.asarray(errors, dtype=float).ravel())
-    ratio = float((errors[0] + 1e-9) / (errors[-1] + 1e-9)) if count > 1 else 0.0
-    positions = [_camera_in_map(beacon, r, t)[0] for r, t in zip(rvecs, tvecs)]
-    disagreement = float(np.linalg.norm(positions[0] - positions[-1]))
+    ratio, disagreement = _square_ambiguity(corners4, image_points[:4], beacon, camera_matrix)
 
     corner_sigma = max(corner_sigma_px, rules.corner_sigma_floor_px)
     tilt_sigma = _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma)

@@ -139,3 +139,32 @@ def test_map_prior_weighs_vision_and_gravity_by_what_each_knows():
     # vision's tilt is ~0.5 degree uncertain here, the sensor's 0.1: the fit keeps ~4 % of vision's error
     assert tilt_error_deg(fused.rotation_wc, rotation) < min(0.1, tilt_error_deg(vision.rotation_wc, rotation) / 5)
     assert np.linalg.norm(fused.position_m - [0.6, -0.4, 0]) < np.linalg.norm(vision.position_m - [0.6, -0.4, 0])
+
+
+# Corners the pipeline measured at commit 64752c6 on two face-to-face frames of
+# `lumipose bench distance` (full-resolution Mi 8 front camera): an exactly square,
+# axis-aligned image, where IPPE_SQUARE's closed form returns NaN poses.
+FACE_TO_FACE_K = np.array([[3911.1111111111113, 0.0, 1939.5], [0.0, 3911.1111111111113, 2591.5], [0.0, 0.0, 1.0]])
+FACE_TO_FACE_CORNERS = {
+    1.7: [[956.053686884913, 2791.946270314395], [1356.9463687501868, 2791.9462743756853],
+          [1356.946366919429, 2391.0537193573796], [956.0536800437734, 2391.053733396644]],
+    2.1: [[1777.2356524691281, 4940.764348385068], [2101.764347760772, 4940.764347785786],
+          [2101.7643477333822, 4616.235651757382], [1777.2356520030137, 4616.23565233638]],
+}
+
+
+@pytest.mark.parametrize("height_m", sorted(FACE_TO_FACE_CORNERS))
+def test_face_to_face_square_gives_a_finite_ambiguity_ratio(height_m):
+    corners = np.array(FACE_TO_FACE_CORNERS[height_m])
+    beacon = Beacon(id=0, center_m=[0, 0, height_m], side_m=0.174, corner_radius_m=0.02)
+    raw = cv2.solvePnPGeneric(model_corners_m(beacon.side_m), corners, FACE_TO_FACE_K, None,
+                              flags=cv2.SOLVEPNP_IPPE_SQUARE)[3]
+    assert not np.all(np.isfinite(raw))  # the degenerate case this test is about
+    for mode in GravityMode:
+        pose = solve_pose(corners, corners.mean(axis=0), beacon, FACE_TO_FACE_K, np.array([0.0, 0.0, -1.0]),
+                          gravity_mode=mode)
+        assert not isinstance(pose, Refusal), pose
+        # off the panel's axis the second minimum is far worse: not ambiguous
+        assert np.isfinite(pose.ambiguity_ratio) and pose.ambiguity_ratio < 0.01
+        assert np.isfinite(pose.alternative_distance_m)
+        assert abs(pose.position_m[2]) < 0.01  # the camera is at height 0
