@@ -10,7 +10,8 @@ from the image itself, in the way of AprilTag's edge refinement:
 2. The crossings are undistorted (when the camera has distortion) and the four sides are
    fitted as lines together (total least squares, outliers trimmed), with the crossings'
    pixel-locking error as a shared periodic term of their sub-pixel phase
-   (`_remove_pixel_locking`).
+   (`_remove_pixel_locking`; only on sides that cross the pixel grid: along a pixel row
+   or column the term is a constant, no different from the side's offset).
 3. The mid-level contour of a *clipped* panel is not its outline (contract, "Physics"): the
    PSF spreads the saturated light outward, so the contour is the outline grown by some
    distance D (a fraction of a pixel to a few pixels, depending on overexposure and PSF,
@@ -41,6 +42,10 @@ from server.vision.binarize import Levels
 
 UNIT_SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or side k + 1, k - 1
+# A side takes part in the pixel-locking fit only if its line crosses this much of its outward
+# axis (a tenth of L's period, several times the crossings' 0.01-0.04 px noise): below it
+# the crossings' phases are set by their noise, not by the geometry.
+MIN_PHASE_SPAN_PX = 0.1
 
 
 @dataclass(frozen=True)
@@ -158,7 +163,8 @@ def _fit_lines(
     return lines, rms, _line_offset_sigma(residuals, weights, rms)
 
 
-def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmonics: int = 2):
+def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmonics: int = 2,
+                          min_phase_span_px: float = MIN_PHASE_SPAN_PX):
     """Refit the four lines together with the crossings' pixel-locking error.
 
     A level crossing interpolated between the pixels of a steep, clipped edge is off by a
@@ -169,6 +175,14 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     side's outward axis (the edge profile is the same), so one Fourier series (`harmonics`
     terms) is fitted with small turns and shifts of the four lines, linearly, and left out.
     Returns the new lines and the residuals without L.
+
+    Only sides whose crossings span at least `min_phase_span_px` of their outward axis
+    (the fitted line's drift across the pixel grid from its first kept crossing to its
+    last) take part: on a side running along a pixel row or column every crossing has the
+    same phase, L is a constant there and cannot be told from the side's own offset (the
+    within-side spread of the phase is then the crossings' own noise, so fitting L would fit
+    the noise and move the side). Such sides are left as fitted, their L in their offset;
+    when no side qualifies (a face-to-face view) nothing is refitted.
     """
     normal = lines[:, :2]
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -177,15 +191,22 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     phase = np.mod(sign[:, None] * phase_points[np.arange(4), :, axis], 1.0)
     offset = points - centres[:, None, :]
     residuals = offset[..., 0] * normal[:, :1] + offset[..., 1] * normal[:, 1:]
+    along = offset[..., 0] * tangent[:, :1] + offset[..., 1] * tangent[:, 1:]
+    kept = weights > 0
+    extent = np.where(kept, along, -np.inf).max(axis=1) - np.where(kept, along, np.inf).min(axis=1)
+    spans = np.abs(tangent[np.arange(4), axis]) * extent  # px the line crosses on its outward axis
+    sampled = spans >= min_phase_span_px
+    if not sampled.any():
+        return lines, residuals
     # columns: a small turn of each side (4), a shift of each side (4), the series (2 per harmonic)
     design = np.zeros(points.shape[:2] + (8 + 2 * harmonics,))
     sides = np.arange(4)
-    design[sides, :, sides] = offset[..., 0] * tangent[:, :1] + offset[..., 1] * tangent[:, 1:]
+    design[sides, :, sides] = along
     design[sides, :, 4 + sides] = 1.0
     angle = 2 * np.pi * phase
     for m in range(1, harmonics + 1):
-        design[..., 6 + 2 * m] = -np.cos(m * angle)
-        design[..., 7 + 2 * m] = -np.sin(m * angle)
+        design[..., 6 + 2 * m] = -np.cos(m * angle) * sampled[:, None]
+        design[..., 7 + 2 * m] = -np.sin(m * angle) * sampled[:, None]
     # Normal equations with einsum, not lstsq: LAPACK's least squares wakes OpenBLAS's threads,
     # which then spin on a 2-core machine and stall every stage after them by milliseconds.
     weighted = design * weights[..., None]
@@ -196,7 +217,7 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     scale = np.linalg.norm(new_normal, axis=1)
     c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
     new_lines = np.column_stack([new_normal, c]) / scale[:, None]
-    locking = -np.einsum("kni,i->kn", design[..., 8:], solution[8:])
+    locking = -np.einsum("kni,i->kn", design[..., 8:], solution[8:])  # 0 on the sides left out
     new_residuals = points[..., 0] * new_lines[:, :1] + points[..., 1] * new_lines[:, 1:2] + new_lines[:, 2:3] - locking
     return new_lines, new_residuals
 
