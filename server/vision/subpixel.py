@@ -178,11 +178,12 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
 
     Only sides whose crossings span at least `min_phase_span_px` of their outward axis
     (the fitted line's drift across the pixel grid from its first kept crossing to its
-    last) take part: on a side running along a pixel row or column every crossing has the
-    same phase, L is a constant there and cannot be told from the side's own offset (the
-    within-side spread of the phase is then the crossings' own noise, so fitting L would fit
-    the noise and move the side). Such sides are left as fitted, their L in their offset;
-    when no side qualifies (a face-to-face view) nothing is refitted.
+    last) fit L: on a side running along a pixel row or column every crossing has the same
+    phase, L is a constant there and cannot be told from the side's own offset (the
+    within-side spread of the phase is then the crossings' own noise, so fitting L on it
+    would fit the noise and move the side). L from the other sides is still taken out of
+    such a side (a trapezoid seen under a tilt); when no side qualifies (a face-to-face view)
+    nothing is refitted and each side keeps its L in its offset.
     """
     normal = lines[:, :2]
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -212,12 +213,18 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     weighted = design * weights[..., None]
     normal_matrix = np.einsum("kni,knj->ij", weighted, design)
     solution = np.linalg.solve(normal_matrix, -np.einsum("kni,kn->i", weighted, residuals))
-    turn, shift = solution[:4], solution[4:8]
+    # L, fitted on the sides that sample its phase, is taken out of all four (the edge profile
+    # is the same): each side's turn and shift are fitted again to its crossings less L.
+    harmonic = np.arange(1, harmonics + 1)
+    locking = np.cos(angle[..., None] * harmonic) @ solution[8::2] + np.sin(angle[..., None] * harmonic) @ solution[9::2]
+    own = np.stack([along, np.ones_like(along)], axis=-1)
+    weighted_own = own * weights[..., None]
+    turn, shift = np.linalg.solve(np.einsum("kni,knj->kij", weighted_own, own),
+                                  np.einsum("kni,kn->ki", weighted_own, locking - residuals)[..., None])[..., 0].T
     new_normal = normal + turn[:, None] * tangent
     scale = np.linalg.norm(new_normal, axis=1)
     c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
     new_lines = np.column_stack([new_normal, c]) / scale[:, None]
-    locking = -np.einsum("kni,i->kn", design[..., 8:], solution[8:])  # 0 on the sides left out
     new_residuals = points[..., 0] * new_lines[:, :1] + points[..., 1] * new_lines[:, 1:2] + new_lines[:, 2:3] - locking
     return new_lines, new_residuals
 

@@ -172,3 +172,27 @@ def test_sides_along_the_pixel_grid_are_left_as_fitted():
     centres = measured.mean(axis=1)
     forced, _ = _remove_pixel_locking(plain, measured, weights, measured, centres, min_phase_span_px=0.0)
     assert np.abs(forced[:, 2] - plain[:, 2]).max() > 0.05
+
+
+def test_locking_from_tilted_sides_is_taken_out_of_grid_aligned_ones():
+    """A trapezoid (a level panel seen under a pitch): two sides along pixel rows, two turned.
+    The turned sides fit L; the aligned ones do not fit it but have it taken out."""
+    rng = np.random.default_rng(3)
+    corners = np.array([[1400.3, 2000.6], [1800.3, 2000.6], [1820.3, 2400.6], [1380.3, 2400.6]])
+    _, normals, _ = _outward_normals(corners)
+    t = np.linspace(0.15, 0.85, 120)
+    points = corners[:, None, :] + t[None, :, None] * (np.roll(corners, -1, axis=0) - corners)[:, None, :]
+    axis = np.argmax(np.abs(normals), axis=1)
+    outward_coordinate = np.sign(normals[np.arange(4), axis])[:, None] * points[np.arange(4), :, axis]
+    locking = 0.06 * np.sin(2 * np.pi * outward_coordinate) + 0.02 * np.cos(4 * np.pi * outward_coordinate)
+    measured = points + (locking + rng.normal(0, 0.01, locking.shape))[..., None] * normals[:, None, :]
+    weights = np.ones(locking.shape)
+    plain, _, _ = _fit_lines(measured, weights, normals)
+    fitted, _, _ = _fit_lines(measured, weights, normals, measured)
+    ends = np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
+    plain_error = np.abs(np.einsum("kjd,kd->kj", ends, plain[:, :2]) + plain[:, 2:3]).max(axis=1)
+    fitted_error = np.abs(np.einsum("kjd,kd->kj", ends, fitted[:, :2]) + fitted[:, 2:3]).max(axis=1)
+    # sides 0 and 2 run along rows: plain, their offsets carry L at their one phase. Measured
+    # over seeds 0-5: plain 0.029-0.043 px on those sides, fitted <= 0.013 px on any side.
+    assert plain_error[[0, 2]].min() > 0.025
+    assert fitted_error.max() < 0.015
