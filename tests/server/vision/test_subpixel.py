@@ -120,6 +120,30 @@ def test_refined_sides_lie_on_the_true_edges_of_a_rendered_panel(yaw_deg, overex
     assert edges.edge_shift_px < -0.3  # an overexposed panel's mid level lies outside its edge
 
 
+def locked_crossings(corners: np.ndarray, wave, noise_px: float, rng, per_side: int):
+    """Edge crossings along the four sides of `corners`, each pushed along its side's outward
+    normal by `wave(phase)` (the pixel-locking error at its sub-pixel phase) plus noise.
+
+    Returns (measured points (4, n, 2), normals (4, 2), unit weights (4, n)).
+    """
+    _, normals, _ = _outward_normals(corners)
+    t = np.linspace(0.15, 0.85, per_side)
+    points = corners[:, None, :] + t[None, :, None] * (np.roll(corners, -1, axis=0) - corners)[:, None, :]
+    axis = np.argmax(np.abs(normals), axis=1)
+    outward_coordinate = np.sign(normals[np.arange(4), axis])[:, None] * points[np.arange(4), :, axis]
+    locking = wave(outward_coordinate)
+    measured = points + (locking + rng.normal(0, noise_px, locking.shape))[..., None] * normals[:, None, :]
+    return measured, normals, np.ones(locking.shape)
+
+
+def one_harmonic(phase):
+    return 0.06 * np.sin(2 * np.pi * phase)
+
+
+def two_harmonics(phase):
+    return 0.06 * np.sin(2 * np.pi * phase) + 0.02 * np.cos(4 * np.pi * phase)
+
+
 def test_pixel_locking_of_grid_aligned_sides_is_fitted_out():
     """Crossings off by a periodic function of their sub-pixel phase (as interpolated
     crossings of a clipped edge are) bend lines that run nearly along the pixel grid; the
@@ -128,14 +152,7 @@ def test_pixel_locking_of_grid_aligned_sides_is_fitted_out():
     side, tilt = 230.0, np.radians(0.3)  # a panel 3 m away, turned 0.3 degree off the grid
     rotation = np.array([[np.cos(tilt), -np.sin(tilt)], [np.sin(tilt), np.cos(tilt)]])
     corners = (np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * side / 2) @ rotation.T + [1500.3, 2100.6]
-    directions, normals, _ = _outward_normals(corners)
-    t = np.linspace(0.15, 0.85, 110)
-    points = corners[:, None, :] + t[None, :, None] * (np.roll(corners, -1, axis=0) - corners)[:, None, :]
-    axis = np.argmax(np.abs(normals), axis=1)
-    outward_coordinate = np.sign(normals[np.arange(4), axis])[:, None] * points[np.arange(4), :, axis]
-    locking = 0.06 * np.sin(2 * np.pi * outward_coordinate) + 0.02 * np.cos(4 * np.pi * outward_coordinate)
-    measured = points + (locking + rng.normal(0, 0.01, locking.shape))[..., None] * normals[:, None, :]
-    weights = np.ones(locking.shape)
+    measured, normals, weights = locked_crossings(corners, two_harmonics, 0.01, rng, 110)
     plain, _, plain_sigma = _fit_lines(measured, weights, normals)
     fitted, _, fitted_sigma = _fit_lines(measured, weights, normals, measured)
 
@@ -155,14 +172,7 @@ def test_sides_along_the_pixel_grid_are_left_as_fitted():
     rng = np.random.default_rng(2)
     side = 400.0
     corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * side / 2 + [1500.3, 2100.6]
-    _, normals, _ = _outward_normals(corners)
-    t = np.linspace(0.15, 0.85, 120)
-    points = corners[:, None, :] + t[None, :, None] * (np.roll(corners, -1, axis=0) - corners)[:, None, :]
-    axis = np.argmax(np.abs(normals), axis=1)
-    outward_coordinate = np.sign(normals[np.arange(4), axis])[:, None] * points[np.arange(4), :, axis]
-    locking = 0.06 * np.sin(2 * np.pi * outward_coordinate)  # one constant per side here
-    measured = points + (locking + rng.normal(0, 0.02, locking.shape))[..., None] * normals[:, None, :]
-    weights = np.ones(locking.shape)
+    measured, normals, weights = locked_crossings(corners, one_harmonic, 0.02, rng, 120)  # a constant per side
     plain, _, _ = _fit_lines(measured, weights, normals)
     fitted, _, _ = _fit_lines(measured, weights, normals, measured)
     np.testing.assert_allclose(fitted, plain, atol=1e-12)
@@ -179,14 +189,7 @@ def test_locking_from_tilted_sides_is_taken_out_of_grid_aligned_ones():
     The turned sides fit L; the aligned ones do not fit it but have it taken out."""
     rng = np.random.default_rng(3)
     corners = np.array([[1400.3, 2000.6], [1800.3, 2000.6], [1820.3, 2400.6], [1380.3, 2400.6]])
-    _, normals, _ = _outward_normals(corners)
-    t = np.linspace(0.15, 0.85, 120)
-    points = corners[:, None, :] + t[None, :, None] * (np.roll(corners, -1, axis=0) - corners)[:, None, :]
-    axis = np.argmax(np.abs(normals), axis=1)
-    outward_coordinate = np.sign(normals[np.arange(4), axis])[:, None] * points[np.arange(4), :, axis]
-    locking = 0.06 * np.sin(2 * np.pi * outward_coordinate) + 0.02 * np.cos(4 * np.pi * outward_coordinate)
-    measured = points + (locking + rng.normal(0, 0.01, locking.shape))[..., None] * normals[:, None, :]
-    weights = np.ones(locking.shape)
+    measured, normals, weights = locked_crossings(corners, two_harmonics, 0.01, rng, 120)
     plain, _, _ = _fit_lines(measured, weights, normals)
     fitted, _, _ = _fit_lines(measured, weights, normals, measured)
     ends = np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
