@@ -18,6 +18,7 @@ import re
 import shutil
 import uuid
 from dataclasses import dataclass
+from functools import cached_property, lru_cache
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -50,6 +51,18 @@ def write_atomic(path: Path, data: bytes) -> None:
         temporary.unlink(missing_ok=True)
 
 
+def _read_map(path: Path) -> BeaconMap:
+    """The map in `path`, parsed again only when the file has been replaced (a locate per frame
+    must not parse the map's JSON each time)."""
+    stat = path.stat()
+    return _parsed_map(path, stat.st_mtime_ns, stat.st_size, stat.st_ino)
+
+
+@lru_cache(maxsize=64)
+def _parsed_map(path: Path, mtime_ns: int, size: int, inode: int) -> BeaconMap:
+    return load_map(path)
+
+
 def _check_name(name: str) -> str:
     if not _NAME.match(name):
         raise StoreError("bad_name", f"map name '{name}' must match {NAME_PATTERN}", field="name")
@@ -67,16 +80,22 @@ class MapStore:
     def _stored_dir(self) -> Path:
         return self.data_dir / "maps"
 
-    def _sources(self) -> dict[str, tuple[str, Path]]:
+    @cached_property
+    def _fixed_sources(self) -> dict[str, tuple[str, Path]]:
+        """The bundled and startup maps: read once, they do not change while the service runs."""
         sources = {load_map(DEMO_MAP_PATH).name: ("bundled", DEMO_MAP_PATH)}
         if self.startup_map is not None:
             sources[load_map(self.startup_map).name] = ("startup", self.startup_map)
-        for path in sorted(self._stored_dir.glob("*.json")):
-            sources[path.stem] = ("stored", path)
         return sources
 
+    def _sources(self) -> dict[str, tuple[str, Path]]:
+        # Stored maps are listed on every call: another replica may have written one.
+        stored = {path.stem: ("stored", path) for path in sorted(self._stored_dir.glob("*.json"))}
+        return self._fixed_sources | stored
+
     def default_name(self) -> str:
-        return load_map(self.startup_map or DEMO_MAP_PATH).name
+        """The startup map's name, or else the bundled demo map's (the startup map comes last)."""
+        return list(self._fixed_sources)[-1]
 
     def active_name(self) -> str:
         path = self.data_dir / "active_map.json"
@@ -92,14 +111,14 @@ class MapStore:
 
     def summaries(self) -> list[MapSummary]:
         active = self.active_name()
-        return [MapSummary(name=name, beacons=len(load_map(path).beacons), active=name == active, source=source)
+        return [MapSummary(name=name, beacons=len(_read_map(path).beacons), active=name == active, source=source)
                 for name, (source, path) in self._sources().items()]
 
     def get(self, name: str) -> BeaconMap:
         source = self._sources().get(_check_name(name))
         if source is None:
             raise StoreError("not_found", f"no map named '{name}'", field="name")
-        return load_map(source[1])
+        return _read_map(source[1])
 
     def put(self, name: str, beacon_map: BeaconMap) -> BeaconMap:
         if beacon_map.name != _check_name(name):
