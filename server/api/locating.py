@@ -9,7 +9,7 @@ from starlette.concurrency import run_in_threadpool
 from server.api.deps import Services
 from server.api.upload import FrameUpload
 from server.ingest import decode_frame
-from server.pipeline import PipelineOptions, locate
+from server.pipeline import PipelineOptions
 from shared_schemas import BeaconMap, LocateResult
 
 
@@ -21,10 +21,7 @@ class Located:
 
 def _locate_now(services: Services, upload: FrameUpload, beacon_map: BeaconMap, options: PipelineOptions,
                 device: str | None) -> LocateResult:
-    frame = decode_frame(upload.data, upload.meta)
-    if device is None:
-        return locate(frame, beacon_map, options)
-    return services.devices.locate(device, frame, beacon_map, options)
+    return services.devices.locate(device, decode_frame(upload.data, upload.meta), beacon_map, options)
 
 
 async def locate_upload(services: Services, upload: FrameUpload, map_name: str | None,

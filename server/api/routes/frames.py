@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import Header, Query, Request
+from fastapi import Depends, Header, Query, Request
 
-from server.api.deps import Services
+from server.api.deps import ServicesDep
 from server.api.upload import FRAME_HEADER, FrameUpload, receive_frame
 from server.pipeline import CornerMethod, PipelineOptions
 from server.pose.solve import GravityMode
@@ -37,10 +37,17 @@ GravityQuery = Annotated[GravityMode, Query(description="use the frame's gravity
 CornersQuery = Annotated[CornerMethod, Query(description="corner method: rounded (default) or the paper's square")]
 
 
-def pipeline_options(beacon_id: int | None, gravity: GravityMode, corners: CornerMethod) -> PipelineOptions:
+def _pipeline_options(beacon_id: BeaconQuery = None, gravity: GravityQuery = GravityMode.auto,
+                      corners: CornersQuery = CornerMethod.rounded) -> PipelineOptions:
     return PipelineOptions(beacon_id=beacon_id, gravity_mode=gravity, corner_method=corners)
 
 
-async def frame_upload(request: Request, services: Services, frame_header: str | None) -> FrameUpload:
+async def _frame_upload(request: Request, services: ServicesDep, frame_json: FrameHeader = None) -> FrameUpload:
     settings = services.settings
-    return await receive_frame(request, frame_header, settings.max_upload_bytes, settings.read_timeout_s)
+    return await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
+
+
+# Route parameters: the pipeline's query options, and the uploaded frame (read after the
+# route's own dependencies, so a write without its API key is refused before its body is read).
+OptionsDep = Annotated[PipelineOptions, Depends(_pipeline_options)]
+UploadDep = Annotated[FrameUpload, Depends(_frame_upload)]

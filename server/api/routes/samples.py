@@ -4,19 +4,16 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Query, Request, Response
+from fastapi import APIRouter, Query, Response
 from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep, WriteAccess
-from server.api.locating import locate_upload
 from server.api.errors import ERROR_RESPONSES
-from server.api.routes.frames import (FRAME_REQUEST_BODY, BeaconQuery, CornersQuery,
-                                      DeviceHeader, FrameHeader, GravityQuery, MapQuery, frame_upload,
-                                      pipeline_options)
+from server.api.locating import locate_upload
+from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, OptionsDep, UploadDep
 from server.api.upload import FRAME_HEADER, FrameUpload
 from server.evaluation import evaluate
-from server.pipeline import CornerMethod, PipelineOptions
-from server.pose.solve import GravityMode
+from server.pipeline import PipelineOptions
 from shared_schemas.api import Evaluation, SampleInfo, SampleList
 
 router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES)
@@ -26,13 +23,10 @@ LabelQuery = Annotated[str | None, Query(max_length=200, description="free text;
 
 @router.post("", status_code=201, response_model=SampleInfo,
              openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess])
-async def store_sample(request: Request, services: ServicesDep, frame_json: FrameHeader = None,
-                       device: DeviceHeader = None, label: LabelQuery = None, map: MapQuery = None,
-                       beacon_id: BeaconQuery = None, gravity: GravityQuery = GravityMode.auto,
-                       corners: CornersQuery = CornerMethod.rounded) -> SampleInfo:
+async def store_sample(services: ServicesDep, upload: UploadDep, options: OptionsDep, device: DeviceHeader = None,
+                       label: LabelQuery = None, map: MapQuery = None) -> SampleInfo:
     """Store a frame with its label and the result it gives now (a frame without a fix is kept too)."""
-    upload = await frame_upload(request, services, frame_json)
-    located = await locate_upload(services, upload, map, pipeline_options(beacon_id, gravity, corners))
+    located = await locate_upload(services, upload, map, options)
     return await run_in_threadpool(services.samples.add, upload.data, upload.meta, located.result,
                                    label=label, device=device, map_name=located.map_name)
 
