@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from server.outcomes import FrameError
 from shared_schemas import CameraIntrinsics, DeviceProfile, FrameMeta, ProfileRef, device_profiles
 
 
@@ -21,7 +22,7 @@ def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> 
 
 
 def resolve_camera(meta: FrameMeta) -> CameraIntrinsics:
-    """The intrinsics of the frame's own pixels; raises `server.ingest.FrameError` for an unknown profile.
+    """The intrinsics of the frame's own pixels; raises `server.outcomes.FrameError` for an unknown profile.
 
     A cropped frame's camera is the full frame's with the principal point moved by the window's
     offset, which is exact for the pinhole and for OpenCV's distortion (centred on the principal point).
@@ -33,8 +34,6 @@ def resolve_camera(meta: FrameMeta) -> CameraIntrinsics:
 
 
 def _profile_camera(ref: ProfileRef, meta: FrameMeta) -> CameraIntrinsics:
-    from server.ingest import FrameError
-
     profile = device_profiles().get(ref.profile)
     if profile is None:
         raise FrameError(f"unknown device profile '{ref.profile}'; known: {', '.join(sorted(device_profiles()))}",

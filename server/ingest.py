@@ -15,19 +15,11 @@ import numpy as np
 from pydantic import ValidationError
 
 from server.camera import resolve_camera
+from server.outcomes import FrameError
 from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
 from shared_schemas.fixture_files import fixture_paths
 
 MAX_PIXELS = 100_000_000
-
-
-class FrameError(ValueError):
-    """A frame or its metadata that cannot be read; `field` is the dotted field at fault."""
-
-    def __init__(self, message: str, field: str | None = None):
-        super().__init__(message)
-        self.message = message
-        self.field = field
 
 
 @dataclass(frozen=True)

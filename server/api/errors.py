@@ -13,7 +13,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
 
-from server.ingest import FrameError
+from server.outcomes import FrameError
 from server.store import StoreError
 from shared_schemas import ErrorBody
 

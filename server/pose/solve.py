@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 
 from server.geometry import beacon_rotation, beacon_to_world, model_corners_m, rotation_z
-from server.vision.contour import Refusal
+from server.outcomes import Refusal
 from shared_schemas import Beacon, FailureReason
 
 

@@ -15,7 +15,8 @@ import cv2
 import numpy as np
 
 from server.vision.binarize import Levels, estimate_levels
-from server.vision.contour import BlobRules, Refusal, find_beacon_blob
+from server.outcomes import Refusal
+from server.vision.contour import BlobRules, find_beacon_blob
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from server.outcomes import Refusal
 from shared_schemas import FailureReason
 
 
@@ -36,14 +37,6 @@ class Blob:
     contour: np.ndarray
     area_px: float
     bounding_box: tuple[int, int, int, int]  # x, y, width, height
-
-
-@dataclass(frozen=True)
-class Refusal:
-    """Why no blob was accepted (the most telling reason over all blobs)."""
-
-    reason: FailureReason
-    message: str
 
 
 def _touches_border(box: tuple[int, int, int, int], shape: tuple[int, int]) -> bool:

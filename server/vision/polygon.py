@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from server.vision.contour import Refusal
+from server.outcomes import Refusal
 from shared_schemas import FailureReason
 
 

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from server.vision.binarize import Levels, estimate_levels, threshold
-from server.vision.contour import BlobRules, Refusal, find_beacon_blob
+from server.outcomes import Refusal
+from server.vision.contour import BlobRules, find_beacon_blob
 from shared_schemas import FailureReason
 
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from server.camera import intrinsics_from_profile
-from server.ingest import FrameError, decode_frame, parse_meta, read_fixture
+from server.ingest import decode_frame, parse_meta, read_fixture
+from server.outcomes import FrameError
 from shared_schemas import device_profiles
 
 CAMERA = {"fx": 500.0, "fy": 500.0, "cx": 3.5, "cy": 2.5}

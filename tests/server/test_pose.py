@@ -16,7 +16,7 @@ from server.geometry import (
 )
 from server.pose.ordering import order_corners
 from server.pose.solve import GravityMode, _map_residuals, _orthonormal_pair, pose_with_gravity, solve_pose
-from server.vision.contour import Refusal
+from server.outcomes import Refusal
 from shared_schemas import Beacon, CameraIntrinsics, FailureReason, OrientationRule
 
 CAMERA = CameraIntrinsics(fx=977.78, fy=977.78, cx=484.5, cy=647.5)

@@ -4,7 +4,8 @@ import cv2
 import numpy as np
 import pytest
 
-from server.vision.contour import Blob, Refusal, find_beacon_blob
+from server.outcomes import Refusal
+from server.vision.contour import Blob, find_beacon_blob
 from server.vision.polygon import Quad, rounded_square_corners, square_corners
 from shared_schemas import FailureReason
 

@@ -1,0 +1,106 @@
+"""What locating a frame can end in, and the one place that turns it into the contract's result.
+
+- `FrameError`: input that cannot be read at all (the API answers 4xx, the CLI exits 2);
+- `Refusal`: a readable frame without a fix, with the contract's reason and a sentence;
+- `Fix`: a camera pose found in the frame, in the frame's own pixels.
+
+Stages return a `Refusal` or their own typed result; the layers above pass `Fix` records
+along (shifting, naming or fusing them with `dataclasses.replace`) and build the contract's
+`LocateResult` once, with `located` or `refused`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from server.geometry import ypr_from_rotation
+from shared_schemas import BeaconIdSource, FailureReason, LocateResult, OrientationRule, TrackState, VlcReading
+
+
+class FrameError(ValueError):
+    """A frame or its metadata that cannot be read; `field` is the dotted field at fault."""
+
+    def __init__(self, message: str, field: str | None = None):
+        super().__init__(message)
+        self.message = message
+        self.field = field
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """Why a frame gave no fix: the contract's reason and a sentence for people."""
+
+    reason: FailureReason
+    message: str
+
+
+@dataclass(frozen=True, eq=False)  # identity: holds numpy arrays
+class Fix:
+    """A camera pose from one frame.
+
+    `position_m` (3,) is the camera's optical centre in the map frame, `rotation_wc` (3, 3)
+    maps camera to map coordinates; `corners_px` (4, 2) in the beacon model's corner order and
+    `center_px` (2,) are in the frame's own (distorted) pixels, pixel centres at integers.
+    """
+
+    position_m: np.ndarray
+    rotation_wc: np.ndarray
+    beacon_id: int | None
+    id_source: BeaconIdSource | None
+    reprojection_error_px: float
+    gravity_used: bool
+    center_px: np.ndarray | None = None
+    corners_px: np.ndarray | None = None
+    orientation_rule: OrientationRule | None = None
+    ambiguity_ratio: float | None = None
+    warnings: tuple[str, ...] = ()
+    timing_ms: Mapping[str, float] = field(default_factory=dict)
+
+    def shifted(self, offset_px: Sequence[float]) -> Fix:
+        """The same fix with its pixels moved by `offset_px` (from a crop back to the full frame)."""
+        offset = np.asarray(offset_px, dtype=float)
+        return replace(self,
+                       center_px=None if self.center_px is None else self.center_px + offset,
+                       corners_px=None if self.corners_px is None else self.corners_px + offset)
+
+    def warned(self, *warnings: str) -> Fix:
+        return replace(self, warnings=self.warnings + tuple(warnings))
+
+
+def _list(array: np.ndarray | None) -> list | None:
+    return None if array is None else np.asarray(array, dtype=float).tolist()
+
+
+def located(fix: Fix, *, vlc: VlcReading | None = None, beacons_in_view: int | None = None,
+            track: TrackState | None = None) -> LocateResult:
+    """The contract's result for a fix."""
+    return LocateResult(
+        ok=True,
+        position_m=_list(fix.position_m),
+        rotation_wc=_list(fix.rotation_wc),
+        yaw_pitch_roll_deg=list(ypr_from_rotation(np.asarray(fix.rotation_wc))),
+        beacon_id=fix.beacon_id,
+        beacon_id_source=fix.id_source,
+        orientation_rule=fix.orientation_rule,
+        corners_px=_list(fix.corners_px),
+        center_px=_list(fix.center_px),
+        reprojection_error_px=fix.reprojection_error_px,
+        ambiguity_ratio=fix.ambiguity_ratio,
+        gravity_used=fix.gravity_used,
+        warnings=list(fix.warnings),
+        timing_ms=dict(fix.timing_ms),
+        vlc=vlc,
+        beacons_in_view=beacons_in_view,
+        track=track,
+    )
+
+
+def refused(refusal: Refusal, *, warnings: Sequence[str] = (), timing_ms: Mapping[str, float] | None = None,
+            vlc: VlcReading | None = None, beacons_in_view: int | None = None,
+            track: TrackState | None = None) -> LocateResult:
+    """The contract's result for a frame without a fix."""
+    return LocateResult(ok=False, reason=refusal.reason, message=refusal.message, warnings=list(warnings),
+                        timing_ms=dict(timing_ms or {}), vlc=vlc, beacons_in_view=beacons_in_view, track=track)
