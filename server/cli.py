@@ -28,8 +28,11 @@ def _add_locate(commands) -> None:
 
 
 def _run_locate(args) -> int:
-    from server.ingest import FrameError, read_fixture
-    from server.pipeline import CornerMethod, PipelineOptions, locate
+    from server.ingest import read_fixture
+    from server.locator import locate
+    from server.options import LocateOptions
+    from server.outcomes import FrameError
+    from server.pipeline import CornerMethod, PipelineOptions
     from server.pose.solve import GravityMode
     from shared_schemas import load_map
 
@@ -47,7 +50,7 @@ def _run_locate(args) -> int:
         subpixel=not args.no_subpixel,
         gravity_mode=GravityMode(args.gravity),
     )
-    result = locate(frame, beacon_map, options)
+    result = locate(frame, beacon_map, LocateOptions(pipeline=options))
     if args.json:
         print(result.model_dump_json(by_alias=True, indent=2))
     elif result.ok:

@@ -31,10 +31,13 @@ class FrameError(ValueError):
 
 @dataclass(frozen=True)
 class Refusal:
-    """Why a frame gave no fix: the contract's reason and a sentence for people."""
+    """Why a frame gave no fix: the contract's reason and a sentence for people (and, from the
+    pipeline, what it noticed and how long it took on the way)."""
 
     reason: FailureReason
     message: str
+    warnings: tuple[str, ...] = ()
+    timing_ms: Mapping[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, eq=False)  # identity: holds numpy arrays
@@ -98,9 +101,8 @@ def located(fix: Fix, *, vlc: VlcReading | None = None, beacons_in_view: int | N
     )
 
 
-def refused(refusal: Refusal, *, warnings: Sequence[str] = (), timing_ms: Mapping[str, float] | None = None,
-            vlc: VlcReading | None = None, beacons_in_view: int | None = None,
+def refused(refusal: Refusal, *, vlc: VlcReading | None = None, beacons_in_view: int | None = None,
             track: TrackState | None = None) -> LocateResult:
     """The contract's result for a frame without a fix."""
-    return LocateResult(ok=False, reason=refusal.reason, message=refusal.message, warnings=list(warnings),
-                        timing_ms=dict(timing_ms or {}), vlc=vlc, beacons_in_view=beacons_in_view, track=track)
+    return LocateResult(ok=False, reason=refusal.reason, message=refusal.message, warnings=list(refusal.warnings),
+                        timing_ms=dict(refusal.timing_ms), vlc=vlc, beacons_in_view=beacons_in_view, track=track)

@@ -1,30 +1,33 @@
-"""The locate pipeline: chains the stages and times each one. No vision happens here.
+"""The one-panel pipeline: chains the stages and times each one. No vision happens here.
 
 coarse ROI -> blur -> threshold -> beacon contour -> hull / RDP / sides -> sub-pixel sides
--> centre from the diagonals -> corner order -> pose. Every refusal becomes a result with a
-reason; only unreadable input raises (in `server.ingest`).
+-> centre from the diagonals -> corner order -> pose, for one known map beacon. Every refusal
+is a `Refusal` with a reason; only unreadable input raises (in `server.ingest`). Which beacon
+is in view, and rooms of several panels, are decided above (`server.locator`).
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 
 import cv2
 import numpy as np
 
-from server.geometry import camera_matrix, distortion_vector, ypr_from_rotation
+from server.geometry import camera_matrix, distortion_vector
 from server.ingest import LumaFrame
+from server.outcomes import Fix, Refusal
 from server.pose.ordering import order_corners
-from server.pose.solve import GravityMode, PoseRules, PoseSolution, solve_pose
+from server.pose.solve import GravityMode, PoseRules, solve_pose
 from server.vision.binarize import blur, threshold
-from server.vision.contour import BlobRules, Refusal, find_beacon_blob
-from server.vision.polygon import Quad, intersect_lines, rounded_square_corners, square_corners
+from server.vision.contour import BlobRules, find_beacon_blob
+from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
 from server.vision.roi import RoiRules, find_roi
 from server.vision.subpixel import EdgeRules, refine_edges
-from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult
+from shared_schemas import Beacon, BeaconIdSource, FailureReason
 
 
 class CornerMethod(str, Enum):
@@ -38,11 +41,11 @@ class PipelineOptions:
     subpixel: bool = True
     gravity_mode: GravityMode = GravityMode.auto
     gravity_sigma_deg: float = 0.1
-    beacon_id: int | None = None  # which map beacon is in view, when known from elsewhere
     blur_kernel_px: int = 5
     mask_step_px: int = 2  # the seed mask is made from every n-th pixel of the region (see locate)
     roi: RoiRules = RoiRules()
     blobs: BlobRules = BlobRules()
+    polygon: PolygonRules = PolygonRules()
     edges: EdgeRules = EdgeRules()
     pose: PoseRules = PoseRules()
 
@@ -52,32 +55,19 @@ class _Timer:
     timing_ms: dict[str, float] = field(default_factory=dict)
 
     @contextmanager
-    def stage(self, name: str):
+    def stage(self, name: str) -> Iterator[None]:
         start = time.perf_counter()
         try:
             yield
         finally:
             self.timing_ms[name] = (time.perf_counter() - start) * 1000.0
 
+    def refusal(self, refusal: Refusal, warnings: list[str] | None = None) -> Refusal:
+        """`refusal` with the stage times so far and what was noticed on the way."""
+        return replace(refusal, warnings=tuple(warnings or ()), timing_ms=self.total())
 
-def _refused(refusal: Refusal, timer: _Timer, warnings: list[str] | None = None) -> LocateResult:
-    timer.timing_ms["total"] = sum(timer.timing_ms.values())
-    return LocateResult(ok=False, reason=refusal.reason, message=refusal.message,
-                        warnings=warnings or [], timing_ms=timer.timing_ms)
-
-
-def _choose_beacon(beacon_map: BeaconMap, beacon_id: int | None) -> tuple[Beacon, BeaconIdSource] | Refusal:
-    if beacon_id is not None:
-        beacon = beacon_map.beacon(beacon_id)
-        if beacon is None:
-            return Refusal(FailureReason.unknown_beacon, f"beacon {beacon_id} is not in map '{beacon_map.name}'")
-        return beacon, BeaconIdSource.vlc
-    if len(beacon_map.beacons) == 1:
-        return beacon_map.beacons[0], BeaconIdSource.single_beacon_map
-    return Refusal(
-        FailureReason.unknown_beacon,
-        f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read",
-    )
+    def total(self) -> dict[str, float]:
+        return {**self.timing_ms, "total": sum(self.timing_ms.values())}
 
 
 def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | None) -> np.ndarray:
@@ -86,23 +76,16 @@ def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray 
     return cv2.undistortPoints(points.reshape(-1, 1, 2), matrix, distortion, P=matrix).reshape(-1, 2)
 
 
-def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = PipelineOptions()) -> LocateResult:
-    """Position and pose of the camera that took `frame`, or the reason there is none."""
-    if options.beacon_id is None and len(beacon_map.beacons) > 1:
-        from server.rooms import locate_in_room  # several beacons: IDs from the frame's stripes (docs/vlc.md)
-
-        return locate_in_room(frame, beacon_map, options)
+def locate_beacon(frame: LumaFrame, beacon: Beacon, options: PipelineOptions = PipelineOptions(),
+                  id_source: BeaconIdSource = BeaconIdSource.single_beacon_map) -> Fix | Refusal:
+    """The pose of the camera that took `frame`, which shows map beacon `beacon`, or why there is none."""
     timer = _Timer()
-    chosen = _choose_beacon(beacon_map, options.beacon_id)
-    if isinstance(chosen, Refusal):
-        return _refused(chosen, timer)
-    beacon, id_source = chosen
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
 
     with timer.stage("roi"):
         roi = find_roi(frame.pixels, options.roi, options.blobs)
     if isinstance(roi, Refusal):
-        return _refused(roi, timer)
+        return timer.refusal(roi)
     window = frame.pixels[roi.y0:roi.y1, roi.x0:roi.x1]
     step = options.mask_step_px if options.subpixel else 1
     with timer.stage("blur"):
@@ -115,12 +98,12 @@ def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = P
     with timer.stage("contour"):
         blob = find_beacon_blob(mask, options.blobs)
     if isinstance(blob, Refusal):
-        return _refused(blob, timer)
+        return timer.refusal(blob)
     with timer.stage("polygon"):
-        quad = (rounded_square_corners(blob.contour) if options.corner_method is CornerMethod.rounded
+        quad = (rounded_square_corners(blob.contour, options.polygon) if options.corner_method is CornerMethod.rounded
                 else square_corners(blob.contour))
     if isinstance(quad, Refusal):
-        return _refused(quad, timer)
+        return timer.refusal(quad)
     quad = Quad(corners=quad.corners * step)  # pixel i of the mask is pixel step * i of the window
 
     warnings: list[str] = []
@@ -139,7 +122,7 @@ def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = P
     with timer.stage("center"):
         center = intersect_lines(corners[0], corners[2], corners[1], corners[3])
     if center is None:
-        return _refused(Refusal(FailureReason.not_four_sides, "the diagonals do not intersect"), timer, warnings)
+        return timer.refusal(Refusal(FailureReason.not_four_sides, "the diagonals do not intersect"), warnings)
     ordered = order_corners(corners, beacon.yaw_deg, frame.meta.heading_deg)
     gravity = None if frame.meta.gravity_camera is None else np.asarray(frame.meta.gravity_camera)
     corner_sigma = edges.line_sigma_px if edges is not None else 1.0
@@ -147,10 +130,12 @@ def locate(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = P
         pose = solve_pose(ordered.corners, center, beacon, matrix, gravity, options.gravity_sigma_deg,
                           options.gravity_mode, corner_sigma, options.pose)
     if isinstance(pose, Refusal):
-        return _refused(pose, timer, warnings)
-    timer.timing_ms["total"] = sum(timer.timing_ms.values())
+        return timer.refusal(pose, warnings)
     reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
-    return _result(pose, reported[:4], reported[4], beacon, id_source, ordered.rule, warnings, timer)
+    return Fix(position_m=pose.position_m, rotation_wc=pose.rotation_wc, beacon_id=beacon.id, id_source=id_source,
+               reprojection_error_px=pose.reprojection_error_px, gravity_used=pose.gravity_used,
+               center_px=reported[4], corners_px=reported[:4], orientation_rule=ordered.rule,
+               ambiguity_ratio=pose.ambiguity_ratio, warnings=tuple(warnings), timing_ms=timer.total())
 
 
 def _distorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | None) -> np.ndarray:
@@ -160,23 +145,3 @@ def _distorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | 
     normalized = np.column_stack([points, np.ones(len(points))]) @ np.linalg.inv(matrix).T
     projected, _ = cv2.projectPoints(normalized, np.zeros(3), np.zeros(3), matrix, distortion)
     return projected.reshape(-1, 2)
-
-
-def _result(pose: PoseSolution, corners, center, beacon, id_source, rule, warnings, timer) -> LocateResult:
-    """The contract's result; `corners` and `center` in the frame's own (distorted) pixels."""
-    return LocateResult(
-        ok=True,
-        position_m=pose.position_m.tolist(),
-        rotation_wc=pose.rotation_wc.tolist(),
-        yaw_pitch_roll_deg=list(ypr_from_rotation(pose.rotation_wc)),
-        beacon_id=beacon.id,
-        beacon_id_source=id_source,
-        orientation_rule=rule,
-        corners_px=corners.tolist(),
-        center_px=center.tolist(),
-        reprojection_error_px=pose.reprojection_error_px,
-        ambiguity_ratio=pose.ambiguity_ratio,
-        gravity_used=pose.gravity_used,
-        warnings=warnings,
-        timing_ms=timer.timing_ms,
-    )

@@ -8,9 +8,10 @@ of a square's pose grows with distance over its image size); the other fixes are
 in, weighted by that same measure, only when they agree with it within `fuse_gate_m` (a
 panel with a wrong ID would move the fix by a beacon spacing, so it is left out, and said).
 
-`locate_in_room` is the pipeline's hook for a multi-beacon map without a given ID: it reads
-the frame's own stripes (a short-exposure frame, docs/vlc.md); the tracking session
-instead brings IDs read from the ID frames beside a pose frame.
+`locate_in_room` serves a multi-beacon map without a given ID and without a device session
+(`server.locator` chooses): it reads the frame's own stripes (a short-exposure frame,
+docs/vlc.md); a device's session (`server.tracking`) instead brings IDs read from the ID
+frames beside a pose frame, and uses `locate_panel` and `choose_and_fuse` from here.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from server.ingest import LumaFrame
+from server.outcomes import Fix, Refusal, located, refused
+from server.pipeline import PipelineOptions, locate_beacon
 from server.vision.beacons import BeaconBlob, CandidateRules, find_beacon_blobs
 from server.vlc.decoder import IdEvidence, StripeRules
 from server.vlc.reader import read_id_frame
@@ -37,10 +40,11 @@ class RoomRules:
 
 @dataclass(frozen=True, eq=False)  # identity: fixes hold numpy arrays
 class PanelFix:
+    """A fix from one panel of the frame, with the blob it came from and the ID reading that named it."""
+
     blob: BeaconBlob
     beacon: Beacon
-    source: BeaconIdSource
-    result: LocateResult
+    fix: Fix
     vlc: VlcReading | None = None
 
 
@@ -67,55 +71,41 @@ def crop_frame(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], mar
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), (x0, y0)
 
 
-def locate_panel(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], beacon: Beacon, options,
-                 background_dn: float, rules: RoomRules = RoomRules()) -> LocateResult:
-    """`locate` on `blob` alone as map beacon `beacon`; pixels reported in the full frame."""
-    from server.pipeline import locate  # the pipeline imports this module for its hook
-
-    crop, (x0, y0) = crop_frame(frame, blob, others, rules.crop_margin_px, background_dn)
-    single = BeaconMap(name=f"beacon {beacon.id}", beacons=[beacon])
-    result = locate(crop, single, replace(options, beacon_id=beacon.id))
-    if not result.ok:
-        return result
-    shift = np.array([x0, y0], dtype=float)
-    return result.model_copy(update={
-        "corners_px": (np.array(result.corners_px) + shift).tolist(),
-        "center_px": (np.array(result.center_px) + shift).tolist(),
-    })
+def locate_panel(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], beacon: Beacon,
+                 id_source: BeaconIdSource, options: PipelineOptions, background_dn: float,
+                 rules: RoomRules = RoomRules()) -> Fix | Refusal:
+    """The one-panel pipeline on `blob` alone as map beacon `beacon`; pixels in the full frame."""
+    crop, offset = crop_frame(frame, blob, others, rules.crop_margin_px, background_dn)
+    fix = locate_beacon(crop, beacon, options, id_source)
+    return fix if isinstance(fix, Refusal) else fix.shifted(offset)
 
 
 def _conditioning(fix: PanelFix) -> float:
     """Inverse variance proxy of a panel's fix: (image size / distance)^2."""
-    distance = float(np.linalg.norm(np.subtract(fix.result.position_m, fix.beacon.center_m)))
+    distance = float(np.linalg.norm(np.subtract(fix.fix.position_m, fix.beacon.center_m)))
     return fix.blob.area_px / max(distance, 1e-3) ** 2
 
 
 def choose_and_fuse(fixes: list[PanelFix], rules: RoomRules = RoomRules()) -> PanelFix | None:
     """The best-conditioned fix, with the fixes that agree with it averaged in."""
-    good = [f for f in fixes if f.result.ok]
-    if not good:
+    if not fixes:
         return None
-    good.sort(key=_conditioning, reverse=True)
-    best = good[0]
-    if not rules.fuse or len(good) == 1:
+    ranked = sorted(fixes, key=_conditioning, reverse=True)
+    best = ranked[0]
+    if not rules.fuse or len(ranked) == 1:
         return best
-    agree = [f for f in good if np.linalg.norm(np.subtract(f.result.position_m, best.result.position_m))
-             <= rules.fuse_gate_m]
-    disagree = [f.beacon.id for f in good if f not in agree]
-    warnings = list(best.result.warnings)
+    agree = [f for f in ranked
+             if np.linalg.norm(f.fix.position_m - best.fix.position_m) <= rules.fuse_gate_m]
+    disagree = [f.beacon.id for f in ranked if f not in agree]
+    fix = best.fix
     if disagree:
-        warnings.append(f"fixes from beacons {disagree} disagree with beacon {best.beacon.id} by more than "
-                        f"{rules.fuse_gate_m * 1000:.0f} mm and were left out")
-    if len(agree) == 1:
-        return replace(best, result=best.result.model_copy(update={"warnings": warnings}))
-    weights = np.array([_conditioning(f) for f in agree])
-    position = (weights[:, None] * np.array([f.result.position_m for f in agree])).sum(axis=0) / weights.sum()
-    warnings.append(f"position fused from beacons {[f.beacon.id for f in agree]}")
-    return replace(best, result=best.result.model_copy(update={"position_m": position.tolist(), "warnings": warnings}))
-
-
-def _refusal(reason: FailureReason, message: str, in_view: int, vlc: VlcReading | None = None) -> LocateResult:
-    return LocateResult(ok=False, reason=reason, message=message, beacons_in_view=in_view, vlc=vlc)
+        fix = fix.warned(f"fixes from beacons {disagree} disagree with beacon {best.beacon.id} by more than "
+                         f"{rules.fuse_gate_m * 1000:.0f} mm and were left out")
+    if len(agree) > 1:
+        weights = np.array([_conditioning(f) for f in agree])
+        position = (weights[:, None] * np.array([f.fix.position_m for f in agree])).sum(axis=0) / weights.sum()
+        fix = replace(fix, position_m=position).warned(f"position fused from beacons {[f.beacon.id for f in agree]}")
+    return replace(best, fix=fix)
 
 
 def vlc_reading(evidence: IdEvidence) -> VlcReading:
@@ -125,19 +115,22 @@ def vlc_reading(evidence: IdEvidence) -> VlcReading:
                       chips_seen=decision.chips_seen, candidates=len(evidence.candidates))
 
 
-def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options, rules: RoomRules = RoomRules()) -> LocateResult:
+def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = PipelineOptions(),
+                   rules: RoomRules = RoomRules()) -> LocateResult:
     """A fix from a frame of a multi-beacon map whose IDs come from the frame's own stripes."""
     reading = read_id_frame(frame, rules.candidates, rules.stripes)
+    found = find_beacon_blobs(frame.pixels, rules.candidates)
     if reading.problem is not None:
-        blobs = find_beacon_blobs(frame.pixels, rules.candidates).blobs
-        return _refusal(FailureReason.unknown_beacon,
-                        f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
-                        f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)",
-                        len(blobs))
+        return refused(Refusal(
+            FailureReason.unknown_beacon,
+            f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
+            f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)"),
+            beacons_in_view=len(found.blobs))
     ids = tuple(sorted(b.id for b in beacon_map.beacons))  # preferred, never the only candidates
-    background = find_beacon_blobs(frame.pixels, rules.candidates).levels.background
     blobs = [p.blob for p in reading.panels]
-    fixes, readings = [], []
+    fixes: list[PanelFix] = []
+    refusals: list[Refusal] = []
+    readings: list[VlcReading] = []
     for panel in reading.panels:
         if panel.observation is None:
             continue
@@ -145,17 +138,19 @@ def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options, rules: Room
         evidence.add(panel.observation)
         vlc = vlc_reading(evidence)
         readings.append(vlc)
-        if not vlc.confident or panel.blob.cut_off or beacon_map.beacon(vlc.beacon_id) is None:
+        beacon = beacon_map.beacon(vlc.beacon_id) if vlc.confident and vlc.beacon_id is not None else None
+        if beacon is None or panel.blob.cut_off:
             continue
-        beacon = beacon_map.beacon(vlc.beacon_id)
-        result = locate_panel(frame, panel.blob, [b for b in blobs if b is not panel.blob], beacon, options,
-                              background, rules)
-        fixes.append(PanelFix(panel.blob, beacon, BeaconIdSource.vlc, result, vlc))
+        fix = locate_panel(frame, panel.blob, [b for b in blobs if b is not panel.blob], beacon, BeaconIdSource.vlc,
+                           options, found.levels.background, rules)
+        if isinstance(fix, Refusal):
+            refusals.append(fix)
+        else:
+            fixes.append(PanelFix(panel.blob, beacon, fix, vlc))
     best = choose_and_fuse(fixes, rules)
     if best is None:
-        reason = fixes[0].result.reason if fixes else FailureReason.unknown_beacon
-        message = (fixes[0].result.message if fixes else
-                   f"no complete panel with a confidently read ID among {len(blobs)} in view")
+        refusal = refusals[0] if refusals else Refusal(
+            FailureReason.unknown_beacon, f"no complete panel with a confidently read ID among {len(blobs)} in view")
         top = max(readings, key=lambda r: r.confidence, default=None)
-        return _refusal(reason, message, len(blobs), top)
-    return best.result.model_copy(update={"vlc": best.vlc, "beacons_in_view": len(blobs)})
+        return refused(refusal, vlc=top, beacons_in_view=len(blobs))
+    return located(best.fix, vlc=best.vlc, beacons_in_view=len(blobs))

@@ -7,8 +7,9 @@ phone's long side along the room's Y axis. Every capture (one every `stepped_int
 = 0.499 s, paper: 0.5 s) is one pose frame (10 ms, overexposed, the code averaged away by
 `row_gains`) and `id_frames` ID frames right after it (1/8000 s, quarter resolution), all
 rendered with every panel in view and each panel's own LED (random phase, +-50 ppm clock).
-The captures go, in order, through one `server.tracking.session.DeviceSession`, exactly as
-the service would see them. Errors are horizontal (2-D) distances of the raw fixes to the
+The captures go, in order, through `server.locator.locate` with one device's sessions
+(`server.tracking.devices.Devices`): ID frames first, then the pose frame, exactly as the
+service sees an app's uploads. Errors are horizontal (2-D) distances of the raw fixes to the
 true optical centre; an ID error is a fix whose beacon is not the panel it was measured on.
 """
 
@@ -17,6 +18,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -26,7 +28,8 @@ import numpy as np
 
 from server.geometry import camera_matrix, rotation_from_ypr, world_to_camera
 from server.ingest import LumaFrame
-from server.tracking.session import DeviceSession
+from server.locator import locate
+from server.tracking.devices import Devices
 from server.vlc.capture import message_period_s, stepped_interval_s
 from shared_schemas import Beacon, FrameKind, FrameMeta
 from simulator.render import CameraPose
@@ -35,6 +38,7 @@ from simulator.trajectories import Area, hand_shake_deg, square_spiral, zigzag
 
 PROFILE_ID = "xiaomi-mi8-front"
 WALKS = ("zigzag", "spiral")
+DEVICE_ID = "office-walker"
 
 
 @dataclass(frozen=True)
@@ -54,7 +58,7 @@ class OfficeConfig:
     seed: int = 1
 
 
-def _scenes(config: OfficeConfig):
+def office_scenes(config: OfficeConfig) -> tuple[Scene, Scene]:
     """(pose-frame scene, ID-frame scene): the bundled scene's ID sensor, and a pose sensor beside it."""
     scene = find_scene(config.scene)
     rng = np.random.default_rng([config.seed, 99])
@@ -84,7 +88,8 @@ def _pose_at(times: np.ndarray, positions: np.ndarray, t_s: float, seed: int, sh
     return CameraPose(position, rotation_from_ypr(yaw, pitch, roll))
 
 
-def _true_beacon(beacons: list[Beacon], camera, pose: CameraPose, center_px) -> int:
+def true_beacon(beacons: list[Beacon], camera, pose: CameraPose, center_px) -> int:
+    """The map beacon whose centre projects nearest `center_px` for the true pose."""
     centres = np.array([b.center_m for b in beacons], float)
     in_camera = world_to_camera(centres, pose.position_m, pose.rotation_wc)
     pixels, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), camera_matrix(camera), None)
@@ -98,21 +103,26 @@ def _frame(scene: Scene, pose: CameraPose, t_s: float, kind: FrameKind, rng) -> 
     return LumaFrame(pixels, meta, scene.camera.intrinsics())
 
 
-def run_walk(config: OfficeConfig) -> dict:
-    """Render and process one walk, capture by capture; per-capture records and a summary."""
-    pose_scene, id_scene = _scenes(config)
-    beacon_map = pose_scene.beacon_map()
-    beacons = list(beacon_map.beacons)
+@dataclass(frozen=True)
+class Capture:
+    """One capture of a walk: the true pose, the pose frame and the ID frames taken after it."""
+
+    t_s: float
+    pose: CameraPose
+    pose_frame: LumaFrame
+    id_frames: tuple[LumaFrame, ...]
+
+
+def walk_captures(config: OfficeConfig) -> Iterator[Capture]:
+    """The walk's captures in order, rendered one at a time (deterministic for `config.seed`)."""
+    pose_scene, id_scene = office_scenes(config)
     rng = np.random.default_rng([config.seed, WALKS.index(config.walk)])
     path, _ = _walk(config, pose_scene)
     shake = config.shake_deg if config.shake_deg is not None else pose_scene.series.rotation.shake_deg
     times = np.array([p.t_s for p in path])
     positions = np.array([p.position_m for p in path])
-    session = DeviceSession(beacon_map)
-    records = []
     shake_seed = config.seed * 7919 + WALKS.index(config.walk)
-    pose_camera = pose_scene.camera.intrinsics()
-    for k, t_s in enumerate(times):
+    for t_s in times:
         pose = _pose_at(times, positions, t_s, shake_seed, shake)
         pose_frame = _frame(pose_scene, pose, t_s, FrameKind.pose, rng)
         id_frames = []
@@ -120,17 +130,33 @@ def run_walk(config: OfficeConfig) -> dict:
             t_id = t_s + config.pose_exposure_s + 0.02 + j * config.id_interval_s
             id_pose = _pose_at(times, positions, t_id, shake_seed, shake)
             id_frames.append(_frame(id_scene, id_pose, t_id, FrameKind.id, rng))
-        result = session.locate(pose_frame, id_frames)
+        yield Capture(float(t_s), pose, pose_frame, tuple(id_frames))
+
+
+def run_walk(config: OfficeConfig) -> dict:
+    """Render and process one walk, capture by capture; per-capture records and a summary."""
+    pose_scene, _ = office_scenes(config)
+    beacon_map = pose_scene.beacon_map()
+    beacons = list(beacon_map.beacons)
+    pose_camera = pose_scene.camera.intrinsics()
+    devices = Devices()
+    records = []
+    total = len(_walk(config, pose_scene)[0])
+    for k, capture in enumerate(walk_captures(config)):
+        for id_frame in capture.id_frames:
+            locate(id_frame, beacon_map, device_id=DEVICE_ID, devices=devices)
+        result = locate(capture.pose_frame, beacon_map, device_id=DEVICE_ID, devices=devices)
+        pose = capture.pose
         nearest = min(beacons, key=lambda b: math.hypot(b.center_m[0] - pose.position_m[0],
                                                         b.center_m[1] - pose.position_m[1])).id
-        record = {"t_s": float(t_s), "truth_m": pose.position_m.tolist(), "ok": result.ok,
+        record = {"t_s": capture.t_s, "truth_m": pose.position_m.tolist(), "ok": result.ok,
                   "reason": None if result.ok else result.reason.value, "in_view": result.beacons_in_view,
                   "nearest_beacon": nearest}
         if result.ok:
             record.update({
                 "fix_m": result.position_m, "beacon_id": result.beacon_id,
                 "source": result.beacon_id_source.value,
-                "true_beacon": _true_beacon(beacons, pose_camera, pose, result.center_px),
+                "true_beacon": true_beacon(beacons, pose_camera, pose, result.center_px),
                 "error_mm": 1000.0 * math.hypot(result.position_m[0] - pose.position_m[0],
                                                 result.position_m[1] - pose.position_m[1]),
                 "vlc_confidence": None if result.vlc is None else result.vlc.confidence,
@@ -139,9 +165,10 @@ def run_walk(config: OfficeConfig) -> dict:
             record["filtered_m"] = result.track.filtered_position_m
             record["outlier"] = result.track.outlier
         records.append(record)
-        _progress(k + 1, len(times), config.walk)
+        _progress(k + 1, total, config.walk)
+    stats = devices.stats(DEVICE_ID)
     return {"config": asdict(config), "summary": summarize_walk(records), "records": records,
-            "stats": asdict(session.stats)}
+            "stats": asdict(stats) if stats is not None else {}}
 
 
 def _progress(done: int, total: int, label: str) -> None:
@@ -200,7 +227,7 @@ def plot_walk(report: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    pose_scene, _ = _scenes(OfficeConfig(**report["config"]))
+    pose_scene, _ = office_scenes(OfficeConfig(**report["config"]))
     beacon_map = pose_scene.beacon_map()
     _, area = _walk(OfficeConfig(**report["config"]), pose_scene)
     colours = dict(zip(sorted(b.id for b in beacon_map.beacons), ["tab:blue", "tab:orange", "tab:green", "tab:red"]))

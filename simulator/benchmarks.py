@@ -27,7 +27,9 @@ import numpy as np
 from server.fov import fov_grid
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
-from server.pipeline import PipelineOptions, locate
+from server.locator import locate
+from server.options import LocateOptions
+from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from server.camera import intrinsics_from_profile
 from shared_schemas import Beacon, BeaconMap, device_profiles
@@ -97,8 +99,8 @@ def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
     beacon_map = BeaconMap(name="bench", beacons=[beacon])
     errors = {}
     for mode, gravity_mode in MODES.items():
-        result = locate(frame, beacon_map, PipelineOptions(gravity_mode=gravity_mode,
-                                                           gravity_sigma_deg=config.gravity_sigma_deg))
+        options = PipelineOptions(gravity_mode=gravity_mode, gravity_sigma_deg=config.gravity_sigma_deg)
+        result = locate(frame, beacon_map, LocateOptions(pipeline=options))
         if result.ok:
             delta = np.subtract(result.position_m, pose.position_m)
             errors[mode] = (float(np.hypot(*delta[:2])), float(np.linalg.norm(delta)),

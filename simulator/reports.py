@@ -17,7 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from server.ingest import LumaFrame
-from server.pipeline import PipelineOptions, locate
+from server.locator import locate
+from server.options import LocateOptions
+from server.pipeline import PipelineOptions
 from shared_schemas import CameraIntrinsics
 from simulator.benchmarks import summarize
 from simulator.sampling import SamplePose, parallel_map, render_pose
@@ -76,7 +78,8 @@ def locate_sample(job: LocateJob) -> Outcome:
     if job.pipeline_camera is not None:
         meta = meta.model_copy(update={"camera": camera})
     try:
-        result = locate(LumaFrame(pixels=pixels, meta=meta, camera=camera), job.scene.beacon_map(), job.options)
+        result = locate(LumaFrame(pixels=pixels, meta=meta, camera=camera), job.scene.beacon_map(),
+                        LocateOptions(pipeline=job.options))
     except Exception as error:  # a crash is a finding of the benchmark, not the end of it
         return Outcome(index=job.sample.index, label=job.sample.label, true_m=job.sample.position_m,
                        estimate_m=None, reason="pipeline_error", message=f"{type(error).__name__}: {error}"[:300],

@@ -8,6 +8,8 @@ from pathlib import Path
 from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from server.options import LocateOptions
+from server.tracking.devices import DeviceRules
 from shared_schemas import load_map
 
 
@@ -27,6 +29,8 @@ class Settings(BaseSettings):
     pipeline_threads: int = Field(default_factory=lambda: os.cpu_count() or 1, ge=1,
                                   description="frames located at once per worker")
     cors_origins: list[str] = Field(default_factory=lambda: ["*"])
+    session_idle_s: float = Field(default=600.0, gt=0, description="a device silent for longer loses its session")
+    max_devices: int = Field(default=1000, ge=1, description="device sessions kept per worker")
 
     @field_validator("map")
     @classmethod
@@ -42,6 +46,13 @@ class Settings(BaseSettings):
     @classmethod
     def _empty_key_is_none(cls, value: str | None) -> str | None:
         return value or None
+
+    def locate_options(self) -> LocateOptions:
+        """The rules of every stage for this service (today all defaults: none is a flag yet)."""
+        return LocateOptions()
+
+    def device_rules(self) -> DeviceRules:
+        return DeviceRules(idle_s=self.session_idle_s, max_devices=self.max_devices)
 
     @property
     def max_upload_bytes(self) -> int:

@@ -10,10 +10,11 @@ import anyio
 from fastapi import Depends, Header, Request
 
 from server.api.config import Settings
-from server.api.devices import Devices
 from server.api.errors import ApiError
 from server.api.metrics import Metrics
+from server.options import LocateOptions
 from server.store import MapStore, SampleStore
+from server.tracking.devices import Devices
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,7 @@ class Services:
     maps: MapStore
     samples: SampleStore
     metrics: Metrics
+    options: LocateOptions  # from the settings; a request's query refines its pipeline part
     devices: Devices  # per-process: see docs/deployment.md
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
 

@@ -7,9 +7,10 @@ from dataclasses import dataclass
 from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import Services
+from server.api.routes.frames import LocateQuery
 from server.api.upload import FrameUpload
 from server.ingest import decode_frame
-from server.pipeline import PipelineOptions
+from server.locator import locate
 from shared_schemas import BeaconMap, LocateResult
 
 
@@ -19,18 +20,19 @@ class Located:
     map_name: str
 
 
-def _locate_now(services: Services, upload: FrameUpload, beacon_map: BeaconMap, options: PipelineOptions,
+def _locate_now(services: Services, upload: FrameUpload, beacon_map: BeaconMap, query: LocateQuery,
                 device: str | None) -> LocateResult:
-    return services.devices.locate(device, decode_frame(upload.data, upload.meta), beacon_map, options)
+    return locate(decode_frame(upload.data, upload.meta), beacon_map, query.options, beacon_id=query.beacon_id,
+                  device_id=device, devices=services.devices)
 
 
 async def locate_upload(services: Services, upload: FrameUpload, map_name: str | None,
-                        options: PipelineOptions, device: str | None = None) -> Located:
+                        query: LocateQuery, device: str | None = None) -> Located:
     """The result for `upload` in map `map_name` (default: the active map); with a `device`, in its
     session (tracking, ID frames combined) when the map has several beacons."""
     name = map_name or services.maps.active_name()
     beacon_map = services.maps.get(name)
     async with services.pipeline_limiter:
-        result = await run_in_threadpool(_locate_now, services, upload, beacon_map, options, device)
+        result = await run_in_threadpool(_locate_now, services, upload, beacon_map, query, device)
     services.metrics.record_result(result)
     return Located(result=result, map_name=name)

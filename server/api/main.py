@@ -9,11 +9,11 @@ from fastapi.middleware.cors import CORSMiddleware
 from server.api import VERSION
 from server.api.config import Settings
 from server.api.deps import Services
-from server.api.devices import Devices
 from server.api.errors import install_error_handlers
 from server.api.metrics import Metrics, MetricsMiddleware
 from server.api.routes import health, locate, maps, profiles, samples
 from server.store import MapStore, SampleStore
+from server.tracking.devices import Devices
 
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
@@ -26,7 +26,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         maps=MapStore(settings.data_dir, settings.map),
         samples=SampleStore(settings.data_dir),
         metrics=metrics,
-        devices=Devices(),
+        options=settings.locate_options(),
+        devices=Devices(settings.device_rules()),
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
     )
     install_error_handlers(app)

@@ -7,7 +7,7 @@ from pydantic import ValidationError
 from lumipose_client.crop import crop_frame
 from server.camera import resolve_camera
 from server.ingest import decode_frame, read_fixture
-from server.pipeline import locate
+from server.locator import locate
 from shared_schemas import FrameMeta, load_map
 from tests.conftest import FIXTURE
 

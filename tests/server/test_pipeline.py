@@ -10,7 +10,9 @@ import pytest
 from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame, read_fixture
-from server.pipeline import CornerMethod, PipelineOptions, locate
+from server.locator import locate as locate_frame
+from server.options import LocateOptions
+from server.pipeline import CornerMethod, PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, FailureReason, device_profiles, load_map
 from simulator.fixtures import fixture_meta
@@ -22,6 +24,10 @@ WIDTH, HEIGHT = 970, 1296  # a quarter of the Mi 8 front camera's resolution
 CAMERA = intrinsics_from_profile(PROFILE, WIDTH, HEIGHT)
 BEACON = Beacon(id=0, center_m=[0, 0, 1.0], side_m=0.174, corner_radius_m=0.02)
 MAP = BeaconMap(name="bench", beacons=[BEACON])
+
+
+def locate(frame, beacon_map, options=PipelineOptions()):
+    return locate_frame(frame, beacon_map, LocateOptions(pipeline=options))
 
 
 def frame_at(position, ypr, seed=0, sensor=SensorModel(), camera=CAMERA, gravity=True) -> LumaFrame:

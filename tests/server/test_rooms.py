@@ -1,16 +1,18 @@
-"""Rooms with several panels: crops, the choice and fusion of fixes, and the pipeline's multi-beacon hook."""
+"""Rooms with several panels: crops, the choice and fusion of fixes, and the dispatcher's room path."""
 
 import numpy as np
 
 from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
-from server.pipeline import PipelineOptions, locate
+from server.locator import locate
+from server.outcomes import Fix, Refusal
+from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from server.rooms import PanelFix, choose_and_fuse, locate_panel
 from server.vision.beacons import find_beacon_blobs
 from server.vlc.codec import LedWaveform
-from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, FrameKind, LocateResult, device_profiles
+from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, FrameKind, device_profiles
 from simulator.fixtures import fixture_meta
 from simulator.led import row_gains
 from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_emitters
@@ -50,19 +52,22 @@ def test_every_panel_is_found_and_located_on_its_own_crop():
         # which blob is which: the one left in the image is beacon 17 (x grows to the right)
         beacon = MAP.beacons[0] if blob.centroid_px[0] < WIDTH / 2 else MAP.beacons[1]
         others = [b for b in found.blobs if b is not blob]
-        result = locate_panel(frame, blob, others, beacon, options, found.levels.background)
-        assert result.ok, result.message
-        assert np.hypot(*(np.array(result.position_m[:2]) - POSE.position_m[:2])) < 0.004
+        fix = locate_panel(frame, blob, others, beacon, BeaconIdSource.vlc, options, found.levels.background)
+        assert not isinstance(fix, Refusal), fix.message
+        assert fix.beacon_id == beacon.id and fix.id_source is BeaconIdSource.vlc
+        assert np.hypot(*(fix.position_m[:2] - POSE.position_m[:2])) < 0.004
         # pixels are reported in the full frame, on the blob
-        assert np.hypot(*(np.array(result.center_px) - blob.centroid_px)) < 3.0
+        assert np.hypot(*(fix.center_px - blob.centroid_px)) < 3.0
+        assert np.all(np.abs(fix.corners_px.mean(axis=0) - blob.centroid_px) < 3.0)
 
 
 def _fix(beacon_id, position, area):
     beacon = next(b for b in MAP.beacons if b.id == beacon_id)
     blob = find_beacon_blobs(two_panel_frame().pixels).blobs[0]
     blob = type(blob)(blob.contour_px, blob.bounding_box, blob.centroid_px, area, False)
-    result = LocateResult(ok=True, position_m=list(position), beacon_id=beacon_id)
-    return PanelFix(blob, beacon, BeaconIdSource.vlc, result)
+    fix = Fix(position_m=np.array(position, float), rotation_wc=np.eye(3), beacon_id=beacon_id,
+              id_source=BeaconIdSource.vlc, reprojection_error_px=0.1, gravity_used=False)
+    return PanelFix(blob, beacon, fix)
 
 
 def test_agreeing_fixes_are_fused_and_a_disagreeing_one_is_left_out_and_said():
@@ -71,9 +76,9 @@ def test_agreeing_fixes_are_fused_and_a_disagreeing_one_is_left_out_and_said():
     far = _fix(42, [1.2, 0.0, 0.0], 3000.0)
     fused = choose_and_fuse([best, close, far])
     assert fused.beacon.id == 17
-    assert 0.0 < fused.result.position_m[0] < 0.004
-    assert any("left out" in w for w in fused.result.warnings)
-    assert any("fused" in w for w in fused.result.warnings)
+    assert 0.0 < fused.fix.position_m[0] < 0.004
+    assert any("left out" in w for w in fused.fix.warnings)
+    assert any("fused" in w for w in fused.fix.warnings)
     assert choose_and_fuse([]) is None
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from server.ingest import read_fixture
-from server.pipeline import locate
+from server.locator import locate
 from shared_schemas import PACKAGE_DIR, BeaconMap, ErrorBody, FrameMeta, LocateResult, load_map
 
 EXAMPLES = PACKAGE_DIR / "examples"

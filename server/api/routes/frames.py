@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
 from typing import Annotated
 
 from fastapi import Depends, Header, Query, Request
 
 from server.api.deps import ServicesDep
 from server.api.upload import FRAME_HEADER, FrameUpload, receive_frame
-from server.pipeline import CornerMethod, PipelineOptions
+from server.options import LocateOptions
+from server.pipeline import CornerMethod
 from server.pose.solve import GravityMode
 
 FRAME_REQUEST_BODY = {
@@ -37,9 +39,19 @@ GravityQuery = Annotated[GravityMode, Query(description="use the frame's gravity
 CornersQuery = Annotated[CornerMethod, Query(description="corner method: rounded (default) or the paper's square")]
 
 
-def _pipeline_options(beacon_id: BeaconQuery = None, gravity: GravityQuery = GravityMode.auto,
-                      corners: CornersQuery = CornerMethod.rounded) -> PipelineOptions:
-    return PipelineOptions(beacon_id=beacon_id, gravity_mode=gravity, corner_method=corners)
+@dataclass(frozen=True)
+class LocateQuery:
+    """A request's way of locating: the service's options with the query's choices, and the beacon in view."""
+
+    options: LocateOptions
+    beacon_id: int | None = None
+
+
+def _locate_query(services: ServicesDep, beacon_id: BeaconQuery = None, gravity: GravityQuery = GravityMode.auto,
+                  corners: CornersQuery = CornerMethod.rounded) -> LocateQuery:
+    options = services.options
+    pipeline = replace(options.pipeline, gravity_mode=gravity, corner_method=corners)
+    return LocateQuery(replace(options, pipeline=pipeline), beacon_id)
 
 
 async def _frame_upload(request: Request, services: ServicesDep, frame_json: FrameHeader = None) -> FrameUpload:
@@ -49,5 +61,5 @@ async def _frame_upload(request: Request, services: ServicesDep, frame_json: Fra
 
 # Route parameters: the pipeline's query options, and the uploaded frame (read after the
 # route's own dependencies, so a write without its API key is refused before its body is read).
-OptionsDep = Annotated[PipelineOptions, Depends(_pipeline_options)]
+QueryDep = Annotated[LocateQuery, Depends(_locate_query)]
 UploadDep = Annotated[FrameUpload, Depends(_frame_upload)]

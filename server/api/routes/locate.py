@@ -7,14 +7,14 @@ from fastapi import APIRouter
 from server.api.deps import ServicesDep
 from server.api.errors import ERROR_RESPONSES
 from server.api.locating import locate_upload
-from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, OptionsDep, UploadDep
+from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
 from shared_schemas import LocateResult
 
 router = APIRouter(prefix="/v1", tags=["locate"], responses=ERROR_RESPONSES)
 
 
 @router.post("/locate", response_model=LocateResult, openapi_extra=FRAME_REQUEST_BODY)
-async def locate_frame(services: ServicesDep, upload: UploadDep, options: OptionsDep, device: DeviceHeader = None,
+async def locate_frame(services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None,
                        map: MapQuery = None) -> LocateResult:
     """Locate the camera. 200 with `ok: false` and a `reason` when the frame holds no usable beacon.
 
@@ -22,5 +22,5 @@ async def locate_frame(services: ServicesDep, upload: UploadDep, options: Option
     ID frames (`frame_kind: id`) wait for its next pose frame (reason `id_frame`), and pose frames
     get beacon IDs from them and from the track, and a motion-filtered `track` (docs/vlc.md).
     """
-    located = await locate_upload(services, upload, map, options, device)
+    located = await locate_upload(services, upload, map, query, device)
     return located.result

@@ -10,10 +10,9 @@ from starlette.concurrency import run_in_threadpool
 from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
 from server.api.locating import locate_upload
-from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, OptionsDep, UploadDep
+from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, LocateQuery, MapQuery, QueryDep, UploadDep
 from server.api.upload import FRAME_HEADER, FrameUpload
 from server.evaluation import evaluate
-from server.pipeline import PipelineOptions
 from shared_schemas.api import Evaluation, SampleInfo, SampleList
 
 router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES)
@@ -23,10 +22,10 @@ LabelQuery = Annotated[str | None, Query(max_length=200, description="free text;
 
 @router.post("", status_code=201, response_model=SampleInfo,
              openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess])
-async def store_sample(services: ServicesDep, upload: UploadDep, options: OptionsDep, device: DeviceHeader = None,
+async def store_sample(services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None,
                        label: LabelQuery = None, map: MapQuery = None) -> SampleInfo:
     """Store a frame with its label and the result it gives now (a frame without a fix is kept too)."""
-    located = await locate_upload(services, upload, map, options)
+    located = await locate_upload(services, upload, map, query)
     return await run_in_threadpool(services.samples.add, upload.data, upload.meta, located.result,
                                    label=label, device=device, map_name=located.map_name)
 
@@ -48,7 +47,7 @@ async def evaluate_samples(services: ServicesDep, map: MapQuery = None,
     located = []
     for sample in await run_in_threadpool(services.samples.all):
         upload = FrameUpload(meta=sample.meta, data=await run_in_threadpool(services.samples.frame, sample.id))
-        located.append((sample, (await locate_upload(services, upload, name, PipelineOptions())).result))
+        located.append((sample, (await locate_upload(services, upload, name, LocateQuery(services.options))).result))
     return evaluate(name, located, cell_m, height_m)
 
 

@@ -6,8 +6,7 @@ import pytest
 
 from lumipose_client import Client
 from lumipose_client.local_server import LocalServer
-from simulator.bench_office import OfficeConfig, _frame, _pose_at, _scenes, _true_beacon, _walk
-from shared_schemas import FrameKind
+from simulator.bench_office import OfficeConfig, office_scenes, true_beacon, walk_captures
 
 
 def _upload(client: Client, frame, device: str | None, map_name: str):
@@ -24,26 +23,21 @@ def roomy_server_url():
 
 def test_a_walk_gets_fixes_with_the_right_ids_and_a_track(roomy_server_url):
     config = OfficeConfig(walk="zigzag", max_captures=5, pose_scale=0.5, seed=2)
-    pose_scene, id_scene = _scenes(config)
+    pose_scene, _ = office_scenes(config)
     beacon_map = pose_scene.beacon_map()
-    path, _ = _walk(config, pose_scene)
-    times = np.array([p.t_s for p in path])
-    positions = np.array([p.position_m for p in path])
-    rng = np.random.default_rng(5)
     fixes, id_answers = [], []
     with Client(roomy_server_url) as client:
         client.put_map(beacon_map)
-        for t_s in times:
-            for j in range(config.id_frames):
-                t_id = t_s + config.pose_exposure_s + 0.02 + j * config.id_interval_s
-                id_frame = _frame(id_scene, _pose_at(times, positions, t_id, 3, 0.5), t_id, FrameKind.id, rng)
+        for capture in walk_captures(config):
+            for id_frame in capture.id_frames:
                 id_answers.append(_upload(client, id_frame, "phone-7", beacon_map.name))
-            pose = _pose_at(times, positions, t_s, 3, 0.5)
-            result = _upload(client, _frame(pose_scene, pose, t_s, FrameKind.pose, rng), "phone-7", beacon_map.name)
+            result = _upload(client, capture.pose_frame, "phone-7", beacon_map.name)
             if result.ok:
-                truth = _true_beacon(list(beacon_map.beacons), pose_scene.camera.intrinsics(), pose, result.center_px)
-                fixes.append((result, truth, 1000 * np.hypot(*np.subtract(result.position_m[:2], pose.position_m[:2]))))
-        stateless = _upload(client, _frame(pose_scene, pose, t_s, FrameKind.pose, rng), None, beacon_map.name)
+                truth = true_beacon(list(beacon_map.beacons), pose_scene.camera.intrinsics(), capture.pose,
+                                    result.center_px)
+                error_mm = 1000 * np.hypot(*np.subtract(result.position_m[:2], capture.pose.position_m[:2]))
+                fixes.append((result, truth, error_mm))
+        stateless = _upload(client, capture.pose_frame, None, beacon_map.name)
 
     assert all(not a.ok and a.reason.value == "id_frame" and "kept" in a.message for a in id_answers)
     assert len(fixes) >= 3, "the session gave too few fixes"

@@ -2,7 +2,6 @@
 
 import numpy as np
 
-from server.tracking.session import DeviceSession, SessionStore
 from simulator.bench_office import OfficeConfig, run_walk
 
 
@@ -18,16 +17,3 @@ def test_a_walk_starting_between_panels_gets_fixes_with_right_ids():
     assert np.mean([r["error_mm"] for r in ok]) < 10.0
     # raw fix and filtered track are both kept
     assert all("filtered_m" in r for r in ok)
-
-
-def test_store_keeps_one_session_per_device_and_map():
-    from shared_schemas import Beacon, BeaconMap
-
-    first = BeaconMap(name="a", beacons=[Beacon(id=1, center_m=[0, 0, 2], side_m=0.2)])
-    second = BeaconMap(name="b", beacons=[Beacon(id=2, center_m=[0, 0, 2], side_m=0.2)])
-    store = SessionStore()
-    session = store.get("phone-1", first)
-    assert isinstance(session, DeviceSession)
-    assert store.get("phone-1", first) is session
-    assert store.get("phone-2", first) is not session
-    assert store.get("phone-1", second) is not session

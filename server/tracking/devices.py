@@ -1,0 +1,138 @@
+"""Every device's state in this process: its session and the ID stripes waiting for its pose frame.
+
+The phone uploads each capture as separate requests (docs/vlc.md): the pose frame, and a burst
+of short-exposure ID frames, all with the same `X-Lumipose-Device`. An ID frame is read when it
+arrives and only its stripes wait here (a few kilobytes, not the frame) until the device's next
+pose frame, which the device's session then locates with them.
+
+One owner, one lock: `Devices` keeps one record per device (its lock, session and waiting
+stripes), so a lock is dropped together with its session. The store's lock is held only to
+find, create or drop records; each device's own lock keeps one device's frames in order, one at
+a time, while other devices run in parallel. Idle devices are dropped after `idle_s`, and the
+least recently seen ones when there are more than `max_devices`, never one in use.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import OrderedDict, deque
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+from server.ingest import LumaFrame
+from server.options import LocateOptions
+from server.outcomes import Refusal, refused
+from server.tracking.session import DeviceSession, IdSighting, SessionStats
+from server.vlc.capture import is_id_frame
+from server.vlc.reader import read_id_frame
+from shared_schemas import BeaconMap, FailureReason, LocateResult
+
+
+@dataclass(frozen=True)
+class DeviceRules:
+    idle_s: float = 600.0  # a device silent for longer loses its session
+    max_devices: int = 1000  # bounds the memory held for devices that went away
+    id_frames_kept: int = 4  # a capture's burst (docs/vlc.md); an older burst gives way to a newer one
+    max_id_frame_age_s: float = 2.0  # ID frames further than this from the pose frame are not combined
+
+
+@dataclass(frozen=True)
+class WaitingIdFrame:
+    t_s: float | None
+    sightings: tuple[IdSighting, ...]
+
+
+@dataclass
+class _Device:
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    session: DeviceSession | None = None
+    waiting: deque[WaitingIdFrame] = field(default_factory=deque)
+    last_seen_s: float = 0.0
+    users: int = 0  # requests holding or waiting for `lock`: such a record is never dropped
+
+
+class Devices:
+    """Device sessions by device id; safe to call from many threads at once."""
+
+    def __init__(self, rules: DeviceRules = DeviceRules(), clock: Callable[[], float] = time.monotonic):
+        self.rules = rules
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._devices: OrderedDict[str, _Device] = OrderedDict()  # least recently seen first
+
+    def locate(self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap,
+               options: LocateOptions = LocateOptions()) -> LocateResult:
+        """An ID frame is kept for the device's next pose frame; a pose frame is located in the device's
+        session (a new one for a new map), with the ID stripes waiting for it."""
+        with self._checked_out(device_id) as device:
+            if is_id_frame(frame):
+                return self._keep(device, frame, options)
+            if device.session is None or device.session.beacon_map != beacon_map:
+                device.session = DeviceSession(beacon_map, options.session)
+            sightings = self._fresh_sightings(device, frame)
+            return device.session.locate(frame, sightings, options.pipeline, options.room)
+
+    def stats(self, device_id: str) -> SessionStats | None:
+        with self._lock:
+            device = self._devices.get(device_id)
+        if device is None or device.session is None:
+            return None
+        with device.lock:
+            return device.session.stats
+
+    def __len__(self) -> int:
+        with self._lock:
+            return len(self._devices)
+
+    @contextmanager
+    def _checked_out(self, device_id: str) -> Iterator[_Device]:
+        with self._lock:
+            self._drop_idle()
+            device = self._devices.get(device_id)
+            if device is None:
+                self._make_room()
+                device = self._devices[device_id] = _Device()
+            self._devices.move_to_end(device_id)
+            device.users += 1
+        try:
+            with device.lock:  # one device's frames are taken in order, one at a time
+                yield device
+        finally:
+            with self._lock:
+                device.users -= 1
+                device.last_seen_s = self._clock()
+
+    def _drop_idle(self) -> None:
+        """Drop the devices idle for longer than `idle_s` (the store's lock is held)."""
+        now = self._clock()
+        for device_id, device in list(self._devices.items()):
+            if device.users == 0 and now - device.last_seen_s > self.rules.idle_s:
+                del self._devices[device_id]
+
+    def _make_room(self) -> None:
+        """Drop the least recently seen devices not in use until a new one fits (the store's lock is held)."""
+        idle = [k for k, d in self._devices.items() if d.users == 0]
+        for device_id in idle[:max(0, len(self._devices) + 1 - self.rules.max_devices)]:
+            del self._devices[device_id]
+
+    def _keep(self, device: _Device, frame: LumaFrame, options: LocateOptions) -> LocateResult:
+        reading = read_id_frame(frame, options.room.candidates, options.room.stripes)
+        if reading.problem is not None:
+            return refused(Refusal(FailureReason.id_frame, f"ID frame not kept: {reading.problem}"))
+        t_s = None if frame.meta.timestamp_ns is None else frame.meta.timestamp_ns * 1e-9
+        sightings = tuple(IdSighting(p.centroid_norm, p.observation) for p in reading.panels
+                          if p.observation is not None)
+        device.waiting.append(WaitingIdFrame(t_s, sightings))
+        while len(device.waiting) > self.rules.id_frames_kept:
+            device.waiting.popleft()
+        return refused(Refusal(FailureReason.id_frame, f"ID frame kept for this device's next pose frame "
+                                                       f"({len(device.waiting)} waiting)"))
+
+    def _fresh_sightings(self, device: _Device, pose_frame: LumaFrame) -> list[IdSighting]:
+        waiting, device.waiting = list(device.waiting), deque()
+        stamp = pose_frame.meta.timestamp_ns
+        return [s for w in waiting
+                if stamp is None or w.t_s is None or abs(stamp * 1e-9 - w.t_s) <= self.rules.max_id_frame_age_s
+                for s in w.sightings]
