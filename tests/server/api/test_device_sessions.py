@@ -7,6 +7,7 @@ import pytest
 from lumipose_client import Client
 from lumipose_client.local_server import LocalServer
 from simulator.bench_office import OfficeConfig, office_scenes, true_beacon, walk_captures
+from shared_schemas import FrameKind
 
 
 def _upload(client: Client, frame, device: str | None, map_name: str):
@@ -47,3 +48,33 @@ def test_a_walk_gets_fixes_with_the_right_ids_and_a_track(roomy_server_url):
     assert np.mean([error for _, _, error in fixes]) < 10.0
     # without a device the 8.4 ms pose frame alone carries no ID in a room of four beacons
     assert not stateless.ok and stateless.reason.value == "unknown_beacon"
+
+
+def test_many_devices_at_once_lose_no_state_and_get_no_error(server_url, client):
+    """120 devices from 8 threads over real HTTP, each a burst of ID frames, a pose frame, a burst
+    again: every ID frame must find the ones its device sent before (its record kept, not another's)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from tests.server.tracking.test_devices import ROOM, dark_frame
+
+    client.put_map(ROOM)
+    bursts, devices = 4, 120
+
+    def walk(device: str) -> list[str]:
+        problems = []
+        with Client(server_url) as own:
+            for round_ in range(2):
+                for n in range(bursts):
+                    frame = dark_frame(FrameKind.id, round_ + 0.01 * n)
+                    answer = _upload(own, frame, device, ROOM.name)
+                    if not answer.message.endswith(f"({n + 1} waiting)"):
+                        problems.append(f"{device}: {answer.message}")
+                pose = _upload(own, dark_frame(FrameKind.pose, round_ + 0.1), device, ROOM.name)
+                if pose.reason is None or pose.reason.value != "no_beacon":
+                    problems.append(f"{device}: pose frame gave {pose.reason}")
+        return problems
+
+    with ThreadPoolExecutor(max_workers=8) as pool:
+        problems = [p for found in pool.map(walk, [f"crowd-{k}" for k in range(devices)]) for p in found]
+    assert problems == []
+    assert client.health().status == "ok"
