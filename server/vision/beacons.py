@@ -1,10 +1,11 @@
 """All beacon candidates in a frame (the paper's office has four panels; `contour.py` keeps one).
 
-Works on the same subsampled view as `roi.py`, thresholded lower (at `level_fraction` of the
-way from background to plateau) so that a short-exposure ID frame, whose panel is striped
-between the LED's low and high levels, stays one blob. Every blob goes through the shape
-rules of `contour.find_beacon_blob` on its own padded mask; blobs that touch the frame border
-are kept and flagged `cut_off` (they may still carry an ID, not a pose).
+Works on the same subsampled view as `roi.py` (`roi.coarse_view`, which keeps the frame's last
+row and column, and the same step rule, `CoarseRules`), thresholded lower (at `level_fraction`
+of the way from background to plateau) so that a short-exposure ID frame, whose panel is
+striped between the LED's low and high levels, stays one blob. Every blob goes through the
+shape rules of `contour.find_beacon_blob` on its own padded mask; blobs that touch the frame
+border are kept and flagged `cut_off` (they may still carry an ID, not a pose).
 """
 
 from __future__ import annotations
@@ -17,12 +18,11 @@ import numpy as np
 from server.vision.binarize import Levels, estimate_levels
 from server.outcomes import Refusal
 from server.vision.contour import BlobRules, find_beacon_blob
+from server.vision.roi import CoarseRules, coarse_to_frame, coarse_view
 
 
 @dataclass(frozen=True)
-class CandidateRules:
-    coarse_short_side_px: int = 480
-    min_contrast_dn: float = 20.0
+class CandidateRules(CoarseRules):  # coarse_short_side_px, min_contrast_dn: shared with roi.RoiRules
     level_fraction: float = 0.2  # of plateau - background; below the LED's low level of 0.3
     close_px: int = 3  # bridges dark stripes and noise holes in the small view
     blobs: BlobRules = BlobRules()
@@ -47,17 +47,27 @@ class Candidates:
     rejected: tuple[str, ...]  # why other bright blobs are not beacons
 
 
-def _step(shape: tuple[int, int], rules: CandidateRules) -> int:
-    return max(1, min(shape) // rules.coarse_short_side_px)
+def _centroid_px(inside: np.ndarray, x: int, y: int, step: int, shape: tuple[int, int]) -> tuple[float, float]:
+    """Mean frame position (x, y) of the view pixels `inside` (bool, the blob's box at view pixel x, y)."""
+    rows, columns = np.nonzero(inside)
+    centre = coarse_to_frame(np.column_stack([columns + x, rows + y]), step, shape).mean(axis=0)
+    return float(centre[0]), float(centre[1])
 
 
 def candidate_mask(image: np.ndarray, levels: Levels, rules: CandidateRules) -> np.ndarray:
-    """Binary mask (uint8 0 / 255) of pixels above the candidate level, small gaps closed."""
+    """Binary mask (uint8 0 / 255) of pixels above the candidate level, small gaps closed.
+
+    The closing sees dark beyond the image's border (padded by `close_px`): with OpenCV's
+    default border its erosion counts the outside as lit, so a panel within `close_px` of
+    the border would be joined to it and flagged cut off (`close_px` * step frame pixels).
+    """
     level = levels.background + rules.level_fraction * levels.contrast
     _, mask = cv2.threshold(image, level, 255, cv2.THRESH_BINARY)
     if rules.close_px > 0:
-        kernel = np.ones((2 * rules.close_px + 1, 2 * rules.close_px + 1), np.uint8)
-        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, kernel)
+        pad = rules.close_px
+        kernel = np.ones((2 * pad + 1, 2 * pad + 1), np.uint8)
+        padded = cv2.copyMakeBorder(mask, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
+        mask = np.ascontiguousarray(cv2.morphologyEx(padded, cv2.MORPH_CLOSE, kernel)[pad:-pad, pad:-pad])
     return mask
 
 
@@ -65,13 +75,13 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
     """Every beacon-shaped blob of a frame (height, width) uint8, largest first."""
     if pixels.ndim != 2 or pixels.dtype != np.uint8:
         raise ValueError(f"pixels must be a 2-D uint8 luma image, got {pixels.dtype} {pixels.shape}")
-    step = _step(pixels.shape, rules)
-    small = np.ascontiguousarray(pixels[::step, ::step])
+    step = rules.coarse_step(pixels.shape)
+    small = coarse_view(pixels, step)  # to the frame's last row and column: `cut_off` is tested on it
     levels = estimate_levels(small)
     if levels.contrast < rules.min_contrast_dn:
         return Candidates((), levels, step, ("nothing stands out of the background",))
     mask = candidate_mask(small, levels, rules)
-    count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     blobs: list[BeaconBlob] = []
     rejected: list[str] = []
     for label in range(1, count):
@@ -92,11 +102,13 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
             contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
         else:
             contour = found.contour
-        contour_px = (contour.astype(float) - 2 + [x, y]) * step
+        # back to frame pixels: the view's last column and row are the frame's, closer than `step`
+        x0, y0 = coarse_to_frame([x, y], step, pixels.shape).astype(int)
+        x1, y1 = min(pixels.shape[1], (x + w) * step), min(pixels.shape[0], (y + h) * step)
         blobs.append(BeaconBlob(
-            contour_px=contour_px,
-            bounding_box=(int(x * step), int(y * step), int(w * step), int(h * step)),
-            centroid_px=(float(centroids[label][0] * step), float(centroids[label][1] * step)),
+            contour_px=coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape),
+            bounding_box=(int(x0), int(y0), int(x1 - x0), int(y1 - y0)),
+            centroid_px=_centroid_px(labels[y:y + h, x:x + w] == label, x, y, step, pixels.shape),
             area_px=float(area * step**2),
             cut_off=bool(cut_off),
         ))

@@ -20,9 +20,21 @@ from shared_schemas import FailureReason
 
 
 @dataclass(frozen=True)
-class RoiRules:
-    coarse_short_side_px: int = 480
-    min_contrast_dn: float = 20.0
+class CoarseRules:
+    """The subsampled view that both coarse stages read: this one (one panel) and
+    `server.vision.beacons` (every panel). `RoiRules` and `beacons.CandidateRules` extend it,
+    so its defaults are written once."""
+
+    coarse_short_side_px: int = 480  # the view's short side is at least this (step = short side // it)
+    min_contrast_dn: float = 20.0  # plateau - background below this: nothing stands out, no beacon
+
+    def coarse_step(self, shape: tuple[int, ...]) -> int:
+        """Subsampling step for a frame of `shape` (height, width): 1 for frames smaller than the view."""
+        return max(1, min(shape[0], shape[1]) // self.coarse_short_side_px)
+
+
+@dataclass(frozen=True)
+class RoiRules(CoarseRules):
     margin_px: int = 12
 
 
@@ -44,6 +56,8 @@ def coarse_view(pixels: np.ndarray, step: int) -> np.ndarray:
     Without the last row and column the view would end up to step - 1 pixels short of the
     frame's far borders, and a panel just inside them would touch the view's border and be
     refused as cut off (found on a bench frame whose panel ended 8 px from the right edge).
+    View pixel (row i, column j) is frame pixel (min(i step, height - 1), min(j step, width - 1))
+    (`coarse_to_frame`).
     """
     height, width = pixels.shape
     grid = pixels[::step, ::step]
@@ -58,10 +72,20 @@ def coarse_view(pixels: np.ndarray, step: int) -> np.ndarray:
     return small
 
 
+def coarse_to_frame(points: np.ndarray, step: int, shape: tuple[int, int]) -> np.ndarray:
+    """Frame pixel coordinates (..., 2) x, y of `coarse_view` pixel coordinates (..., 2) x, y.
+
+    Whole view pixels land exactly on the frame pixel they were read from: `step` times, except
+    the view's extra last column and row, which are the frame's last (closer than `step`).
+    """
+    height, width = shape
+    return np.minimum(np.asarray(points, dtype=float) * step, [width - 1, height - 1])
+
+
 def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobRules = BlobRules()) -> Roi | Refusal:
     """The beacon's region of interest in a full frame (height, width) uint8."""
     height, width = pixels.shape
-    step = max(1, min(height, width) // rules.coarse_short_side_px)
+    step = rules.coarse_step(pixels.shape)
     small = coarse_view(pixels, step)
     levels = estimate_levels(small[::2])  # every other row: plenty for two percentiles, half the time
     if levels.contrast < rules.min_contrast_dn:

@@ -1,7 +1,7 @@
 import cv2
 import numpy as np
 
-from server.vision.beacons import blob_mask, find_beacon_blobs
+from server.vision.beacons import CandidateRules, blob_mask, find_beacon_blobs
 
 
 def test_all_square_panels_are_found_a_round_lamp_is_not_and_a_cut_one_is_flagged():
@@ -33,3 +33,44 @@ def test_bad_input_is_named():
 
     with pytest.raises(ValueError, match="pixels"):
         find_beacon_blobs(np.zeros((10, 10, 3), np.uint8))
+
+
+# 300 x 401 with a 50 px coarse view: step 6, and neither height - 1 nor width - 1 is a multiple
+# of it, so the grid's last column is 396 and its last row 294, short of the frame's 400 and 299.
+SMALL_VIEW = CandidateRules(coarse_short_side_px=50)
+
+
+def square_frame(x0: int, x1: int, y0: int, y1: int) -> np.ndarray:
+    image = np.full((300, 401), 8, np.uint8)
+    image[y0:y1, x0:x1] = 250
+    return image
+
+
+def test_a_panel_a_few_pixels_inside_the_far_border_is_not_cut_off():
+    # right edge at column 397 (3 px inside) covers the grid's last column, not the frame's
+    found = find_beacon_blobs(square_frame(298, 398, 100, 200), SMALL_VIEW)
+    assert found.step == 6 and len(found.blobs) == 1
+    blob = found.blobs[0]
+    assert not blob.cut_off
+    x, y, w, h = blob.bounding_box
+    assert abs(x - 298) <= 6 and abs(x + w - 398) <= 6 and x + w <= 401
+    assert abs(y - 100) <= 6 and abs(y + h - 200) <= 6
+    assert abs(blob.centroid_px[0] - 347.5) <= 3 and abs(blob.centroid_px[1] - 149.5) <= 3
+    assert blob.contour_px[:, 0].max() <= 397 and blob.contour_px[:, 0].min() >= 298
+    # bottom edge at row 297 (2 px inside the last row, 299)
+    found = find_beacon_blobs(square_frame(150, 250, 197, 298), SMALL_VIEW)
+    assert len(found.blobs) == 1 and not found.blobs[0].cut_off
+    x, y, w, h = found.blobs[0].bounding_box
+    assert abs(y + h - 298) <= 6 and y + h <= 300
+
+
+def test_a_panel_on_the_far_border_is_cut_off_and_stays_in_the_frame():
+    found = find_beacon_blobs(square_frame(301, 401, 100, 200), SMALL_VIEW)
+    assert len(found.blobs) == 1 and found.blobs[0].cut_off
+    x, y, w, h = found.blobs[0].bounding_box
+    assert x + w == 401  # the box ends at the frame's border, not beyond it
+    assert found.blobs[0].contour_px[:, 0].max() == 400  # the frame's last column
+    found = find_beacon_blobs(square_frame(150, 250, 200, 300), SMALL_VIEW)
+    assert len(found.blobs) == 1 and found.blobs[0].cut_off
+    x, y, w, h = found.blobs[0].bounding_box
+    assert y + h == 300 and found.blobs[0].contour_px[:, 1].max() == 299
