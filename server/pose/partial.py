@@ -30,6 +30,7 @@ from scipy.spatial import cKDTree
 
 from server.geometry import (beacon_to_world, camera_matrix, distortion_vector, rotation_from_ypr,
                              rounded_square_outline_m)
+from server.vision.subpixel import level_crossings, profile_offsets, sample_profiles
 from shared_schemas import Beacon, CameraIntrinsics
 
 
@@ -90,20 +91,11 @@ def edge_points(pixels: np.ndarray, box: tuple[int, int, int, int], level: float
         contour, normal = contour[pick], normal[pick]
     if len(contour) == 0:
         return np.zeros((0, 2))
-    offsets = np.arange(-rules.half_window_px, rules.half_window_px + 1e-9, rules.step_px)
-    samples = contour[:, None, :] + offsets[None, :, None] * normal[:, None, :]
-    profiles = cv2.remap(window, samples[..., 0].astype(np.float32), samples[..., 1].astype(np.float32),
-                         cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    above, below = profiles[:, :-1], profiles[:, 1:]
-    crossing = (above >= level) & (below < level)
-    distance = np.where(crossing, np.abs(offsets[:-1]), np.inf)
-    j = np.argmin(distance, axis=1)
-    rows = np.arange(len(profiles))
-    found = np.isfinite(distance[rows, j])
-    fraction = (above[rows, j] - level) / np.maximum(above[rows, j] - below[rows, j], 1e-9)
-    shift = offsets[j] + fraction * rules.step_px
-    points = contour + shift[:, None] * normal + [x0, y0]
-    return points[found]
+    offsets = profile_offsets(rules.half_window_px, rules.step_px, np.float64)
+    shift = level_crossings(sample_profiles(window, contour, normal, offsets), offsets, level)
+    found = np.isfinite(shift)
+    points = contour[found] + shift[found, None] * normal[found] + [x0, y0]
+    return points
 
 
 def _outline_px(beacon: Beacon, position_m, rotation_wc, camera: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:

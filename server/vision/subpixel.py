@@ -89,8 +89,38 @@ def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
     return directions, normals * outward[:, None], lengths
 
 
-def _mid_level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> np.ndarray:
-    """Offset of each profile's bright-to-dark crossing of `level` nearest to 0 (NaN if none)."""
+def profile_offsets(half_window_px: float, step_px: float, dtype=np.float32) -> np.ndarray:
+    """Sample positions (m,) along a profile, px from its base point: -half_window_px to
+    +half_window_px inclusive, `step_px` apart (`dtype` float32 or float64)."""
+    return np.arange(-half_window_px, half_window_px + 1e-9, step_px, dtype=dtype)
+
+
+def sample_profiles(image: np.ndarray, bases: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Grey-level profiles (n, m) float32 across edges, bilinear.
+
+    image (height, width), uint8 or float32: sample j of profile i is the image at
+    bases[i] + offsets[j] * normals[i]. bases (n, 2) x, y in the image's pixels (pixel
+    centres at whole numbers); normals (n, 2) unit vectors; offsets (m,) px (`profile_offsets`).
+    The sample coordinates are computed in the precision of `bases`, `normals` and `offsets`,
+    then given to OpenCV as float32 (it places them on a 1/32 px grid). A uint8 image is
+    read straight, each sample rounded to a whole DN (moves a crossing by < 0.005 px, and
+    costs less than a float copy of the image); outside the image the border pixels repeat.
+    """
+    map_x = (bases[:, :1] + offsets[None, :] * normals[:, :1]).astype(np.float32, copy=False)
+    map_y = (bases[:, 1:2] + offsets[None, :] * normals[:, 1:2]).astype(np.float32, copy=False)
+    profiles = cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return profiles.astype(np.float32, copy=False)
+
+
+def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> np.ndarray:
+    """Where each profile falls through `level`: (n,) px along its normal, NaN where it does not.
+
+    profiles (n, m) grey levels (DN) sampled at offsets (m,) px, evenly spaced and increasing
+    (from inside a bright blob outward, as `sample_profiles` with outward normals gives them).
+    Of each profile's bright-to-dark crossings (a sample >= level followed by one < level),
+    the one nearest offset 0 is taken and placed between its two samples by linear
+    interpolation, so the result is a sub-pixel offset from the profile's base point.
+    """
     above, below = profiles[:, :-1], profiles[:, 1:]
     crossing = (above >= level) & (below < level)
     distance = np.where(crossing, np.abs(offsets[:-1]), np.inf)
@@ -322,22 +352,19 @@ def refine_edges(
         bases, across = np.vstack([side_bases, arc_bases]), np.vstack([side_normals, arc_normals])
     else:
         bases, across, n_arc = side_bases, side_normals, 0
-    offsets = np.arange(-rules.half_window_px, rules.half_window_px + 1e-9, rules.step_px, dtype=np.float32)
+    offsets = profile_offsets(rules.half_window_px, rules.step_px)
     bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
-    map_x = bases32[:, :1] + offsets[None, :] * across32[:, :1]  # contiguous maps: no copy in remap
-    map_y = bases32[:, 1:] + offsets[None, :] * across32[:, 1:]
-    # Straight from the 8-bit pixels: OpenCV's remap places samples on a 1/32 px grid for any
-    # pixel type, and rounding a sample to whole DN moves a crossing by < 0.005 px, while a
-    # float copy of the region would cost more than the sampling itself.
-    profiles = cv2.remap(roi, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float32)
-    crossings = _mid_level_crossings(profiles, offsets, levels.threshold)
+    # straight from the 8-bit pixels (see `sample_profiles`)
+    profiles = sample_profiles(roi, bases32, across32, offsets)
+    crossings = level_crossings(profiles, offsets, levels.threshold)
     height, width = roi.shape
-    inside = [(mx >= 0) & (my >= 0) & (mx <= width - 1) & (my <= height - 1)
-              for mx, my in ((map_x[:, 0], map_y[:, 0]), (map_x[:, -1], map_y[:, -1]))]
+    ends = (bases32 + offsets[0] * across32, bases32 + offsets[-1] * across32)  # each profile's first, last sample
+    inside = [(end[:, 0] >= 0) & (end[:, 1] >= 0) & (end[:, 0] <= width - 1) & (end[:, 1] <= height - 1)
+              for end in ends]
     valid = np.isfinite(crossings) & inside[0] & inside[1]
     quarter_level = (levels.threshold + levels.background) / 2
     every = slice(0, 4 * n_along, 3)  # only the median gap is wanted: a third of the sides will do
-    level_gap = _mid_level_crossings(profiles[every], offsets, quarter_level) - crossings[every]
+    level_gap = level_crossings(profiles[every], offsets, quarter_level) - crossings[every]
     level_gap_px = float(np.nanmedian(level_gap)) if np.isfinite(level_gap).any() else float("nan")
 
     points = bases + crossings[:, None] * across + np.asarray(roi_origin, dtype=float)
