@@ -1,4 +1,4 @@
-"""Pydantic models of the Lumipose contract (`shared/spec/contract.md`).
+"""Pydantic models of the Lumipose contract (`docs/contract.md`).
 
 These models are the single source of truth: the JSON Schemas in `json/` are exported
 from them (`python -m shared_schemas.export`), and every other language tests against
