@@ -1,13 +1,25 @@
-"""The capture protocol that keeps both the pose and the ID readable (docs/vlc.md).
+"""The capture protocol that keeps both the pose and the ID readable (docs/vlc.md, "Capture protocol").
 
-A pose frame wants a normal exposure (~10 ms, saturated panel, sharp edges); at that
-exposure the 8.4 ms message is averaged away. So the phone takes, beside each pose frame,
-one or more ID frames: same camera, exposure 1/8000 s (a third of a chip; at most one chip,
-1/2500 s), ISO raised so
-that the panel stays ~200 DN, with `frame_kind = "id"`, its own `timestamp_ns` (first-row
-exposure start) and `rolling_shutter_skew_s`. A burst of ID frames is timed so that each
-frame starts 0.382 of a message later in the message's cycle than the one before
-(golden-ratio stepping), so any few consecutive frames see well-spread parts of the message.
+A pose frame wants a normal exposure (saturated panel, sharp edges); at that exposure the
+8.4 ms message is averaged away. So each capture of the phone (the Android app's
+`IdCapturePlan`) is:
+
+1. one pose frame, `frame_kind = "pose"`, exposed a whole number of message periods
+   (`message_period_s`: 8.4 ms or 16.8 ms, where the code averages exactly away);
+2. right after it a burst of `ID_BURST_FRAMES` (4) ID frames: same camera, `frame_kind = "id"`,
+   exposure `ID_EXPOSURE_S` = 1/8000 s (0.31 chip; frames longer than
+   `StripeRules.max_exposure_chips`, one chip = 1/2500 s, are refused by `id_frame_problem`),
+   ISO raised so that the panel stays around 200 DN, each with its own `timestamp_ns`
+   (first-row exposure start) and `rolling_shutter_skew_s`, both required;
+3. timing (`stepped_interval_s`): within a burst each ID frame starts `ID_BURST_STEP` (a
+   quarter) of a message later in the message than the one before, so the burst tiles the
+   message when each frame sees a quarter of it (`id_frame_interval_s`: 35.70 ms at 30 fps);
+   successive captures are `GOLDEN_STEP` (0.382) of a message apart (golden ratio, 498.81 ms
+   for a nominal 0.5 s) so that their bursts fill each other's gaps.
+
+The decoder works with any timing (it uses the timestamps); this one makes the fewest frames
+cover the whole message. `bench vlc` steps all its frames by the golden step, the more
+general case.
 """
 
 from __future__ import annotations
@@ -16,11 +28,13 @@ import math
 
 from server.ingest import LumaFrame
 from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS
+from server.vlc.decoder import StripeRules
 from shared_schemas import FrameKind
 
 ID_EXPOSURE_S = 1.0 / 8000.0
-MAX_ID_EXPOSURE_CHIPS = 1.0  # beyond one chip the box average smears neighbouring chips together
-GOLDEN_STEP = (3.0 - math.sqrt(5.0)) / 2.0  # 0.382: the most evenly spreading phase step
+ID_BURST_FRAMES = 4  # ID frames after each pose frame (the app's IdCapturePlan.BURST_FRAMES)
+ID_BURST_STEP = 1.0 / ID_BURST_FRAMES  # message phase from one ID frame of a burst to the next
+GOLDEN_STEP = (3.0 - math.sqrt(5.0)) / 2.0  # 0.382: from one capture to the next, the most evenly spreading step
 
 
 def message_period_s(chip_rate_hz: float = CHIP_RATE_HZ) -> float:
@@ -30,8 +44,9 @@ def message_period_s(chip_rate_hz: float = CHIP_RATE_HZ) -> float:
 def stepped_interval_s(nominal_s: float, step: float = GOLDEN_STEP, chip_rate_hz: float = CHIP_RATE_HZ) -> float:
     """The frame interval nearest `nominal_s` that advances the message phase by `step` of a period.
 
-    0.382 (golden ratio) spreads any number of frames evenly; 1/n tiles the message exactly
-    with a burst of n frames that each see at least 1/n of it.
+    The default, 0.382 (golden ratio), is the step between captures: it spreads any number
+    of frames evenly. 1/n tiles the message exactly with a burst of n frames that each see
+    at least 1/n of it (`id_frame_interval_s`).
     """
     if not nominal_s > 0:
         raise ValueError(f"nominal_s must be positive, got {nominal_s}")
@@ -41,17 +56,24 @@ def stepped_interval_s(nominal_s: float, step: float = GOLDEN_STEP, chip_rate_hz
     return (max(0, round(nominal_s / period - step)) + step) * period
 
 
-def id_frame_problem(frame: LumaFrame, chip_rate_hz: float = CHIP_RATE_HZ,
-                     max_exposure_chips: float = MAX_ID_EXPOSURE_CHIPS) -> str | None:
-    """None when `frame` can carry stripes, else the sentence saying why it cannot."""
+def id_frame_interval_s(nominal_s: float = 1.0 / 30.0, chip_rate_hz: float = CHIP_RATE_HZ) -> float:
+    """The interval between the ID frames of a burst: `ID_BURST_STEP` of a message, nearest `nominal_s`."""
+    return stepped_interval_s(nominal_s, ID_BURST_STEP, chip_rate_hz)
+
+
+def id_frame_problem(frame: LumaFrame, rules: StripeRules = StripeRules()) -> str | None:
+    """None when `frame` can carry stripes, else the sentence saying why it cannot.
+
+    The exposure limit is `rules.max_exposure_chips` at `rules.chip_rate_hz`.
+    """
     meta = frame.meta
     if meta.rolling_shutter_skew_s is None or meta.rolling_shutter_skew_s <= 0:
         return "rolling_shutter_skew_s is missing: the row times are unknown"
     if meta.exposure_s is None:
         return "exposure_s is missing"
-    if meta.exposure_s > max_exposure_chips / chip_rate_hz:
-        return (f"exposure_s {meta.exposure_s:.2g} s is longer than {max_exposure_chips / chip_rate_hz:.2g} s: "
-                "the code is averaged away")
+    longest_s = rules.max_exposure_chips / rules.chip_rate_hz
+    if meta.exposure_s > longest_s:
+        return f"exposure_s {meta.exposure_s:.2g} s is longer than {longest_s:.2g} s: the code is averaged away"
     if meta.timestamp_ns is None:
         return "timestamp_ns is missing: frames cannot be combined"
     return None

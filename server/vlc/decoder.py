@@ -47,7 +47,9 @@ class StripeRules:
     min_relative_depth: float = 0.35  # fitted chip gain / mean panel level; the code's is 0.7 to 2.3
     min_samples: int = 6
     chip_rate_hz: float = CHIP_RATE_HZ
-    max_exposure_chips: float = 1.0  # longer ID exposures are refused before decoding (server.vlc.capture)
+    # longer ID exposures are refused before decoding (server.vlc.capture.id_frame_problem): beyond one
+    # chip the box average smears neighbouring chips together
+    max_exposure_chips: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -77,7 +79,6 @@ class IdDecision:
     confidence: float  # its posterior probability among the candidates
     confident: bool
     frames: int
-    runner_up: int | None
     chips_seen: float  # over all frames combined (with overlaps)
     message: str
 
@@ -252,7 +253,7 @@ class IdEvidence:
     def decide(self) -> IdDecision:
         usable = [o for o in self.observations if o.samples >= self.rules.min_samples]
         if not usable:
-            return IdDecision(None, 0.0, False, 0, None, 0.0, "no stripes read yet")
+            return IdDecision(None, 0.0, False, 0, 0.0, "no stripes read yet")
         reference = usable[0].timestamp_s
         errors = self._clock_errors()
         total = 0.0
@@ -280,8 +281,6 @@ class IdEvidence:
         threshold = self.rules.confident_posterior
         confident = confidence >= threshold and (plain >= threshold or self.unseen_chips(usable) <= 1.0)
         chips = float(sum(o.chips_seen for o in usable))
-        runner = self.candidates[order[1]] if len(order) > 1 else None
         message = (f"ID {self.candidates[best]} at posterior {confidence:.3f} from {len(usable)} frame(s), "
                    f"{chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message")
-        return IdDecision(int(self.candidates[best]), confidence, confident, len(usable),
-                          None if runner is None else int(runner), chips, message)
+        return IdDecision(int(self.candidates[best]), confidence, confident, len(usable), chips, message)

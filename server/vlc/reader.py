@@ -26,7 +26,7 @@ class IdFrameReading:
 def read_id_frame(frame: LumaFrame, candidates: CandidateRules = CandidateRules(),
                   rules: StripeRules = StripeRules()) -> IdFrameReading:
     """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included)."""
-    problem = id_frame_problem(frame, rules.chip_rate_hz, rules.max_exposure_chips)
+    problem = id_frame_problem(frame, rules)
     if problem is not None:
         return IdFrameReading((), problem)
     meta = frame.meta

@@ -105,3 +105,23 @@ def test_burst_timing_tiles_the_message():
         assert (interval / period) % 1 == pytest.approx(step, abs=1e-9)
     with pytest.raises(ValueError, match="step"):
         stepped_interval_s(0.5, step=1.0)
+
+
+def test_the_protocol_s_burst_is_four_frames_a_quarter_message_apart():
+    # docs/vlc.md, "Capture protocol": 35.70 ms within a burst, captures 0.382 apart (498.81 ms)
+    from server.vlc.capture import ID_BURST_FRAMES, ID_BURST_STEP, id_frame_interval_s, stepped_interval_s
+
+    assert ID_BURST_FRAMES == 4 and ID_BURST_STEP == 0.25
+    assert id_frame_interval_s() == pytest.approx(0.03570, abs=1e-8)
+    assert stepped_interval_s(0.5) == pytest.approx(0.49881, abs=1e-5)
+
+
+def test_the_id_frame_exposure_limit_comes_from_the_stripe_rules(make_id_frames):
+    from server.vlc.capture import id_frame_problem
+    from server.vlc.decoder import StripeRules
+
+    frame = make_id_frames(0xA5, 1.0, 1 / 3000, 1, seed=1)[0]  # 0.83 chip
+    assert id_frame_problem(frame) is None  # called with the frame alone: StripeRules' limit of one chip
+    assert "averaged away" in id_frame_problem(frame, StripeRules(max_exposure_chips=0.5))
+    longer = frame.__class__(frame.pixels, frame.meta.model_copy(update={"exposure_s": 1 / 2000}), frame.camera)
+    assert "averaged away" in id_frame_problem(longer)
