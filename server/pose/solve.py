@@ -59,7 +59,6 @@ class PoseSolution:
     ambiguity_ratio: float
     alternative_distance_m: float  # between the two IPPE minima's camera positions
     gravity_used: bool
-    vision_tilt_sigma_deg: float
 
 
 def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -207,14 +206,6 @@ def _map_pose(object_points, image_points, vision, beacon, camera_matrix, gravit
     return best[0], best[1]
 
 
-def _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma_px: float) -> float:
-    """Predicted 1-sigma tilt error of the vision fix from its Jacobian."""
-    _, jacobian = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
-    information = jacobian[:, :6].T @ jacobian[:, :6]
-    covariance = np.linalg.pinv(information) * corner_sigma_px**2
-    return float(np.degrees(np.sqrt(np.trace(covariance[:2, :2]) / 2)))
-
-
 def _ippe_square_minima(corners4, image_corners, camera_matrix) -> list[tuple[float, np.ndarray, np.ndarray]]:
     """IPPE_SQUARE's local minima (reprojection error, rvec, tvec), best first; non-finite ones dropped."""
     count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
@@ -271,7 +262,6 @@ def solve_pose(
     ratio, disagreement = _square_ambiguity(corners4, image_points[:4], beacon, camera_matrix)
 
     corner_sigma = max(corner_sigma_px, rules.corner_sigma_floor_px)
-    tilt_sigma = _vision_tilt_sigma_deg(object_points, rvec, tvec, camera_matrix, corner_sigma)
     ambiguous = ratio > rules.max_ambiguity_ratio and disagreement > rules.max_ambiguous_disagreement_m
     use_gravity = gravity_camera is not None and gravity_mode is not GravityMode.never
     if ambiguous and not use_gravity:
@@ -294,5 +284,4 @@ def solve_pose(
         ambiguity_ratio=ratio,
         alternative_distance_m=disagreement,
         gravity_used=use_gravity,
-        vision_tilt_sigma_deg=tilt_sigma,
     )
