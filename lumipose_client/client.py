@@ -14,7 +14,7 @@ from pydantic import BaseModel, ValidationError
 
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
 from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, SampleInfo, SampleList
-from shared_schemas.fixture_files import fixture_paths
+from shared_schemas.fixture_files import read_fixture_files
 
 FRAME_HEADER = "X-Lumipose-Frame"
 T = TypeVar("T")
@@ -26,12 +26,6 @@ class LumiposeError(Exception):
     def __init__(self, status: int, body: ErrorBody):
         super().__init__(f"HTTP {status} {body.error}: {body.message}")
         self.status, self.body = status, body
-
-
-def read_fixture_files(path: Path | str) -> tuple[FrameMeta, bytes]:
-    """The metadata and bytes of a recorded frame (NAME.json + NAME.y / .yuv / .png)."""
-    meta_path, raw_path = fixture_paths(path)
-    return FrameMeta.model_validate_json(meta_path.read_bytes()), raw_path.read_bytes()
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from server.camera import resolve_camera
 from server.outcomes import FrameError
 from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
-from shared_schemas.fixture_files import fixture_paths
+from shared_schemas.fixture_files import read_fixture_files
 
 MAX_PIXELS = 100_000_000
 
@@ -87,12 +87,10 @@ def decode_frame(data: bytes | memoryview, meta: FrameMeta) -> LumaFrame:
 
 
 def read_fixture(path: Path | str) -> LumaFrame:
-    """A recorded frame from NAME.json and its sibling NAME.y / NAME.yuv / NAME.png."""
+    """A recorded frame from NAME.json and its sibling NAME.y / NAME.yuv / NAME.png, in the format
+    of the file found (the client reads fixtures with the same function)."""
     try:
-        meta_path, raw_path = fixture_paths(path)
+        meta, data = read_fixture_files(path, parse_meta)
     except FileNotFoundError as error:
         raise FrameError(str(error)) from None
-    meta = parse_meta(meta_path.read_bytes())
-    if raw_path.suffix == ".png" and meta.format is not FrameFormat.png:
-        meta = meta.model_copy(update={"format": FrameFormat.png})
-    return decode_frame(raw_path.read_bytes(), meta)
+    return decode_frame(data, meta)

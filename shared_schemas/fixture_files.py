@@ -1,10 +1,19 @@
-"""Where the two files of a recorded frame are: NAME.json beside NAME.y, NAME.yuv or NAME.png."""
+"""A recorded frame on disk: NAME.json beside NAME.y, NAME.yuv or NAME.png.
+
+One reader for the server (`server.ingest.read_fixture`, which decodes the pixels) and the
+client (which sends the bytes as they are), so both take the same file and the same format
+for it. Only the standard library and the contract's models: no numpy or OpenCV here.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Callable
+
+from shared_schemas.models import FrameFormat, FrameMeta
 
 RAW_SUFFIXES = (".y", ".yuv", ".png")
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 def fixture_paths(path: Path | str) -> tuple[Path, Path]:
@@ -22,3 +31,34 @@ def fixture_paths(path: Path | str) -> tuple[Path, Path]:
         raise FileNotFoundError(
             f"no frame data beside {meta_path} (looked for {', '.join(p.name for p in raw_paths)})")
     return meta_path, raw_path
+
+
+def with_actual_format(meta: FrameMeta, data: bytes) -> FrameMeta:
+    """`meta` with the format the frame bytes really have.
+
+    Bytes that start with the PNG signature are a PNG whatever the JSON says (a fixture's JSON
+    written for a raw plane, kept beside a PNG of it); raw bytes under a JSON that says PNG are
+    read as one Y8 luma plane (its size is checked when the frame is decoded). Otherwise the
+    JSON's raw format (Y8, NV21, I420) stands: the bytes cannot tell them apart.
+    """
+    if data[:len(PNG_SIGNATURE)] == PNG_SIGNATURE:
+        actual = FrameFormat.png
+    elif meta.format is FrameFormat.png:
+        actual = FrameFormat.y8
+    else:
+        return meta
+    return meta if meta.format is actual else meta.model_copy(update={"format": actual})
+
+
+def read_fixture_files(path: Path | str, parse_meta: Callable[[bytes], FrameMeta] = FrameMeta.model_validate_json
+                       ) -> tuple[FrameMeta, bytes]:
+    """The metadata and frame bytes of a recorded frame, named by any of its files or its stem,
+    with the format of the file actually found (`with_actual_format`).
+
+    `parse_meta` reads the JSON (the server passes its own, which names the faulty field).
+    Raises FileNotFoundError naming what is missing.
+    """
+    meta_path, raw_path = fixture_paths(path)
+    meta = parse_meta(meta_path.read_bytes())
+    data = raw_path.read_bytes()
+    return with_actual_format(meta, data), data
