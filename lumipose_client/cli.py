@@ -1,6 +1,8 @@
 """`lumipose client ...`: the service from the command line, through the Python client.
 
 Exit codes as `lumipose locate`: 0 success (a fix), 1 no fix, 2 a refused request or bad input.
+Only the client and the contract are imported here; the figures of `samples evaluate --plots`
+come from whoever builds the command line (`lumipose_cli.main` hands in the simulator's).
 """
 
 from __future__ import annotations
@@ -9,14 +11,20 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import Callable
 
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap
+from shared_schemas.api import Evaluation
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
 
+PlotEvaluation = Callable[[Evaluation, Path], list[Path]]  # (report, folder) -> the figure files written
 
-def add_commands(commands) -> None:
+
+def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> None:
+    """Add `client ...` to an argparse subparsers object; `samples evaluate --plots` exists when
+    `plot_evaluation` is given."""
     client = commands.add_parser("client", help="talk to a running Lumipose service")
     client.add_argument("--url", default=DEFAULT_URL, help="service URL (default $LUMIPOSE_URL or %(default)s)")
     client.add_argument("--api-key", default=os.environ.get("LUMIPOSE_API_KEY"), help="default $LUMIPOSE_API_KEY")
@@ -41,8 +49,9 @@ def add_commands(commands) -> None:
     evaluate = sample_actions.add_parser("evaluate", help="error and coverage of the stored samples")
     evaluate.add_argument("--map")
     evaluate.add_argument("--cell", type=float, default=0.05, help="grid cell side for 'i,j' labels, metres")
-    evaluate.add_argument("--plots", type=Path, help="write the paper's Figs. 13-14 (scatter, heat map) here")
-    evaluate.set_defaults(client_run=_evaluate)
+    if plot_evaluation is not None:
+        evaluate.add_argument("--plots", type=Path, help="write the paper's Figs. 13-14 (scatter, heat map) here")
+    evaluate.set_defaults(client_run=_evaluate, plot_evaluation=plot_evaluation)
 
     maps = actions.add_parser("maps", help="beacon maps")
     map_actions = maps.add_subparsers(dest="maps_command", required=True)
@@ -113,26 +122,10 @@ def _evaluate(client: Client, args) -> int:
     if report.mean_mm is not None:
         print(f"2D error mm: mean {report.mean_mm:.2f}  std {report.std_mm:.2f}  "
               f"min {report.min_mm:.2f}  max {report.max_mm:.2f}")
-    if args.plots:
-        for path in _plot_evaluation(report, args.plots):
+    if getattr(args, "plots", None):
+        for path in args.plot_evaluation(report, args.plots):
             print(f"wrote {path}")
     return 0
-
-
-def _plot_evaluation(report, folder: Path) -> list[Path]:
-    from simulator.reports import Outcome, plot_heatmap, plot_scatter
-
-    outcomes = [Outcome(index=i, label=row.label or row.id, true_m=tuple(row.truth_m),
-                        estimate_m=tuple(row.position_m) if row.ok else None, reason=row.reason, message=None,
-                        reprojection_px=None)
-                for i, row in enumerate(report.rows) if row.truth_m is not None]
-    if not outcomes:
-        raise ValueError("no stored sample has a truth (ground_truth or an 'i,j' label) to plot")
-    folder.mkdir(parents=True, exist_ok=True)
-    scatter, heatmap = folder / "samples_scatter.png", folder / "samples_heatmap.png"
-    plot_scatter(outcomes, scatter, f"stored samples, map {report.map}")
-    plot_heatmap(outcomes, heatmap, f"2D error, map {report.map}")
-    return [scatter, heatmap]
 
 
 def _list_maps(client: Client, args) -> int:

@@ -2,29 +2,80 @@
 
 A 20-megapixel luma plane is 20 MB on the wire; the window around a 0.174 m panel seen by
 the Mi 8 front camera is about 3 MB at 1 m and a few hundred kilobytes at 2-3 m, and the
-server's answer is the same (its fine stages only read that region). The window is twice the
-panel's extent so the background still makes up most of it (the threshold level is half-way
-between the background median and the panel's plateau).
+server's answer is the same (its fine stages only read that region).
+
+Which window to send is the client's own rule, kept deliberately simple and numpy-only (no
+OpenCV on a laptop): the server finds the panel again inside the window with its full
+checks, so the window only has to hold the whole panel with a margin of background.
+
+1. A coarse view: the mean of each square block, a `BLOCK_DIVISOR`-th of the short side.
+2. A level half-way between the background (the view's median) and the bright plateau (its
+   brightest block); nothing is cut when the two are less than `MIN_CONTRAST_DN` apart.
+3. The bright region holding the brightest block (blocks at or above the level, 8-connected);
+   the panel's extent is its bounding box grown by `EDGE_BLOCKS` blocks a side (the blurred
+   edge and the glow around the panel stay below the level).
+4. A square window `WINDOW_PER_PANEL` times the extent's longer side around its centre,
+   clipped to the frame: the background still makes up most of it, so the server's own
+   threshold (half-way between background and plateau) lands where it would on the whole frame.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from server.vision.roi import find_roi
 from shared_schemas import Crop, FrameFormat, FrameMeta
 
 WINDOW_PER_PANEL = 2.0
+BLOCK_DIVISOR = 240  # blocks across the short side of the coarse view
+MIN_CONTRAST_DN = 20.0
+EDGE_BLOCKS = 3  # the panel's extent: its bright region's box grown by this many blocks a side
+
+
+def _block_means(pixels: np.ndarray, block: int) -> np.ndarray:
+    """Mean of each whole block x block tile; the frame's last rows and columns that do not fill
+    a tile (fewer than `block`) are left out of the view."""
+    rows, cols = pixels.shape[0] // block, pixels.shape[1] // block
+    tiles = pixels[:rows * block, :cols * block]
+    row_sums = tiles.reshape(rows, block, cols * block).sum(axis=1, dtype=np.uint32)
+    return row_sums.reshape(rows, cols, block).sum(axis=2) / (block * block)
+
+
+def _region_of(seed: tuple[int, int], mask: np.ndarray) -> np.ndarray:
+    """The 8-connected part of `mask` holding `seed`, grown one block ring at a time."""
+    region = np.zeros_like(mask)
+    region[seed] = True
+    while True:
+        grown = region.copy()
+        grown[1:, :] |= region[:-1, :]
+        grown[:-1, :] |= region[1:, :]
+        grown[:, 1:] |= grown[:, :-1].copy()
+        grown[:, :-1] |= grown[:, 1:].copy()
+        grown &= mask
+        if np.array_equal(grown, region):
+            return region
+        region = grown
 
 
 def beacon_window(pixels: np.ndarray) -> tuple[int, int, int, int] | None:
-    """(x0, y0, x1, y1) of a window around the brightest panel, or None when there is none."""
-    roi = find_roi(pixels)
-    if not hasattr(roi, "x0"):
-        return None
+    """(x0, y0, x1, y1) of the window to send around the brightest panel, or None when nothing
+    stands out of the background."""
     height, width = pixels.shape
-    centre_x, centre_y = (roi.x0 + roi.x1) / 2, (roi.y0 + roi.y1) / 2
-    half = WINDOW_PER_PANEL * max(roi.x1 - roi.x0, roi.y1 - roi.y0) / 2
+    block = max(1, min(height, width) // BLOCK_DIVISOR)
+    coarse = _block_means(pixels, block)
+    background, plateau = float(np.median(coarse)), float(coarse.max())
+    if plateau - background < MIN_CONTRAST_DN:
+        return None
+    brightest = np.unravel_index(np.argmax(coarse), coarse.shape)
+    region = _region_of(brightest, coarse >= (background + plateau) / 2)
+    rows, cols = np.flatnonzero(region.any(axis=1)), np.flatnonzero(region.any(axis=0))
+    # the panel's blurred edge and glow reach a few blocks below the level; a region at the view's
+    # far edge may go on in the rows and columns the view left out
+    margin = EDGE_BLOCKS * block
+    left, top = cols[0] * block - margin, rows[0] * block - margin
+    right = width if cols[-1] == coarse.shape[1] - 1 else (cols[-1] + 1) * block + margin
+    bottom = height if rows[-1] == coarse.shape[0] - 1 else (rows[-1] + 1) * block + margin
+    centre_x, centre_y = (left + right) / 2, (top + bottom) / 2
+    half = WINDOW_PER_PANEL * max(right - left, bottom - top) / 2
     x0, y0 = max(0, int(centre_x - half)), max(0, int(centre_y - half))
     x1, y1 = min(width, int(np.ceil(centre_x + half))), min(height, int(np.ceil(centre_y + half)))
     return x0, y0, x1, y1

@@ -1,5 +1,7 @@
-"""The `lumipose` command line.
+"""The server's commands of `lumipose`: `locate`, `fov` and `serve`.
 
+`lumipose_cli.main` joins them with the client's and the simulator's commands into the one
+`lumipose` command; `python -m server.cli` runs the server's commands alone.
 Exit codes: 0 a fix (or success), 1 no fix (the reason is printed), 2 bad input.
 """
 
@@ -150,18 +152,17 @@ def _startup_map_name(settings) -> str:
     return load_map(settings.map or DEMO_MAP_PATH).name
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
-    commands = parser.add_subparsers(dest="command", required=True)
+def add_commands(commands) -> None:
+    """Add `locate`, `fov` and `serve` to an argparse subparsers object."""
     _add_locate(commands)
     _add_fov(commands)
     _add_serve(commands)
-    from lumipose_client.cli import add_commands as add_client_commands
 
-    add_client_commands(commands)
-    from simulator.cli import add_commands as add_simulator_commands
 
-    add_simulator_commands(commands)
+def build_parser() -> argparse.ArgumentParser:
+    """The server's commands alone (the full `lumipose` parser is `lumipose_cli.main.build_parser`)."""
+    parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
+    add_commands(parser.add_subparsers(dest="command", required=True))
     return parser
 
 

@@ -8,13 +8,13 @@ import sys
 import numpy as np
 
 from lumipose_client.crop import crop_frame
-from lumipose_client.load import LoadReport, run_load
-from lumipose_client.local_server import LocalServer
 from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
 from shared_schemas import BeaconMap, FrameMeta, device_profiles
+from simulator.bench_load import LoadReport, run_load
 from simulator.benchmarks import PROFILE_ID, bench_beacon
 from simulator.fixtures import fixture_meta
+from simulator.local_server import LocalServer
 from simulator.render import CameraPose, SensorModel, render_frame
 
 FRAME_WIDTHS = {"1080p": 1080, "full": None, "full-window": None}  # full = the profile's native 3880 x 5184
@@ -69,19 +69,8 @@ def print_reports(reports: list[LoadReport], as_json: bool) -> None:
               f"| {r.server_peak_rss_mb or float('nan'):.0f} |")
 
 
-def add_load_command(benches) -> None:
-    load = benches.add_parser("load", help="the HTTP service under concurrent clients (starts its own server)")
-    load.add_argument("--frames", nargs="+", choices=sorted(FRAME_WIDTHS), default=["1080p", "full", "full-window"],
-                      help="full-window: the full frame cut to the beacon's window by the client")
-    load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4])
-    load.add_argument("--seconds", type=float, default=20.0, help="per client count")
-    load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
-    load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
-    load.add_argument("--json", action="store_true")
-    load.set_defaults(run=_run_load_command)
-
-
-def _run_load_command(args) -> int:
+def run_load_command(args) -> int:
+    """`lumipose bench load` (its flags: simulator/cli.py)."""
     encodings = [None if encoding == "none" else encoding for encoding in args.encodings]
     reports = run_service_load(args.frames, args.clients, args.seconds, encodings, args.workers)
     print_reports(reports, args.json)

@@ -1,4 +1,5 @@
-"""Simulator subcommands of `lumipose`: `render` and `bench ...`."""
+"""Simulator subcommands of `lumipose`: `render`, `simulate` and `bench ...`, and the figures of
+`lumipose client samples evaluate --plots` (`plot_sample_evaluation`)."""
 
 from __future__ import annotations
 
@@ -56,9 +57,16 @@ def add_commands(commands) -> None:
     speed.add_argument("--no-gravity", action="store_true", help="leave the gravity vector out (no MAP pose fit)")
     speed.add_argument("--json", action="store_true")
     speed.set_defaults(run=_run_speed)
-    from simulator.bench_service import add_load_command
-
-    add_load_command(benches)
+    load = benches.add_parser("load", help="the HTTP service under concurrent clients (starts its own server)")
+    load.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],  # bench_service.FRAME_WIDTHS
+                      default=["1080p", "full", "full-window"],
+                      help="full-window: the full frame cut to the beacon's window by the client")
+    load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4])
+    load.add_argument("--seconds", type=float, default=20.0, help="per client count")
+    load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
+    load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
+    load.add_argument("--json", action="store_true")
+    load.set_defaults(run=_run_load)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
                             ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
         grid = benches.add_parser(name, help=help_text)
@@ -106,6 +114,24 @@ def add_commands(commands) -> None:
     add_vlc_benches(benches)
 
 
+def plot_sample_evaluation(report, folder: Path) -> list[Path]:
+    """The paper's Figs. 13-14 (scatter, heat map) of the service's sample evaluation (a
+    shared_schemas.api.Evaluation): `lumipose client samples evaluate --plots DIR`."""
+    from simulator.reports import Outcome, plot_heatmap, plot_scatter
+
+    outcomes = [Outcome(index=i, label=row.label or row.id, true_m=tuple(row.truth_m),
+                        estimate_m=tuple(row.position_m) if row.ok else None, reason=row.reason, message=None,
+                        reprojection_px=None)
+                for i, row in enumerate(report.rows) if row.truth_m is not None]
+    if not outcomes:
+        raise ValueError("no stored sample has a truth (ground_truth or an 'i,j' label) to plot")
+    folder.mkdir(parents=True, exist_ok=True)
+    scatter, heatmap = folder / "samples_scatter.png", folder / "samples_heatmap.png"
+    plot_scatter(outcomes, scatter, f"stored samples, map {report.map}")
+    plot_heatmap(outcomes, heatmap, f"2D error, map {report.map}")
+    return [scatter, heatmap]
+
+
 def _run_render(args) -> int:
     import numpy as np
 
@@ -137,9 +163,8 @@ def _run_render(args) -> int:
 
 
 def _bundled_scenes() -> list[str]:
-    from simulator.scene import SCENES_DIR
-
-    return sorted(path.stem for path in SCENES_DIR.glob("*.json"))
+    # simulator.scene.SCENES_DIR, without importing the renderer for every `lumipose --help`
+    return sorted(path.stem for path in (Path(__file__).parent / "scenes").glob("*.json"))
 
 
 def _run_simulate(args) -> int:
@@ -171,6 +196,12 @@ def _run_simulate(args) -> int:
         return 2
     print(f"wrote {len(stems)} fixtures ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
+
+
+def _run_load(args) -> int:
+    from simulator.bench_service import run_load_command
+
+    return run_load_command(args)
 
 
 def _run_accuracy(args) -> int:

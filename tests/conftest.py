@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from lumipose_client import Client, read_fixture_files
-from lumipose_client.local_server import LocalServer
+from simulator.local_server import LocalServer
 
 API_KEY = "test-key"
 UPLOAD_LIMIT_MB = 4  # small, so the 'too large' cases are cheap

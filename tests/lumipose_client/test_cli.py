@@ -1,6 +1,13 @@
 """`lumipose client ...` against the real server: exit codes and what it prints."""
 
-from server.cli import main
+import json
+import shutil
+
+import cv2
+import numpy as np
+
+from lumipose_cli.main import main
+from lumipose_client import read_fixture_files
 from tests.conftest import API_KEY, FIXTURE
 
 
@@ -27,3 +34,20 @@ def test_client_store_list_evaluate(server_url, capsys, tmp_path):
 def test_client_without_a_server_is_a_clear_error(capsys):
     assert main(["client", "--url", "http://127.0.0.1:9", "maps", "list"]) == 2
     assert "cannot reach http://127.0.0.1:9" in capsys.readouterr().err
+
+
+def test_client_locate_sends_a_png_beside_a_json_that_says_y8(server_url, capsys, tmp_path):
+    """The client reads a fixture as the server's `lumipose locate` does: the format of the file found."""
+    meta, data = read_fixture_files(FIXTURE)
+    assert meta.format.value == "Y8"
+    pixels = np.frombuffer(data, np.uint8).reshape(meta.height, meta.stride)[:, :meta.width]
+    shutil.copy(FIXTURE, tmp_path / "frame.json")
+    (tmp_path / "frame.png").write_bytes(cv2.imencode(".png", pixels)[1].tobytes())
+    assert main(["locate", str(tmp_path / "frame.json"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ok"]
+    results = []
+    for path in (tmp_path / "frame.json", FIXTURE):
+        assert main(["client", "--url", server_url, "locate", str(path)]) == 0
+        results.append(json.loads(capsys.readouterr().out))
+    png, y8 = results
+    assert png["ok"] and png["position_m"] == y8["position_m"]  # the same pixels, the same fix

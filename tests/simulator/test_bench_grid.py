@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from server.cli import main
+from lumipose_cli.main import main
 from simulator.bench_fidelity import fidelity_row
 from simulator.bench_grid import RealBench, grid_scene, real_bench_scene
 from simulator.bench_sweeps import distance_scene, tilt_scene

@@ -20,7 +20,7 @@ def test_vlc_bench_reports_single_and_combined_rates(tmp_path):
 
 
 def test_vlc_bench_command_prints_json():
-    out = subprocess.run([sys.executable, "-m", "server.cli", "bench", "vlc", "--distances", "2.0", "--trials", "1",
+    out = subprocess.run([sys.executable, "-m", "lumipose_cli", "bench", "vlc", "--distances", "2.0", "--trials", "1",
                           "--max-frames", "10", "--workers", "1", "--json"],
                          capture_output=True, text=True, check=True, timeout=300)
     report = json.loads(out.stdout)["vlc"][0]

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from server.cli import main
+from lumipose_cli.main import main
 from server.ingest import read_fixture
 from simulator.sampling import render_pose, series_poses, write_series
 from simulator.scene import Scene, find_scene

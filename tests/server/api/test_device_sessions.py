@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from lumipose_client import Client
-from lumipose_client.local_server import LocalServer
+from simulator.local_server import LocalServer
 from simulator.bench_office import OfficeConfig, office_scenes, true_beacon, walk_captures
 from shared_schemas import FrameKind
 

@@ -3,7 +3,7 @@
 import socket
 import time
 
-from lumipose_client.local_server import LocalServer
+from simulator.local_server import LocalServer
 
 
 def _read_response(sock: socket.socket) -> str:
