@@ -15,12 +15,25 @@ MVN=(mvn -B -ntp -f android_client/pom.xml)
 
 # The core also runs on Android, whose org.json differs from Maven Central's (checked JSONException,
 # fewer methods): compile the core's main sources against the framework classes alone to prove it.
-M2="${M2_REPO:-$HOME/.m2/repository}"
+OUT="$(mktemp -d)"
+trap 'rm -rf "$OUT"' EXIT
+# The android-all jar is in Maven's local repository, wherever Maven puts it (settings.xml,
+# user.home, a -Dmaven.repo.local given to this script): ask Maven (written to a file, since
+# its stdout carries colour codes). M2_REPO still overrides.
+PROPERTIES=()
+for arg in "$@"; do
+    if [[ "$arg" == -D* ]]; then PROPERTIES+=("$arg"); fi
+done
+if [ -n "${M2_REPO:-}" ]; then
+    M2="$M2_REPO"
+else
+    "${MVN[@]}" -N -q org.apache.maven.plugins:maven-help-plugin:3.5.2:evaluate \
+        -Dexpression=settings.localRepository -Doutput="$OUT/local-repository" ${PROPERTIES[@]+"${PROPERTIES[@]}"}
+    M2="$(cat "$OUT/local-repository")"
+fi
 AA_VERSION="$(sed -n 's:.*<android.all.version>\(.*\)</android.all.version>.*:\1:p' android_client/pom.xml)"
 ANDROID_ALL="$M2/org/robolectric/android-all/$AA_VERSION/android-all-$AA_VERSION.jar"
 [ -f "$ANDROID_ALL" ] || { echo "android-all jar not found at $ANDROID_ALL (set M2_REPO)" >&2; exit 1; }
-OUT="$(mktemp -d)"
-trap 'rm -rf "$OUT"' EXIT
-javac --release 8 -nowarn -encoding UTF-8 -cp "$ANDROID_ALL" -d "$OUT" \
+javac --release 8 -nowarn -encoding UTF-8 -cp "$ANDROID_ALL" -d "$OUT/classes" \
     $(find android_client/core/src/main/java -name '*.java')
 echo "core compiles against the Android framework's org.json (android-all $AA_VERSION)"
