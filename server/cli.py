@@ -116,6 +116,8 @@ def _add_serve(commands) -> None:
     parser.add_argument("--api-key", help="required for writes when set")
     parser.add_argument("--max-upload-mb", type=float, help="upload limit (default 64)")
     parser.add_argument("--read-timeout-s", type=float, help="longest time to receive one upload (default 30)")
+    parser.add_argument("--session-idle-s", type=float, help="a device silent for longer loses its session (default 600)")
+    parser.add_argument("--max-devices", type=int, help="device sessions kept per worker (default 1000)")
     parser.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
     parser.set_defaults(run=_run_serve)
 
@@ -129,7 +131,8 @@ def _run_serve(args) -> int:
     from server.api.config import Settings
 
     given = {name: getattr(args, name) for name in ("host", "port", "workers", "map", "data_dir", "api_key",
-                                                    "max_upload_mb", "read_timeout_s") if getattr(args, name) is not None}
+                                                    "max_upload_mb", "read_timeout_s", "session_idle_s", "max_devices")
+             if getattr(args, name) is not None}
     try:
         settings = Settings(**given)
     except ValidationError as error:

@@ -25,7 +25,7 @@ from server.ingest import LumaFrame
 from server.options import LocateOptions
 from server.outcomes import Refusal, refused
 from server.tracking.session import DeviceSession, IdSighting, SessionStats
-from server.vlc.capture import is_id_frame
+from server.vlc.capture import ID_BURST_FRAMES, is_id_frame
 from server.vlc.reader import read_id_frame
 from shared_schemas import BeaconMap, FailureReason, LocateResult
 
@@ -34,7 +34,7 @@ from shared_schemas import BeaconMap, FailureReason, LocateResult
 class DeviceRules:
     idle_s: float = 600.0  # a device silent for longer loses its session
     max_devices: int = 1000  # bounds the memory held for devices that went away
-    id_frames_kept: int = 4  # a capture's burst (docs/vlc.md); an older burst gives way to a newer one
+    id_frames_kept: int = ID_BURST_FRAMES  # a capture's burst; an older burst gives way to a newer one
     max_id_frame_age_s: float = 2.0  # ID frames further than this from the pose frame are not combined
 
 
