@@ -70,8 +70,8 @@ def fit_expected_panels(frame: LumaFrame, blobs: list[BeaconBlob], beacons: list
     ray = _ray(frame.camera, rotation, blob.centroid_px)
     start_m = np.asarray(beacon.center_m) - ray * (beacon.center_m[2] - predicted_m[2]) / ray[2]
     fit = fit_partial(panels, frame.camera, gravity, start_m, yaw_deg, growth_px, rules.partial)
-    if isinstance(fit, str):
-        return Refusal(FailureReason.beacon_cut_off, fit)
+    if isinstance(fit, Refusal):
+        return fit
     blob, beacon = named[0]
     centre, _ = cv2.projectPoints((np.array([beacon.center_m]) - fit.position_m) @ fit.rotation_wc,
                                   np.zeros(3), np.zeros(3), matrix, distortion)
@@ -95,7 +95,7 @@ def fit_cut_off_panel(frame: LumaFrame, blob: BeaconBlob, template: Beacon, yaw_
     ray = _ray(frame.camera, rotation, blob.centroid_px)
     start_m = -ray * distance_m / ray[2]
     fit = fit_partial([(template, points)], frame.camera, gravity, start_m, yaw_deg, growth_px, rules.partial)
-    if isinstance(fit, str):
+    if isinstance(fit, Refusal):
         return None
     return Fix(position_m=fit.position_m, rotation_wc=fit.rotation_wc, beacon_id=None, id_source=None,
                reprojection_error_px=fit.rms_px, gravity_used=True, center_px=np.asarray(blob.centroid_px, float),

@@ -31,7 +31,8 @@ from scipy.spatial import cKDTree
 from server.geometry import (beacon_to_world, camera_matrix, distortion_vector, rotation_from_ypr,
                              rounded_square_outline_m)
 from server.vision.subpixel import level_crossings, profile_offsets, sample_profiles
-from shared_schemas import Beacon, CameraIntrinsics
+from server.outcomes import Refusal
+from shared_schemas import Beacon, CameraIntrinsics, FailureReason
 
 
 @dataclass(frozen=True)
@@ -141,7 +142,7 @@ def measure_growth(beacon: Beacon, points: np.ndarray, position_m, rotation_wc, 
 
 def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsics, gravity_camera,
                 position_guess_m, yaw_guess_deg: float, growth_px: float | None,
-                rules: PartialRules = PartialRules()) -> PartialFix | str:
+                rules: PartialRules = PartialRules()) -> PartialFix | Refusal:
     """Camera pose from edge points of (partly visible) panels; or why there is none.
 
     `growth_px` None: the growth is fitted too (the rounded corners tell it from distance, weakly).
@@ -149,9 +150,9 @@ def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsic
     panels = [(b, p) for b, p in panels if len(p) > 0]
     count = sum(len(p) for _, p in panels)
     if count < rules.min_points:
-        return f"only {count} edge points away from the frame border"
+        return Refusal(FailureReason.beacon_cut_off, f"only {count} edge points away from the frame border")
     if gravity_camera is None:
-        return "a partial panel needs the gravity vector for its tilt"
+        return Refusal(FailureReason.beacon_cut_off, "a partial panel needs the gravity vector for its tilt")
     pitch, roll = tilt_from_gravity(gravity_camera)
 
     def unpack(params):
@@ -166,19 +167,19 @@ def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsic
     try:
         solution = least_squares(residuals, start, loss="huber", f_scale=1.0, x_scale=scale, max_nfev=200)
     except (ValueError, np.linalg.LinAlgError) as error:
-        return f"the partial fit failed: {error}"
+        return Refusal(FailureReason.beacon_cut_off, f"the partial fit failed: {error}")
     final = solution.fun
     rms = float(np.sqrt(np.mean(final**2)))
     jacobian = solution.jac
     try:
         covariance = np.linalg.inv(jacobian.T @ jacobian) * max(rms, 0.1) ** 2
     except np.linalg.LinAlgError:
-        return "the visible edges do not fix the position"
+        return Refusal(FailureReason.beacon_cut_off, "the visible edges do not fix the position")
     sigma = float(np.sqrt(np.trace(covariance[1:4, 1:4])))
     if not solution.success or rms > rules.max_rms_px:
-        return f"the visible edges do not fit the panels (RMS {rms:.2f} px)"
+        return Refusal(FailureReason.beacon_cut_off, f"the visible edges do not fit the panels (RMS {rms:.2f} px)")
     if sigma > rules.max_sigma_m:
-        return f"the visible edges fix the position only to {sigma * 1000:.0f} mm"
+        return Refusal(FailureReason.beacon_cut_off, f"the visible edges fix the position only to {sigma * 1000:.0f} mm")
     position, rotation = unpack(solution.x)
     return PartialFix(position, rotation, rms, sigma, count, float(solution.x[4]) if growth_px is None else growth_px)
 

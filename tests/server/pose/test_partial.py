@@ -4,6 +4,7 @@ import numpy as np
 
 from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
+from server.outcomes import Refusal
 from server.pose.partial import edge_points, fit_partial, measure_growth, tilt_from_gravity
 from server.vision.beacons import find_beacon_blobs
 from shared_schemas import Beacon, device_profiles
@@ -44,8 +45,8 @@ def test_a_cut_off_panel_gives_the_position_to_a_few_millimetres():
     gravity = pose.rotation_wc.T @ [0, 0, -1.0]
     guess = pose.position_m + [0.08, -0.06, 0.05]
     fit = fit_partial([(BEACON, points)], CAMERA, gravity, guess, 0.0, growth)
-    assert not isinstance(fit, str), fit
+    assert not isinstance(fit, Refusal), fit
     assert np.hypot(*(fit.position_m[:2] - pose.position_m[:2])) < 0.005
     assert abs(fit.position_m[2] - pose.position_m[2]) < 0.01
     # without gravity there is no tilt, and the fit says so
-    assert "gravity" in fit_partial([(BEACON, points)], CAMERA, None, guess, 0.0, growth)
+    assert "gravity" in fit_partial([(BEACON, points)], CAMERA, None, guess, 0.0, growth).message
