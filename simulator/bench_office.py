@@ -30,7 +30,7 @@ from server.geometry import camera_matrix, rotation_from_ypr, world_to_camera
 from server.ingest import LumaFrame
 from server.locator import locate
 from server.tracking.devices import Devices
-from server.vlc.capture import message_period_s, stepped_interval_s
+from server.vlc.capture import ID_BURST_FRAMES, id_frame_interval_s, message_period_s, stepped_interval_s
 from shared_schemas import Beacon, FrameKind, FrameMeta
 from simulator.render import CameraPose
 from simulator.scene import Scene, TrajectorySeries, find_scene, render_sample
@@ -52,8 +52,8 @@ class OfficeConfig:
     capture_interval_s: float = stepped_interval_s(0.5)
     pose_scale: float = 0.5  # of the Mi 8 front camera's 3880 x 5184
     pose_exposure_s: float = message_period_s()  # a whole message period: the code averages exactly away
-    id_frames: int = 4
-    id_interval_s: float = stepped_interval_s(1.0 / 30.0, step=0.25)  # 4 frames tile the message
+    id_frames: int = ID_BURST_FRAMES
+    id_interval_s: float = id_frame_interval_s()  # the app's burst: 4 frames a quarter message apart
     max_captures: int | None = None
     seed: int = 1
 

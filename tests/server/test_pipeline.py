@@ -137,7 +137,7 @@ def test_face_to_face_frames_with_sides_along_the_pixel_grid(label):
 def test_distance_bench_frames_that_crashed_are_located(distance_m, label):
     """`lumipose bench distance --distances 1.7 2.1`: at 64752c6 these face-to-face frames made
     IPPE_SQUARE return NaN minima and locate raised on a NaN ambiguity ratio (the corners
-    themselves are replayed in tests/server/test_pose.py, as later pipeline changes moved them
+    themselves are replayed in tests/server/pose/test_solve.py, as later pipeline changes moved them
     off the exact degenerate case). Measured since: 1.5 and 2.1 mm."""
     from simulator.bench_grid import grid_scene
     from simulator.bench_sweeps import distance_scene
