@@ -10,8 +10,8 @@ from __future__ import annotations
 import json
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap
@@ -86,8 +86,9 @@ def _print(model) -> None:
 
 
 def _locate(client: Client, args) -> int:
-    result = client.locate_fixture(args.frame, map=args.map,
-                                   compress=None if args.compress == "none" else args.compress)
+    result = client.locate_fixture(
+        args.frame, map=args.map, compress=None if args.compress == "none" else args.compress
+    )
     _print(result)
     return 0 if result.ok else 1
 
@@ -103,8 +104,10 @@ def _store_samples(client: Client, args) -> int:
 
 def _list_samples(client: Client, args) -> int:
     for info in client.samples().samples:
-        print(f"{info.id}  {info.created:%Y-%m-%d %H:%M:%S}  label={info.label}  map={info.map}  "
-              f"{'fix' if info.result.ok else info.result.reason.value}")
+        print(
+            f"{info.id}  {info.created:%Y-%m-%d %H:%M:%S}  label={info.label}  map={info.map}  "
+            f"{'fix' if info.result.ok else info.result.reason.value}"
+        )
     return 0
 
 
@@ -117,11 +120,15 @@ def _delete_samples(client: Client, args) -> int:
 
 def _evaluate(client: Client, args) -> int:
     report = client.evaluate_samples(map=args.map, cell_m=args.cell)
-    print(f"map {report.map}: {report.samples} samples, {report.with_truth} with truth, "
-          f"coverage {100 * report.coverage:.1f} %")
+    print(
+        f"map {report.map}: {report.samples} samples, {report.with_truth} with truth, "
+        f"coverage {100 * report.coverage:.1f} %"
+    )
     if report.mean_mm is not None:
-        print(f"2D error mm: mean {report.mean_mm:.2f}  std {report.std_mm:.2f}  "
-              f"min {report.min_mm:.2f}  max {report.max_mm:.2f}")
+        print(
+            f"2D error mm: mean {report.mean_mm:.2f}  std {report.std_mm:.2f}  "
+            f"min {report.min_mm:.2f}  max {report.max_mm:.2f}"
+        )
     if getattr(args, "plots", None):
         for path in args.plot_evaluation(report, args.plots):
             print(f"wrote {path}")

@@ -4,9 +4,10 @@
 from __future__ import annotations
 
 import gzip
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 import httpx
 import zstandard
@@ -40,8 +41,14 @@ class _Call(Generic[T]):
 
     def request_args(self) -> dict[str, Any]:
         params = {name: value for name, value in self.params.items() if value is not None}
-        return dict(method=self.method, url=self.path, params=params, headers=self.headers,
-                    content=self.content, json=self.json)
+        return {
+            "method": self.method,
+            "url": self.path,
+            "params": params,
+            "headers": self.headers,
+            "content": self.content,
+            "json": self.json,
+        }
 
 
 def _raise_for_error(response: httpx.Response) -> None:
@@ -58,6 +65,7 @@ def _model(model: type[BaseModel]) -> Callable[[httpx.Response], Any]:
     def parse(response: httpx.Response):
         _raise_for_error(response)
         return model.model_validate_json(response.content)
+
     return parse
 
 
@@ -65,6 +73,7 @@ def _models(model: type[BaseModel]) -> Callable[[httpx.Response], list]:
     def parse(response: httpx.Response):
         _raise_for_error(response)
         return [model.model_validate(item) for item in response.json()]
+
     return parse
 
 
@@ -98,8 +107,10 @@ def encode_frame(data: bytes, encoding: str | None = "gzip") -> EncodedFrame:
 
 def _frame_request(meta: FrameMeta, frame: bytes | EncodedFrame, compress: str | None) -> dict[str, Any]:
     encoded = frame if isinstance(frame, EncodedFrame) else encode_frame(frame, compress)
-    headers = {"Content-Type": "application/octet-stream",
-               FRAME_HEADER: meta.model_dump_json(by_alias=True, exclude_none=True)}
+    headers = {
+        "Content-Type": "application/octet-stream",
+        FRAME_HEADER: meta.model_dump_json(by_alias=True, exclude_none=True),
+    }
     if encoded.encoding:
         headers["Content-Encoding"] = encoded.encoding
     return {"headers": headers, "content": encoded.data}
@@ -114,9 +125,17 @@ class _Endpoints:
     def health(self):
         return self._run(_Call("GET", "/healthz", _model(Health)))
 
-    def locate(self, data: bytes | EncodedFrame, meta: FrameMeta, *, map: str | None = None,
-               beacon_id: int | None = None, gravity: str | None = None, compress: str | None = "gzip",
-               device: str | None = None):
+    def locate(
+        self,
+        data: bytes | EncodedFrame,
+        meta: FrameMeta,
+        *,
+        map: str | None = None,
+        beacon_id: int | None = None,
+        gravity: str | None = None,
+        compress: str | None = "gzip",
+        device: str | None = None,
+    ):
         """Locate the camera of one frame: LocateResult (ok, or ok=False with a reason).
 
         `data` is sent with `compress` ('gzip', 'zstd' or None) unless it is already an EncodedFrame.
@@ -124,8 +143,15 @@ class _Endpoints:
         """
         request = _frame_request(meta, data, compress)
         request["headers"] |= {"X-Lumipose-Device": device} if device else {}
-        return self._run(_Call("POST", "/v1/locate", _model(LocateResult),
-                               params={"map": map, "beacon_id": beacon_id, "gravity": gravity}, **request))
+        return self._run(
+            _Call(
+                "POST",
+                "/v1/locate",
+                _model(LocateResult),
+                params={"map": map, "beacon_id": beacon_id, "gravity": gravity},
+                **request,
+            )
+        )
 
     def locate_fixture(self, path: Path | str, **options):
         meta, data = read_fixture_files(path)
@@ -138,8 +164,14 @@ class _Endpoints:
         return self._run(_Call("GET", f"/v1/maps/{name}", _model(BeaconMap)))
 
     def put_map(self, beacon_map: BeaconMap):
-        return self._run(_Call("PUT", f"/v1/maps/{beacon_map.name}", _model(BeaconMap),
-                               json=beacon_map.model_dump(mode="json", by_alias=True)))
+        return self._run(
+            _Call(
+                "PUT",
+                f"/v1/maps/{beacon_map.name}",
+                _model(BeaconMap),
+                json=beacon_map.model_dump(mode="json", by_alias=True),
+            )
+        )
 
     def active_map(self):
         return self._run(_Call("GET", "/v1/maps/active", _model(ActiveMap)))
@@ -150,12 +182,21 @@ class _Endpoints:
     def profiles(self):
         return self._run(_Call("GET", "/v1/profiles", _models(DeviceProfile)))
 
-    def store_sample(self, data: bytes | EncodedFrame, meta: FrameMeta, *, label: str | None = None,
-                     device: str | None = None, map: str | None = None, compress: str | None = "gzip"):
+    def store_sample(
+        self,
+        data: bytes | EncodedFrame,
+        meta: FrameMeta,
+        *,
+        label: str | None = None,
+        device: str | None = None,
+        map: str | None = None,
+        compress: str | None = "gzip",
+    ):
         request = _frame_request(meta, data, compress)
         request["headers"] |= {"X-Lumipose-Device": device} if device else {}
-        return self._run(_Call("POST", "/v1/samples", _model(SampleInfo), params={"label": label, "map": map},
-                               **request))
+        return self._run(
+            _Call("POST", "/v1/samples", _model(SampleInfo), params={"label": label, "map": map}, **request)
+        )
 
     def samples(self):
         return self._run(_Call("GET", "/v1/samples", _model(SampleList)))
@@ -171,8 +212,14 @@ class _Endpoints:
         return self._run(_Call("DELETE", f"/v1/samples/{sample_id}", _nothing))
 
     def evaluate_samples(self, *, map: str | None = None, cell_m: float = 0.05, height_m: float = 0.0):
-        return self._run(_Call("GET", "/v1/samples/evaluation", _model(Evaluation),
-                               params={"map": map, "cell_m": cell_m, "height_m": height_m}))
+        return self._run(
+            _Call(
+                "GET",
+                "/v1/samples/evaluation",
+                _model(Evaluation),
+                params={"map": map, "cell_m": cell_m, "height_m": height_m},
+            )
+        )
 
 
 def _auth(api_key: str | None) -> dict[str, str]:
@@ -182,8 +229,14 @@ def _auth(api_key: str | None) -> dict[str, str]:
 class Client(_Endpoints):
     """Synchronous client; use as a context manager or call `close()`."""
 
-    def __init__(self, base_url: str, *, api_key: str | None = None, timeout_s: float = 30.0,
-                 transport: httpx.BaseTransport | None = None):
+    def __init__(
+        self,
+        base_url: str,
+        *,
+        api_key: str | None = None,
+        timeout_s: float = 30.0,
+        transport: httpx.BaseTransport | None = None,
+    ):
         self._http = httpx.Client(base_url=base_url, headers=_auth(api_key), timeout=timeout_s, transport=transport)
 
     def _run(self, call: _Call[T]) -> T:
@@ -202,10 +255,17 @@ class Client(_Endpoints):
 class AsyncClient(_Endpoints):
     """Asynchronous client: the same methods, awaited."""
 
-    def __init__(self, base_url: str, *, api_key: str | None = None, timeout_s: float = 30.0,
-                 transport: httpx.AsyncBaseTransport | None = None):
-        self._http = httpx.AsyncClient(base_url=base_url, headers=_auth(api_key), timeout=timeout_s,
-                                       transport=transport)
+    def __init__(
+        self,
+        base_url: str,
+        *,
+        api_key: str | None = None,
+        timeout_s: float = 30.0,
+        transport: httpx.AsyncBaseTransport | None = None,
+    ):
+        self._http = httpx.AsyncClient(
+            base_url=base_url, headers=_auth(api_key), timeout=timeout_s, transport=transport
+        )
 
     async def _run(self, call: _Call[T]) -> T:
         return call.parse(await self._http.request(**call.request_args()))

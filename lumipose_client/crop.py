@@ -35,7 +35,7 @@ def _block_means(pixels: np.ndarray, block: int) -> np.ndarray:
     """Mean of each whole block x block tile; the frame's last rows and columns that do not fill
     a tile (fewer than `block`) are left out of the view."""
     rows, cols = pixels.shape[0] // block, pixels.shape[1] // block
-    tiles = pixels[:rows * block, :cols * block]
+    tiles = pixels[: rows * block, : cols * block]
     row_sums = tiles.reshape(rows, block, cols * block).sum(axis=1, dtype=np.uint32)
     return row_sums.reshape(rows, cols, block).sum(axis=2) / (block * block)
 
@@ -65,7 +65,8 @@ def beacon_window(pixels: np.ndarray) -> tuple[int, int, int, int] | None:
     background, plateau = float(np.median(coarse)), float(coarse.max())
     if plateau - background < MIN_CONTRAST_DN:
         return None
-    brightest = np.unravel_index(np.argmax(coarse), coarse.shape)
+    row, col = np.unravel_index(np.argmax(coarse), coarse.shape)
+    brightest = (int(row), int(col))
     region = _region_of(brightest, coarse >= (background + plateau) / 2)
     rows, cols = np.flatnonzero(region.any(axis=1)), np.flatnonzero(region.any(axis=0))
     # the panel's blurred edge and glow reach a few blocks below the level; a region at the view's
@@ -90,8 +91,15 @@ def crop_frame(pixels: np.ndarray, meta: FrameMeta) -> tuple[FrameMeta, bytes]:
     x0, y0, x1, y1 = window
     full_width, full_height = meta.full_size
     offset_x, offset_y = (meta.crop.x, meta.crop.y) if meta.crop else (0, 0)
-    cropped = meta.model_copy(update={
-        "width": x1 - x0, "height": y1 - y0, "row_stride": None, "format": FrameFormat.y8,
-        "crop": Crop(x=offset_x + x0, y=offset_y + y0, full_width=full_width, full_height=full_height)})
+    cropped = meta.model_copy(
+        update={
+            "width": x1 - x0,
+            "height": y1 - y0,
+            "row_stride": None,
+            "format": FrameFormat.y8,
+            "crop": Crop(x=offset_x + x0, y=offset_y + y0, full_width=full_width, full_height=full_height),
+        }
+    )
     return FrameMeta.model_validate(cropped.model_dump(by_alias=True)), np.ascontiguousarray(
-        pixels[y0:y1, x0:x1]).tobytes()
+        pixels[y0:y1, x0:x1]
+    ).tobytes()

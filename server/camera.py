@@ -15,9 +15,14 @@ def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> 
     scale = max(width / profile.width, height / profile.height)
     focal_px = profile.focal_length_m / profile.pixel_size_m * scale
     return CameraIntrinsics(
-        fx=focal_px, fy=focal_px, cx=(width - 1) / 2, cy=(height - 1) / 2,
-        distortion=list(profile.distortion), pixel_size_m=profile.pixel_size_m / scale,
-        focal_length_m=profile.focal_length_m, device=profile.name,
+        fx=focal_px,
+        fy=focal_px,
+        cx=(width - 1) / 2,
+        cy=(height - 1) / 2,
+        distortion=list(profile.distortion),
+        pixel_size_m=profile.pixel_size_m / scale,
+        focal_length_m=profile.focal_length_m,
+        device=profile.name,
     )
 
 
@@ -36,10 +41,13 @@ def resolve_camera(meta: FrameMeta) -> CameraIntrinsics:
 def _profile_camera(ref: ProfileRef, meta: FrameMeta) -> CameraIntrinsics:
     profile = device_profiles().get(ref.profile)
     if profile is None:
-        raise FrameError(f"unknown device profile '{ref.profile}'; known: {', '.join(sorted(device_profiles()))}",
-                         field="camera.profile")
+        raise FrameError(
+            f"unknown device profile '{ref.profile}'; known: {', '.join(sorted(device_profiles()))}",
+            field="camera.profile",
+        )
     width, height = meta.full_size
     if (width > height) != (profile.width > profile.height):
-        raise FrameError(f"frame {width}x{height} is turned against profile "
-                         f"{profile.width}x{profile.height}", field="width")
+        raise FrameError(
+            f"frame {width}x{height} is turned against profile {profile.width}x{profile.height}", field="width"
+        )
     return intrinsics_from_profile(profile, width, height)

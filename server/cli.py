@@ -24,8 +24,12 @@ def _add_locate(commands) -> None:
     parser.add_argument("--json", action="store_true", help="print the contract's result as JSON")
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
     parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
-    parser.add_argument("--gravity", choices=["auto", "always", "never"], default="auto",
-                        help="use the frame's gravity vector (default: where it helps)")
+    parser.add_argument(
+        "--gravity",
+        choices=["auto", "always", "never"],
+        default="auto",
+        help="use the frame's gravity vector (default: where it helps)",
+    )
     parser.set_defaults(run=_run_locate)
 
 
@@ -56,22 +60,29 @@ def _run_locate(args) -> int:
     if args.json:
         print(result.model_dump_json(by_alias=True, indent=2))
     elif result.ok:
+        assert result.position_m is not None and result.yaw_pitch_roll_deg is not None  # outcomes.located sets both
         x, y, z = result.position_m
         yaw, pitch, roll = result.yaw_pitch_roll_deg
         print(f"position  x={x:+.4f} m  y={y:+.4f} m  z={z:+.4f} m   (beacon {result.beacon_id})")
-        print(f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
-              f"   gravity prior {'used' if result.gravity_used else 'not used'}")
-        print(f"quality   reprojection {result.reprojection_error_px:.3f} px, "
-              f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms")
+        print(
+            f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
+            f"   gravity prior {'used' if result.gravity_used else 'not used'}"
+        )
+        print(
+            f"quality   reprojection {result.reprojection_error_px:.3f} px, "
+            f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms"
+        )
         truth = frame.meta.ground_truth
         if truth is not None:
-            dx, dy, dz = (a - b for a, b in zip(result.position_m, truth.position_m))
-            print(f"truth     error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.2f} mm, 3D "
-                  f"{1000 * (dx * dx + dy * dy + dz * dz) ** 0.5:.2f} mm")
+            dx, dy, dz = (a - b for a, b in zip((x, y, z), truth.position_m, strict=True))
+            print(
+                f"truth     error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.2f} mm, 3D "
+                f"{1000 * (dx * dx + dy * dy + dz * dz) ** 0.5:.2f} mm"
+            )
         for warning in result.warnings:
             print(f"warning   {warning}")
     else:
-        print(f"no fix: {result.reason.value}: {result.message}")
+        print(f"no fix: {result.reason}: {result.message}")
     return EXIT_FIX if result.ok else EXIT_NO_FIX
 
 
@@ -116,7 +127,9 @@ def _add_serve(commands) -> None:
     parser.add_argument("--api-key", help="required for writes when set")
     parser.add_argument("--max-upload-mb", type=float, help="upload limit (default 64)")
     parser.add_argument("--read-timeout-s", type=float, help="longest time to receive one upload (default 30)")
-    parser.add_argument("--session-idle-s", type=float, help="a device silent for longer loses its session (default 600)")
+    parser.add_argument(
+        "--session-idle-s", type=float, help="a device silent for longer loses its session (default 600)"
+    )
     parser.add_argument("--max-devices", type=int, help="device sessions kept per worker (default 1000)")
     parser.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
     parser.set_defaults(run=_run_serve)
@@ -130,9 +143,22 @@ def _run_serve(args) -> int:
 
     from server.api.config import Settings
 
-    given = {name: getattr(args, name) for name in ("host", "port", "workers", "map", "data_dir", "api_key",
-                                                    "max_upload_mb", "read_timeout_s", "session_idle_s", "max_devices")
-             if getattr(args, name) is not None}
+    given = {
+        name: getattr(args, name)
+        for name in (
+            "host",
+            "port",
+            "workers",
+            "map",
+            "data_dir",
+            "api_key",
+            "max_upload_mb",
+            "read_timeout_s",
+            "session_idle_s",
+            "max_devices",
+        )
+        if getattr(args, name) is not None
+    }
     try:
         settings = Settings(**given)
     except ValidationError as error:
@@ -141,11 +167,21 @@ def _run_serve(args) -> int:
     # Workers are separate processes: hand them the checked settings through the environment.
     for name, value in settings.model_dump(exclude_none=True).items():
         os.environ[f"LUMIPOSE_{name.upper()}"] = json.dumps(value) if isinstance(value, list) else str(value)
-    print(f"lumipose: serving map '{_startup_map_name(settings)}' on http://{settings.host}:{settings.port} "
-          f"(data in {settings.data_dir}, {'API key required for writes' if settings.api_key else 'no API key'})",
-          file=sys.stderr, flush=True)
-    uvicorn.run("server.api.main:app_from_environment", factory=True, host=settings.host, port=settings.port,
-                workers=settings.workers, log_level=args.log_level, timeout_keep_alive=30)
+    print(
+        f"lumipose: serving map '{_startup_map_name(settings)}' on http://{settings.host}:{settings.port} "
+        f"(data in {settings.data_dir}, {'API key required for writes' if settings.api_key else 'no API key'})",
+        file=sys.stderr,
+        flush=True,
+    )
+    uvicorn.run(
+        "server.api.main:app_from_environment",
+        factory=True,
+        host=settings.host,
+        port=settings.port,
+        workers=settings.workers,
+        log_level=args.log_level,
+        timeout_keep_alive=30,
+    )
     return EXIT_FIX
 
 

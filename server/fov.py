@@ -31,8 +31,8 @@ def fov_grid(profile: DeviceProfile, distance_m: float, cell_m: float, beacon_si
     if distance_m <= 0 or cell_m <= 0 or beacon_side_m < 0:
         raise ValueError("distance and cell must be positive and the beacon side not negative")
     sensor = (profile.width * profile.pixel_size_m, profile.height * profile.pixel_size_m)
-    fov = tuple(s * distance_m / profile.focal_length_m for s in sensor)
-    adjusted = tuple(f - beacon_side_m for f in fov)
+    fov = (sensor[0] * distance_m / profile.focal_length_m, sensor[1] * distance_m / profile.focal_length_m)
+    adjusted = (fov[0] - beacon_side_m, fov[1] - beacon_side_m)
     cells = []
     for extent in adjusted:
         count = max(0, math.floor(extent / cell_m + 1e-9))

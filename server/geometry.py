@@ -77,16 +77,17 @@ def rounded_square_outline_m(side_m: float, radius_m: float, points_per_arc: int
     """
     h = side_m / 2.0
     inner = h - radius_m
-    outline = []
+    outline: list[np.ndarray] = []
     for k, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
         start = math.pi / 2 * k
         angles = np.linspace(start, start + math.pi / 2, max(points_per_arc, 2))
         cx, cy = sx * inner, sy * inner
         if radius_m == 0:
-            outline.append([[cx, cy, 0.0]])
+            outline.append(np.array([[cx, cy, 0.0]]))
             continue
-        outline.append(np.stack([cx + radius_m * np.cos(angles), cy + radius_m * np.sin(angles),
-                                 np.zeros_like(angles)], axis=1))
+        outline.append(
+            np.stack([cx + radius_m * np.cos(angles), cy + radius_m * np.sin(angles), np.zeros_like(angles)], axis=1)
+        )
     return np.concatenate(outline, axis=0)
 
 

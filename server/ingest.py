@@ -43,7 +43,9 @@ def parse_meta(text: str | bytes | dict) -> FrameMeta:
         field = ".".join(location) or None
         raise FrameError(f"{field}: {first['msg']}" if field else first["msg"], field=field) from None
     if meta.width * meta.height > MAX_PIXELS:
-        raise FrameError(f"frame {meta.width}x{meta.height} exceeds {MAX_PIXELS // 1_000_000} megapixels", field="width")
+        raise FrameError(
+            f"frame {meta.width}x{meta.height} exceeds {MAX_PIXELS // 1_000_000} megapixels", field="width"
+        )
     return meta
 
 
@@ -58,7 +60,9 @@ def _raw_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
     if len(data) not in (expected, short_last_row):
         raise FrameError(
             f"frame has {len(data)} bytes but {meta.format.value} {width}x{height} with row_stride {stride} "
-            f"needs {expected}", field="row_stride" if len(data) % height == 0 else "frame")
+            f"needs {expected}",
+            field="row_stride" if len(data) % height == 0 else "frame",
+        )
     buffer = np.frombuffer(data, dtype=np.uint8)
     rows = np.lib.stride_tricks.as_strided(buffer, shape=(height, width), strides=(stride, 1), writeable=False)
     return rows
@@ -73,8 +77,9 @@ def _png_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
     if image.ndim != 2:
         raise FrameError(f"PNG must be single-channel luma, got {image.shape[2]} channels", field="frame")
     if image.shape != (meta.height, meta.width):
-        raise FrameError(f"PNG is {image.shape[1]}x{image.shape[0]} but metadata says {meta.width}x{meta.height}",
-                         field="width")
+        raise FrameError(
+            f"PNG is {image.shape[1]}x{image.shape[0]} but metadata says {meta.width}x{meta.height}", field="width"
+        )
     image.flags.writeable = False
     return image
 

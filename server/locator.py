@@ -21,9 +21,15 @@ from server.tracking.devices import Devices
 from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResult
 
 
-def locate(frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = LocateOptions(), *,
-           beacon_id: int | None = None, device_id: str | None = None,
-           devices: Devices | None = None) -> LocateResult:
+def locate(
+    frame: LumaFrame,
+    beacon_map: BeaconMap,
+    options: LocateOptions = LocateOptions(),
+    *,
+    beacon_id: int | None = None,
+    device_id: str | None = None,
+    devices: Devices | None = None,
+) -> LocateResult:
     """Position and pose of the camera that took `frame`, or the reason there is none.
 
     `beacon_id`: the map beacon in view, when known from elsewhere; `device_id` and `devices`:
@@ -32,7 +38,9 @@ def locate(frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = Loc
     if beacon_id is not None:
         beacon = beacon_map.beacon(beacon_id)
         if beacon is None:
-            return refused(Refusal(FailureReason.unknown_beacon, f"beacon {beacon_id} is not in map '{beacon_map.name}'"))
+            return refused(
+                Refusal(FailureReason.unknown_beacon, f"beacon {beacon_id} is not in map '{beacon_map.name}'")
+            )
         return _one_panel(frame, beacon, BeaconIdSource.vlc, options)
     if len(beacon_map.beacons) == 1:
         return _one_panel(frame, beacon_map.beacons[0], BeaconIdSource.single_beacon_map, options)

@@ -65,9 +65,11 @@ class Fix:
     def shifted(self, offset_px: Sequence[float]) -> Fix:
         """The same fix with its pixels moved by `offset_px` (from a crop back to the full frame)."""
         offset = np.asarray(offset_px, dtype=float)
-        return replace(self,
-                       center_px=None if self.center_px is None else self.center_px + offset,
-                       corners_px=None if self.corners_px is None else self.corners_px + offset)
+        return replace(
+            self,
+            center_px=None if self.center_px is None else self.center_px + offset,
+            corners_px=None if self.corners_px is None else self.corners_px + offset,
+        )
 
     def warned(self, *warnings: str) -> Fix:
         return replace(self, warnings=self.warnings + tuple(warnings))
@@ -77,8 +79,9 @@ def _list(array: np.ndarray | None) -> list | None:
     return None if array is None else np.asarray(array, dtype=float).tolist()
 
 
-def located(fix: Fix, *, vlc: VlcReading | None = None, beacons_in_view: int | None = None,
-            track: TrackState | None = None) -> LocateResult:
+def located(
+    fix: Fix, *, vlc: VlcReading | None = None, beacons_in_view: int | None = None, track: TrackState | None = None
+) -> LocateResult:
     """The contract's result for a fix."""
     return LocateResult(
         ok=True,
@@ -101,8 +104,21 @@ def located(fix: Fix, *, vlc: VlcReading | None = None, beacons_in_view: int | N
     )
 
 
-def refused(refusal: Refusal, *, vlc: VlcReading | None = None, beacons_in_view: int | None = None,
-            track: TrackState | None = None) -> LocateResult:
+def refused(
+    refusal: Refusal,
+    *,
+    vlc: VlcReading | None = None,
+    beacons_in_view: int | None = None,
+    track: TrackState | None = None,
+) -> LocateResult:
     """The contract's result for a frame without a fix."""
-    return LocateResult(ok=False, reason=refusal.reason, message=refusal.message, warnings=list(refusal.warnings),
-                        timing_ms=dict(refusal.timing_ms), vlc=vlc, beacons_in_view=beacons_in_view, track=track)
+    return LocateResult(
+        ok=False,
+        reason=refusal.reason,
+        message=refusal.message,
+        warnings=list(refusal.warnings),
+        timing_ms=dict(refusal.timing_ms),
+        vlc=vlc,
+        beacons_in_view=beacons_in_view,
+        track=track,
+    )

@@ -12,7 +12,7 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from enum import Enum
+from enum import StrEnum
 
 import cv2
 import numpy as np
@@ -30,7 +30,7 @@ from server.vision.subpixel import EdgeRules, refine_edges
 from shared_schemas import Beacon, BeaconIdSource, FailureReason
 
 
-class CornerMethod(str, Enum):
+class CornerMethod(StrEnum):
     rounded = "rounded"  # the paper's rounded-corner path (hull, RDP, sides)
     square = "square"  # the paper's square-corner path (RDP at 1 %, four vertices)
 
@@ -76,8 +76,12 @@ def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray 
     return cv2.undistortPoints(points.reshape(-1, 1, 2), matrix, distortion, P=matrix).reshape(-1, 2)
 
 
-def locate_beacon(frame: LumaFrame, beacon: Beacon, options: PipelineOptions = PipelineOptions(),
-                  id_source: BeaconIdSource = BeaconIdSource.single_beacon_map) -> Fix | Refusal:
+def locate_beacon(
+    frame: LumaFrame,
+    beacon: Beacon,
+    options: PipelineOptions = PipelineOptions(),
+    id_source: BeaconIdSource = BeaconIdSource.single_beacon_map,
+) -> Fix | Refusal:
     """The pose of the camera that took `frame`, which shows map beacon `beacon`, or why there is none."""
     timer = _Timer()
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
@@ -86,7 +90,7 @@ def locate_beacon(frame: LumaFrame, beacon: Beacon, options: PipelineOptions = P
         roi = find_roi(frame.pixels, options.roi, options.blobs)
     if isinstance(roi, Refusal):
         return timer.refusal(roi)
-    window = frame.pixels[roi.y0:roi.y1, roi.x0:roi.x1]
+    window = frame.pixels[roi.y0 : roi.y1, roi.x0 : roi.x1]
     step = options.mask_step_px if options.subpixel else 1
     with timer.stage("blur"):
         # The mask only seeds the sub-pixel stage, which reads every pixel of the window: corners
@@ -100,8 +104,11 @@ def locate_beacon(frame: LumaFrame, beacon: Beacon, options: PipelineOptions = P
     if isinstance(blob, Refusal):
         return timer.refusal(blob)
     with timer.stage("polygon"):
-        quad = (rounded_square_corners(blob.contour, options.polygon) if options.corner_method is CornerMethod.rounded
-                else square_corners(blob.contour))
+        quad = (
+            rounded_square_corners(blob.contour, options.polygon)
+            if options.corner_method is CornerMethod.rounded
+            else square_corners(blob.contour)
+        )
     if isinstance(quad, Refusal):
         return timer.refusal(quad)
     quad = Quad(corners=quad.corners * step)  # pixel i of the mask is pixel step * i of the window
@@ -112,8 +119,9 @@ def locate_beacon(frame: LumaFrame, beacon: Beacon, options: PipelineOptions = P
         edges = None
         if options.subpixel:
             straight = 1.0 - 2.0 * beacon.corner_radius_m / beacon.side_m
-            edges = refine_edges(window, (roi.x0, roi.y0), quad.corners, roi.levels, straight,
-                                 matrix, distortion, options.edges)
+            edges = refine_edges(
+                window, (roi.x0, roi.y0), quad.corners, roi.levels, straight, matrix, distortion, options.edges
+            )
             if edges is None:
                 warnings.append("sub-pixel sides failed: corners from the polygon stage")
             else:
@@ -127,15 +135,34 @@ def locate_beacon(frame: LumaFrame, beacon: Beacon, options: PipelineOptions = P
     gravity = None if frame.meta.gravity_camera is None else np.asarray(frame.meta.gravity_camera)
     corner_sigma = edges.line_sigma_px if edges is not None else 1.0
     with timer.stage("pose"):
-        pose = solve_pose(ordered.corners, center, beacon, matrix, gravity, options.gravity_sigma_deg,
-                          options.gravity_mode, corner_sigma, options.pose)
+        pose = solve_pose(
+            ordered.corners,
+            center,
+            beacon,
+            matrix,
+            gravity,
+            options.gravity_sigma_deg,
+            options.gravity_mode,
+            corner_sigma,
+            options.pose,
+        )
     if isinstance(pose, Refusal):
         return timer.refusal(pose, warnings)
     reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
-    return Fix(position_m=pose.position_m, rotation_wc=pose.rotation_wc, beacon_id=beacon.id, id_source=id_source,
-               reprojection_error_px=pose.reprojection_error_px, gravity_used=pose.gravity_used,
-               center_px=reported[4], corners_px=reported[:4], orientation_rule=ordered.rule,
-               ambiguity_ratio=pose.ambiguity_ratio, warnings=tuple(warnings), timing_ms=timer.total())
+    return Fix(
+        position_m=pose.position_m,
+        rotation_wc=pose.rotation_wc,
+        beacon_id=beacon.id,
+        id_source=id_source,
+        reprojection_error_px=pose.reprojection_error_px,
+        gravity_used=pose.gravity_used,
+        center_px=reported[4],
+        corners_px=reported[:4],
+        orientation_rule=ordered.rule,
+        ambiguity_ratio=pose.ambiguity_ratio,
+        warnings=tuple(warnings),
+        timing_ms=timer.total(),
+    )
 
 
 def _distorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | None) -> np.ndarray:

@@ -48,8 +48,9 @@ class PanelFix:
     vlc: VlcReading | None = None
 
 
-def crop_frame(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], margin_px: int,
-               background_dn: float) -> tuple[LumaFrame, tuple[int, int]]:
+def crop_frame(
+    frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], margin_px: int, background_dn: float
+) -> tuple[LumaFrame, tuple[int, int]]:
     """`frame` cut to `blob`'s box plus a margin (at least the box's size), other blobs blanked; and (x0, y0)."""
     height, width = frame.pixels.shape
     x, y, w, h = blob.bounding_box
@@ -71,9 +72,16 @@ def crop_frame(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], mar
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), (x0, y0)
 
 
-def locate_panel(frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], beacon: Beacon,
-                 id_source: BeaconIdSource, options: PipelineOptions, background_dn: float,
-                 rules: RoomRules = RoomRules()) -> Fix | Refusal:
+def locate_panel(
+    frame: LumaFrame,
+    blob: BeaconBlob,
+    others: list[BeaconBlob],
+    beacon: Beacon,
+    id_source: BeaconIdSource,
+    options: PipelineOptions,
+    background_dn: float,
+    rules: RoomRules = RoomRules(),
+) -> Fix | Refusal:
     """The one-panel pipeline on `blob` alone as map beacon `beacon`; pixels in the full frame."""
     crop, offset = crop_frame(frame, blob, others, rules.crop_margin_px, background_dn)
     fix = locate_beacon(crop, beacon, options, id_source)
@@ -94,13 +102,14 @@ def choose_and_fuse(fixes: list[PanelFix], rules: RoomRules = RoomRules()) -> Pa
     best = ranked[0]
     if not rules.fuse or len(ranked) == 1:
         return best
-    agree = [f for f in ranked
-             if np.linalg.norm(f.fix.position_m - best.fix.position_m) <= rules.fuse_gate_m]
+    agree = [f for f in ranked if np.linalg.norm(f.fix.position_m - best.fix.position_m) <= rules.fuse_gate_m]
     disagree = [f.beacon.id for f in ranked if f not in agree]
     fix = best.fix
     if disagree:
-        fix = fix.warned(f"fixes from beacons {disagree} disagree with beacon {best.beacon.id} by more than "
-                         f"{rules.fuse_gate_m * 1000:.0f} mm and were left out")
+        fix = fix.warned(
+            f"fixes from beacons {disagree} disagree with beacon {best.beacon.id} by more than "
+            f"{rules.fuse_gate_m * 1000:.0f} mm and were left out"
+        )
     if len(agree) > 1:
         weights = np.array([_conditioning(f) for f in agree])
         position = (weights[:, None] * np.array([f.fix.position_m for f in agree])).sum(axis=0) / weights.sum()
@@ -110,22 +119,34 @@ def choose_and_fuse(fixes: list[PanelFix], rules: RoomRules = RoomRules()) -> Pa
 
 def vlc_reading(evidence: IdEvidence) -> VlcReading:
     decision = evidence.decide()
-    return VlcReading(beacon_id=decision.beacon_id, confidence=min(1.0, max(0.0, decision.confidence)),
-                      confident=decision.confident, frames=decision.frames,
-                      chips_seen=decision.chips_seen, candidates=len(evidence.candidates))
+    return VlcReading(
+        beacon_id=decision.beacon_id,
+        confidence=min(1.0, max(0.0, decision.confidence)),
+        confident=decision.confident,
+        frames=decision.frames,
+        chips_seen=decision.chips_seen,
+        candidates=len(evidence.candidates),
+    )
 
 
-def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOptions = PipelineOptions(),
-                   rules: RoomRules = RoomRules()) -> LocateResult:
+def locate_in_room(
+    frame: LumaFrame,
+    beacon_map: BeaconMap,
+    options: PipelineOptions = PipelineOptions(),
+    rules: RoomRules = RoomRules(),
+) -> LocateResult:
     """A fix from a frame of a multi-beacon map whose IDs come from the frame's own stripes."""
     reading = read_id_frame(frame, rules.candidates, rules.stripes)
     found = find_beacon_blobs(frame.pixels, rules.candidates)
     if reading.problem is not None:
-        return refused(Refusal(
-            FailureReason.unknown_beacon,
-            f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
-            f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)"),
-            beacons_in_view=len(found.blobs))
+        return refused(
+            Refusal(
+                FailureReason.unknown_beacon,
+                f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
+                f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)",
+            ),
+            beacons_in_view=len(found.blobs),
+        )
     ids = tuple(sorted(b.id for b in beacon_map.beacons))  # preferred, never the only candidates
     blobs = [p.blob for p in reading.panels]
     fixes: list[PanelFix] = []
@@ -141,16 +162,29 @@ def locate_in_room(frame: LumaFrame, beacon_map: BeaconMap, options: PipelineOpt
         beacon = beacon_map.beacon(vlc.beacon_id) if vlc.confident and vlc.beacon_id is not None else None
         if beacon is None or panel.blob.cut_off:
             continue
-        fix = locate_panel(frame, panel.blob, [b for b in blobs if b is not panel.blob], beacon, BeaconIdSource.vlc,
-                           options, found.levels.background, rules)
+        fix = locate_panel(
+            frame,
+            panel.blob,
+            [b for b in blobs if b is not panel.blob],
+            beacon,
+            BeaconIdSource.vlc,
+            options,
+            found.levels.background,
+            rules,
+        )
         if isinstance(fix, Refusal):
             refusals.append(fix)
         else:
             fixes.append(PanelFix(panel.blob, beacon, fix, vlc))
     best = choose_and_fuse(fixes, rules)
     if best is None:
-        refusal = refusals[0] if refusals else Refusal(
-            FailureReason.unknown_beacon, f"no complete panel with a confidently read ID among {len(blobs)} in view")
+        refusal = (
+            refusals[0]
+            if refusals
+            else Refusal(
+                FailureReason.unknown_beacon, f"no complete panel with a confidently read ID among {len(blobs)} in view"
+            )
+        )
         top = max(readings, key=lambda r: r.confidence, default=None)
         return refused(refusal, vlc=top, beacons_in_view=len(blobs))
     return located(best.fix, vlc=best.vlc, beacons_in_view=len(blobs))

@@ -18,8 +18,8 @@ import re
 import shutil
 import uuid
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from functools import cached_property, lru_cache
-from datetime import datetime, timezone
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH, BeaconMap, FrameMeta, LocateResult, load_map
@@ -111,8 +111,10 @@ class MapStore:
 
     def summaries(self) -> list[MapSummary]:
         active = self.active_name()
-        return [MapSummary(name=name, beacons=len(_read_map(path).beacons), active=name == active, source=source)
-                for name, (source, path) in self._sources().items()]
+        return [
+            MapSummary(name=name, beacons=len(_read_map(path).beacons), active=name == active, source=source)
+            for name, (source, path) in self._sources().items()
+        ]
 
     def get(self, name: str) -> BeaconMap:
         source = self._sources().get(_check_name(name))
@@ -122,8 +124,9 @@ class MapStore:
 
     def put(self, name: str, beacon_map: BeaconMap) -> BeaconMap:
         if beacon_map.name != _check_name(name):
-            raise StoreError("name_mismatch", f"the map's name '{beacon_map.name}' differs from '{name}' in the URL",
-                             field="name")
+            raise StoreError(
+                "name_mismatch", f"the map's name '{beacon_map.name}' differs from '{name}' in the URL", field="name"
+            )
         write_atomic(self._stored_dir / f"{name}.json", beacon_map.model_dump_json(by_alias=True, indent=2).encode())
         return beacon_map
 
@@ -144,18 +147,36 @@ class SampleStore:
             raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id")
         return folder
 
-    def add(self, frame: bytes, meta: FrameMeta, result: LocateResult, *, label: str | None,
-            device: str | None, map_name: str) -> SampleInfo:
+    def add(
+        self,
+        frame: bytes,
+        meta: FrameMeta,
+        result: LocateResult,
+        *,
+        label: str | None,
+        device: str | None,
+        map_name: str,
+    ) -> SampleInfo:
         sample_id = uuid.uuid4().hex
-        info = SampleInfo(id=sample_id, label=label, created=datetime.now(timezone.utc), device=device,
-                          map=map_name, frame_bytes=len(frame), meta=meta, result=result)
+        info = SampleInfo(
+            id=sample_id,
+            label=label,
+            created=datetime.now(UTC),
+            device=device,
+            map=map_name,
+            frame_bytes=len(frame),
+            meta=meta,
+            result=result,
+        )
         self._root.mkdir(parents=True, exist_ok=True)
         staging = self._root / f".{sample_id}.tmp"
         staging.mkdir()
         try:
-            for name, data in (("frame.bin", frame),
-                               ("meta.json", meta.model_dump_json(by_alias=True, exclude_none=True).encode()),
-                               ("sample.json", info.model_dump_json(by_alias=True).encode())):
+            for name, data in (
+                ("frame.bin", frame),
+                ("meta.json", meta.model_dump_json(by_alias=True, exclude_none=True).encode()),
+                ("sample.json", info.model_dump_json(by_alias=True).encode()),
+            ):
                 write_atomic(staging / name, data)
             os.replace(staging, self._root / sample_id)
         finally:

@@ -7,8 +7,8 @@ for it. Only the standard library and the contract's models: no numpy or OpenCV 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from shared_schemas.models import FrameFormat, FrameMeta
 
@@ -28,8 +28,7 @@ def fixture_paths(path: Path | str) -> tuple[Path, Path]:
     raw_paths = [path] if path.suffix in RAW_SUFFIXES else [path.with_suffix(s) for s in RAW_SUFFIXES]
     raw_path = next((p for p in raw_paths if p.is_file()), None)
     if raw_path is None:
-        raise FileNotFoundError(
-            f"no frame data beside {meta_path} (looked for {', '.join(p.name for p in raw_paths)})")
+        raise FileNotFoundError(f"no frame data beside {meta_path} (looked for {', '.join(p.name for p in raw_paths)})")
     return meta_path, raw_path
 
 
@@ -41,7 +40,7 @@ def with_actual_format(meta: FrameMeta, data: bytes) -> FrameMeta:
     read as one Y8 luma plane (its size is checked when the frame is decoded). Otherwise the
     JSON's raw format (Y8, NV21, I420) stands: the bytes cannot tell them apart.
     """
-    if data[:len(PNG_SIGNATURE)] == PNG_SIGNATURE:
+    if data[: len(PNG_SIGNATURE)] == PNG_SIGNATURE:
         actual = FrameFormat.png
     elif meta.format is FrameFormat.png:
         actual = FrameFormat.y8
@@ -50,8 +49,9 @@ def with_actual_format(meta: FrameMeta, data: bytes) -> FrameMeta:
     return meta if meta.format is actual else meta.model_copy(update={"format": actual})
 
 
-def read_fixture_files(path: Path | str, parse_meta: Callable[[bytes], FrameMeta] = FrameMeta.model_validate_json
-                       ) -> tuple[FrameMeta, bytes]:
+def read_fixture_files(
+    path: Path | str, parse_meta: Callable[[bytes], FrameMeta] = FrameMeta.model_validate_json
+) -> tuple[FrameMeta, bytes]:
     """The metadata and frame bytes of a recorded frame, named by any of its files or its stem,
     with the format of the file actually found (`with_actual_format`).
 

@@ -14,8 +14,8 @@ Conventions that bind everywhere:
 from __future__ import annotations
 
 import math
-from enum import Enum
-from typing import Annotated, Literal
+from enum import StrEnum
+from typing import Annotated, Final, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -23,9 +23,9 @@ Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
 Point2 = Annotated[list[float], Field(min_length=2, max_length=2)]
 
-FRAME_SCHEMA = "lumipose.frame/1"
-MAP_SCHEMA = "lumipose.map/1"
-RESULT_SCHEMA = "lumipose.result/1"
+FRAME_SCHEMA: Final = "lumipose.frame/1"
+MAP_SCHEMA: Final = "lumipose.map/1"
+RESULT_SCHEMA: Final = "lumipose.result/1"
 
 
 def _require_finite(name: str, values: list[float]) -> None:
@@ -71,9 +71,7 @@ class CameraIntrinsics(Open):
     @classmethod
     def _distortion_shape(cls, value: list[float]) -> list[float]:
         if len(value) not in (0, 4, 5, 8):
-            raise ValueError(
-                f"distortion must have 0, 4, 5 or 8 OpenCV coefficients, got {len(value)}"
-            )
+            raise ValueError(f"distortion must have 0, 4, 5 or 8 OpenCV coefficients, got {len(value)}")
         _require_finite("distortion", value)
         return value
 
@@ -84,7 +82,7 @@ class ProfileRef(Strict):
     profile: str = Field(description="device profile id, for example 'xiaomi-mi8-front'")
 
 
-class Facing(str, Enum):
+class Facing(StrEnum):
     front = "front"
     rear = "rear"
 
@@ -101,19 +99,17 @@ class DeviceProfile(Strict):
     width: int = Field(gt=0, description="native output width, pixels")
     height: int = Field(gt=0, description="native output height, pixels")
     distortion: list[float] = Field(default_factory=list)
-    gravity_sigma_deg: float = Field(
-        default=0.1, ge=0, description="1-sigma tilt error of the gravity sensor at rest"
-    )
+    gravity_sigma_deg: float = Field(default=0.1, ge=0, description="1-sigma tilt error of the gravity sensor at rest")
 
 
-class FrameFormat(str, Enum):
+class FrameFormat(StrEnum):
     y8 = "Y8"
     nv21 = "NV21"
     i420 = "I420"
     png = "PNG"
 
 
-class FrameKind(str, Enum):
+class FrameKind(StrEnum):
     """What a frame is for (docs/vlc.md, capture protocol)."""
 
     pose = "pose"  # normal exposure (~10 ms): the panel's outline; any LED code is averaged away
@@ -191,11 +187,13 @@ class FrameMeta(Open):
         return value
 
     @model_validator(mode="after")
-    def _crop_inside(self) -> "FrameMeta":
+    def _crop_inside(self) -> FrameMeta:
         crop = self.crop
         if crop is not None and (crop.x + self.width > crop.full_width or crop.y + self.height > crop.full_height):
-            raise ValueError(f"crop window {self.width}x{self.height} at ({crop.x}, {crop.y}) does not fit in the "
-                             f"full frame {crop.full_width}x{crop.full_height}")
+            raise ValueError(
+                f"crop window {self.width}x{self.height} at ({crop.x}, {crop.y}) does not fit in the "
+                f"full frame {crop.full_width}x{crop.full_height}"
+            )
         return self
 
     @property
@@ -255,7 +253,7 @@ class BeaconMap(Strict):
         return next((b for b in self.beacons if b.id == beacon_id), None)
 
 
-class FailureReason(str, Enum):
+class FailureReason(StrEnum):
     no_beacon = "no_beacon"
     beacon_cut_off = "beacon_cut_off"
     not_a_square = "not_a_square"
@@ -266,12 +264,12 @@ class FailureReason(str, Enum):
     id_frame = "id_frame"  # an ID frame kept for the device's next capture: no fix of its own (docs/vlc.md)
 
 
-class OrientationRule(str, Enum):
+class OrientationRule(StrEnum):
     heading = "heading"
     yaw_within_45deg = "yaw_within_45deg"
 
 
-class BeaconIdSource(str, Enum):
+class BeaconIdSource(StrEnum):
     single_beacon_map = "single_beacon_map"
     vlc = "vlc"
     track = "track"  # carried by the device's track: the map beacon nearest the predicted view
@@ -310,9 +308,7 @@ class LocateResult(Strict):
     beacon_id: int | None = None
     beacon_id_source: BeaconIdSource | None = None
     orientation_rule: OrientationRule | None = None
-    corners_px: list[Point2] | None = Field(
-        default=None, description="4 corners in the beacon model's corner order"
-    )
+    corners_px: list[Point2] | None = Field(default=None, description="4 corners in the beacon model's corner order")
     center_px: Point2 | None = None
     reprojection_error_px: float | None = None
     ambiguity_ratio: float | None = Field(

@@ -26,8 +26,9 @@ class Settings(BaseSettings):
     api_key: str | None = Field(default=None, description="required for writes (maps, samples) when set")
     max_upload_mb: float = Field(default=64.0, gt=0, description="limit on the upload, compressed or not")
     read_timeout_s: float = Field(default=30.0, gt=0, description="longest time to receive one upload")
-    pipeline_threads: int = Field(default_factory=lambda: os.cpu_count() or 1, ge=1,
-                                  description="frames located at once per worker")
+    pipeline_threads: int = Field(
+        default_factory=lambda: os.cpu_count() or 1, ge=1, description="frames located at once per worker"
+    )
     cors_origins: list[str] = Field(default_factory=lambda: ["*"])
     session_idle_s: float = Field(default=600.0, gt=0, description="a device silent for longer loses its session")
     max_devices: int = Field(default=1000, ge=1, description="device sessions kept per worker")

@@ -37,9 +37,10 @@ def _services(request: Request) -> Services:
 ServicesDep = Annotated[Services, Depends(_services)]
 
 
-def _require_api_key(services: ServicesDep,
-                     x_api_key: Annotated[str | None, Header(description="needed when the server has a key")] = None
-                     ) -> None:
+def _require_api_key(
+    services: ServicesDep,
+    x_api_key: Annotated[str | None, Header(description="needed when the server has a key")] = None,
+) -> None:
     expected = services.settings.api_key
     if expected is None:
         return

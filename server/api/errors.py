@@ -7,6 +7,7 @@ the store raises `StoreError`, and the handlers here turn them into responses.
 from __future__ import annotations
 
 import logging
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -20,10 +21,18 @@ from shared_schemas import ErrorBody
 log = logging.getLogger("lumipose.api")
 
 # Declared on every router, so the OpenAPI spec says what each 4xx body looks like.
-ERROR_RESPONSES = {status: {"model": ErrorBody, "description": text} for status, text in {
-    400: "unreadable frame, metadata or body", 401: "missing or wrong API key", 404: "unknown map or sample",
-    408: "upload too slow", 413: "upload too large", 415: "unsupported content type or encoding",
-    422: "invalid parameter"}.items()}
+ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
+    status: {"model": ErrorBody, "description": text}
+    for status, text in {
+        400: "unreadable frame, metadata or body",
+        401: "missing or wrong API key",
+        404: "unknown map or sample",
+        408: "upload too slow",
+        413: "upload too large",
+        415: "unsupported content type or encoding",
+        422: "invalid parameter",
+    }.items()
+}
 
 STORE_STATUS = {"not_found": 404, "bad_name": 400, "name_mismatch": 400}
 

@@ -20,14 +20,22 @@ class Located:
     map_name: str
 
 
-def _locate_now(services: Services, upload: FrameUpload, beacon_map: BeaconMap, query: LocateQuery,
-                device: str | None) -> LocateResult:
-    return locate(decode_frame(upload.data, upload.meta), beacon_map, query.options, beacon_id=query.beacon_id,
-                  device_id=device, devices=services.devices)
+def _locate_now(
+    services: Services, upload: FrameUpload, beacon_map: BeaconMap, query: LocateQuery, device: str | None
+) -> LocateResult:
+    return locate(
+        decode_frame(upload.data, upload.meta),
+        beacon_map,
+        query.options,
+        beacon_id=query.beacon_id,
+        device_id=device,
+        devices=services.devices,
+    )
 
 
-async def locate_upload(services: Services, upload: FrameUpload, map_name: str | None,
-                        query: LocateQuery, device: str | None = None) -> Located:
+async def locate_upload(
+    services: Services, upload: FrameUpload, map_name: str | None, query: LocateQuery, device: str | None = None
+) -> Located:
     """The result for `upload` in map `map_name` (default: the active map); with a `device`, in its
     session (tracking, ID frames combined) when the map has several beacons."""
     name = map_name or services.maps.active_name()

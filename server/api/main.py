@@ -15,11 +15,15 @@ from server.api.routes import health, locate, maps, profiles, samples
 from server.store import MapStore, SampleStore
 from server.tracking.devices import Devices
 
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
-    app = FastAPI(title="Lumipose", version=VERSION,
-                  description="Indoor positioning from one photo of an LED ceiling panel. "
-                              "Frames, maps and results follow the Lumipose contract (shared_schemas).")
+    app = FastAPI(
+        title="Lumipose",
+        version=VERSION,
+        description="Indoor positioning from one photo of an LED ceiling panel. "
+        "Frames, maps and results follow the Lumipose contract (shared_schemas).",
+    )
     metrics = Metrics()
     app.state.services = Services(
         settings=settings,
@@ -33,8 +37,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)
     for router in (health.router, locate.router, maps.router, profiles.router, samples.router):
         app.include_router(router)
-    app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["*"],
-                       allow_headers=["*"], expose_headers=["X-Lumipose-Frame"])
+    app.add_middleware(
+        CORSMiddleware,
+        allow_origins=settings.cors_origins,
+        allow_methods=["*"],
+        allow_headers=["*"],
+        expose_headers=["X-Lumipose-Frame"],
+    )
     app.add_middleware(MetricsMiddleware, metrics=metrics)
     return app
 

@@ -17,15 +17,21 @@ LATENCY_BUCKETS_S = (0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.
 class Metrics:
     def __init__(self) -> None:
         self.registry = CollectorRegistry()
-        self.requests = Counter("lumipose_requests_total", "HTTP requests", ["route", "status"],
-                                registry=self.registry)
-        self.latency = Histogram("lumipose_request_seconds", "HTTP request latency", ["route"],
-                                 buckets=LATENCY_BUCKETS_S, registry=self.registry)
+        self.requests = Counter("lumipose_requests_total", "HTTP requests", ["route", "status"], registry=self.registry)
+        self.latency = Histogram(
+            "lumipose_request_seconds",
+            "HTTP request latency",
+            ["route"],
+            buckets=LATENCY_BUCKETS_S,
+            registry=self.registry,
+        )
         self.fixes = Counter("lumipose_fixes_total", "frames located", registry=self.registry)
-        self.no_fix = Counter("lumipose_no_fix_total", "frames without a fix, by reason", ["reason"],
-                              registry=self.registry)
-        self.pipeline = Histogram("lumipose_pipeline_seconds", "pipeline time per frame",
-                                  buckets=LATENCY_BUCKETS_S, registry=self.registry)
+        self.no_fix = Counter(
+            "lumipose_no_fix_total", "frames without a fix, by reason", ["reason"], registry=self.registry
+        )
+        self.pipeline = Histogram(
+            "lumipose_pipeline_seconds", "pipeline time per frame", buckets=LATENCY_BUCKETS_S, registry=self.registry
+        )
 
     def record_result(self, result: LocateResult) -> None:
         if result.ok:

@@ -49,18 +49,22 @@ async def _receive(request: Request, limit: int, timeout_s: float) -> bytes | by
         async for chunk in request.stream():
             end = size + len(chunk)
             if end > limit or (expected is not None and end > expected):
-                raise _too_large(limit) if end > limit else ApiError(
-                    400, "bad_length", f"the body is longer than its Content-Length {expected}", field="body")
+                raise (
+                    _too_large(limit)
+                    if end > limit
+                    else ApiError(
+                        400, "bad_length", f"the body is longer than its Content-Length {expected}", field="body"
+                    )
+                )
             body[size:end] = chunk
             size = end
 
     try:
         await asyncio.wait_for(read_all(), timeout_s)
-    except asyncio.TimeoutError:
+    except TimeoutError:
         raise ApiError(408, "timeout", f"the upload took longer than {timeout_s:g} s", field="body") from None
     if expected is not None and size != expected:
-        raise ApiError(400, "bad_length", f"the body has {size} bytes but Content-Length says {expected}",
-                       field="body")
+        raise ApiError(400, "bad_length", f"the body has {size} bytes but Content-Length says {expected}", field="body")
     return body
 
 
@@ -68,7 +72,7 @@ def _unzstd(body: bytes | bytearray, limit: int) -> tuple[bytes, bool]:
     # Fed in small pieces so that a bomb is stopped a few megabytes past the limit.
     reader, pieces, size = zstandard.ZstdDecompressor().decompressobj(), [], 0
     for start in range(0, len(body), ZSTD_PIECE):
-        pieces.append(reader.decompress(body[start:start + ZSTD_PIECE]))
+        pieces.append(reader.decompress(body[start : start + ZSTD_PIECE]))
         size += len(pieces[-1])
         if size > limit or reader.eof:
             break
@@ -87,12 +91,16 @@ def _decompress(body: bytes | bytearray, encoding: str, limit: int) -> bytes | b
         elif encoding == "zstd":
             data, complete = _unzstd(body, limit)
         else:
-            raise ApiError(415, "unsupported_encoding",
-                           f"Content-Encoding '{encoding}' is not supported; use gzip, zstd or none",
-                           field="Content-Encoding")
+            raise ApiError(
+                415,
+                "unsupported_encoding",
+                f"Content-Encoding '{encoding}' is not supported; use gzip, zstd or none",
+                field="Content-Encoding",
+            )
     except (zlib.error, zstandard.ZstdError) as error:
-        raise ApiError(400, "bad_encoding", f"the body is not valid {encoding}: {error}",
-                       field="Content-Encoding") from None
+        raise ApiError(
+            400, "bad_encoding", f"the body is not valid {encoding}: {error}", field="Content-Encoding"
+        ) from None
     if len(data) > limit:
         raise _too_large(limit)
     if not complete:
@@ -107,12 +115,17 @@ async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[s
     try:
         form = await MultiPartParser(request.headers, stream(), max_files=1, max_fields=2).parse()
     except MultiPartException as error:
-        raise ApiError(400, "bad_multipart", f"the multipart body cannot be read: {error.message}",
-                       field="body") from None
+        raise ApiError(
+            400, "bad_multipart", f"the multipart body cannot be read: {error.message}", field="body"
+        ) from None
     meta, frame = form.get("meta"), form.get("frame")
     if meta is None or frame is None:
-        raise ApiError(400, "bad_multipart", "a multipart upload needs a 'meta' part (frame JSON) and a "
-                       "'frame' part (bytes)", field="meta" if meta is None else "frame")
+        raise ApiError(
+            400,
+            "bad_multipart",
+            "a multipart upload needs a 'meta' part (frame JSON) and a 'frame' part (bytes)",
+            field="meta" if meta is None else "frame",
+        )
     meta_text = (await meta.read()).decode("utf-8", "replace") if isinstance(meta, UploadFile) else meta
     frame_bytes = await frame.read() if isinstance(frame, UploadFile) else frame.encode("latin-1")
     await form.close()
@@ -123,20 +136,23 @@ async def receive_frame(request: Request, frame_header: str | None, limit: int, 
     """The frame of a locate or sample request; raises `ApiError` or `FrameError` on bad input."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type not in (*RAW_TYPES, MULTIPART):
-        raise ApiError(415, "unsupported_media_type",
-                       f"Content-Type '{content_type or '(none)'}' is not accepted; send "
-                       f"{', '.join(RAW_TYPES)} with the {FRAME_HEADER} header, or {MULTIPART}",
-                       field="Content-Type")
+        raise ApiError(
+            415,
+            "unsupported_media_type",
+            f"Content-Type '{content_type or '(none)'}' is not accepted; send "
+            f"{', '.join(RAW_TYPES)} with the {FRAME_HEADER} header, or {MULTIPART}",
+            field="Content-Type",
+        )
     body = await _receive(request, limit, timeout_s)
     body = _decompress(body, request.headers.get("content-encoding", "").strip().lower(), limit)
     if content_type == MULTIPART:
         meta_text, data = await _multipart_parts(request, body)
+    elif frame_header:
+        meta_text, data = frame_header, body
     else:
-        meta_text = frame_header
-        if not meta_text:
-            raise ApiError(400, "missing_metadata", f"the {FRAME_HEADER} header with the frame JSON is missing",
-                           field=FRAME_HEADER)
-        data = body
+        raise ApiError(
+            400, "missing_metadata", f"the {FRAME_HEADER} header with the frame JSON is missing", field=FRAME_HEADER
+        )
     meta = parse_meta(meta_text)
     if content_type == "image/png" and meta.format is not FrameFormat.png:
         meta = meta.model_copy(update={"format": FrameFormat.png})

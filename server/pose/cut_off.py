@@ -40,9 +40,16 @@ def _ray(camera: CameraIntrinsics, rotation_wc: np.ndarray, pixel: tuple[float, 
     return rotation_wc @ np.array([(pixel[0] - camera.cx) / camera.fx, (pixel[1] - camera.cy) / camera.fy, 1.0])
 
 
-def fit_expected_panels(frame: LumaFrame, blobs: list[BeaconBlob], beacons: list[Beacon], predicted_m: np.ndarray,
-                        yaw_deg: float, growth_px: float, level: float,
-                        rules: CutOffRules = CutOffRules()) -> tuple[BeaconBlob, Beacon, Fix] | Refusal:
+def fit_expected_panels(
+    frame: LumaFrame,
+    blobs: list[BeaconBlob],
+    beacons: list[Beacon],
+    predicted_m: np.ndarray,
+    yaw_deg: float,
+    growth_px: float,
+    level: float,
+    rules: CutOffRules = CutOffRules(),
+) -> tuple[BeaconBlob, Beacon, Fix] | Refusal:
     """A fix from the visible parts of the map panels the track predicts in view at `predicted_m`,
     with the first blob it named and that blob's beacon."""
     gravity = frame.meta.gravity_camera
@@ -73,17 +80,37 @@ def fit_expected_panels(frame: LumaFrame, blobs: list[BeaconBlob], beacons: list
     if isinstance(fit, Refusal):
         return fit
     blob, beacon = named[0]
-    centre, _ = cv2.projectPoints((np.array([beacon.center_m]) - fit.position_m) @ fit.rotation_wc,
-                                  np.zeros(3), np.zeros(3), matrix, distortion)
-    return blob, beacon, Fix(position_m=fit.position_m, rotation_wc=fit.rotation_wc, beacon_id=beacon.id,
-                             id_source=BeaconIdSource.track, reprojection_error_px=fit.rms_px, gravity_used=True,
-                             center_px=centre.reshape(2),
-                             warnings=(f"pose from the visible edges of cut-off panels {[b.id for _, b in named]} "
-                                       f"({fit.points} points, sigma {fit.sigma_m * 1000:.1f} mm)",))
+    centre, _ = cv2.projectPoints(
+        (np.array([beacon.center_m]) - fit.position_m) @ fit.rotation_wc, np.zeros(3), np.zeros(3), matrix, distortion
+    )
+    return (
+        blob,
+        beacon,
+        Fix(
+            position_m=fit.position_m,
+            rotation_wc=fit.rotation_wc,
+            beacon_id=beacon.id,
+            id_source=BeaconIdSource.track,
+            reprojection_error_px=fit.rms_px,
+            gravity_used=True,
+            center_px=centre.reshape(2),
+            warnings=(
+                f"pose from the visible edges of cut-off panels {[b.id for _, b in named]} "
+                f"({fit.points} points, sigma {fit.sigma_m * 1000:.1f} mm)",
+            ),
+        ),
+    )
 
 
-def fit_cut_off_panel(frame: LumaFrame, blob: BeaconBlob, template: Beacon, yaw_deg: float,
-                      growth_px: float | None, level: float, rules: CutOffRules = CutOffRules()) -> Fix | None:
+def fit_cut_off_panel(
+    frame: LumaFrame,
+    blob: BeaconBlob,
+    template: Beacon,
+    yaw_deg: float,
+    growth_px: float | None,
+    level: float,
+    rules: CutOffRules = CutOffRules(),
+) -> Fix | None:
     """The camera relative to the template beacon from one cut-off blob (its growth fitted when
     `growth_px` is None); None without gravity or when the fit fails."""
     gravity = frame.meta.gravity_camera
@@ -97,7 +124,16 @@ def fit_cut_off_panel(frame: LumaFrame, blob: BeaconBlob, template: Beacon, yaw_
     fit = fit_partial([(template, points)], frame.camera, gravity, start_m, yaw_deg, growth_px, rules.partial)
     if isinstance(fit, Refusal):
         return None
-    return Fix(position_m=fit.position_m, rotation_wc=fit.rotation_wc, beacon_id=None, id_source=None,
-               reprojection_error_px=fit.rms_px, gravity_used=True, center_px=np.asarray(blob.centroid_px, float),
-               warnings=(f"pose from the visible edges of a cut-off panel ({fit.points} points, "
-                         f"sigma {fit.sigma_m * 1000:.1f} mm, growth {fit.growth_px:.2f} px)",))
+    return Fix(
+        position_m=fit.position_m,
+        rotation_wc=fit.rotation_wc,
+        beacon_id=None,
+        id_source=None,
+        reprojection_error_px=fit.rms_px,
+        gravity_used=True,
+        center_px=np.asarray(blob.centroid_px, float),
+        warnings=(
+            f"pose from the visible edges of a cut-off panel ({fit.points} points, "
+            f"sigma {fit.sigma_m * 1000:.1f} mm, growth {fit.growth_px:.2f} px)",
+        ),
+    )

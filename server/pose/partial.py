@@ -28,10 +28,15 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
-from server.geometry import (beacon_to_world, camera_matrix, distortion_vector, rotation_from_ypr,
-                             rounded_square_outline_m)
-from server.vision.subpixel import level_crossings, profile_offsets, sample_profiles
+from server.geometry import (
+    beacon_to_world,
+    camera_matrix,
+    distortion_vector,
+    rotation_from_ypr,
+    rounded_square_outline_m,
+)
 from server.outcomes import Refusal
+from server.vision.subpixel import level_crossings, profile_offsets, sample_profiles
 from shared_schemas import Beacon, CameraIntrinsics, FailureReason
 
 
@@ -63,8 +68,9 @@ def tilt_from_gravity(gravity_camera: np.ndarray) -> tuple[float, float]:
     return math.degrees(math.asin(max(-1.0, min(1.0, g[0])))), math.degrees(math.atan2(-g[1], -g[2]))
 
 
-def edge_points(pixels: np.ndarray, box: tuple[int, int, int, int], level: float,
-                rules: PartialRules = PartialRules()) -> np.ndarray:
+def edge_points(
+    pixels: np.ndarray, box: tuple[int, int, int, int], level: float, rules: PartialRules = PartialRules()
+) -> np.ndarray:
     """Sub-pixel mid-level edge points (N, 2) of the blob in `box`, none near the frame border."""
     height, width = pixels.shape
     x, y, w, h = box
@@ -84,8 +90,12 @@ def edge_points(pixels: np.ndarray, box: tuple[int, int, int, int], level: float
     probe = np.clip(np.rint(contour + 2 * normal).astype(int), 0, [mask.shape[1] - 1, mask.shape[0] - 1])
     normal[mask[probe[:, 1], probe[:, 0]] > 0] *= -1
     full = contour + [x0, y0]
-    keep = ((full[:, 0] > rules.border_px) & (full[:, 1] > rules.border_px)
-            & (full[:, 0] < width - 1 - rules.border_px) & (full[:, 1] < height - 1 - rules.border_px))
+    keep = (
+        (full[:, 0] > rules.border_px)
+        & (full[:, 1] > rules.border_px)
+        & (full[:, 0] < width - 1 - rules.border_px)
+        & (full[:, 1] < height - 1 - rules.border_px)
+    )
     contour, normal = contour[keep], normal[keep]
     if len(contour) > rules.max_points_per_panel:
         pick = np.linspace(0, len(contour) - 1, rules.max_points_per_panel).astype(int)
@@ -108,8 +118,12 @@ def _outline_px(beacon: Beacon, position_m, rotation_wc, camera: CameraIntrinsic
     outline = rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, per_arc)
     closed = np.vstack([outline, outline[:1]])
     lengths = np.linalg.norm(np.diff(closed, axis=0), axis=1) / beacon.side_m * span_px
-    dense = np.concatenate([np.linspace(a, b, max(1, int(np.ceil(n))), endpoint=False)
-                            for a, b, n in zip(closed[:-1], closed[1:], lengths)])
+    dense = np.concatenate(
+        [
+            np.linspace(a, b, max(1, int(np.ceil(n))), endpoint=False)
+            for a, b, n in zip(closed[:-1], closed[1:], lengths, strict=True)
+        ]
+    )
     world = beacon_to_world(beacon, dense)
     rvec, _ = cv2.Rodrigues(np.ascontiguousarray(rotation_wc.T))
     tvec = -rotation_wc.T @ position_m
@@ -135,14 +149,21 @@ def measure_growth(beacon: Beacon, points: np.ndarray, position_m, rotation_wc, 
     """How far (px, outward) the mid-level contour lies from the outline of a panel of known pose."""
     if len(points) < 20:
         return None
-    distances = _residuals([(beacon, points)], np.asarray(position_m, float), np.asarray(rotation_wc, float),
-                           camera, 0.0)
+    distances = _residuals(
+        [(beacon, points)], np.asarray(position_m, float), np.asarray(rotation_wc, float), camera, 0.0
+    )
     return float(np.median(distances))
 
 
-def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsics, gravity_camera,
-                position_guess_m, yaw_guess_deg: float, growth_px: float | None,
-                rules: PartialRules = PartialRules()) -> PartialFix | Refusal:
+def fit_partial(
+    panels: list[tuple[Beacon, np.ndarray]],
+    camera: CameraIntrinsics,
+    gravity_camera,
+    position_guess_m,
+    yaw_guess_deg: float,
+    growth_px: float | None,
+    rules: PartialRules = PartialRules(),
+) -> PartialFix | Refusal:
     """Camera pose from edge points of (partly visible) panels; or why there is none.
 
     `growth_px` None: the growth is fitted too (the rounded corners tell it from distance, weakly).
@@ -179,7 +200,8 @@ def fit_partial(panels: list[tuple[Beacon, np.ndarray]], camera: CameraIntrinsic
     if not solution.success or rms > rules.max_rms_px:
         return Refusal(FailureReason.beacon_cut_off, f"the visible edges do not fit the panels (RMS {rms:.2f} px)")
     if sigma > rules.max_sigma_m:
-        return Refusal(FailureReason.beacon_cut_off, f"the visible edges fix the position only to {sigma * 1000:.0f} mm")
+        return Refusal(
+            FailureReason.beacon_cut_off, f"the visible edges fix the position only to {sigma * 1000:.0f} mm"
+        )
     position, rotation = unpack(solution.x)
     return PartialFix(position, rotation, rms, sigma, count, float(solution.x[4]) if growth_px is None else growth_px)
-

@@ -28,7 +28,7 @@ All image points here are undistorted pixel coordinates.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 import cv2
 import numpy as np
@@ -38,7 +38,7 @@ from server.outcomes import Refusal
 from shared_schemas import Beacon, FailureReason
 
 
-class GravityMode(str, Enum):
+class GravityMode(StrEnum):
     auto = "auto"
     always = "always"
     never = "never"
@@ -122,8 +122,11 @@ def _orthonormal_pair(vector: np.ndarray) -> np.ndarray:
     """Two unit vectors (2, 3) orthogonal to `vector` and to each other."""
     x, y, z = vector
     # the cross product with the axis least aligned with `vector`, written out (np.cross is slow)
-    first = np.array([0.0, z, -y]) if abs(x) <= min(abs(y), abs(z)) else (
-        np.array([-z, 0.0, x]) if abs(y) <= abs(z) else np.array([y, -x, 0.0]))
+    first = (
+        np.array([0.0, z, -y])
+        if abs(x) <= min(abs(y), abs(z))
+        else (np.array([-z, 0.0, x]) if abs(y) <= abs(z) else np.array([y, -x, 0.0]))
+    )
     first /= np.linalg.norm(first)
     fx, fy, fz = first
     return np.array([first, [y * fz - z * fy, z * fx - x * fz, x * fy - y * fx]])
@@ -187,14 +190,25 @@ def _level_start(image_points, beacon: Beacon, camera_matrix, gravity_camera) ->
     return _beacon_in_camera(beacon, *pose_with_gravity(image_points, beacon, camera_matrix, gravity_camera))
 
 
-def _map_pose(object_points, image_points, vision, beacon, camera_matrix, gravity_camera,
-              corner_sigma_px: float, gravity_sigma_deg: float, try_level: bool) -> tuple[np.ndarray, np.ndarray]:
+def _map_pose(
+    object_points,
+    image_points,
+    vision,
+    beacon,
+    camera_matrix,
+    gravity_camera,
+    corner_sigma_px: float,
+    gravity_sigma_deg: float,
+    try_level: bool,
+) -> tuple[np.ndarray, np.ndarray]:
     """The MAP fit from the vision pose; also from the sensor's tilt when `try_level` or when
     the two disagree by over 3 sigma (vision may sit in the wrong one of a small square's two
     minima). The lower cost wins; a fit that puts the beacon behind the camera never does."""
+
     def fit(start):
-        return fuse_gravity(object_points, image_points, start, camera_matrix, gravity_camera,
-                            corner_sigma_px, gravity_sigma_deg)
+        return fuse_gravity(
+            object_points, image_points, start, camera_matrix, gravity_camera, corner_sigma_px, gravity_sigma_deg
+        )
 
     candidates = [fit(vision)]
     if try_level or _gravity_angle_deg(candidates[0][0], gravity_camera) > 3 * gravity_sigma_deg:
@@ -211,13 +225,17 @@ def _ippe_square_minima(corners4, image_corners, camera_matrix) -> list[tuple[fl
     count, rvecs, tvecs, errors = cv2.solvePnPGeneric(
         corners4, image_corners, camera_matrix, None, flags=cv2.SOLVEPNP_IPPE_SQUARE
     )
-    minima = [(float(e), r, t) for e, r, t in zip(np.ravel(errors)[:count], rvecs, tvecs)
-              if np.isfinite(e) and np.all(np.isfinite(r)) and np.all(np.isfinite(t))]
+    minima = [
+        (float(e), r, t)
+        for e, r, t in zip(np.ravel(errors)[:count], rvecs, tvecs, strict=False)
+        if np.isfinite(e) and np.all(np.isfinite(r)) and np.all(np.isfinite(t))
+    ]
     return sorted(minima, key=lambda m: m[0])
 
 
-def _square_ambiguity(corners4, image_corners, beacon: Beacon, camera_matrix,
-                      nudge_px: float = 1e-3) -> tuple[float, float]:
+def _square_ambiguity(
+    corners4, image_corners, beacon: Beacon, camera_matrix, nudge_px: float = 1e-3
+) -> tuple[float, float]:
     """(error ratio of IPPE_SQUARE's two minima, distance between their camera positions, m).
 
     IPPE_SQUARE's closed form divides zero by zero (NaN poses, NaN errors) when the image of
@@ -273,8 +291,17 @@ def solve_pose(
     if use_gravity and gravity_mode is GravityMode.always:
         rvec, tvec = _level_start(image_points, beacon, camera_matrix, gravity_camera)
     elif use_gravity:
-        rvec, tvec = _map_pose(object_points, image_points, (rvec, tvec), beacon, camera_matrix, gravity_camera,
-                               corner_sigma, gravity_sigma_deg, try_level=ratio > rules.max_ambiguity_ratio / 4)
+        rvec, tvec = _map_pose(
+            object_points,
+            image_points,
+            (rvec, tvec),
+            beacon,
+            camera_matrix,
+            gravity_camera,
+            corner_sigma,
+            gravity_sigma_deg,
+            try_level=ratio > rules.max_ambiguity_ratio / 4,
+        )
     position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
     projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
     return PoseSolution(

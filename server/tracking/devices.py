@@ -62,8 +62,9 @@ class Devices:
         self._lock = threading.Lock()
         self._devices: OrderedDict[str, _Device] = OrderedDict()  # least recently seen first
 
-    def locate(self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap,
-               options: LocateOptions = LocateOptions()) -> LocateResult:
+    def locate(
+        self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = LocateOptions()
+    ) -> LocateResult:
         """An ID frame is kept for the device's next pose frame; a pose frame is located in the device's
         session (a new one for a new map), with the ID stripes waiting for it."""
         with self._checked_out(device_id) as device:
@@ -114,7 +115,7 @@ class Devices:
     def _make_room(self) -> None:
         """Drop the least recently seen devices not in use until a new one fits (the store's lock is held)."""
         idle = [k for k, d in self._devices.items() if d.users == 0]
-        for device_id in idle[:max(0, len(self._devices) + 1 - self.rules.max_devices)]:
+        for device_id in idle[: max(0, len(self._devices) + 1 - self.rules.max_devices)]:
             del self._devices[device_id]
 
     def _keep(self, device: _Device, frame: LumaFrame, options: LocateOptions) -> LocateResult:
@@ -122,17 +123,25 @@ class Devices:
         if reading.problem is not None:
             return refused(Refusal(FailureReason.id_frame, f"ID frame not kept: {reading.problem}"))
         t_s = None if frame.meta.timestamp_ns is None else frame.meta.timestamp_ns * 1e-9
-        sightings = tuple(IdSighting(p.centroid_norm, p.observation) for p in reading.panels
-                          if p.observation is not None)
+        sightings = tuple(
+            IdSighting(p.centroid_norm, p.observation) for p in reading.panels if p.observation is not None
+        )
         device.waiting.append(WaitingIdFrame(t_s, sightings))
         while len(device.waiting) > self.rules.id_frames_kept:
             device.waiting.popleft()
-        return refused(Refusal(FailureReason.id_frame, f"ID frame kept for this device's next pose frame "
-                                                       f"({len(device.waiting)} waiting)"))
+        return refused(
+            Refusal(
+                FailureReason.id_frame,
+                f"ID frame kept for this device's next pose frame ({len(device.waiting)} waiting)",
+            )
+        )
 
     def _fresh_sightings(self, device: _Device, pose_frame: LumaFrame) -> list[IdSighting]:
         waiting, device.waiting = list(device.waiting), deque()
         stamp = pose_frame.meta.timestamp_ns
-        return [s for w in waiting
-                if stamp is None or w.t_s is None or abs(stamp * 1e-9 - w.t_s) <= self.rules.max_id_frame_age_s
-                for s in w.sightings]
+        return [
+            s
+            for w in waiting
+            if stamp is None or w.t_s is None or abs(stamp * 1e-9 - w.t_s) <= self.rules.max_id_frame_age_s
+            for s in w.sightings
+        ]

@@ -67,8 +67,9 @@ def predict(state: FilterState, t_s: float, rules: FilterRules = FilterRules()) 
     q = rules.accel_sigma_mps2**2
     block = np.array([[dt**4 / 4, dt**3 / 2], [dt**3 / 2, dt**2]]) * q
     noise = np.kron(block, np.eye(3))
-    return FilterState(float(t_s), transition @ state.mean, transition @ state.covariance @ transition.T + noise,
-                       state.outliers_in_row)
+    return FilterState(
+        float(t_s), transition @ state.mean, transition @ state.covariance @ transition.T + noise, state.outliers_in_row
+    )
 
 
 def update(state: FilterState, t_s: float, fix_m: np.ndarray, rules: FilterRules = FilterRules()) -> FilterStep:
@@ -85,8 +86,12 @@ def update(state: FilterState, t_s: float, fix_m: np.ndarray, rules: FilterRules
     if d2 > rules.gate_chi2:
         if predicted.outliers_in_row + 1 >= rules.max_outliers:
             return FilterStep(start(t_s, fix, rules), True, True, d2)
-        return FilterStep(FilterState(predicted.t_s, predicted.mean, predicted.covariance,
-                                      predicted.outliers_in_row + 1), False, False, d2)
+        return FilterStep(
+            FilterState(predicted.t_s, predicted.mean, predicted.covariance, predicted.outliers_in_row + 1),
+            False,
+            False,
+            d2,
+        )
     gain = predicted.covariance @ _H.T @ np.linalg.inv(s)
     # With fixes far more precise than a walker is predictable, the optimal velocity gain tends to
     # 2 / dt (an alpha-beta filter with beta -> 2): the speed then rings from step to step after a

@@ -67,8 +67,15 @@ class PanelNamer:
         self.panels = [p for p in self.panels if t_s - p.t_s <= self.rules.panel_timeout_s]
         return set()
 
-    def name(self, blob: BeaconBlob, relative: Fix, observations: list[StripeObservation], t_s: float,
-             track: Track, claimed: set[int]) -> PanelFix | None:
+    def name(
+        self,
+        blob: BeaconBlob,
+        relative: Fix,
+        observations: list[StripeObservation],
+        t_s: float,
+        track: Track,
+        claimed: set[int],
+    ) -> PanelFix | None:
         """The fix of a panel located relative to the template, once its beacon is named; None until then."""
         relative_m = np.asarray(relative.position_m)
         panel = self._panel_for(relative_m, t_s, track, claimed)
@@ -77,7 +84,8 @@ class PanelNamer:
         reading = panel.reading
         if panel.beacon_id is None and panel.evidence.observations:  # decoding stops once the ID is known
             reading = panel.reading = vlc_reading(panel.evidence)
-        if reading is not None and reading.confident and self.beacon_map.beacon(reading.beacon_id) is None:
+        in_map = reading is not None and reading.beacon_id is not None and self.beacon_map.beacon(reading.beacon_id)
+        if reading is not None and reading.confident and not in_map:
             self.stats.foreign_ids += 1  # a confidently read code that is not in this map: not used
         elif reading is not None and reading.confident:
             if panel.beacon_id is not None and panel.beacon_id != reading.beacon_id:
@@ -92,8 +100,9 @@ class PanelNamer:
         if beacon is None:
             return None
         source = BeaconIdSource.vlc if panel.beacon_id is not None else BeaconIdSource.track
-        named = replace(relative, position_m=relative_m + np.asarray(beacon.center_m), beacon_id=beacon.id,
-                        id_source=source)
+        named = replace(
+            relative, position_m=relative_m + np.asarray(beacon.center_m), beacon_id=beacon.id, id_source=source
+        )
         return PanelFix(blob, beacon, named, reading)
 
     def count(self, source: BeaconIdSource | None) -> None:
@@ -120,13 +129,17 @@ class PanelNamer:
             # fixed panel; at a turn the walker did not, so standing still counts too. A neighbouring
             # panel is a beacon spacing (>= 1.2 m) off either way, twice the gate.
             moved = panel.relative_m + velocity * (t_s - panel.t_s)
-            distance = min(float(np.linalg.norm(relative_m - moved)),
-                           float(np.linalg.norm(relative_m - panel.relative_m)))
+            distance = min(
+                float(np.linalg.norm(relative_m - moved)), float(np.linalg.norm(relative_m - panel.relative_m))
+            )
             if distance < best_distance:
                 best, best_distance = index, distance
         if best is None:
-            evidence = IdEvidence(preferred=tuple(sorted(b.id for b in self.beacon_map.beacons)),
-                                  rules=self.rules.stripes, max_frames=self.rules.evidence_frames)
+            evidence = IdEvidence(
+                preferred=tuple(sorted(b.id for b in self.beacon_map.beacons)),
+                rules=self.rules.stripes,
+                max_frames=self.rules.evidence_frames,
+            )
             self.panels.append(PanelTrack(relative_m, t_s, evidence))
             best = len(self.panels) - 1
         claimed.add(best)
@@ -139,8 +152,9 @@ class PanelNamer:
         predicted = track.predicted_m(t_s)
         if predicted is None:
             return None
-        distances = sorted((float(np.linalg.norm(relative_m + b.center_m - predicted)), b.id)
-                           for b in self.beacon_map.beacons)
+        distances = sorted(
+            (float(np.linalg.norm(relative_m + b.center_m - predicted)), b.id) for b in self.beacon_map.beacons
+        )
         if distances[0][0] > self.rules.carry_gate_m:
             return None
         if len(distances) > 1 and distances[1][0] < self.rules.carry_ratio * distances[0][0]:

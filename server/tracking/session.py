@@ -73,8 +73,9 @@ def template_beacon(beacon_map: BeaconMap) -> Beacon | None:
     return beacon_map.beacons[0].model_copy(update={"center_m": [0.0, 0.0, 0.0]})
 
 
-def attach_sightings(sightings: Sequence[IdSighting], blobs: Sequence[BeaconBlob], frame: LumaFrame,
-                     gate_norm: float) -> dict[int, list[StripeObservation]]:
+def attach_sightings(
+    sightings: Sequence[IdSighting], blobs: Sequence[BeaconBlob], frame: LumaFrame, gate_norm: float
+) -> dict[int, list[StripeObservation]]:
     """The stripes of each ID-frame panel, by the index of the nearest pose-frame blob within `gate_norm`."""
     stripes: dict[int, list[StripeObservation]] = {}
     if not blobs:
@@ -105,12 +106,23 @@ class DeviceSession:
     @property
     def stats(self) -> SessionStats:
         naming = self.namer.stats
-        return SessionStats(captures=self.captures, fixes=self.track.fixes, vlc_ids=naming.vlc_ids,
-                            carried_ids=naming.carried_ids, outliers=self.track.outliers,
-                            conflicts=naming.conflicts, foreign_ids=naming.foreign_ids)
+        return SessionStats(
+            captures=self.captures,
+            fixes=self.track.fixes,
+            vlc_ids=naming.vlc_ids,
+            carried_ids=naming.carried_ids,
+            outliers=self.track.outliers,
+            conflicts=naming.conflicts,
+            foreign_ids=naming.foreign_ids,
+        )
 
-    def locate(self, pose_frame: LumaFrame, sightings: Sequence[IdSighting] = (),
-               options: PipelineOptions = PipelineOptions(), room: RoomRules = RoomRules()) -> LocateResult:
+    def locate(
+        self,
+        pose_frame: LumaFrame,
+        sightings: Sequence[IdSighting] = (),
+        options: PipelineOptions = PipelineOptions(),
+        room: RoomRules = RoomRules(),
+    ) -> LocateResult:
         """The fix of one capture, with its VLC reading and the filtered track."""
         self.captures += 1
         t_s = (pose_frame.meta.timestamp_ns or 0) * 1e-9
@@ -125,8 +137,9 @@ class DeviceSession:
             if blob.cut_off or template is None:
                 continue
             others = [b for b in blobs if b is not blob]
-            relative = locate_panel(pose_frame, blob, others, template, BeaconIdSource.vlc, options,
-                                    candidates.levels.background, room)
+            relative = locate_panel(
+                pose_frame, blob, others, template, BeaconIdSource.vlc, options, candidates.levels.background, room
+            )
             if isinstance(relative, Refusal):
                 refusals.append(relative)
                 continue
@@ -148,22 +161,40 @@ class DeviceSession:
             refusals.insert(0, partial)
         return refused(self._why_no_fix(blobs, refusals), beacons_in_view=len(blobs), track=self.track.coasting(t_s))
 
-    def _expected_panels(self, frame: LumaFrame, blobs: list[BeaconBlob], level: float,
-                         t_s: float) -> PanelFix | Refusal | None:
+    def _expected_panels(
+        self, frame: LumaFrame, blobs: list[BeaconBlob], level: float, t_s: float
+    ) -> PanelFix | Refusal | None:
         """A fix from the visible parts of panels named by the track; None when not even tried."""
         predicted = self.track.predicted_m(t_s)
         if not blobs or predicted is None or not self.growths_px or self.last_rotation_wc is None:
             return None
         yaw = ypr_from_rotation(self.last_rotation_wc)[0]
-        found = fit_expected_panels(frame, blobs, list(self.beacon_map.beacons), predicted, yaw,
-                                    float(np.median(self.growths_px)), level, self.rules.cut_off)
+        found = fit_expected_panels(
+            frame,
+            blobs,
+            list(self.beacon_map.beacons),
+            predicted,
+            yaw,
+            float(np.median(self.growths_px)),
+            level,
+            self.rules.cut_off,
+        )
         if isinstance(found, Refusal):
             return found
         blob, beacon, fix = found
         return PanelFix(blob, beacon, fix, None)
 
-    def _cut_off_panels(self, frame: LumaFrame, blobs: list[BeaconBlob], stripes, level: float, t_s: float,
-                        claimed: set[int], template: Beacon, room: RoomRules) -> PanelFix | None:
+    def _cut_off_panels(
+        self,
+        frame: LumaFrame,
+        blobs: list[BeaconBlob],
+        stripes,
+        level: float,
+        t_s: float,
+        claimed: set[int],
+        template: Beacon,
+        room: RoomRules,
+    ) -> PanelFix | None:
         """Each cut-off panel located alone relative to the template, then named like a complete panel."""
         yaw = ypr_from_rotation(self.last_rotation_wc)[0] if self.last_rotation_wc is not None else template.yaw_deg
         growth = float(np.median(self.growths_px)) if self.growths_px else None
@@ -184,7 +215,7 @@ class DeviceSession:
         points = edge_points(frame.pixels, best.blob.bounding_box, level, self.rules.cut_off.partial)
         growth = measure_growth(best.beacon, points, best.fix.position_m, best.fix.rotation_wc, frame.camera)
         if growth is not None:
-            self.growths_px = (self.growths_px + [growth])[-self.rules.growth_memory:]
+            self.growths_px = (self.growths_px + [growth])[-self.rules.growth_memory :]
         self.last_rotation_wc = np.asarray(best.fix.rotation_wc)
 
     def _why_no_fix(self, blobs: list[BeaconBlob], refusals: list[Refusal]) -> Refusal:

@@ -58,14 +58,20 @@ class Track:
             if step.restarted:
                 self.accepted_in_row = 0
         self.accepted_in_row = 0 if outlier else self.accepted_in_row + 1
-        return TrackState(filtered_position_m=self.state.position_m.tolist(),
-                          velocity_mps=self.state.velocity_mps.tolist(), outlier=outlier,
-                          beacon_id_carried=beacon_id_carried)
+        return TrackState(
+            filtered_position_m=self.state.position_m.tolist(),
+            velocity_mps=self.state.velocity_mps.tolist(),
+            outlier=outlier,
+            beacon_id_carried=beacon_id_carried,
+        )
 
     def coasting(self, t_s: float) -> TrackState | None:
         """The track predicted to `t_s` for a capture without a fix (None before the first fix)."""
         if self.state is None or t_s < self.state.t_s:
             return None
         predicted = predict(self.state, t_s, self.rules.motion)
-        return TrackState(filtered_position_m=predicted.position_m.tolist(),
-                          velocity_mps=predicted.velocity_mps.tolist(), outlier=False)
+        return TrackState(
+            filtered_position_m=predicted.position_m.tolist(),
+            velocity_mps=predicted.velocity_mps.tolist(),
+            outlier=False,
+        )

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from server.vision.binarize import Levels, estimate_levels
 from server.outcomes import Refusal
+from server.vision.binarize import Levels, estimate_levels
 from server.vision.contour import BlobRules, find_beacon_blob
 from server.vision.roi import CoarseRules, coarse_to_frame, coarse_view
 
@@ -90,9 +90,13 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
             continue
         # the component alone, padded so that the shape rules never see the frame border
         alone = np.zeros((h + 4, w + 4), np.uint8)
-        alone[2:-2, 2:-2] = np.where(labels[y:y + h, x:x + w] == label, 255, 0)
-        shape_rules = BlobRules(min_area_px=rules.blobs.min_area_px / step**2, min_convexity=rules.blobs.min_convexity,
-                                min_rectangle_fill=rules.blobs.min_rectangle_fill, min_aspect=rules.blobs.min_aspect)
+        alone[2:-2, 2:-2] = np.where(labels[y : y + h, x : x + w] == label, 255, 0)
+        shape_rules = BlobRules(
+            min_area_px=rules.blobs.min_area_px / step**2,
+            min_convexity=rules.blobs.min_convexity,
+            min_rectangle_fill=rules.blobs.min_rectangle_fill,
+            min_aspect=rules.blobs.min_aspect,
+        )
         found = find_beacon_blob(alone, shape_rules)
         cut_off = x <= 0 or y <= 0 or x + w >= small.shape[1] or y + h >= small.shape[0]
         if isinstance(found, Refusal):
@@ -103,21 +107,24 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
         else:
             contour = found.contour
         # back to frame pixels: the view's last column and row are the frame's, closer than `step`
-        x0, y0 = coarse_to_frame([x, y], step, pixels.shape).astype(int)
+        x0, y0 = coarse_to_frame(np.array([x, y]), step, pixels.shape).astype(int)
         x1, y1 = min(pixels.shape[1], (x + w) * step), min(pixels.shape[0], (y + h) * step)
-        blobs.append(BeaconBlob(
-            contour_px=coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape),
-            bounding_box=(int(x0), int(y0), int(x1 - x0), int(y1 - y0)),
-            centroid_px=_centroid_px(labels[y:y + h, x:x + w] == label, x, y, step, pixels.shape),
-            area_px=float(area * step**2),
-            cut_off=bool(cut_off),
-        ))
+        blobs.append(
+            BeaconBlob(
+                contour_px=coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape),
+                bounding_box=(int(x0), int(y0), int(x1 - x0), int(y1 - y0)),
+                centroid_px=_centroid_px(labels[y : y + h, x : x + w] == label, x, y, step, pixels.shape),
+                area_px=float(area * step**2),
+                cut_off=bool(cut_off),
+            )
+        )
     blobs.sort(key=lambda b: b.area_px, reverse=True)
     return Candidates(tuple(blobs), levels, step, tuple(rejected))
 
 
-def blob_mask(pixels: np.ndarray, blob: BeaconBlob, levels: Levels, rules: CandidateRules = CandidateRules(),
-              margin_px: int = 4) -> tuple[int, int, np.ndarray]:
+def blob_mask(
+    pixels: np.ndarray, blob: BeaconBlob, levels: Levels, rules: CandidateRules = CandidateRules(), margin_px: int = 4
+) -> tuple[int, int, np.ndarray]:
     """(y0, x0, mask): the blob's full-resolution mask (bool) over its box plus `margin_px`.
 
     Only the connected component nearest the blob's centroid is kept, so a neighbouring

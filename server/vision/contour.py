@@ -63,14 +63,13 @@ def _shape_problem(contour: np.ndarray, area: float, rules: BlobRules) -> str | 
 def find_beacon_blob(mask: np.ndarray, rules: BlobRules = BlobRules()) -> Blob | Refusal:
     """The beacon's blob in `mask` (uint8, 0 / 255), or the reason there is none."""
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    candidates = sorted(
-        ((cv2.contourArea(c), c) for c in contours), key=lambda item: item[0], reverse=True
-    )
+    candidates = sorted(((cv2.contourArea(c), c) for c in contours), key=lambda item: item[0], reverse=True)
     refusal: Refusal | None = None
     for area, contour in candidates:
         if area < rules.min_area_px:
             break
-        box = cv2.boundingRect(contour)
+        x, y, w, h = cv2.boundingRect(contour)
+        box = (x, y, w, h)
         # A cut-off panel is not square either: say the truer thing first.
         if _touches_border(box, mask.shape):
             refusal = refusal or Refusal(FailureReason.beacon_cut_off, "the beacon touches the frame border")

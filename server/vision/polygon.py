@@ -64,7 +64,7 @@ def _merge_collinear(starts: np.ndarray, ends: np.ndarray, max_angle_deg: float)
         return abs((direction(*b) - direction(*a) + 180.0) % 360.0 - 180.0) < max_angle_deg
 
     merged: list[list] = []
-    for start, end in zip(starts, ends):
+    for start, end in zip(starts, ends, strict=True):
         if merged and collinear(merged[-1], [start, end]):
             merged[-1][1] = end
         else:
@@ -92,7 +92,7 @@ def rounded_square_corners(contour: np.ndarray, rules: PolygonRules = PolygonRul
         return Refusal(FailureReason.not_four_sides, "the four longest sides cover too little of the outline")
     chosen = [sides[i] for i in longest]
     corners = []
-    for previous, current in zip(chosen[-1:] + chosen[:-1], chosen):
+    for previous, current in zip(chosen[-1:] + chosen[:-1], chosen, strict=True):
         corner = intersect_lines(previous[0], previous[1], current[0], current[1])
         if corner is None:
             return Refusal(FailureReason.not_four_sides, "two neighbouring sides are parallel")

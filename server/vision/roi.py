@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from server.vision.binarize import Levels, estimate_levels, threshold
 from server.outcomes import Refusal
+from server.vision.binarize import Levels, estimate_levels, threshold
 from server.vision.contour import BlobRules, find_beacon_blob
 from shared_schemas import FailureReason
 
@@ -63,11 +63,11 @@ def coarse_view(pixels: np.ndarray, step: int) -> np.ndarray:
     grid = pixels[::step, ::step]
     extra_row, extra_col = int((height - 1) % step > 0), int((width - 1) % step > 0)
     small = np.empty((grid.shape[0] + extra_row, grid.shape[1] + extra_col), pixels.dtype)
-    small[:grid.shape[0], :grid.shape[1]] = grid
+    small[: grid.shape[0], : grid.shape[1]] = grid
     if extra_col:
-        small[:grid.shape[0], -1] = pixels[::step, -1]
+        small[: grid.shape[0], -1] = pixels[::step, -1]
     if extra_row:
-        small[-1, :grid.shape[1]] = pixels[-1, ::step]
+        small[-1, : grid.shape[1]] = pixels[-1, ::step]
         small[-1, -1] = pixels[-1, -1]
     return small
 

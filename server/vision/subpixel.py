@@ -178,7 +178,11 @@ def _fit_lines(
         total = weights.sum(axis=1)
         cx, cy = (weights * x).sum(axis=1) / total, (weights * y).sum(axis=1) / total
         dx, dy = x - cx[:, None], y - cy[:, None]
-        sxx, syy, sxy = (weights * dx * dx).sum(axis=1), (weights * dy * dy).sum(axis=1), (weights * dx * dy).sum(axis=1)
+        sxx, syy, sxy = (
+            (weights * dx * dx).sum(axis=1),
+            (weights * dy * dy).sum(axis=1),
+            (weights * dx * dy).sum(axis=1),
+        )
         along = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the scatter's major axis
         normal = np.column_stack([-np.sin(along), np.cos(along)])
         normal *= np.sign(np.sum(normal * outward, axis=1))[:, None]
@@ -193,8 +197,9 @@ def _fit_lines(
     return lines, rms, _line_offset_sigma(residuals, weights, rms)
 
 
-def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmonics: int = 2,
-                          min_phase_span_px: float = MIN_PHASE_SPAN_PX):
+def _remove_pixel_locking(
+    lines, points, weights, phase_points, centres, harmonics: int = 2, min_phase_span_px: float = MIN_PHASE_SPAN_PX
+):
     """Refit the four lines together with the crossings' pixel-locking error.
 
     A level crossing interpolated between the pixels of a steep, clipped edge is off by a
@@ -246,11 +251,15 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
     # L, fitted on the sides that sample its phase, is taken out of all four (the edge profile
     # is the same): each side's turn and shift are fitted again to its crossings less L.
     harmonic = np.arange(1, harmonics + 1)
-    locking = np.cos(angle[..., None] * harmonic) @ solution[8::2] + np.sin(angle[..., None] * harmonic) @ solution[9::2]
+    locking = (
+        np.cos(angle[..., None] * harmonic) @ solution[8::2] + np.sin(angle[..., None] * harmonic) @ solution[9::2]
+    )
     own = np.stack([along, np.ones_like(along)], axis=-1)
     weighted_own = own * weights[..., None]
-    turn, shift = np.linalg.solve(np.einsum("kni,knj->kij", weighted_own, own),
-                                  np.einsum("kni,kn->ki", weighted_own, locking - residuals)[..., None])[..., 0].T
+    turn, shift = np.linalg.solve(
+        np.einsum("kni,knj->kij", weighted_own, own),
+        np.einsum("kni,kn->ki", weighted_own, locking - residuals)[..., None],
+    )[..., 0].T
     new_normal = normal + turn[:, None] * tangent
     scale = np.linalg.norm(new_normal, axis=1)
     c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
@@ -359,8 +368,9 @@ def refine_edges(
     crossings = level_crossings(profiles, offsets, levels.threshold)
     height, width = roi.shape
     ends = (bases32 + offsets[0] * across32, bases32 + offsets[-1] * across32)  # each profile's first, last sample
-    inside = [(end[:, 0] >= 0) & (end[:, 1] >= 0) & (end[:, 0] <= width - 1) & (end[:, 1] <= height - 1)
-              for end in ends]
+    inside = [
+        (end[:, 0] >= 0) & (end[:, 1] >= 0) & (end[:, 0] <= width - 1) & (end[:, 1] <= height - 1) for end in ends
+    ]
     valid = np.isfinite(crossings) & inside[0] & inside[1]
     quarter_level = (levels.threshold + levels.background) / 2
     every = slice(0, 4 * n_along, 3)  # only the median gap is wanted: a third of the sides will do
@@ -368,17 +378,19 @@ def refine_edges(
     level_gap_px = float(np.nanmedian(level_gap)) if np.isfinite(level_gap).any() else float("nan")
 
     points = bases + crossings[:, None] * across + np.asarray(roi_origin, dtype=float)
-    sensor_points = points[:4 * n_along].reshape(4, n_along, 2)
+    sensor_points = points[: 4 * n_along].reshape(4, n_along, 2)
     if distortion is not None:
-        points = cv2.undistortPoints(points.reshape(-1, 1, 2), camera_matrix, distortion,
-                                     P=camera_matrix).reshape(-1, 2)
-    side_valid = valid[:4 * n_along].reshape(4, n_along)
+        points = cv2.undistortPoints(points.reshape(-1, 1, 2), camera_matrix, distortion, P=camera_matrix).reshape(
+            -1, 2
+        )
+    side_valid = valid[: 4 * n_along].reshape(4, n_along)
     counts = side_valid.sum(axis=1)
     if counts.min() < max(6, n_along // 3):
         return None
-    side_points = np.where(side_valid[..., None], points[:4 * n_along].reshape(4, n_along, 2), 0.0)
-    lines_array, rms, line_sigma = _fit_lines(side_points, side_valid.astype(float), normals,
-                                              np.where(side_valid[..., None], sensor_points, 0.0))
+    side_points = np.where(side_valid[..., None], points[: 4 * n_along].reshape(4, n_along, 2), 0.0)
+    lines_array, rms, line_sigma = _fit_lines(
+        side_points, side_valid.astype(float), normals, np.where(side_valid[..., None], sensor_points, 0.0)
+    )
 
     warnings: list[str] = []
     shift = 0.0
@@ -388,7 +400,7 @@ def refine_edges(
         square = _intersections(lines_array)
         growth = contour_growth(square, arc_points, radius_fraction)
         blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
-        if blur_px is not None:
+        if growth is not None and blur_px is not None:
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
             arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
@@ -407,6 +419,6 @@ def refine_edges(
         line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
         line_sigma_px=line_sigma,
         points_per_side=tuple(int(c) for c in counts),
-        arc_points=int(valid[4 * n_along:].sum()),
+        arc_points=int(valid[4 * n_along :].sum()),
         warnings=tuple(warnings),
     )

@@ -92,7 +92,7 @@ def decode(chips: np.ndarray) -> int | None:
     if len(starts) != 1:
         return None
     rolled = np.roll(chips, -starts[0])
-    bits = _bmc_bits(rolled[len(HEADER):], HEADER[-1])
+    bits = _bmc_bits(rolled[len(HEADER) :], HEADER[-1])
     if bits is None:
         return None
     return int(sum(bit << (DATA_BITS - 1 - k) for k, bit in enumerate(bits)))

@@ -92,8 +92,15 @@ def row_time_s(skew_s: float, height: int) -> float:
     return skew_s / (height - 1)
 
 
-def read_stripes(pixels: np.ndarray, mask: np.ndarray, origin_yx: tuple[int, int], timestamp_s: float,
-                 row_time: float, exposure_s: float, rules: StripeRules = StripeRules()) -> StripeObservation | None:
+def read_stripes(
+    pixels: np.ndarray,
+    mask: np.ndarray,
+    origin_yx: tuple[int, int],
+    timestamp_s: float,
+    row_time: float,
+    exposure_s: float,
+    rules: StripeRules = StripeRules(),
+) -> StripeObservation | None:
     """Bin means of the rows inside `mask` (bool, placed at `origin_yx` of `pixels`), or None.
 
     None when fewer than `min_samples` bins remain after shrinking the mask.
@@ -102,7 +109,7 @@ def read_stripes(pixels: np.ndarray, mask: np.ndarray, origin_yx: tuple[int, int
         raise ValueError(f"exposure_s must be positive to read stripes, got {exposure_s}")
     y0, x0 = origin_yx
     h, w = mask.shape
-    window = np.asarray(pixels[y0:y0 + h, x0:x0 + w], dtype=np.float32)
+    window = np.asarray(pixels[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
     if rules.edge_margin_px > 0:
         size = 2 * rules.edge_margin_px + 1
         mask = cv2.erode(mask.astype(np.uint8), np.ones((size, size), np.uint8)).astype(bool)
@@ -130,8 +137,12 @@ def read_stripes(pixels: np.ndarray, mask: np.ndarray, origin_yx: tuple[int, int
     centre = absolute_rows.mean(axis=1)
     position = (centre - centre.mean()) / max(1.0, (centre.max() - centre.min()) / 2)
     return StripeObservation(
-        timestamp_s=float(timestamp_s), exposure_s=float(exposure_s),
-        row_offsets_s=absolute_rows * row_time, values_dn=values, sigma_dn=sigma, position=position,
+        timestamp_s=float(timestamp_s),
+        exposure_s=float(exposure_s),
+        row_offsets_s=absolute_rows * row_time,
+        values_dn=values,
+        sigma_dn=sigma,
+        position=position,
         chips_seen=float((used * row_time + exposure_s) / chip_s),
     )
 
@@ -141,13 +152,22 @@ def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int,
     """(C, MESSAGE_CHIPS * steps) each candidate's 0/1 code box-averaged over `exposure_s`."""
     chip_s = 1.0 / chip_rate_hz
     times = np.arange(MESSAGE_CHIPS * steps_per_chip) * chip_s / steps_per_chip
-    table = [LedWaveform(tuple(int(c) for c in encode(i)), chip_rate_hz=chip_rate_hz, low_level=0.0)
-             .window_means(times, exposure_s) for i in candidates]
+    table = [
+        LedWaveform(tuple(int(c) for c in encode(i)), chip_rate_hz=chip_rate_hz, low_level=0.0).window_means(
+            times, exposure_s
+        )
+        for i in candidates
+    ]
     return np.array(table, dtype=np.float32)
 
 
-def _frame_log_likelihood(obs: StripeObservation, reference_s: float, candidates: tuple[int, ...],
-                          clock_errors_ppm: np.ndarray, rules: StripeRules) -> np.ndarray:
+def _frame_log_likelihood(
+    obs: StripeObservation,
+    reference_s: float,
+    candidates: tuple[int, ...],
+    clock_errors_ppm: np.ndarray,
+    rules: StripeRules,
+) -> np.ndarray:
     """(C, phases, clock errors) log-likelihood of one frame; relative to its best fit."""
     lut = _lookup(candidates, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz)
     steps = lut.shape[1]
@@ -205,7 +225,7 @@ class IdEvidence:
 
     def add(self, observation: StripeObservation) -> None:
         self.observations.append(observation)
-        del self.observations[:-self.max_frames]
+        del self.observations[: -self.max_frames]
         newest = max(o.timestamp_s for o in self.observations)
         self.observations[:] = [o for o in self.observations if newest - o.timestamp_s <= self.max_span_s]
 
@@ -256,7 +276,7 @@ class IdEvidence:
             return IdDecision(None, 0.0, False, 0, 0.0, "no stripes read yet")
         reference = usable[0].timestamp_s
         errors = self._clock_errors()
-        total = 0.0
+        total = np.zeros(())  # broadcasts to the first frame's shape
         setting = (reference, tuple(np.round(errors, 6)))
         cache = {}
         for obs in usable:
@@ -281,6 +301,8 @@ class IdEvidence:
         threshold = self.rules.confident_posterior
         confident = confidence >= threshold and (plain >= threshold or self.unseen_chips(usable) <= 1.0)
         chips = float(sum(o.chips_seen for o in usable))
-        message = (f"ID {self.candidates[best]} at posterior {confidence:.3f} from {len(usable)} frame(s), "
-                   f"{chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message")
+        message = (
+            f"ID {self.candidates[best]} at posterior {confidence:.3f} from {len(usable)} frame(s), "
+            f"{chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message"
+        )
         return IdDecision(int(self.candidates[best]), confidence, confident, len(usable), chips, message)

@@ -23,21 +23,23 @@ class IdFrameReading:
     problem: str | None  # why this frame cannot carry stripes, if it cannot
 
 
-def read_id_frame(frame: LumaFrame, candidates: CandidateRules = CandidateRules(),
-                  rules: StripeRules = StripeRules()) -> IdFrameReading:
+def read_id_frame(
+    frame: LumaFrame, candidates: CandidateRules = CandidateRules(), rules: StripeRules = StripeRules()
+) -> IdFrameReading:
     """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included)."""
     problem = id_frame_problem(frame, rules)
     if problem is not None:
         return IdFrameReading((), problem)
     meta = frame.meta
-    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.full_size[1])  # the sensor's rows, crop or not
-    first_row_s = meta.timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
+    skew_s, timestamp_ns, exposure_s = meta.rolling_shutter_skew_s, meta.timestamp_ns, meta.exposure_s
+    assert skew_s is not None and timestamp_ns is not None and exposure_s is not None  # id_frame_problem checked
+    row_time = row_time_s(skew_s, meta.full_size[1])  # the sensor's rows, crop or not
+    first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
     found = find_beacon_blobs(frame.pixels, candidates)
     panels = []
     for blob in found.blobs:
         y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
-        observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time,
-                                   meta.exposure_s, rules)
+        observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time, exposure_s, rules)
         centroid = meta.fraction_of_full_frame(*blob.centroid_px)
         panels.append(PanelStripes(blob, centroid, observation))
     return IdFrameReading(tuple(panels), None)

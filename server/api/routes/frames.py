@@ -17,22 +17,29 @@ FRAME_REQUEST_BODY = {
     "requestBody": {
         "required": True,
         "description": f"The frame bytes as the contract's fixture file holds them, with the frame JSON in the "
-                       f"{FRAME_HEADER} header; or multipart with 'meta' and 'frame' parts. "
-                       "Content-Encoding gzip or zstd is accepted.",
+        f"{FRAME_HEADER} header; or multipart with 'meta' and 'frame' parts. "
+        "Content-Encoding gzip or zstd is accepted.",
         "content": {
             "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
             "image/png": {"schema": {"type": "string", "format": "binary"}},
-            "multipart/form-data": {"schema": {
-                "type": "object", "required": ["meta", "frame"],
-                "properties": {"meta": {"type": "string", "description": "frame JSON (lumipose.frame/1)"},
-                               "frame": {"type": "string", "format": "binary"}}}},
+            "multipart/form-data": {
+                "schema": {
+                    "type": "object",
+                    "required": ["meta", "frame"],
+                    "properties": {
+                        "meta": {"type": "string", "description": "frame JSON (lumipose.frame/1)"},
+                        "frame": {"type": "string", "format": "binary"},
+                    },
+                }
+            },
         },
     }
 }
 
 FrameHeader = Annotated[str | None, Header(alias=FRAME_HEADER, description="frame JSON (lumipose.frame/1)")]
-DeviceHeader = Annotated[str | None, Header(alias="X-Lumipose-Device", max_length=128,
-                                            description="device or session id of the sender")]
+DeviceHeader = Annotated[
+    str | None, Header(alias="X-Lumipose-Device", max_length=128, description="device or session id of the sender")
+]
 MapQuery = Annotated[str | None, Query(description="map name; default: the active map")]
 BeaconQuery = Annotated[int | None, Query(ge=0, le=255, description="the beacon in view, when known otherwise")]
 GravityQuery = Annotated[GravityMode, Query(description="use the frame's gravity vector")]
@@ -47,8 +54,12 @@ class LocateQuery:
     beacon_id: int | None = None
 
 
-def _locate_query(services: ServicesDep, beacon_id: BeaconQuery = None, gravity: GravityQuery = GravityMode.auto,
-                  corners: CornersQuery = CornerMethod.rounded) -> LocateQuery:
+def _locate_query(
+    services: ServicesDep,
+    beacon_id: BeaconQuery = None,
+    gravity: GravityQuery = GravityMode.auto,
+    corners: CornersQuery = CornerMethod.rounded,
+) -> LocateQuery:
     options = services.options
     pipeline = replace(options.pipeline, gravity_mode=gravity, corner_method=corners)
     return LocateQuery(replace(options, pipeline=pipeline), beacon_id)

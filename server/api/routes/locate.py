@@ -14,8 +14,9 @@ router = APIRouter(prefix="/v1", tags=["locate"], responses=ERROR_RESPONSES)
 
 
 @router.post("/locate", response_model=LocateResult, openapi_extra=FRAME_REQUEST_BODY)
-async def locate_frame(services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None,
-                       map: MapQuery = None) -> LocateResult:
+async def locate_frame(
+    services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None, map: MapQuery = None
+) -> LocateResult:
     """Locate the camera. 200 with `ok: false` and a `reason` when the frame holds no usable beacon.
 
     With `X-Lumipose-Device` on a map of several beacons, the frame joins the device's session:

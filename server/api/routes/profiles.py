@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from server.api.errors import ApiError
-from server.api.errors import ERROR_RESPONSES
+from server.api.errors import ERROR_RESPONSES, ApiError
 from shared_schemas import DeviceProfile, device_profiles
 
 router = APIRouter(prefix="/v1/profiles", tags=["profiles"], responses=ERROR_RESPONSES)
@@ -20,6 +19,10 @@ async def list_profiles() -> list[DeviceProfile]:
 async def get_profile(profile_id: str) -> DeviceProfile:
     profile = device_profiles().get(profile_id)
     if profile is None:
-        raise ApiError(404, "not_found", f"no device profile '{profile_id}'; known: "
-                       f"{', '.join(sorted(device_profiles()))}", field="profile_id")
+        raise ApiError(
+            404,
+            "not_found",
+            f"no device profile '{profile_id}'; known: {', '.join(sorted(device_profiles()))}",
+            field="profile_id",
+        )
     return profile

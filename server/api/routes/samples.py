@@ -20,14 +20,28 @@ router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPO
 LabelQuery = Annotated[str | None, Query(max_length=200, description="free text; 'i,j' names a grid cell")]
 
 
-@router.post("", status_code=201, response_model=SampleInfo,
-             openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess])
-async def store_sample(services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None,
-                       label: LabelQuery = None, map: MapQuery = None) -> SampleInfo:
+@router.post(
+    "", status_code=201, response_model=SampleInfo, openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess]
+)
+async def store_sample(
+    services: ServicesDep,
+    upload: UploadDep,
+    query: QueryDep,
+    device: DeviceHeader = None,
+    label: LabelQuery = None,
+    map: MapQuery = None,
+) -> SampleInfo:
     """Store a frame with its label and the result it gives now (a frame without a fix is kept too)."""
     located = await locate_upload(services, upload, map, query)
-    return await run_in_threadpool(services.samples.add, upload.data, upload.meta, located.result,
-                                   label=label, device=device, map_name=located.map_name)
+    return await run_in_threadpool(
+        services.samples.add,
+        upload.data,
+        upload.meta,
+        located.result,
+        label=label,
+        device=device,
+        map_name=located.map_name,
+    )
 
 
 @router.get("", response_model=SampleList)
@@ -36,11 +50,12 @@ async def list_samples(services: ServicesDep) -> SampleList:
 
 
 @router.get("/evaluation", response_model=Evaluation)
-async def evaluate_samples(services: ServicesDep, map: MapQuery = None,
-                           cell_m: Annotated[float, Query(gt=0, le=10, description="grid cell side")] = 0.05,
-                           height_m: Annotated[float, Query(ge=-100, le=100,
-                                                            description="z of the grid plane")] = 0.0,
-                           ) -> Evaluation:
+async def evaluate_samples(
+    services: ServicesDep,
+    map: MapQuery = None,
+    cell_m: Annotated[float, Query(gt=0, le=10, description="grid cell side")] = 0.05,
+    height_m: Annotated[float, Query(ge=-100, le=100, description="z of the grid plane")] = 0.0,
+) -> Evaluation:
     """Re-locate every stored sample in `map` and compare with its truth (paper Table 2)."""
     name = map or services.maps.active_name()
     services.maps.get(name)
@@ -56,13 +71,21 @@ async def get_sample(sample_id: str, services: ServicesDep) -> SampleInfo:
     return await run_in_threadpool(services.samples.get, sample_id)
 
 
-@router.get("/{sample_id}/frame", response_class=Response, responses={
-    200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"}})
+@router.get(
+    "/{sample_id}/frame",
+    response_class=Response,
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"}
+    },
+)
 async def get_sample_frame(sample_id: str, services: ServicesDep) -> Response:
     info = await run_in_threadpool(services.samples.get, sample_id)
     data = await run_in_threadpool(services.samples.frame, sample_id)
-    return Response(data, media_type="application/octet-stream", headers={
-        FRAME_HEADER: info.meta.model_dump_json(by_alias=True, exclude_none=True)})
+    return Response(
+        data,
+        media_type="application/octet-stream",
+        headers={FRAME_HEADER: info.meta.model_dump_json(by_alias=True, exclude_none=True)},
+    )
 
 
 @router.delete("/{sample_id}", status_code=204, dependencies=[WriteAccess])
