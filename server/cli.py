@@ -1,13 +1,12 @@
 """The server's commands of `lumipose`: `locate`, `fov` and `serve`.
 
 `lumipose_cli.main` joins them with the client's and the simulator's commands into the one
-`lumipose` command; `python -m server.cli` runs the server's commands alone.
+`lumipose` command (`python -m lumipose_cli` without the console script).
 Exit codes: 0 a fix (or success), 1 no fix (the reason is printed), 2 bad input.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -196,19 +195,3 @@ def add_commands(commands) -> None:
     _add_locate(commands)
     _add_fov(commands)
     _add_serve(commands)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    """The server's commands alone (the full `lumipose` parser is `lumipose_cli.main.build_parser`)."""
-    parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
-    add_commands(parser.add_subparsers(dest="command", required=True))
-    return parser
-
-
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    return args.run(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -94,7 +94,7 @@ def test_frames_without_a_usable_beacon_are_refused():
 
 def test_cli_locates_the_bundled_fixture_as_the_readme_says():
     truth = read_fixture(FIXTURE).meta.ground_truth.position_m
-    run = subprocess.run([sys.executable, "-m", "server.cli", "locate", str(FIXTURE), "--json"],
+    run = subprocess.run([sys.executable, "-m", "lumipose_cli", "locate", str(FIXTURE), "--json"],
                          capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr
     import json
@@ -107,7 +107,7 @@ def test_cli_locates_the_bundled_fixture_as_the_readme_says():
 def test_cli_exit_codes_for_bad_input(tmp_path):
     (tmp_path / "bad.json").write_text('{"width": 4, "height": 4, "camera": {"fx": "NaN"}}')
     (tmp_path / "bad.y").write_bytes(bytes(16))
-    run = subprocess.run([sys.executable, "-m", "server.cli", "locate", str(tmp_path / "bad.json")],
+    run = subprocess.run([sys.executable, "-m", "lumipose_cli", "locate", str(tmp_path / "bad.json")],
                          capture_output=True, text=True, check=False)
     assert run.returncode == 2 and "error:" in run.stderr
 
