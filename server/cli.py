@@ -130,6 +130,11 @@ def _add_serve(commands) -> None:
         "--session-idle-s", type=float, help="a device silent for longer loses its session (default 600)"
     )
     parser.add_argument("--max-devices", type=int, help="device sessions kept per worker (default 1000)")
+    parser.add_argument("--max-body-kb", type=float, help="body limit of the JSON routes (default 1024)")
+    parser.add_argument("--max-header-kb", type=float, help="limit on a request's line and headers (default 64)")
+    parser.add_argument(
+        "--max-frames-in-flight", type=int, help="frame uploads held at once per worker (default 2 x cores + 2)"
+    )
     parser.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
     parser.set_defaults(run=_run_serve)
 
@@ -141,6 +146,7 @@ def _run_serve(args) -> int:
     from pydantic import ValidationError
 
     from server.api.config import Settings
+    from server.api.protocol import GuardedHttpToolsProtocol
 
     given = {
         name: getattr(args, name)
@@ -155,6 +161,9 @@ def _run_serve(args) -> int:
             "read_timeout_s",
             "session_idle_s",
             "max_devices",
+            "max_body_kb",
+            "max_header_kb",
+            "max_frames_in_flight",
         )
         if getattr(args, name) is not None
     }
@@ -180,6 +189,7 @@ def _run_serve(args) -> int:
         workers=settings.workers,
         log_level=args.log_level,
         timeout_keep_alive=30,
+        http=GuardedHttpToolsProtocol,
     )
     return EXIT_FIX
 

@@ -6,18 +6,19 @@ never copied (the pixels are a strided view of the bytes).
 
 from __future__ import annotations
 
-import json
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
 import numpy as np
+import pydantic_core
 from pydantic import ValidationError
 
 from server.camera import resolve_camera
 from server.outcomes import FrameError
 from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
-from shared_schemas.fixture_files import read_fixture_files
+from shared_schemas.fixture_files import PNG_SIGNATURE, read_fixture_files
 
 MAX_PIXELS = 100_000_000
 
@@ -30,10 +31,14 @@ class LumaFrame:
 
 
 def parse_meta(text: str | bytes | dict) -> FrameMeta:
-    """Validate frame metadata; NaN and Infinity are refused by the models, naming the field."""
+    """Validate frame metadata; NaN and Infinity are refused by the models, naming the field.
+
+    The JSON parser is pydantic's, whose nesting limit turns a header nested thousands deep into
+    a clear error instead of a RecursionError.
+    """
     try:
-        data = text if isinstance(text, dict) else json.loads(text)
-    except json.JSONDecodeError as error:
+        data = text if isinstance(text, dict) else pydantic_core.from_json(text)
+    except ValueError as error:
         raise FrameError(f"frame metadata is not valid JSON: {error}") from None
     try:
         meta = FrameMeta.model_validate(data)
@@ -68,7 +73,22 @@ def _raw_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
     return rows
 
 
+def png_size(data: bytes | memoryview) -> tuple[int, int] | None:
+    """(width, height) from a PNG's IHDR chunk, or None when `data` does not start like a PNG."""
+    if len(data) < 24 or bytes(data[:8]) != PNG_SIGNATURE or bytes(data[12:16]) != b"IHDR":
+        return None
+    width, height = struct.unpack(">II", bytes(data[16:24]))
+    return width, height
+
+
 def _png_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
+    # The header says the size before anything is decoded: a small file may claim a small image
+    # in its metadata and hold 20000 x 20000 pixels (gigabytes once decoded).
+    size = png_size(data)
+    if size is None:
+        raise FrameError("frame is not a readable PNG", field="frame")
+    if size != (meta.width, meta.height):
+        raise FrameError(f"PNG is {size[0]}x{size[1]} but metadata says {meta.width}x{meta.height}", field="width")
     image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise FrameError("frame is not a readable PNG", field="frame")

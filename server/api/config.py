@@ -25,7 +25,16 @@ class Settings(BaseSettings):
     data_dir: Path = Path("data")
     api_key: str | None = Field(default=None, description="required for writes (maps, samples) when set")
     max_upload_mb: float = Field(default=64.0, gt=0, description="limit on the upload, compressed or not")
-    read_timeout_s: float = Field(default=30.0, gt=0, description="longest time to receive one upload")
+    read_timeout_s: float = Field(
+        default=30.0, gt=0, description="longest time to receive a request's headers, and its body"
+    )
+    max_body_kb: float = Field(default=1024.0, gt=0, description="limit on the body of the routes that take JSON")
+    max_header_kb: float = Field(default=64.0, gt=0, description="limit on a request's line and headers together")
+    max_frames_in_flight: int = Field(
+        default_factory=lambda: 2 * (os.cpu_count() or 1) + 2,
+        ge=1,
+        description="frame uploads held at once per worker (each up to max_upload_mb); more wait for a slot",
+    )
     pipeline_threads: int = Field(
         default_factory=lambda: os.cpu_count() or 1, ge=1, description="frames located at once per worker"
     )
@@ -58,3 +67,11 @@ class Settings(BaseSettings):
     @property
     def max_upload_bytes(self) -> int:
         return int(self.max_upload_mb * 1024 * 1024)
+
+    @property
+    def max_body_bytes(self) -> int:
+        return int(self.max_body_kb * 1024)
+
+    @property
+    def max_header_bytes(self) -> int:
+        return int(self.max_header_kb * 1024)

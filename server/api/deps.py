@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import hmac
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Annotated
 
 import anyio
 from fastapi import Depends, Header, Request
+from starlette.responses import Response
 
 from server.api.config import Settings
 from server.api.errors import ApiError
@@ -15,6 +17,23 @@ from server.api.metrics import Metrics
 from server.options import LocateOptions
 from server.store import MapStore, SampleStore
 from server.tracking.devices import Devices
+
+
+class FrameSlots:
+    """How many frame uploads a worker holds at once (each up to `max_upload_bytes`)."""
+
+    def __init__(self, slots: int) -> None:
+        self._semaphore = anyio.Semaphore(slots)
+
+    async def run(self, wait_s: float, work: Callable[[], Awaitable[Response]]) -> Response:
+        with anyio.move_on_after(wait_s) as waited:
+            await self._semaphore.acquire()
+        if waited.cancelled_caught:
+            raise ApiError(503, "busy", "too many frames are being received; try again", field="body").closing()
+        try:
+            return await work()
+        finally:
+            self._semaphore.release()
 
 
 @dataclass(frozen=True)
@@ -28,6 +47,7 @@ class Services:
     options: LocateOptions  # from the settings; a request's query refines its pipeline part
     devices: Devices  # per-process: see docs/deployment.md
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
+    frame_slots: FrameSlots  # frame uploads held at once (server.api.guard)
 
 
 def _services(request: Request) -> Services:
@@ -37,17 +57,25 @@ def _services(request: Request) -> Services:
 ServicesDep = Annotated[Services, Depends(_services)]
 
 
-def _require_api_key(
+def api_key_problem(expected: str | None, given: str | None) -> ApiError | None:
+    """Why a write with `given` as its X-API-Key is refused by a server whose key is `expected`."""
+    if expected is None:
+        return None
+    if given is None:
+        return ApiError(401, "unauthorized", "this server needs an X-API-Key header for writes", field="X-API-Key")
+    if not hmac.compare_digest(given.encode(), expected.encode()):
+        return ApiError(401, "unauthorized", "the X-API-Key is wrong", field="X-API-Key")
+    return None
+
+
+def require_api_key(
     services: ServicesDep,
     x_api_key: Annotated[str | None, Header(description="needed when the server has a key")] = None,
 ) -> None:
-    expected = services.settings.api_key
-    if expected is None:
-        return
-    if x_api_key is None:
-        raise ApiError(401, "unauthorized", "this server needs an X-API-Key header for writes", field="X-API-Key")
-    if not hmac.compare_digest(x_api_key.encode(), expected.encode()):
-        raise ApiError(401, "unauthorized", "the X-API-Key is wrong", field="X-API-Key")
+    """The write routes' dependency: it documents the header; `server.api.guard` checks it before the body."""
+    problem = api_key_problem(services.settings.api_key, x_api_key)
+    if problem is not None:
+        raise problem
 
 
-WriteAccess = Depends(_require_api_key)
+WriteAccess = Depends(require_api_key)

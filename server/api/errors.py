@@ -7,12 +7,14 @@ the store raises `StoreError`, and the handlers here turn them into responses.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from server.outcomes import FrameError
 from server.store import StoreError
@@ -41,6 +43,12 @@ class ApiError(Exception):
     def __init__(self, status: int, error: str, message: str, field: str | None = None):
         super().__init__(message)
         self.status, self.body = status, ErrorBody(error=error, field=field, message=message)
+        self.headers: dict[str, str] = {}
+
+    def closing(self) -> ApiError:
+        """The same error, answered on a connection that then closes (its request body is left unread)."""
+        self.headers["connection"] = "close"
+        return self
 
 
 def error_response(status: int, error: str, message: str, field: str | None = None) -> JSONResponse:
@@ -55,7 +63,7 @@ def _location(loc: tuple) -> str | None:
 def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(ApiError)
     async def _api_error(request: Request, error: ApiError) -> JSONResponse:
-        return JSONResponse(error.body.model_dump(), status_code=error.status)
+        return JSONResponse(error.body.model_dump(), status_code=error.status, headers=error.headers)
 
     @app.exception_handler(FrameError)
     async def _frame_error(request: Request, error: FrameError) -> JSONResponse:
@@ -77,8 +85,37 @@ def install_error_handlers(app: FastAPI) -> None:
         code = {404: "not_found", 405: "method_not_allowed"}.get(error.status_code, "http_error")
         return error_response(error.status_code, code, str(error.detail))
 
-    @app.exception_handler(Exception)
-    async def _bug(request: Request, error: Exception) -> JSONResponse:
-        # A bug, never an answer to bad input: log it whole, tell the client little.
-        log.exception("unhandled error on %s %s", request.method, request.url.path)
-        return error_response(500, "internal_error", f"the server failed on this request ({type(error).__name__})")
+
+class BugCatcher:
+    """ASGI middleware: an exception no handler took is a bug, never an answer to bad input.
+
+    It is logged whole and counted (`on_bug`), and the client gets a 500 ErrorBody on a
+    connection that stays open (Starlette's outermost handler re-raises after its answer, and
+    the server then closes the connection).
+    """
+
+    def __init__(self, app: ASGIApp, on_bug: Callable[[], None]) -> None:
+        self.app, self.on_bug = app, on_bug
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        started = False
+
+        async def noting_start(message: Message) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
+
+        try:
+            await self.app(scope, receive, noting_start)
+        except Exception as error:
+            log.exception("unhandled error on %s %s", scope.get("method"), scope.get("path"))
+            self.on_bug()
+            if started:  # too late for an answer of our own
+                raise
+            response = error_response(
+                500, "internal_error", f"the server failed on this request ({type(error).__name__})"
+            )
+            await response(scope, receive, send)

@@ -6,10 +6,10 @@ import anyio
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 
-from server.api import VERSION
+from server.api import VERSION, protocol
 from server.api.config import Settings
-from server.api.deps import Services
-from server.api.errors import install_error_handlers
+from server.api.deps import FrameSlots, Services
+from server.api.errors import BugCatcher, install_error_handlers
 from server.api.metrics import Metrics, MetricsMiddleware
 from server.api.routes import health, locate, maps, profiles, samples
 from server.store import MapStore, SampleStore
@@ -33,10 +33,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         options=settings.locate_options(),
         devices=Devices(settings.device_rules()),
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
+        frame_slots=FrameSlots(settings.max_frames_in_flight),
     )
     install_error_handlers(app)
     for router in (health.router, locate.router, maps.router, profiles.router, samples.router):
         app.include_router(router)
+    # outermost last: metrics see every answer, bugs become counted 500s, CORS answers preflights
     app.add_middleware(
         CORSMiddleware,
         allow_origins=settings.cors_origins,
@@ -44,7 +46,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         allow_headers=["*"],
         expose_headers=["X-Lumipose-Frame"],
     )
+    app.add_middleware(BugCatcher, on_bug=metrics.server_errors.inc)
     app.add_middleware(MetricsMiddleware, metrics=metrics)
+    protocol.configure(settings.read_timeout_s, settings.max_header_bytes)
     return app
 
 

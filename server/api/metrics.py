@@ -29,6 +29,9 @@ class Metrics:
         self.no_fix = Counter(
             "lumipose_no_fix_total", "frames without a fix, by reason", ["reason"], registry=self.registry
         )
+        self.server_errors = Counter(
+            "lumipose_server_errors_total", "requests that ended in a 500 (a bug: logged whole)", registry=self.registry
+        )
         self.pipeline = Histogram(
             "lumipose_pipeline_seconds", "pipeline time per frame", buckets=LATENCY_BUCKETS_S, registry=self.registry
         )

@@ -36,6 +36,8 @@ class DeviceRules:
     max_devices: int = 1000  # bounds the memory held for devices that went away
     id_frames_kept: int = ID_BURST_FRAMES  # a capture's burst; an older burst gives way to a newer one
     max_id_frame_age_s: float = 2.0  # ID frames further than this from the pose frame are not combined
+    max_panels_per_id_frame: int = 8  # the largest panels of an ID frame keep their stripes
+    max_waiting_bytes: int = 64 * 2**20  # stripes waiting, all devices together; the least recent give way
 
 
 @dataclass(frozen=True)
@@ -43,12 +45,18 @@ class WaitingIdFrame:
     t_s: float | None
     sightings: tuple[IdSighting, ...]
 
+    @property
+    def nbytes(self) -> int:
+        """The memory its stripes hold (their arrays, plus a little for the objects around them)."""
+        return sum(s.observation.nbytes + 256 for s in self.sightings) + 128
+
 
 @dataclass
 class _Device:
     lock: threading.Lock = field(default_factory=threading.Lock)
     session: DeviceSession | None = None
     waiting: deque[WaitingIdFrame] = field(default_factory=deque)
+    waiting_bytes: int = 0  # of `waiting`; changed under the store's lock only
     last_seen_s: float = 0.0
     users: int = 0  # requests holding or waiting for `lock`: such a record is never dropped
 
@@ -61,6 +69,7 @@ class Devices:
         self._clock = clock
         self._lock = threading.Lock()
         self._devices: OrderedDict[str, _Device] = OrderedDict()  # least recently seen first
+        self._waiting_bytes = 0  # all devices' waiting stripes
 
     def locate(
         self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = LocateOptions()
@@ -87,6 +96,12 @@ class Devices:
         with self._lock:
             return len(self._devices)
 
+    @property
+    def waiting_bytes(self) -> int:
+        """Memory held by the stripes of ID frames waiting for their pose frames, all devices."""
+        with self._lock:
+            return self._waiting_bytes
+
     @contextmanager
     def _checked_out(self, device_id: str) -> Iterator[_Device]:
         with self._lock:
@@ -110,25 +125,42 @@ class Devices:
         now = self._clock()
         for device_id, device in list(self._devices.items()):
             if device.users == 0 and now - device.last_seen_s > self.rules.idle_s:
-                del self._devices[device_id]
+                self._forget(device_id)
 
     def _make_room(self) -> None:
         """Drop the least recently seen devices not in use until a new one fits (the store's lock is held)."""
         idle = [k for k, d in self._devices.items() if d.users == 0]
         for device_id in idle[: max(0, len(self._devices) + 1 - self.rules.max_devices)]:
-            del self._devices[device_id]
+            self._forget(device_id)
+
+    def _forget(self, device_id: str) -> None:
+        self._waiting_bytes -= self._devices.pop(device_id).waiting_bytes
+
+    def _set_waiting(self, device: _Device, waiting: deque[WaitingIdFrame]) -> None:
+        """Replace a device's waiting frames and keep the byte count (the store's lock is held)."""
+        nbytes = sum(w.nbytes for w in waiting)
+        self._waiting_bytes += nbytes - device.waiting_bytes
+        device.waiting, device.waiting_bytes = waiting, nbytes
+
+    def _within_budget(self, keeping: _Device) -> None:
+        """Drop the waiting frames of the least recently seen devices not in use until the total fits."""
+        for device in list(self._devices.values()):
+            if self._waiting_bytes <= self.rules.max_waiting_bytes:
+                return
+            if device is not keeping and device.users == 0 and device.waiting:
+                self._set_waiting(device, deque())
 
     def _keep(self, device: _Device, frame: LumaFrame, options: LocateOptions) -> LocateResult:
         reading = read_id_frame(frame, options.room.candidates, options.room.stripes)
         if reading.problem is not None:
             return refused(Refusal(FailureReason.id_frame, f"ID frame not kept: {reading.problem}"))
         t_s = None if frame.meta.timestamp_ns is None else frame.meta.timestamp_ns * 1e-9
-        sightings = tuple(
-            IdSighting(p.centroid_norm, p.observation) for p in reading.panels if p.observation is not None
-        )
-        device.waiting.append(WaitingIdFrame(t_s, sightings))
-        while len(device.waiting) > self.rules.id_frames_kept:
-            device.waiting.popleft()
+        read = [p for p in reading.panels if p.observation is not None][: self.rules.max_panels_per_id_frame]
+        sightings = tuple(IdSighting(p.centroid_norm, p.observation) for p in read if p.observation is not None)
+        waiting = deque([*device.waiting, WaitingIdFrame(t_s, sightings)][-self.rules.id_frames_kept :])
+        with self._lock:
+            self._set_waiting(device, waiting)
+            self._within_budget(device)
         return refused(
             Refusal(
                 FailureReason.id_frame,
@@ -137,7 +169,9 @@ class Devices:
         )
 
     def _fresh_sightings(self, device: _Device, pose_frame: LumaFrame) -> list[IdSighting]:
-        waiting, device.waiting = list(device.waiting), deque()
+        waiting = list(device.waiting)
+        with self._lock:
+            self._set_waiting(device, deque())
         stamp = pose_frame.meta.timestamp_ns
         return [
             s

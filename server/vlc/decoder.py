@@ -69,6 +69,11 @@ class StripeObservation:
     chips_seen: float  # time the panel's rows span, in chips
 
     @property
+    def nbytes(self) -> int:
+        """Memory held by its arrays."""
+        return self.row_offsets_s.nbytes + self.values_dn.nbytes + self.sigma_dn.nbytes + self.position.nbytes
+
+    @property
     def samples(self) -> int:
         return len(self.values_dn)
 

@@ -65,12 +65,12 @@ def _locate_query(
     return LocateQuery(replace(options, pipeline=pipeline), beacon_id)
 
 
-async def _frame_upload(request: Request, services: ServicesDep, frame_json: FrameHeader = None) -> FrameUpload:
+async def frame_upload(request: Request, services: ServicesDep, frame_json: FrameHeader = None) -> FrameUpload:
     settings = services.settings
     return await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
 
 
-# Route parameters: the pipeline's query options, and the uploaded frame (read after the
-# route's own dependencies, so a write without its API key is refused before its body is read).
+# Route parameters: the pipeline's query options, and the uploaded frame (read by `frame_upload`
+# itself, with its own limits; `server.api.guard` has checked the key and the length before).
 QueryDep = Annotated[LocateQuery, Depends(_locate_query)]
-UploadDep = Annotated[FrameUpload, Depends(_frame_upload)]
+UploadDep = Annotated[FrameUpload, Depends(frame_upload)]

@@ -7,10 +7,11 @@ from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
+from server.api.guard import GuardedRoute
 from shared_schemas import BeaconMap
 from shared_schemas.api import ActiveMap, MapSummary
 
-router = APIRouter(prefix="/v1/maps", tags=["maps"], responses=ERROR_RESPONSES)
+router = APIRouter(prefix="/v1/maps", tags=["maps"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
 
 @router.get("", response_model=list[MapSummary])

@@ -5,9 +5,10 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from server.api.errors import ERROR_RESPONSES, ApiError
+from server.api.guard import GuardedRoute
 from shared_schemas import DeviceProfile, device_profiles
 
-router = APIRouter(prefix="/v1/profiles", tags=["profiles"], responses=ERROR_RESPONSES)
+router = APIRouter(prefix="/v1/profiles", tags=["profiles"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
 
 @router.get("", response_model=list[DeviceProfile])

@@ -9,13 +9,14 @@ from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
+from server.api.guard import GuardedRoute
 from server.api.locating import locate_upload
 from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, LocateQuery, MapQuery, QueryDep, UploadDep
 from server.api.upload import FRAME_HEADER, FrameUpload
 from server.evaluation import evaluate
 from shared_schemas.api import Evaluation, SampleInfo, SampleList
 
-router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES)
+router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
 LabelQuery = Annotated[str | None, Query(max_length=200, description="free text; 'i,j' names a grid cell")]
 

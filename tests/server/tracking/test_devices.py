@@ -130,3 +130,22 @@ def test_a_failing_request_still_returns_the_device_record(kind, monkeypatch):
     monkeypatch.undo()
     devices.locate("q", dark_frame(), ROOM)  # "p" is no longer in use, so it gives way to "q"
     assert len(devices) == 1 and devices.stats("q") is not None
+
+
+def test_waiting_stripes_are_bounded_in_bytes_across_devices(monkeypatch):
+    from server.vlc.decoder import StripeObservation
+    from server.vlc.reader import IdFrameReading, PanelStripes
+
+    rows = 3000  # a big panel's stripes: ~100 KB each
+    observation = StripeObservation(0.0, 1 / 8000, np.zeros((rows, 4)), np.zeros(rows), np.zeros(rows),
+                                    np.zeros(rows), 20.0)
+    panels = tuple(PanelStripes(None, (0.5, 0.5), observation) for _ in range(20))  # a frame full of panels
+    monkeypatch.setattr("server.tracking.devices.read_id_frame", lambda *a: IdFrameReading(panels, None))
+    per_frame = 8 * (observation.nbytes + 256) + 128  # only the 8 largest panels keep their stripes
+    devices = Devices(DeviceRules(max_panels_per_id_frame=8, max_waiting_bytes=3 * per_frame))
+    for k in range(5):
+        devices.locate(f"phone-{k}", dark_frame(FrameKind.id), ROOM)
+        assert devices.waiting_bytes <= 3 * per_frame
+    assert devices.waiting_bytes == 3 * per_frame  # the two least recently seen devices gave theirs up
+    devices.locate("phone-4", dark_frame(FrameKind.pose), ROOM)  # its pose frame takes its stripes
+    assert devices.waiting_bytes == 2 * per_frame

@@ -1,0 +1,115 @@
+"""Limits before work: a request's key, size and time are checked before its body is read.
+
+FastAPI reads and parses a route's JSON body before it runs the route's dependencies, so a
+map sent without its API key used to be received and parsed whole before the 401 (a 200 MB
+body held gigabytes). `GuardedRoute` answers first, from the route's own declarations:
+- a route that depends on `require_api_key` gets its key checked before anything is read;
+- a route that takes a frame (`frame_upload`) gets one of `max_frames_in_flight` slots and its
+  declared length checked against `max_upload_bytes`; it reads its body itself, streaming,
+  within `read_timeout_s` (`server.api.upload`);
+- any other route gets its body read here, at most `max_body_bytes` with or without a
+  Content-Length, within `read_timeout_s`, a JSON body's nesting bounded, then handed on.
+A refusal before the body is read closes the connection after the answer.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable, Coroutine
+from typing import Any
+
+import pydantic_core
+from fastapi.routing import APIRoute
+from starlette.requests import Request
+from starlette.responses import Response
+from starlette.types import Message, Receive
+
+from server.api.config import Settings
+from server.api.deps import api_key_problem, require_api_key
+from server.api.errors import ApiError
+from server.api.routes.frames import frame_upload
+
+
+class GuardedRoute(APIRoute):
+    """An API route whose key and body limits are checked before FastAPI reads its body."""
+
+    def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
+        handler = super().get_route_handler()
+        needs_key = any(getattr(d, "dependency", None) is require_api_key for d in self.dependencies)
+        takes_frame = any(d.call is frame_upload for d in self.dependant.dependencies)
+
+        async def guarded(request: Request) -> Response:
+            services = request.app.state.services
+            settings: Settings = services.settings
+            if needs_key:
+                problem = api_key_problem(settings.api_key, request.headers.get("x-api-key"))
+                if problem is not None:
+                    raise problem.closing()
+            limit = settings.max_upload_bytes if takes_frame else settings.max_body_bytes
+            _check_length(request.headers.get("content-length"), limit)
+            if takes_frame:
+                return await services.frame_slots.run(settings.read_timeout_s, lambda: handler(request))
+            body = await _read_body(request.receive, limit, settings.read_timeout_s)
+            return await handler(Request(request.scope, _replay(body, request.receive)))
+
+        return guarded
+
+
+def _too_large(limit: int) -> ApiError:
+    return ApiError(413, "too_large", f"the body exceeds the limit of {limit} bytes for this route", "body").closing()
+
+
+def _check_length(declared: str | None, limit: int) -> None:
+    if declared is None:
+        return
+    if not declared.isdigit():
+        raise ApiError(
+            400, "bad_length", f"Content-Length '{declared[:40]}' is not a number", "Content-Length"
+        ).closing()
+    if int(declared) > limit:
+        raise _too_large(limit)
+
+
+async def _read_body(receive: Receive, limit: int, timeout_s: float) -> bytes:
+    chunks: list[bytes] = []
+    size = 0
+
+    async def read_all() -> None:
+        nonlocal size
+        while True:
+            message = await receive()
+            if message["type"] == "http.disconnect":
+                raise ApiError(400, "disconnected", "the client went away before the body was sent", "body")
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > limit:
+                raise _too_large(limit)
+            chunks.append(chunk)
+            if not message.get("more_body", False):
+                return
+
+    try:
+        await asyncio.wait_for(read_all(), timeout_s)
+    except TimeoutError:
+        raise ApiError(408, "timeout", f"the body took longer than {timeout_s:g} s", field="body").closing() from None
+    body = b"".join(chunks)
+    if body[:1] in (b"{", b"["):
+        try:  # pydantic's parser stops at a nesting limit; the standard one recurses until it crashes
+            pydantic_core.from_json(body)
+        except ValueError as error:
+            if "recursion limit" in str(error):
+                raise ApiError(400, "too_deep", "the JSON body is nested too deeply", field="body") from None
+    return body
+
+
+def _replay(body: bytes, receive: Receive) -> Receive:
+    sent = False
+
+    async def replayed() -> Message:
+        nonlocal sent
+        if not sent:
+            sent = True
+            return {"type": "http.request", "body": body, "more_body": False}
+        return await receive()  # after the body only the disconnect is left
+
+    return replayed
