@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pydantic import ValidationError
+
 from server.outcomes import FrameError
 from shared_schemas import CameraIntrinsics, DeviceProfile, FrameMeta, ProfileRef, device_profiles
 
@@ -50,4 +52,12 @@ def _profile_camera(ref: ProfileRef, meta: FrameMeta) -> CameraIntrinsics:
         raise FrameError(
             f"frame {width}x{height} is turned against profile {profile.width}x{profile.height}", field="width"
         )
-    return intrinsics_from_profile(profile, width, height)
+    try:
+        return intrinsics_from_profile(profile, width, height)
+    except ValidationError as error:  # a frame far smaller or larger than the profile's native size
+        problem = error.errors()[0]
+        raise FrameError(
+            f"frame {width}x{height} scales profile '{ref.profile}' ({profile.width}x{profile.height}) out of the "
+            f"contract's range: {'.'.join(map(str, problem['loc']))}: {problem['msg']}",
+            field="width",
+        ) from None

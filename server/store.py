@@ -9,24 +9,52 @@ share it (a volume) see the same maps, active map and samples.
     DATA/samples/ID/meta.json   the frame's metadata
     DATA/samples/ID/frame.bin   the frame bytes, uncompressed, as uploaded
     DATA/samples/ID/sample.json SampleInfo (label, result, ...)
+    DATA/.write.lock            held shared by writers, exclusive by the start-up clean-up
+
+Damaged files (docs/reliability.md, "Damaged data folder") never make a request fail with a
+500: a map or sample that cannot be read is left where it is, logged, named by `damaged()`
+(the service's /healthz) and skipped in listings; asked for by name it is a `damaged_map` or
+`damaged_sample` StoreError; an unreadable active_map.json means the default map. What an
+interrupted write leaves (temporary files, staging and half-deleted sample folders, all
+hidden names) is never listed, and is removed when a store is built (`recover`).
 """
 
 from __future__ import annotations
 
+import fcntl
+import logging
 import os
 import re
 import shutil
+import threading
+import time
 import uuid
-from dataclasses import dataclass
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from functools import cached_property, lru_cache
 from pathlib import Path
 
+from pydantic import ValidationError
+
 from shared_schemas import DEMO_MAP_PATH, BeaconMap, FrameMeta, LocateResult, load_map
 from shared_schemas.api import NAME_PATTERN, ActiveMap, MapSummary, SampleInfo
 
+log = logging.getLogger("lumipose.store")
+
+ACTIVE_MAP_FILE = "active_map.json"
+LOCK_FILE = ".write.lock"
+LOCK_WAIT_S = 5.0  # the start-up clean-up waits this long for writers in other processes
+STALE_AFTER_S = 600.0  # without the lock, only leftovers older than this are surely dead
+
 _NAME = re.compile(NAME_PATTERN)
 _SAMPLE_ID = re.compile(r"^[0-9a-f]{32}$")
+# What interrupted writes leave: write_atomic's temporary files, a sample's staging folder,
+# a sample folder whose deletion was cut short.
+_TEMPORARY_FILE = re.compile(r"^\..+\.[0-9a-f]{32}\.tmp$")
+_STAGING_FOLDER = re.compile(r"^\.[0-9a-f]{32}\.tmp$")
+_DELETED_FOLDER = re.compile(r"^\.[0-9a-f]{32}\.[0-9a-f]{32}\.deleted$")
 
 
 class StoreError(Exception):
@@ -37,18 +65,167 @@ class StoreError(Exception):
         self.code, self.message, self.field = code, message, field
 
 
+def _fsync_folder(folder: Path) -> None:
+    """Make a rename in `folder` durable (a power cut after the answer must not undo it)."""
+    try:
+        handle = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(handle)
+    except OSError:
+        pass  # some file systems cannot sync a folder; the rename itself is still atomic
+    finally:
+        os.close(handle)
+
+
+def _write_durably(path: Path, data: bytes) -> None:
+    with open(path, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        os.fsync(handle.fileno())
+
+
 def write_atomic(path: Path, data: bytes) -> None:
     """Write `data` to `path` so that readers see the old file or the new one, never a part."""
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
-        with open(temporary, "wb") as handle:
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
+        _write_durably(temporary, data)
         os.replace(temporary, path)
+        _fsync_folder(path.parent)
     finally:
         temporary.unlink(missing_ok=True)
+
+
+@contextmanager
+def _data_lock(data_dir: Path, *, exclusive: bool) -> Iterator[bool]:
+    """The data folder's write lock: writers hold it shared from their first temporary name to
+    the rename, the start-up clean-up exclusive, so a leftover it finds is no live writer's, in
+    any process or replica sharing the folder. Yields whether it is held: not when the file
+    system has no locks, or (exclusive) when writers kept it for `LOCK_WAIT_S`."""
+    try:
+        if not exclusive:
+            data_dir.mkdir(parents=True, exist_ok=True)
+        handle = os.open(data_dir / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        yield False
+        return
+    try:
+        yield _flock(handle, exclusive)
+    finally:
+        os.close(handle)  # releases the lock
+
+
+def _flock(handle: int, exclusive: bool) -> bool:
+    if not exclusive:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH)
+            return True
+        except OSError:
+            return False
+    deadline = time.monotonic() + LOCK_WAIT_S
+    while True:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.02)
+        except OSError:
+            return False
+
+
+def _remove_leftovers(data_dir: Path, places: list[tuple[Path, re.Pattern[str]]]) -> None:
+    """Remove what interrupted writes left in `places` (folder, pattern of the leftovers' names)."""
+    removed: list[str] = []
+    with _data_lock(data_dir, exclusive=True) as locked:
+        older_than = None if locked else time.time() - STALE_AFTER_S
+        for folder, pattern in places:
+            try:
+                entries = [entry for entry in os.scandir(folder) if pattern.match(entry.name)]
+            except OSError:
+                continue
+            for entry in entries:
+                try:
+                    if older_than is not None and entry.stat(follow_symlinks=False).st_mtime > older_than:
+                        continue  # maybe a live writer's, in a process that holds no lock
+                    if entry.is_dir(follow_symlinks=False):
+                        shutil.rmtree(entry.path)
+                    else:
+                        os.unlink(entry.path)
+                except FileNotFoundError:
+                    continue  # removed meanwhile (a deletion finishing in another process)
+                except OSError as error:
+                    log.warning("lumipose: could not remove the leftover %s: %s", entry.path, error)
+                    continue
+                removed.append(Path(entry.path).relative_to(data_dir).as_posix())
+    if not locked:
+        log.warning(
+            "lumipose: could not lock %s; only leftovers older than %.0f s were removed", data_dir, STALE_AFTER_S
+        )
+    if removed:
+        shown = ", ".join(removed[:10]) + (", ..." if len(removed) > 10 else "")
+        log.warning(
+            "lumipose: removed %d leftover(s) of interrupted writes from the data folder %s: %s",
+            len(removed),
+            data_dir,
+            shown,
+        )
+
+
+def _why(error: Exception) -> str:
+    """One line on why a stored file cannot be read."""
+    if isinstance(error, ValidationError):
+        first = error.errors()[0]
+        where = ".".join(str(part) for part in first.get("loc", ()))
+        return f"{where}: {first['msg']}" if where else first["msg"]
+    if isinstance(error, OSError):
+        return error.strerror or type(error).__name__
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
+class Damage:
+    """The damaged files a store has found: path relative to the data folder -> why.
+
+    Each is logged when found (and again if its problem changes), and once more when it is
+    whole again or gone; a file damaged for good is not logged on every request.
+    """
+
+    def __init__(self, data_dir: Path) -> None:
+        self._data_dir = data_dir
+        self._lock = threading.Lock()
+        self._files: dict[str, str] = {}
+
+    def update(self, scope: str, found: dict[str, str]) -> None:
+        """`found`: every damaged file under `scope` (a file, or a folder) as of now."""
+        with self._lock:
+            gone = [name for name in self._files if _within(name, scope) and name not in found]
+            new = {name: why for name, why in found.items() if self._files.get(name) != why}
+            for name in gone:
+                del self._files[name]
+            self._files.update(found)
+        for name, why in new.items():
+            log.warning("lumipose: damaged file in the data folder %s: %s (%s)", self._data_dir, name, why)
+        for name in gone:
+            log.warning("lumipose: %s in the data folder %s is whole again or gone", name, self._data_dir)
+
+    def names(self, scope: str = "") -> list[str]:
+        with self._lock:
+            return sorted(name for name in self._files if _within(name, scope))
+
+
+def _within(name: str, scope: str) -> bool:
+    return not scope or name == scope or name.startswith(scope + "/")
+
+
+class _Damaged(Exception):
+    """A stored file that cannot be read: its path relative to the data folder, and why."""
+
+    def __init__(self, path: str, why: str):
+        super().__init__(f"{path}: {why}")
+        self.path, self.why = path, why
 
 
 def _read_map(path: Path) -> BeaconMap:
@@ -71,79 +248,210 @@ def _check_name(name: str) -> str:
 
 @dataclass(frozen=True)
 class MapStore:
-    """Bundled demo map, the startup map, and maps stored in the data folder (in rising precedence)."""
+    """Bundled demo map, the startup map, and maps stored in the data folder (in rising precedence).
+
+    Built, it removes the temporary files interrupted writes left and logs damaged map files.
+    """
 
     data_dir: Path
     startup_map: Path | None = None
+    _damage: Damage = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_damage", Damage(self.data_dir))
+        self.recover()
 
     @property
     def _stored_dir(self) -> Path:
         return self.data_dir / "maps"
 
     @cached_property
-    def _fixed_sources(self) -> dict[str, tuple[str, Path]]:
+    def _fixed(self) -> dict[str, tuple[str, BeaconMap]]:
         """The bundled and startup maps: read once, they do not change while the service runs."""
-        sources = {load_map(DEMO_MAP_PATH).name: ("bundled", DEMO_MAP_PATH)}
+        bundled = load_map(DEMO_MAP_PATH)
+        fixed = {bundled.name: ("bundled", bundled)}
         if self.startup_map is not None:
-            sources[load_map(self.startup_map).name] = ("startup", self.startup_map)
-        return sources
+            startup = load_map(self.startup_map)
+            fixed[startup.name] = ("startup", startup)
+        return fixed
 
-    def _sources(self) -> dict[str, tuple[str, Path]]:
-        # Stored maps are listed on every call: another replica may have written one.
-        stored = {path.stem: ("stored", path) for path in sorted(self._stored_dir.glob("*.json"))}
-        return self._fixed_sources | stored
+    def _stored(self) -> dict[str, Path]:
+        # Listed on every call: another replica may have written one.
+        return {path.stem: path for path in sorted(self._stored_dir.glob("*.json")) if _NAME.match(path.stem)}
+
+    def _names(self) -> set[str]:
+        return set(self._fixed) | set(self._stored())
+
+    def _read_stored(self, path: Path) -> BeaconMap:
+        """The stored map in `path`; `_Damaged` if it cannot be read, FileNotFoundError if gone."""
+        try:
+            return _read_map(path)
+        except FileNotFoundError:
+            raise
+        except (OSError, ValueError) as error:
+            raise _Damaged(path.relative_to(self.data_dir).as_posix(), _why(error)) from None
 
     def default_name(self) -> str:
         """The startup map's name, or else the bundled demo map's (the startup map comes last)."""
-        return list(self._fixed_sources)[-1]
+        return list(self._fixed)[-1]
 
     def active_name(self) -> str:
-        path = self.data_dir / "active_map.json"
-        if path.is_file():
-            name = ActiveMap.model_validate_json(path.read_bytes()).name
-            if name in self._sources():
-                return name
-        return self.default_name()
+        """The map named in active_map.json; the default map when the file is absent, damaged
+        (reported in `damaged`) or names no map."""
+        try:
+            name = ActiveMap.model_validate_json((self.data_dir / ACTIVE_MAP_FILE).read_bytes()).name
+        except FileNotFoundError:
+            self._damage.update(ACTIVE_MAP_FILE, {})
+            return self.default_name()
+        except (OSError, ValueError) as error:
+            why = f"{_why(error)}; the default map '{self.default_name()}' is active"
+            self._damage.update(ACTIVE_MAP_FILE, {ACTIVE_MAP_FILE: why})
+            return self.default_name()
+        self._damage.update(ACTIVE_MAP_FILE, {})
+        return name if name in self._names() else self.default_name()
 
     def set_active(self, name: str) -> None:
         self.get(name)
-        write_atomic(self.data_dir / "active_map.json", ActiveMap(name=name).model_dump_json().encode())
+        with _data_lock(self.data_dir, exclusive=False):
+            write_atomic(self.data_dir / ACTIVE_MAP_FILE, ActiveMap(name=name).model_dump_json().encode())
+        self._damage.update(ACTIVE_MAP_FILE, {})
+
+    def _readable(self) -> list[tuple[str, str, BeaconMap]]:
+        """(name, source, map) of every map that can be read; damaged stored maps are noted, left out."""
+        maps = {name: (source, beacon_map) for name, (source, beacon_map) in self._fixed.items()}
+        damaged: dict[str, str] = {}
+        for name, path in self._stored().items():
+            maps.pop(name, None)  # a stored map hides the fixed one of its name, even damaged
+            try:
+                maps[name] = ("stored", self._read_stored(path))
+            except FileNotFoundError:
+                continue
+            except _Damaged as damage:
+                damaged[damage.path] = damage.why
+        self._damage.update("maps", damaged)
+        return [(name, source, beacon_map) for name, (source, beacon_map) in maps.items()]
 
     def summaries(self) -> list[MapSummary]:
+        """Every map that can be read: a damaged stored map is left out (logged, and in `damaged`)."""
         active = self.active_name()
         return [
-            MapSummary(name=name, beacons=len(_read_map(path).beacons), active=name == active, source=source)
-            for name, (source, path) in self._sources().items()
+            MapSummary(name=name, beacons=len(beacon_map.beacons), active=name == active, source=source)
+            for name, source, beacon_map in self._readable()
         ]
 
+    def damaged(self) -> list[str]:
+        """The damaged map files and active_map.json, relative to the data folder, checked now."""
+        self._readable()
+        self.active_name()
+        return self._damage.names()
+
     def get(self, name: str) -> BeaconMap:
-        source = self._sources().get(_check_name(name))
-        if source is None:
+        """The map `name`: `not_found`, or `damaged_map` (naming the file) if it cannot be read."""
+        path = self._stored().get(_check_name(name))
+        if path is None:
+            if name in self._fixed:
+                return self._fixed[name][1]
             raise StoreError("not_found", f"no map named '{name}'", field="name")
-        return _read_map(source[1])
+        relative = path.relative_to(self.data_dir).as_posix()
+        try:
+            beacon_map = self._read_stored(path)
+        except FileNotFoundError:
+            raise StoreError("not_found", f"no map named '{name}'", field="name") from None
+        except _Damaged as damage:
+            self._damage.update(relative, {relative: damage.why})
+            raise StoreError(
+                "damaged_map",
+                f"the stored map '{name}' is damaged ({relative}: {damage.why}); PUT the map again to replace it",
+                field="name",
+            ) from None
+        self._damage.update(relative, {})
+        return beacon_map
 
     def put(self, name: str, beacon_map: BeaconMap) -> BeaconMap:
         if beacon_map.name != _check_name(name):
             raise StoreError(
                 "name_mismatch", f"the map's name '{beacon_map.name}' differs from '{name}' in the URL", field="name"
             )
-        write_atomic(self._stored_dir / f"{name}.json", beacon_map.model_dump_json(by_alias=True, indent=2).encode())
+        path = self._stored_dir / f"{name}.json"
+        self._stored_dir.mkdir(parents=True, exist_ok=True)
+        with _data_lock(self.data_dir, exclusive=False):
+            write_atomic(path, beacon_map.model_dump_json(by_alias=True, indent=2).encode())
+        self._damage.update(path.relative_to(self.data_dir).as_posix(), {})
         return beacon_map
+
+    def recover(self) -> None:
+        """Remove the temporary files of interrupted writes; log every damaged map file."""
+        if not self.data_dir.is_dir():
+            return
+        _remove_leftovers(self.data_dir, [(self.data_dir, _TEMPORARY_FILE), (self._stored_dir, _TEMPORARY_FILE)])
+        self.damaged()
 
 
 @dataclass(frozen=True)
 class SampleStore:
-    """Recorded frames with labels; each sample is one folder, created whole or not at all."""
+    """Recorded frames with labels; each sample is one folder, created whole or not at all.
+
+    A sample folder that is not whole (sample.json missing or unreadable, frame.bin missing or
+    not the size sample.json says) is left in place: logged, in `damaged`, skipped in `all`;
+    `get` and `frame` refuse it with `damaged_sample`, `delete` removes it. Built, the store
+    removes staging and half-deleted folders of interrupted writes and logs damaged samples.
+    """
 
     data_dir: Path
+    _damage: Damage = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_damage", Damage(self.data_dir))
+        self.recover()
 
     @property
     def _root(self) -> Path:
         return self.data_dir / "samples"
 
-    def _folder(self, sample_id: str) -> Path:
+    def _relative(self, path: Path) -> str:
+        return path.relative_to(self.data_dir).as_posix()
+
+    def _whole(self, folder: Path) -> SampleInfo | None:
+        """The sample in `folder` if it is whole, None if the folder is gone; `_Damaged` otherwise."""
+        info_path, frame_path = folder / "sample.json", folder / "frame.bin"
+        try:
+            info = SampleInfo.model_validate_json(info_path.read_bytes())
+        except FileNotFoundError:
+            if not folder.is_dir():
+                return None  # deleted meanwhile
+            raise _Damaged(self._relative(info_path), "missing") from None
+        except (OSError, ValueError) as error:
+            raise _Damaged(self._relative(info_path), _why(error)) from None
+        if info.id != folder.name:
+            raise _Damaged(self._relative(info_path), f"it is the record of another sample, '{info.id}'")
+        try:
+            size = frame_path.stat().st_size
+        except FileNotFoundError:
+            if not folder.is_dir():
+                return None
+            raise _Damaged(self._relative(frame_path), "missing") from None
+        except OSError as error:
+            raise _Damaged(self._relative(frame_path), _why(error)) from None
+        if size != info.frame_bytes:
+            raise _Damaged(self._relative(frame_path), f"{size} bytes where sample.json says {info.frame_bytes}")
+        return info
+
+    def _checked(self, sample_id: str) -> Path:
+        """The folder of the whole sample `sample_id`; `not_found` or `damaged_sample` otherwise."""
         folder = self._root / sample_id
-        if not _SAMPLE_ID.match(sample_id) or not (folder / "sample.json").is_file():
+        if not _SAMPLE_ID.match(sample_id):
+            raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id")
+        try:
+            info = self._whole(folder)
+        except _Damaged as damage:
+            self._damage.update(self._relative(folder), {damage.path: damage.why})
+            raise StoreError(
+                "damaged_sample",
+                f"the sample '{sample_id}' is damaged ({damage.path}: {damage.why}); DELETE it to remove it",
+                field="id",
+            ) from None
+        self._damage.update(self._relative(folder), {})
+        if info is None:
             raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id")
         return folder
 
@@ -169,32 +477,70 @@ class SampleStore:
             result=result,
         )
         self._root.mkdir(parents=True, exist_ok=True)
-        staging = self._root / f".{sample_id}.tmp"
-        staging.mkdir()
-        try:
-            for name, data in (
-                ("frame.bin", frame),
-                ("meta.json", meta.model_dump_json(by_alias=True, exclude_none=True).encode()),
-                ("sample.json", info.model_dump_json(by_alias=True).encode()),
-            ):
-                write_atomic(staging / name, data)
-            os.replace(staging, self._root / sample_id)
-        finally:
-            shutil.rmtree(staging, ignore_errors=True)
+        staging = self._root / f".{sample_id}.tmp"  # a hidden name: never listed, removed at start-up
+        with _data_lock(self.data_dir, exclusive=False):
+            staging.mkdir()
+            try:
+                for name, data in (
+                    ("frame.bin", frame),
+                    ("meta.json", meta.model_dump_json(by_alias=True, exclude_none=True).encode()),
+                    ("sample.json", info.model_dump_json(by_alias=True).encode()),
+                ):
+                    _write_durably(staging / name, data)
+                os.replace(staging, self._root / sample_id)
+                _fsync_folder(self._root)
+            finally:
+                shutil.rmtree(staging, ignore_errors=True)
         return info
 
     def all(self) -> list[SampleInfo]:
-        infos = (SampleInfo.model_validate_json(path.read_bytes()) for path in self._root.glob("*/sample.json"))
+        """Every whole sample, oldest first; damaged ones are left out (logged, and in `damaged`)."""
+        infos, damaged = [], {}
+        try:
+            folders = [entry.path for entry in os.scandir(self._root) if _SAMPLE_ID.match(entry.name)]
+        except FileNotFoundError:
+            folders = []
+        for folder in folders:
+            try:
+                info = self._whole(Path(folder))
+            except _Damaged as damage:
+                damaged[damage.path] = damage.why
+                continue
+            if info is not None:
+                infos.append(info)
+        self._damage.update("samples", damaged)
         return sorted(infos, key=lambda info: info.created)
 
+    def damaged(self) -> list[str]:
+        """The damaged sample files found by the last listing or read, checked again now."""
+        for name in self._damage.names("samples"):
+            sample_id = name.split("/")[1]
+            with suppress(StoreError):
+                self._checked(sample_id)
+        return self._damage.names("samples")
+
     def get(self, sample_id: str) -> SampleInfo:
-        return SampleInfo.model_validate_json((self._folder(sample_id) / "sample.json").read_bytes())
+        return SampleInfo.model_validate_json((self._checked(sample_id) / "sample.json").read_bytes())
 
     def frame(self, sample_id: str) -> bytes:
-        return (self._folder(sample_id) / "frame.bin").read_bytes()
+        return (self._checked(sample_id) / "frame.bin").read_bytes()
 
     def delete(self, sample_id: str) -> None:
-        folder = self._folder(sample_id)
+        """Remove the sample, whole or damaged."""
+        folder = self._root / sample_id
+        if not _SAMPLE_ID.match(sample_id):
+            raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id")
         doomed = folder.with_name(f".{sample_id}.{uuid.uuid4().hex}.deleted")
-        os.replace(folder, doomed)  # gone from listings at once, even if the removal is cut short
+        try:
+            os.replace(folder, doomed)  # gone from listings at once, even if the removal is cut short
+        except FileNotFoundError:
+            raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id") from None
         shutil.rmtree(doomed, ignore_errors=True)
+        self._damage.update(self._relative(folder), {})
+
+    def recover(self) -> None:
+        """Remove staging and half-deleted sample folders; log every damaged sample."""
+        if not self.data_dir.is_dir():
+            return
+        _remove_leftovers(self.data_dir, [(self._root, _STAGING_FOLDER), (self._root, _DELETED_FOLDER)])
+        self.all()

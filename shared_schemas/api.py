@@ -18,9 +18,17 @@ CELL_LABEL = re.compile(r"^\s*(-?\d+)\s*,\s*(-?\d+)\s*$")
 
 
 class Health(BaseModel):
-    status: str = Field(description="'ok' when the service can locate frames")
+    status: str = Field(
+        description="'ok' when the service can locate frames and its stored files are whole; "
+        "'degraded' when some are damaged (listed in `damaged`): the service still answers"
+    )
     version: str
     active_map: str
+    damaged: list[str] = Field(
+        default_factory=list,
+        description="stored files that cannot be read, relative to the data folder (maps/NAME.json, "
+        "active_map.json, samples/ID/sample.json, ...): skipped in listings, refused by name (409)",
+    )
 
 
 class MapSummary(BaseModel):

@@ -17,7 +17,8 @@ import math
 from enum import StrEnum
 from typing import Annotated, Final, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Mat3 = Annotated[list[Vec3], Field(min_length=3, max_length=3)]
@@ -27,11 +28,68 @@ FRAME_SCHEMA: Final = "lumipose.frame/1"
 MAP_SCHEMA: Final = "lumipose.map/1"
 RESULT_SCHEMA: Final = "lumipose.result/1"
 
+# The physical range of every number a client or a map gives (docs/contract.md, "range" columns;
+# the Android core mirrors them in io.lumipose.client.contract.ContractRanges and tests that they
+# equal the exported schemas). Generous, so that no real camera, phone or room is refused, but
+# finite, so that no number that passes can overflow or degenerate the pipeline's arithmetic.
+MAX_SIDE_PX: Final = 100_000  # frame width/height: a 200 MP phone sensor is 16 320 x 12 240; 6x room
+MAX_ROW_STRIDE: Final = 2 * MAX_SIDE_PX  # bytes per luma row: the widest frame with as much padding again
+MIN_FOCAL_PX: Final = 1.0  # fx, fy: an ultra-wide lens on a 4-pixel-wide frame; 0 or 1e-300 makes K singular
+MAX_FOCAL_PX: Final = 1e6  # a 0.5-degree field of view across 8000 px (a 10x periscope lens is ~65 000 px)
+# cx, cy: anywhere within the full frame's size beyond either edge (FrameMeta checks it against the
+# frame); real principal points are within a few percent of the centre.
+MIN_PRINCIPAL_PX: Final = -float(MAX_SIDE_PX)
+MAX_PRINCIPAL_PX: Final = 2.0 * MAX_SIDE_PX
+# OpenCV distortion coefficients (k1, k2, p1, p2, k3, k4, k5, k6): a phone lens has |k| < 1 with the
+# polynomial model; rational-model fits of wide lenses reach tens to hundreds where numerator and
+# denominator cancel; p1, p2 are ~1e-3. 1000 bounds them all and keeps the r^6 terms far from overflow.
+MAX_DISTORTION: Final = 1e3
+MIN_PIXEL_SIZE_M: Final = 1e-9  # phone pixels are 0.56-2.4 um; room for a frame scaled up 500x from native
+MAX_PIXEL_SIZE_M: Final = 1e-2  # the pitch of a frame of a few pixels scaled down from a large sensor
+MIN_FOCAL_LENGTH_M: Final = 1e-4  # phone lenses are 1.5-20 mm; 0.1 mm is below a medical endoscope's
+MAX_FOCAL_LENGTH_M: Final = 1.0  # a 1 m telephoto lens
+MIN_EXPOSURE_S: Final = 1e-9  # Camera2 counts exposure in whole nanoseconds
+MAX_EXPOSURE_S: Final = 3600.0  # phones stop at ~30 s; an hour leaves room for any camera
+MIN_ISO: Final = 1.0  # sensors start at ISO 50-100
+MAX_ISO: Final = 1e7  # the highest-ISO video camera is ~4.5 million
+MAX_SKEW_S: Final = 1.0  # a phone reads a frame out in 5-40 ms; no sensor takes a second
+MAX_TIMESTAMP_NS: Final = 2**63  # exclusive: Camera2's SENSOR_TIMESTAMP is a signed 64-bit count, >= 0
+MAX_ANGLE_DEG: Final = 360.0  # headings and yaws: one turn either way covers (-180, 180] and [0, 360)
+MAX_GRAVITY: Final = 100.0  # per component: TYPE_GRAVITY gives 9.81 m/s^2, a unit vector 1; 10 g is no gravity
+MIN_GRAVITY_NORM: Final = 1e-6  # the zero vector (or one too short to have a direction) is refused
+MAX_COORDINATE_M: Final = 1e7  # map coordinates: a room is metres, projected coordinates (UTM) reach 1e7 m
+MAX_ROTATION_ENTRY: Final = 1.001  # entries of a rotation matrix are within [-1, 1]; room for rounding
+MIN_SIDE_M: Final = 0.005  # a panel of 5 mm is a single LED; smaller cannot be seen as a square
+MAX_SIDE_M: Final = 10.0  # a 10 m luminous ceiling
+MAX_GRAVITY_SIGMA_DEG: Final = 90.0  # a tilt error beyond 90 degrees says nothing
+
+Distortion = list[Annotated[float, Field(ge=-MAX_DISTORTION, le=MAX_DISTORTION)]]
+Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)]
+PositionM = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+RotationEntry = Annotated[float, Field(ge=-MAX_ROTATION_ENTRY, le=MAX_ROTATION_ENTRY)]
+RotationRow = Annotated[list[RotationEntry], Field(min_length=3, max_length=3)]
+Rotation = Annotated[list[RotationRow], Field(min_length=3, max_length=3)]
+GravityComponent = Annotated[float, Field(ge=-MAX_GRAVITY, le=MAX_GRAVITY)]
+GravityVec = Annotated[list[GravityComponent], Field(min_length=3, max_length=3)]
+
 
 def _require_finite(name: str, values: list[float]) -> None:
     for value in values:
         if not math.isfinite(value):
             raise ValueError(f"{name} must be finite numbers, got {value}")
+
+
+def _field_error(loc: tuple[str | int, ...], message: str, value: object) -> ValidationError:
+    """A validation error located at `loc` (a model validator's own errors have no field)."""
+    error = PydanticCustomError("value_error", message)
+    return ValidationError.from_exception_data("FrameMeta", [InitErrorDetails(type=error, loc=loc, input=value)])
+
+
+def _check_distortion(value: list[float]) -> list[float]:
+    if len(value) not in (0, 4, 5, 8):
+        raise ValueError(f"distortion must have 0, 4, 5 or 8 OpenCV coefficients, got {len(value)}")
+    _require_finite("distortion", value)
+    return value
 
 
 class Strict(BaseModel):
@@ -52,13 +110,22 @@ class CameraIntrinsics(Open):
     `distortion` is OpenCV's order (k1, k2, p1, p2[, k3[, k4, k5, k6]]); empty means none.
     """
 
-    fx: float = Field(gt=0, description="focal length along x, pixels")
-    fy: float = Field(gt=0, description="focal length along y, pixels")
-    cx: float = Field(description="principal point x, pixels (pixel centres at integers)")
-    cy: float = Field(description="principal point y, pixels")
-    distortion: list[float] = Field(default_factory=list)
-    pixel_size_m: float | None = Field(default=None, gt=0)
-    focal_length_m: float | None = Field(default=None, gt=0)
+    fx: float = Field(ge=MIN_FOCAL_PX, le=MAX_FOCAL_PX, description="focal length along x, pixels")
+    fy: float = Field(ge=MIN_FOCAL_PX, le=MAX_FOCAL_PX, description="focal length along y, pixels")
+    cx: float = Field(
+        ge=MIN_PRINCIPAL_PX,
+        le=MAX_PRINCIPAL_PX,
+        description="principal point x, pixels of the full frame (pixel centres at integers); "
+        "within [-width, 2 width] of the full frame",
+    )
+    cy: float = Field(
+        ge=MIN_PRINCIPAL_PX,
+        le=MAX_PRINCIPAL_PX,
+        description="principal point y, pixels of the full frame; within [-height, 2 height] of the full frame",
+    )
+    distortion: Distortion = Field(default_factory=list)
+    pixel_size_m: float | None = Field(default=None, ge=MIN_PIXEL_SIZE_M, le=MAX_PIXEL_SIZE_M)
+    focal_length_m: float | None = Field(default=None, ge=MIN_FOCAL_LENGTH_M, le=MAX_FOCAL_LENGTH_M)
     device: str | None = None
 
     @field_validator("fx", "fy", "cx", "cy")
@@ -70,10 +137,7 @@ class CameraIntrinsics(Open):
     @field_validator("distortion")
     @classmethod
     def _distortion_shape(cls, value: list[float]) -> list[float]:
-        if len(value) not in (0, 4, 5, 8):
-            raise ValueError(f"distortion must have 0, 4, 5 or 8 OpenCV coefficients, got {len(value)}")
-        _require_finite("distortion", value)
-        return value
+        return _check_distortion(value)
 
 
 class ProfileRef(Strict):
@@ -94,12 +158,19 @@ class DeviceProfile(Strict):
     name: str
     sensor: str
     facing: Facing
-    pixel_size_m: float = Field(gt=0)
-    focal_length_m: float = Field(gt=0)
-    width: int = Field(gt=0, description="native output width, pixels")
-    height: int = Field(gt=0, description="native output height, pixels")
-    distortion: list[float] = Field(default_factory=list)
-    gravity_sigma_deg: float = Field(default=0.1, ge=0, description="1-sigma tilt error of the gravity sensor at rest")
+    pixel_size_m: float = Field(ge=MIN_PIXEL_SIZE_M, le=MAX_PIXEL_SIZE_M)
+    focal_length_m: float = Field(ge=MIN_FOCAL_LENGTH_M, le=MAX_FOCAL_LENGTH_M)
+    width: int = Field(ge=1, le=MAX_SIDE_PX, description="native output width, pixels")
+    height: int = Field(ge=1, le=MAX_SIDE_PX, description="native output height, pixels")
+    distortion: Distortion = Field(default_factory=list)
+    gravity_sigma_deg: float = Field(
+        default=0.1, ge=0, le=MAX_GRAVITY_SIGMA_DEG, description="1-sigma tilt error of the gravity sensor at rest"
+    )
+
+    @field_validator("distortion")
+    @classmethod
+    def _distortion_shape(cls, value: list[float]) -> list[float]:
+        return _check_distortion(value)
 
 
 class FrameFormat(StrEnum):
@@ -117,8 +188,8 @@ class FrameKind(StrEnum):
 
 
 class GroundTruth(Open):
-    position_m: Vec3 = Field(description="camera optical centre, map frame")
-    rotation_wc: Mat3 = Field(description="camera-to-world rotation")
+    position_m: PositionM = Field(description="camera optical centre, map frame")
+    rotation_wc: Rotation = Field(description="camera-to-world rotation")
 
 
 class Crop(Strict):
@@ -129,10 +200,10 @@ class Crop(Strict):
     full frame; results (`corners_px`, `center_px`) are in the window's own pixels.
     """
 
-    x: int = Field(ge=0, description="column of the window's first pixel in the full frame")
-    y: int = Field(ge=0, description="row of the window's first pixel in the full frame")
-    full_width: int = Field(gt=0)
-    full_height: int = Field(gt=0)
+    x: int = Field(ge=0, le=MAX_SIDE_PX, description="column of the window's first pixel in the full frame")
+    y: int = Field(ge=0, le=MAX_SIDE_PX, description="row of the window's first pixel in the full frame")
+    full_width: int = Field(ge=1, le=MAX_SIDE_PX)
+    full_height: int = Field(ge=1, le=MAX_SIDE_PX)
 
 
 class FrameMeta(Open):
@@ -140,16 +211,16 @@ class FrameMeta(Open):
 
     schema_: Literal["lumipose.frame/1"] = Field(default=FRAME_SCHEMA, alias="schema")
     format: FrameFormat = FrameFormat.y8
-    width: int = Field(gt=0)
-    height: int = Field(gt=0)
-    row_stride: int | None = Field(default=None, gt=0, description="bytes per row; default width")
+    width: int = Field(ge=1, le=MAX_SIDE_PX)
+    height: int = Field(ge=1, le=MAX_SIDE_PX)
+    row_stride: int | None = Field(default=None, ge=1, le=MAX_ROW_STRIDE, description="bytes per row; default width")
     camera: CameraIntrinsics | ProfileRef
-    exposure_s: float | None = Field(default=None, gt=0)
-    iso: float | None = Field(default=None, gt=0)
-    rolling_shutter_skew_s: float | None = Field(default=None, ge=0)
-    timestamp_ns: int | None = None
-    heading_deg: float | None = None
-    gravity_camera: Vec3 | None = None
+    exposure_s: float | None = Field(default=None, ge=MIN_EXPOSURE_S, le=MAX_EXPOSURE_S)
+    iso: float | None = Field(default=None, ge=MIN_ISO, le=MAX_ISO)
+    rolling_shutter_skew_s: float | None = Field(default=None, ge=0, le=MAX_SKEW_S)
+    timestamp_ns: int | None = Field(default=None, ge=0, lt=MAX_TIMESTAMP_NS)
+    heading_deg: float | None = Field(default=None, ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)
+    gravity_camera: GravityVec | None = None
     ground_truth: GroundTruth | None = None
     crop: Crop | None = Field(default=None, description="present when the pixels are a window of a larger frame")
     frame_kind: FrameKind = Field(
@@ -173,9 +244,9 @@ class FrameMeta(Open):
         if value is None:
             return None
         _require_finite("gravity_camera", value)
-        norm = math.sqrt(sum(v * v for v in value))
-        if norm < 1e-6:
-            raise ValueError("gravity_camera must not be the zero vector")
+        norm = math.hypot(*value)
+        if norm < MIN_GRAVITY_NORM:
+            raise ValueError(f"gravity_camera must not be the zero vector (its length is {norm:.3g})")
         return [v / norm for v in value]
 
     @field_validator("row_stride")
@@ -190,10 +261,27 @@ class FrameMeta(Open):
     def _crop_inside(self) -> FrameMeta:
         crop = self.crop
         if crop is not None and (crop.x + self.width > crop.full_width or crop.y + self.height > crop.full_height):
-            raise ValueError(
+            raise _field_error(
+                ("crop",),
                 f"crop window {self.width}x{self.height} at ({crop.x}, {crop.y}) does not fit in the "
-                f"full frame {crop.full_width}x{crop.full_height}"
+                f"full frame {crop.full_width}x{crop.full_height}",
+                crop.model_dump(),
             )
+        return self
+
+    @model_validator(mode="after")
+    def _principal_point_near_the_frame(self) -> FrameMeta:
+        """cx, cy (of the full frame) within [-size, 2 size] of the full frame: real ones are near its centre."""
+        if not isinstance(self.camera, CameraIntrinsics):
+            return self
+        for name, value, size in (("cx", self.camera.cx, self.full_size[0]), ("cy", self.camera.cy, self.full_size[1])):
+            if not -size <= value <= 2 * size:
+                raise _field_error(
+                    ("camera", name),
+                    f"principal point {name} = {value:g} px is outside [-{size}, {2 * size}], "
+                    f"the full frame's {'width' if name == 'cx' else 'height'} {size} beyond either edge",
+                    value,
+                )
         return self
 
     @property
@@ -221,10 +309,10 @@ class Beacon(Strict):
     """A square luminous panel on the ceiling, facing down (-Z)."""
 
     id: int = Field(ge=0, le=255, description="VLC code of the beacon")
-    center_m: Vec3
-    yaw_deg: float = 0.0
-    side_m: float = Field(gt=0, description="outer side of the rounded square")
-    corner_radius_m: float = Field(default=0.0, ge=0)
+    center_m: PositionM
+    yaw_deg: float = Field(default=0.0, ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)
+    side_m: float = Field(ge=MIN_SIDE_M, le=MAX_SIDE_M, description="outer side of the rounded square")
+    corner_radius_m: float = Field(default=0.0, ge=0, le=MAX_SIDE_M / 2)
 
     @model_validator(mode="after")
     def _geometry(self) -> Beacon:
@@ -262,6 +350,7 @@ class FailureReason(StrEnum):
     pose_ambiguous = "pose_ambiguous"
     unknown_beacon = "unknown_beacon"
     id_frame = "id_frame"  # an ID frame kept for the device's next capture: no fix of its own (docs/vlc.md)
+    numerical_failure = "numerical_failure"  # the arithmetic failed on the frame's or map's numbers (logged)
 
 
 class OrientationRule(StrEnum):

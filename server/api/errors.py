@@ -36,7 +36,7 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     }.items()
 }
 
-STORE_STATUS = {"not_found": 404, "bad_name": 400, "name_mismatch": 400}
+STORE_STATUS = {"not_found": 404, "bad_name": 400, "name_mismatch": 400, "damaged_map": 409, "damaged_sample": 409}
 
 
 class ApiError(Exception):

@@ -54,10 +54,10 @@ def test_png():
         ({}, padded()[:-20], "frame", "needs 60"),
         ({"row_stride": 12}, padded(), "row_stride", "needs 72"),
         ({"row_stride": 6}, padded(), "row_stride", "smaller than width"),
-        ({"width": 0}, padded(), "width", "greater than 0"),
-        ({"height": -4}, padded(), "height", "greater than 0"),
+        ({"width": 0}, padded(), "width", "greater than or equal to 1"),
+        ({"height": -4}, padded(), "height", "greater than or equal to 1"),
         ({"format": "RGB"}, padded(), "format", "Y8"),
-        ({"camera": {**CAMERA, "fx": -1}}, padded(), "camera.fx", "greater than 0"),
+        ({"camera": {**CAMERA, "fx": -1}}, padded(), "camera.fx", "greater than or equal to 1"),
         ({"camera": {"profile": "nokia-3310"}}, padded(), "camera.profile", "unknown device profile"),
         ({"format": "PNG", "row_stride": 8}, cv2.imencode(".png", np.zeros((5, 8), np.uint8))[1].tobytes(), "width", "metadata says"),
         ({"format": "PNG", "row_stride": 8}, cv2.imencode(".png", np.zeros((6, 8, 3), np.uint8))[1].tobytes(), "frame", "channels"),
@@ -95,3 +95,10 @@ def test_profile_intrinsics_scale_with_the_frame():
 def test_missing_fixture_is_a_frame_error(tmp_path):
     with pytest.raises(FrameError, match="no frame metadata"):
         read_fixture(tmp_path / "nothing.json")
+
+
+def test_a_profile_scaled_out_of_the_contracts_ranges_is_a_frame_error():
+    """A 1 x 1 frame of a 3024 x 4032 profile would have fx = 0.996 px, below the contract's 1 px."""
+    with pytest.raises(FrameError) as error:
+        decode_frame(bytes(1), parse_meta(meta(width=1, height=1, row_stride=1, camera={"profile": "xiaomi-mi8-rear"})))
+    assert error.value.field == "width" and "fx" in error.value.message

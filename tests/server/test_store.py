@@ -1,11 +1,20 @@
-"""The service's data folder: map precedence, re-reading replaced maps, atomic writes."""
+"""The service's data folder: map precedence, re-reading replaced maps, atomic writes, damaged files,
+crashes mid-write."""
 
 import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from pathlib import Path
 
 import pytest
 
-from server.store import MapStore, SampleStore, StoreError, write_atomic
-from shared_schemas import load_map
+import server.store as store_module
+from server.store import LOCK_FILE, STALE_AFTER_S, MapStore, SampleStore, StoreError, write_atomic
+from shared_schemas import BeaconMap, FailureReason, FrameMeta, LocateResult, load_map
 
 
 def test_startup_map_is_the_default_and_stored_maps_override(tmp_path):
@@ -51,3 +60,189 @@ def test_unknown_and_unsafe_names_are_refused(tmp_path):
         assert refused.value.code == code
     with pytest.raises(StoreError, match="no sample"):
         samples.get("../../x")
+
+
+# --- Damaged files and interrupted writes (docs/reliability.md, "Damaged data folder") ---
+
+FIXTURE_META = Path(__file__).parents[1] / "fixtures" / "bench_1m.json"
+NO_FIX = LocateResult(ok=False, reason=FailureReason.no_beacon, message="none")
+
+
+def _add(samples: SampleStore, frame: bytes = b"\x00" * 64) -> str:
+    meta = FrameMeta.model_validate_json(FIXTURE_META.read_bytes())
+    return samples.add(frame, meta, NO_FIX, label="1,2", device=None, map_name="test-bench").id
+
+
+def _room(beacons: int) -> BeaconMap:
+    beacon = load_map().beacons[0]
+    return BeaconMap(
+        name="room",
+        beacons=[beacon.model_copy(update={"id": i, "center_m": [i * 0.5, 0.0, 1.0]}) for i in range(beacons)],
+    )
+
+
+def _hidden(data_dir: Path) -> list[str]:
+    """What interrupted writes may leave: every hidden name in the data folder but the lock."""
+    return sorted(p.relative_to(data_dir).as_posix() for p in data_dir.rglob(".*") if p.name != LOCK_FILE)
+
+
+def test_damaged_maps_are_skipped_named_and_refused_and_a_put_repairs_them(tmp_path):
+    maps = MapStore(tmp_path)
+    maps.put("room", _room(2))
+    maps.put("hall", _room(1).model_copy(update={"name": "hall"}))
+    maps.set_active("room")
+    (tmp_path / "maps" / "room.json").write_text('{"schema": "lumipose.map/1", "name": "ro')
+    assert [s.name for s in maps.summaries()] == ["test-bench", "hall"]
+    assert maps.damaged() == ["maps/room.json"]
+    with pytest.raises(StoreError) as refused:
+        maps.get("room")
+    assert refused.value.code == "damaged_map" and "maps/room.json" in refused.value.message
+    assert maps.active_name() == "room"  # named, so locates in it are refused, not moved to another map
+    maps.put("room", _room(3))
+    assert maps.get("room") == _room(3) and maps.damaged() == []
+
+
+def test_a_damaged_active_map_file_means_the_default_map(tmp_path):
+    maps = MapStore(tmp_path)
+    maps.put("room", _room(1))
+    maps.set_active("room")
+    for damage in (b'{"na', b"\xff\xfe", b'{"name": "../x"}', b"[]"):
+        (tmp_path / "active_map.json").write_bytes(damage)
+        assert maps.active_name() == "test-bench" and maps.damaged() == ["active_map.json"]
+    assert MapStore(tmp_path).damaged() == ["active_map.json"]  # found at start-up too
+    maps.set_active("room")
+    assert maps.active_name() == "room" and maps.damaged() == []
+
+
+@pytest.mark.parametrize(
+    "damage, named",
+    [
+        (lambda folder: (folder / "sample.json").write_text('{"id": "'), "sample.json"),
+        (lambda folder: (folder / "sample.json").unlink(), "sample.json"),
+        (lambda folder: (folder / "frame.bin").write_bytes(b"\x00" * 10), "frame.bin"),
+        (lambda folder: (folder / "frame.bin").unlink(), "frame.bin"),
+        (lambda folder: folder.rename(folder.with_name("0" * 32)), "sample.json"),  # a record of another id
+    ],
+)
+def test_a_damaged_sample_is_skipped_named_refused_and_can_be_deleted(tmp_path, damage, named):
+    samples = SampleStore(tmp_path)
+    whole, broken = _add(samples), _add(samples)
+    damage(tmp_path / "samples" / broken)
+    broken = next(p.name for p in (tmp_path / "samples").iterdir() if p.name != whole)
+    for store in (samples, SampleStore(tmp_path)):  # on read, and at start-up
+        assert [s.id for s in store.all()] == [whole]
+        assert store.damaged() == [f"samples/{broken}/{named}"]
+        for read in (store.get, store.frame):
+            with pytest.raises(StoreError) as refused:
+                read(broken)
+            assert refused.value.code == "damaged_sample" and f"samples/{broken}/{named}" in refused.value.message
+    samples.delete(broken)
+    assert not (tmp_path / "samples" / broken).exists() and samples.damaged() == [] and _hidden(tmp_path) == []
+    assert samples.get(whole).id == whole
+
+
+def test_unfinished_writes_are_never_listed_and_are_removed_at_start_up(tmp_path):
+    """The ghost: a staging folder (a crash before its rename) has a sample.json; a half-deleted
+    folder may still have one. Neither is listed; building a store removes them."""
+    samples = SampleStore(tmp_path)
+    kept = _add(samples)
+    ghost = uuid.uuid4().hex
+    shutil.copytree(tmp_path / "samples" / kept, tmp_path / "samples" / f".{ghost}.tmp")
+    (tmp_path / "samples" / f".{ghost}.tmp" / "sample.json").write_text(
+        (tmp_path / "samples" / kept / "sample.json").read_text().replace(kept, ghost)
+    )
+    shutil.copytree(tmp_path / "samples" / kept, tmp_path / "samples" / f".{kept}.{uuid.uuid4().hex}.deleted")
+    (tmp_path / "maps").mkdir()
+    (tmp_path / "maps" / f".room.json.{uuid.uuid4().hex}.tmp").write_text('{"na')
+    (tmp_path / f".active_map.json.{uuid.uuid4().hex}.tmp").write_text("")
+    assert [s.id for s in samples.all()] == [kept] and len(_hidden(tmp_path)) == 4
+    with pytest.raises(StoreError, match="no sample"):
+        samples.get(ghost)
+    MapStore(tmp_path), SampleStore(tmp_path)
+    assert _hidden(tmp_path) == [] and [s.id for s in samples.all()] == [kept]
+
+
+def test_the_clean_up_spares_what_a_live_writer_holds(tmp_path, monkeypatch):
+    """Replicas share the folder: a writer in another process holds the lock shared while its
+    temporary names exist, so a replica starting then removes only leftovers old enough to be
+    surely dead."""
+    monkeypatch.setattr(store_module, "LOCK_WAIT_S", 0.05)
+    young, old = (tmp_path / "samples" / f".{uuid.uuid4().hex}.tmp" for _ in range(2))
+    young.mkdir(parents=True), old.mkdir()
+    os.utime(old, (time.time() - 2 * STALE_AFTER_S,) * 2)
+    with store_module._data_lock(tmp_path, exclusive=False):
+        SampleStore(tmp_path)
+        assert young.exists() and not old.exists()
+    SampleStore(tmp_path)
+    assert not young.exists()
+
+
+CRASHING_CHILD = """
+import os, signal, sys
+from pathlib import Path
+from server.store import MapStore, SampleStore
+from tests.server.test_store import _add, _room
+
+data_dir, operation, function, nth = Path(sys.argv[1]), sys.argv[2], sys.argv[3], int(sys.argv[4])
+maps, samples = MapStore(data_dir), SampleStore(data_dir)
+real, calls = getattr(os, function), [0]
+
+def crash(*args, **kwargs):  # the process dies here, as under kill -9 or a power cut
+    calls[0] += 1
+    if calls[0] == nth:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return real(*args, **kwargs)
+
+setattr(os, function, crash)
+if operation == "add":
+    _add(samples, b"\\x01" * 64)
+elif operation == "delete":
+    samples.delete(sys.argv[5])
+elif operation == "put":
+    maps.put("room", _room(2))
+else:
+    maps.set_active("room")
+"""
+
+
+@pytest.mark.parametrize(
+    "operation, function, nth, done",
+    [
+        ("add", "fsync", 1, False),  # frame.bin written in the staging folder
+        ("add", "fsync", 3, False),  # the whole sample written, not yet moved into place
+        ("add", "replace", 1, False),  # at the move: the ghost of the old code
+        ("add", "fsync", 4, True),  # moved into place, before its folder is synced
+        ("delete", "replace", 1, False),
+        ("delete", "unlink", 1, True),  # moved aside, its removal cut short
+        ("delete", "unlink", 3, True),
+        ("put", "fsync", 1, False),  # the temporary file written
+        ("put", "replace", 1, False),
+        ("put", "fsync", 2, True),
+        ("activate", "replace", 1, False),
+    ],
+)
+def test_a_crash_at_any_step_of_a_write_leaves_the_item_whole_or_absent(tmp_path, operation, function, nth, done):
+    maps, samples = MapStore(tmp_path), SampleStore(tmp_path)
+    maps.put("room", _room(1))
+    first = _add(samples)
+    child = subprocess.run(
+        [sys.executable, "-c", CRASHING_CHILD, str(tmp_path), operation, function, str(nth), first],
+        cwd=Path(__file__).parents[2],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert child.returncode == -signal.SIGKILL, child.stderr
+
+    maps, samples = MapStore(tmp_path), SampleStore(tmp_path)  # the restart
+    assert _hidden(tmp_path) == [] and maps.damaged() == [] and samples.damaged() == []
+    listed = [s.id for s in samples.all()]
+    assert sorted(listed) == sorted(p.name for p in (tmp_path / "samples").iterdir())
+    for sample_id in listed:
+        assert samples.get(sample_id).frame_bytes == len(samples.frame(sample_id)) == 64
+    if operation == "add":
+        assert len(listed) == (2 if done else 1)
+    if operation == "delete":
+        assert listed == ([] if done else [first])
+    assert maps.get("room") == _room(2 if operation == "put" and done else 1)
+    assert maps.active_name() == "test-bench"

@@ -2,8 +2,8 @@
 
 Each model and enum of the contract has a section whose heading names it in backticks
 (`### `FrameMeta`: the frame JSON`); the first table of that section lists its fields
-(field | type | unit | required | meaning) or its values (value | meaning). These tests fail
-when a field, a required flag, a default or an enum value drifts between the two.
+(field | type | unit | range | required | meaning) or its values (value | meaning). These tests
+fail when a field, a range, a required flag, a default or an enum value drifts between the two.
 """
 
 from __future__ import annotations
@@ -143,6 +143,63 @@ def test_required_and_defaults_match_the_model(name):
             assert said is not None, f"`{name}.{json_name}`: docs/contract.md must give its default `{_rendered(default)}`"
             assert said[1] == _rendered(default), (
                 f"`{name}.{json_name}` defaults to {_rendered(default)} in the model, {said[1]} in docs/contract.md")
+
+
+# A range cell: `[1, 1e6]`, `(0, 1]`, `[0, 2^63)` (brackets include, parentheses exclude), `>= 0`,
+# or either prefixed by `each` for the items of a list; empty when the model sets no bound.
+INTERVAL = re.compile(r"^(each\s+)?([\[(])\s*([^,\s]+)\s*,\s*([^,\s]+)\s*([\])])$")
+ONE_SIDED = re.compile(r"^(each\s+)?(>=|>|<=|<)\s*(\S+)$")
+Bounds = tuple[bool, tuple[float, bool] | None, tuple[float, bool] | None]  # each, (lower, inclusive), (upper, ...)
+
+
+def _number(text: str) -> float:
+    base, caret, power = text.partition("^")
+    return float(base) ** int(power) if caret else float(text)
+
+
+def _doc_bounds(cell: str) -> Bounds | None:
+    """What a range cell says, or None when it is empty."""
+    cell = cell.strip()
+    if not cell:
+        return None
+    interval = INTERVAL.match(cell)
+    if interval:
+        each, left, low, high, right = interval.groups()
+        return bool(each), (_number(low), left == "["), (_number(high), right == "]")
+    one_sided = ONE_SIDED.match(cell)
+    assert one_sided, f"range {cell!r} is neither [a, b] (brackets or parentheses), '>= a' nor empty"
+    each, operator, value = one_sided.groups()
+    bound = (_number(value), "=" in operator)
+    return (bool(each), bound, None) if operator.startswith(">") else (bool(each), None, bound)
+
+
+def _schema_bounds(prop: dict) -> Bounds | None:
+    """The bounds of a property of a model's JSON Schema (of its innermost items for lists), or None."""
+    branches = [branch for branch in prop.get("anyOf", [prop]) if branch.get("type") != "null"]
+    if len(branches) != 1:
+        return None  # a choice of models: each has its own section
+    schema, each = branches[0], False
+    while schema.get("type") == "array" and "items" in schema:
+        schema, each = schema["items"], True
+    lower = (schema["minimum"], True) if "minimum" in schema else None
+    lower = (schema["exclusiveMinimum"], False) if "exclusiveMinimum" in schema else lower
+    upper = (schema["maximum"], True) if "maximum" in schema else None
+    upper = (schema["exclusiveMaximum"], False) if "exclusiveMaximum" in schema else upper
+    return None if lower is None and upper is None else (each, lower, upper)
+
+
+@pytest.mark.parametrize("name", sorted(CONTRACT_MODELS))
+def test_range_column_says_the_models_bounds(name):
+    """Every field table has a range column, and it says exactly the bounds of the model's JSON Schema."""
+    rows = SECTIONS.get(name, [])
+    assert rows and "range" in rows[0], f"`{name}`: the field table of docs/contract.md has no range column"
+    properties = CONTRACT_MODELS[name].model_json_schema(by_alias=True)["properties"]
+    for row in rows:
+        json_name = _name(row["field"])
+        if json_name not in properties:
+            continue  # reported by the field test
+        said, bounds = _doc_bounds(row["range"]), _schema_bounds(properties[json_name])
+        assert said == bounds, f"`{name}.{json_name}`: docs/contract.md says range {row['range']!r}, the model {bounds}"
 
 
 @pytest.mark.parametrize("name", sorted(CONTRACT_ENUMS))

@@ -7,7 +7,7 @@ from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.concurrency import run_in_threadpool
 
 from server.api import VERSION
-from server.api.deps import ServicesDep
+from server.api.deps import Services, ServicesDep
 from shared_schemas.api import Health
 
 router = APIRouter(tags=["health"])
@@ -15,7 +15,18 @@ router = APIRouter(tags=["health"])
 
 @router.get("/healthz", response_model=Health)
 async def health(services: ServicesDep) -> Health:
-    return Health(status="ok", version=VERSION, active_map=await run_in_threadpool(services.maps.active_name))
+    """200 while the service runs; 'degraded' names the stored files that cannot be read."""
+    return await run_in_threadpool(_health, services)
+
+
+def _health(services: Services) -> Health:
+    damaged = services.maps.damaged() + services.samples.damaged()
+    return Health(
+        status="degraded" if damaged else "ok",
+        version=VERSION,
+        active_map=services.maps.active_name(),
+        damaged=damaged,
+    )
 
 
 @router.get(

@@ -8,13 +8,14 @@ from server.api.deps import ServicesDep
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
 from server.api.locating import locate_upload
+from server.api.routes import DAMAGED_RESPONSES
 from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
 from shared_schemas import LocateResult
 
 router = APIRouter(prefix="/v1", tags=["locate"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
 
-@router.post("/locate", response_model=LocateResult, openapi_extra=FRAME_REQUEST_BODY)
+@router.post("/locate", response_model=LocateResult, openapi_extra=FRAME_REQUEST_BODY, responses=DAMAGED_RESPONSES)
 async def locate_frame(
     services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None, map: MapQuery = None
 ) -> LocateResult:

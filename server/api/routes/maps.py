@@ -8,6 +8,7 @@ from starlette.concurrency import run_in_threadpool
 from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
+from server.api.routes import DAMAGED_RESPONSES
 from shared_schemas import BeaconMap
 from shared_schemas.api import ActiveMap, MapSummary
 
@@ -16,6 +17,7 @@ router = APIRouter(prefix="/v1/maps", tags=["maps"], responses=ERROR_RESPONSES, 
 
 @router.get("", response_model=list[MapSummary])
 async def list_maps(services: ServicesDep) -> list[MapSummary]:
+    """Every map that can be read: a damaged stored map is left out (logged, and named by /healthz)."""
     return await run_in_threadpool(services.maps.summaries)
 
 
@@ -24,13 +26,13 @@ async def get_active_map(services: ServicesDep) -> ActiveMap:
     return ActiveMap(name=await run_in_threadpool(services.maps.active_name))
 
 
-@router.put("/active", response_model=ActiveMap, dependencies=[WriteAccess])
+@router.put("/active", response_model=ActiveMap, dependencies=[WriteAccess], responses=DAMAGED_RESPONSES)
 async def set_active_map(active: ActiveMap, services: ServicesDep) -> ActiveMap:
     await run_in_threadpool(services.maps.set_active, active.name)
     return active
 
 
-@router.get("/{name}", response_model=BeaconMap)
+@router.get("/{name}", response_model=BeaconMap, responses=DAMAGED_RESPONSES)
 async def get_map(name: str, services: ServicesDep) -> BeaconMap:
     return await run_in_threadpool(services.maps.get, name)
 

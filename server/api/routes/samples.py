@@ -11,9 +11,11 @@ from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
 from server.api.locating import locate_upload
+from server.api.routes import DAMAGED_RESPONSES
 from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, LocateQuery, MapQuery, QueryDep, UploadDep
 from server.api.upload import FRAME_HEADER, FrameUpload
 from server.evaluation import evaluate
+from server.store import StoreError
 from shared_schemas.api import Evaluation, SampleInfo, SampleList
 
 router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
@@ -22,7 +24,12 @@ LabelQuery = Annotated[str | None, Query(max_length=200, description="free text;
 
 
 @router.post(
-    "", status_code=201, response_model=SampleInfo, openapi_extra=FRAME_REQUEST_BODY, dependencies=[WriteAccess]
+    "",
+    status_code=201,
+    response_model=SampleInfo,
+    openapi_extra=FRAME_REQUEST_BODY,
+    dependencies=[WriteAccess],
+    responses=DAMAGED_RESPONSES,
 )
 async def store_sample(
     services: ServicesDep,
@@ -47,27 +54,34 @@ async def store_sample(
 
 @router.get("", response_model=SampleList)
 async def list_samples(services: ServicesDep) -> SampleList:
+    """Every whole sample: a damaged one is left out (logged, and named by /healthz)."""
     return SampleList(samples=await run_in_threadpool(services.samples.all))
 
 
-@router.get("/evaluation", response_model=Evaluation)
+@router.get("/evaluation", response_model=Evaluation, responses=DAMAGED_RESPONSES)
 async def evaluate_samples(
     services: ServicesDep,
     map: MapQuery = None,
     cell_m: Annotated[float, Query(gt=0, le=10, description="grid cell side")] = 0.05,
     height_m: Annotated[float, Query(ge=-100, le=100, description="z of the grid plane")] = 0.0,
 ) -> Evaluation:
-    """Re-locate every stored sample in `map` and compare with its truth (paper Table 2)."""
-    name = map or services.maps.active_name()
-    services.maps.get(name)
+    """Re-locate every stored sample in `map` and compare with its truth (paper Table 2).
+
+    Damaged samples are left out, and so is one deleted or damaged while this runs."""
+    name: str = map if map else await run_in_threadpool(services.maps.active_name)
+    await run_in_threadpool(services.maps.get, name)
     located = []
     for sample in await run_in_threadpool(services.samples.all):
-        upload = FrameUpload(meta=sample.meta, data=await run_in_threadpool(services.samples.frame, sample.id))
+        try:
+            data = await run_in_threadpool(services.samples.frame, sample.id)
+        except StoreError:
+            continue
+        upload = FrameUpload(meta=sample.meta, data=data)
         located.append((sample, (await locate_upload(services, upload, name, LocateQuery(services.options))).result))
     return evaluate(name, located, cell_m, height_m)
 
 
-@router.get("/{sample_id}", response_model=SampleInfo)
+@router.get("/{sample_id}", response_model=SampleInfo, responses=DAMAGED_RESPONSES)
 async def get_sample(sample_id: str, services: ServicesDep) -> SampleInfo:
     return await run_in_threadpool(services.samples.get, sample_id)
 
@@ -76,7 +90,8 @@ async def get_sample(sample_id: str, services: ServicesDep) -> SampleInfo:
     "/{sample_id}/frame",
     response_class=Response,
     responses={
-        200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"}
+        200: {"content": {"application/octet-stream": {}}, "description": f"frame bytes; metadata in {FRAME_HEADER}"},
+        **DAMAGED_RESPONSES,
     },
 )
 async def get_sample_frame(sample_id: str, services: ServicesDep) -> Response:
@@ -91,5 +106,6 @@ async def get_sample_frame(sample_id: str, services: ServicesDep) -> Response:
 
 @router.delete("/{sample_id}", status_code=204, dependencies=[WriteAccess])
 async def delete_sample(sample_id: str, services: ServicesDep) -> Response:
+    """Remove the sample, also a damaged one."""
     await run_in_threadpool(services.samples.delete, sample_id)
     return Response(status_code=204)

@@ -258,3 +258,34 @@ def test_no_server_error_was_counted(server):
     metrics = httpx.get(server.url + "/metrics", timeout=5).text
     errors = [line for line in metrics.splitlines() if line.startswith("lumipose_server_errors_total")]
     assert errors == ["lumipose_server_errors_total 0.0"], errors
+
+
+# Numbers within no physical range (item 1 of the issue): each refused by the contract's models,
+# naming the field, before any arithmetic; the map's PUT is refused, so no locate can fail on it.
+OUT_OF_RANGE_FRAMES = [
+    ({"camera": {**frame_header()["camera"], "fx": 1e308}}, "camera.fx"),
+    ({"camera": {**frame_header()["camera"], "cx": 1e-300, "fx": 1e-300}}, "camera.fx"),
+    ({"camera": {**frame_header()["camera"], "distortion": [1e300, 0, 0, 0, 0]}}, "camera.distortion.0"),
+    ({"camera": {**frame_header()["camera"], "distortion": [1e10] * 8}}, "camera.distortion.0"),
+    ({"gravity_camera": [1e200, 1e200, 1e200]}, "gravity_camera.0"),
+    ({"timestamp_ns": 10**400}, "timestamp_ns"),
+]
+
+
+def test_numbers_out_of_their_physical_range_are_4xx_naming_the_field(server):
+    data = FIXTURE.with_suffix(".y").read_bytes()
+    for changes, field in OUT_OF_RANGE_FRAMES:
+        header = json.dumps(frame_header(**changes))
+        response, seconds = post(server, "/v1/locate?gravity=always", content=data,
+                                 headers={"X-Lumipose-Frame": header, "Content-Type": "application/octet-stream"})
+        assert refused(response, 400, field)["error"] == "bad_frame", (changes, response.text)
+        assert seconds < 5.0
+    beacon = ROOM.beacons[0].model_dump()
+    for changes, field in [({"side_m": 1e-300}, "beacons.0.side_m"), ({"side_m": 1e308}, "beacons.0.side_m"),
+                           ({"center_m": [0.0, 0.0, 1e308]}, "beacons.0.center_m.2")]:
+        body = json.dumps({"name": "tiny", "beacons": [{**beacon, **changes}]})
+        response, _ = put(server, "/v1/maps/tiny", content=body.encode(),
+                          headers={"X-API-Key": API_KEY, "Content-Type": "application/json"})
+        assert refused(response, 422, field)["error"] == "invalid_request", response.text
+    assert httpx.get(server.url + "/v1/maps/tiny", headers={"X-API-Key": API_KEY}, timeout=5).status_code == 404
+    still_healthy(server)
