@@ -8,17 +8,36 @@
   its track (`server.tracking.devices`).
 
 The API, the command line and the benchmarks call `locate`; nothing below imports this module.
+
+A numerical failure anywhere below (OpenCV, numpy, float overflow: numbers within the contract's
+ranges that still break the arithmetic) is a refusal with reason `numerical_failure`, logged with
+its traceback on `lumipose.pipeline`, never an exception; a `FrameError` (bad input) still raises.
 """
 
 from __future__ import annotations
 
+import logging
+import re
+import traceback
+from pathlib import Path
+
+import cv2
+import numpy as np
+
 from server.ingest import LumaFrame
 from server.options import LocateOptions
-from server.outcomes import Refusal, located, refused
+from server.outcomes import FrameError, Refusal, located, refused
 from server.pipeline import locate_beacon
 from server.rooms import locate_in_room
 from server.tracking.devices import Devices
 from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResult
+
+LOG = logging.getLogger("lumipose.pipeline")
+# What the stages' arithmetic raises on numbers it cannot handle: OpenCV's checks, a singular or
+# non-converging matrix, float overflow or division by zero, and numpy's / the models' ValueError
+# (a result with NaN in it). `FrameError` is a ValueError too, but it is the request's fault: re-raised.
+NUMERICAL_ERRORS: tuple[type[Exception], ...] = (cv2.error, np.linalg.LinAlgError, ArithmeticError, ValueError)
+_SERVER_DIR = Path(__file__).resolve().parent
 
 
 def locate(
@@ -35,6 +54,49 @@ def locate(
     `beacon_id`: the map beacon in view, when known from elsewhere; `device_id` and `devices`:
     the sender and the sessions of this process, for maps of several beacons.
     """
+    try:
+        return _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
+    except FrameError:
+        raise
+    except NUMERICAL_ERRORS as error:
+        where = _where(error)
+        LOG.warning("numerical failure in %s on map '%s': %r", where, beacon_map.name, error, exc_info=True)
+        first_line = (_opencv_message(str(error)).strip().splitlines() or [""])[0][:200]
+        return refused(
+            Refusal(
+                FailureReason.numerical_failure,
+                f"the frame's numbers (camera, distortion, gravity, times) or the map's broke the arithmetic "
+                f"in {where}: {'cv2.error' if isinstance(error, cv2.error) else type(error).__name__}: {first_line}",
+            )
+        )
+
+
+def _opencv_message(text: str) -> str:
+    """A cv2.error's own words, without OpenCV's version and source path ("OpenCV(4.x) /path:272: error: ...").
+    (cv2.error's `err` attribute is set on the class, so another thread's error may have replaced it.)"""
+    match = re.search(r": error: (.*)", text)
+    return match[1] if match else text
+
+
+def _where(error: BaseException) -> str:
+    """`module.function` of the innermost server frame the error passed through."""
+    where = "the pipeline"
+    for entry in traceback.extract_tb(error.__traceback__):
+        path = Path(entry.filename).resolve()
+        if path.is_relative_to(_SERVER_DIR):
+            module = ".".join(("server", *path.relative_to(_SERVER_DIR).with_suffix("").parts))
+            where = f"{module}.{entry.name}"
+    return where
+
+
+def _dispatch(
+    frame: LumaFrame,
+    beacon_map: BeaconMap,
+    options: LocateOptions,
+    beacon_id: int | None,
+    device_id: str | None,
+    devices: Devices | None,
+) -> LocateResult:
     if beacon_id is not None:
         beacon = beacon_map.beacon(beacon_id)
         if beacon is None:

@@ -149,6 +149,14 @@ def locate_beacon(
     if isinstance(pose, Refusal):
         return timer.refusal(pose, warnings)
     reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
+    numbers = (pose.position_m, pose.rotation_wc, reported, pose.reprojection_error_px, pose.ambiguity_ratio)
+    if not all(np.all(np.isfinite(value)) for value in numbers):
+        # extreme but valid intrinsics or distortion can overflow without raising: such a fix
+        # must not reach a device's track (it would stay NaN) nor the result
+        return timer.refusal(
+            Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers"),
+            warnings,
+        )
     return Fix(
         position_m=pose.position_m,
         rotation_wc=pose.rotation_wc,
