@@ -7,12 +7,15 @@ import java.util.Set;
 import org.json.JSONObject;
 
 import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.contract.ContractRanges;
 import io.lumipose.client.json.ContractException;
 import io.lumipose.client.json.Json;
 
 /**
  * The contract's frame JSON ({@code lumipose.frame/1}) that travels with every frame.
  * Fields the client does not know are kept and written back, as the contract asks.
+ * Every number is checked against its range in the contract ({@link ContractRanges}): a frame the
+ * server would refuse is refused here, naming the field.
  */
 public final class FrameMeta {
     public static final String SCHEMA = "lumipose.frame/1";
@@ -42,30 +45,32 @@ public final class FrameMeta {
     private final String cameraExtrasJson;
 
     private FrameMeta(Builder b) {
-        if (b.width <= 0) {
-            throw new ContractException("width", "must be > 0, got " + b.width);
-        }
-        if (b.height <= 0) {
-            throw new ContractException("height", "must be > 0, got " + b.height);
-        }
+        ContractRanges.SIDE_PX.check("width", b.width);
+        ContractRanges.SIDE_PX.check("height", b.height);
         int stride = b.rowStride == null ? b.width : b.rowStride;
+        ContractRanges.ROW_STRIDE.check("row_stride", stride);
         if ("Y8".equals(b.format) && stride < b.width) {
             throw new ContractException("row_stride", "must be >= width " + b.width + ", got " + stride);
         }
         if ((b.camera == null) == (b.cameraProfile == null)) {
             throw new ContractException("camera", "give either intrinsics or a device profile");
         }
-        positiveOrNull("exposure_s", b.exposureS);
-        positiveOrNull("iso", b.iso);
-        if (b.rollingShutterSkewS != null && b.rollingShutterSkewS < 0) {
-            throw new ContractException("rolling_shutter_skew_s", "must be >= 0, got " + b.rollingShutterSkewS);
+        int[] fullSize = fullSize(b.extras, b.width, b.height);
+        if (b.camera != null) {
+            checkCamera(b.camera, fullSize);
         }
+        ContractRanges.EXPOSURE_S.check("exposure_s", b.exposureS);
+        ContractRanges.ISO.check("iso", b.iso);
+        ContractRanges.ROLLING_SHUTTER_SKEW_S.check("rolling_shutter_skew_s", b.rollingShutterSkewS);
+        ContractRanges.checkTimestampNs("timestamp_ns", b.timestampNs);
+        ContractRanges.ANGLE_DEG.check("heading_deg", b.headingDeg);
         if (b.frameKind != null && !"pose".equals(b.frameKind) && !"id".equals(b.frameKind)) {
             throw new ContractException("frame_kind", "must be 'pose' or 'id', got '" + b.frameKind + "'");
         }
         if (b.gravityCamera != null && b.gravityCamera.length != 3) {
             throw new ContractException("gravity_camera", "must hold 3 numbers");
         }
+        ContractRanges.checkGravity("gravity_camera", b.gravityCamera);
         this.format = b.format;
         this.width = b.width;
         this.height = b.height;
@@ -83,10 +88,41 @@ public final class FrameMeta {
         this.cameraExtrasJson = b.cameraExtras.toString();
     }
 
-    private static void positiveOrNull(String field, Double v) {
-        if (v != null && !(v > 0)) {
-            throw new ContractException(field, "must be > 0, got " + v);
+    private static void checkCamera(Intrinsics k, int[] fullSize) {
+        ContractRanges.FOCAL_PX.check("camera.fx", k.fx);
+        ContractRanges.FOCAL_PX.check("camera.fy", k.fy);
+        ContractRanges.checkPrincipalPoint("camera.cx", k.cx, fullSize[0]);
+        ContractRanges.checkPrincipalPoint("camera.cy", k.cy, fullSize[1]);
+        double[] d = k.distortion();
+        if (d.length != 0 && d.length != 4 && d.length != 5 && d.length != 8) {
+            throw new ContractException("camera.distortion", "must hold 0, 4, 5 or 8 OpenCV coefficients, got "
+                    + d.length);
         }
+        ContractRanges.DISTORTION.checkEach("camera.distortion", d);
+        ContractRanges.PIXEL_SIZE_M.check("camera.pixel_size_m", k.pixelSizeM);
+        ContractRanges.FOCAL_LENGTH_M.check("camera.focal_length_m", k.focalLengthM);
+    }
+
+    /**
+     * (width, height) of the full frame the camera describes: the {@code crop} block's (kept as an
+     * extra field, checked here), or this frame's own.
+     */
+    private static int[] fullSize(JSONObject extras, int width, int height) {
+        JSONObject crop = Json.optObject(extras, "crop", "crop");
+        if (crop == null) {
+            return new int[] {width, height};
+        }
+        int x = (int) ContractRanges.CROP_OFFSET_PX.check("crop.x", Json.requireInt(crop, "x", "crop.x"));
+        int y = (int) ContractRanges.CROP_OFFSET_PX.check("crop.y", Json.requireInt(crop, "y", "crop.y"));
+        int fullWidth = (int) ContractRanges.SIDE_PX.check("crop.full_width",
+                Json.requireInt(crop, "full_width", "crop.full_width"));
+        int fullHeight = (int) ContractRanges.SIDE_PX.check("crop.full_height",
+                Json.requireInt(crop, "full_height", "crop.full_height"));
+        if ((long) x + width > fullWidth || (long) y + height > fullHeight) {
+            throw new ContractException("crop", "window " + width + "x" + height + " at (" + x + ", " + y
+                    + ") does not fit in the full frame " + fullWidth + "x" + fullHeight);
+        }
+        return new int[] {fullWidth, fullHeight};
     }
 
     public static Builder builder(int width, int height) {
@@ -169,7 +205,7 @@ public final class FrameMeta {
         }
         Long stride = Json.optLong(o, "row_stride", "row_stride");
         if (stride != null) {
-            b.rowStride(stride.intValue());
+            b.rowStride((int) ContractRanges.ROW_STRIDE.check("row_stride", stride.doubleValue()));
         }
         JSONObject cam = Json.requireObject(o, "camera", "camera");
         String profile = Json.optString(cam, "profile", "camera.profile");

@@ -117,6 +117,9 @@ public final class Json {
         if (!(v instanceof Integer || v instanceof Long || v instanceof java.math.BigInteger)) {
             throw new ContractException(path, "must be an integer, got " + v);
         }
+        if (v instanceof java.math.BigInteger && ((java.math.BigInteger) v).bitLength() > 63) {
+            throw new ContractException(path, "out of range: " + v); // longValue() would keep only the low bits
+        }
         return ((Number) v).longValue();
     }
 

@@ -6,6 +6,7 @@ import java.util.List;
 
 import org.json.JSONObject;
 
+import io.lumipose.client.contract.ContractRanges;
 import io.lumipose.client.json.ContractException;
 import io.lumipose.client.json.Json;
 
@@ -44,11 +45,11 @@ public final class RoomMap {
             if (centre == null) {
                 throw new ContractException(p + "center_m", "missing");
             }
-            Double yaw = Json.optDouble(b, "yaw_deg", p + "yaw_deg");
-            double side = Json.requireDouble(b, "side_m", p + "side_m");
-            if (!(side > 0)) {
-                throw new ContractException(p + "side_m", "must be > 0, got " + side);
-            }
+            ContractRanges.COORDINATE_M.checkEach(p + "center_m", centre);
+            Double yaw = ContractRanges.ANGLE_DEG.check(p + "yaw_deg", Json.optDouble(b, "yaw_deg", p + "yaw_deg"));
+            double side = ContractRanges.BEACON_SIDE_M.check(p + "side_m", Json.requireDouble(b, "side_m", p + "side_m"));
+            ContractRanges.CORNER_RADIUS_M.check(p + "corner_radius_m",
+                    Json.optDouble(b, "corner_radius_m", p + "corner_radius_m"));
             beacons.add(new Beacon(Json.requireInt(b, "id", p + "id"), centre, yaw == null ? 0 : yaw, side));
         }
         String name = Json.optString(o, "name", "name");

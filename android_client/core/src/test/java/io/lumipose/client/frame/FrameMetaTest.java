@@ -96,7 +96,7 @@ class FrameMetaTest {
         assertNull(m.frameKind, "pose frames leave frame_kind to its default");
         assertFalse(m.toJson().has("frame_kind"));
         assertEquals("frame_kind", assertThrows(ContractException.class,
-                () -> FrameMeta.builder(4, 4).camera(K).frameKind("video").build()).field);
+                () -> FrameMeta.builder(640, 480).camera(K).frameKind("video").build()).field);
         FrameMeta external = new FrameAssembler(640, 480, K, 0, null)
                 .assemble(new CaptureValues(null, null, null, null), new float[] {0, 0, 9.81f});
         assertNull(external.gravityCamera(), "an external camera's attitude is unknown");
