@@ -26,7 +26,7 @@ import numpy as np
 
 from server.ingest import LumaFrame
 from server.options import LocateOptions
-from server.outcomes import FrameError, Refusal, located, refused
+from server.outcomes import Refusal, located, refused
 from server.pipeline import locate_beacon
 from server.rooms import locate_in_room
 from server.tracking.devices import Devices
@@ -34,9 +34,10 @@ from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResul
 
 LOG = logging.getLogger("lumipose.pipeline")
 # What the stages' arithmetic raises on numbers it cannot handle: OpenCV's checks, a singular or
-# non-converging matrix, float overflow or division by zero, and numpy's / the models' ValueError
-# (a result with NaN in it). `FrameError` is a ValueError too, but it is the request's fault: re-raised.
-NUMERICAL_ERRORS: tuple[type[Exception], ...] = (cv2.error, np.linalg.LinAlgError, ArithmeticError, ValueError)
+# non-converging matrix, float overflow or division by zero. Not ValueError: that is what most
+# plain bugs raise (unpacking, broadcasting, a result model built wrong), and a bug must stay a
+# counted 500 (server.api.errors.BugCatcher), not pass for the frame's fault.
+NUMERICAL_ERRORS: tuple[type[Exception], ...] = (cv2.error, np.linalg.LinAlgError, ArithmeticError)
 _SERVER_DIR = Path(__file__).resolve().parent
 
 
@@ -56,8 +57,6 @@ def locate(
     """
     try:
         return _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
-    except FrameError:
-        raise
     except NUMERICAL_ERRORS as error:
         where = _where(error)
         LOG.warning("numerical failure in %s on map '%s': %r", where, beacon_map.name, error, exc_info=True)

@@ -106,7 +106,7 @@ def _raise(error: BaseException):
 @pytest.mark.parametrize(
     "error",
     [cv2.error("(-215:Assertion failed) s_(0) >= 1e-7"), np.linalg.LinAlgError("Singular matrix"),
-     OverflowError("int too large to convert to float"), FloatingPointError("overflow"), ValueError("math domain")],
+     OverflowError("int too large to convert to float"), FloatingPointError("overflow"), ZeroDivisionError("div")],
     ids=lambda error: type(error).__name__,
 )
 def test_a_stage_that_fails_numerically_gives_a_refusal_naming_it(monkeypatch, caplog, error):
@@ -147,4 +147,11 @@ def test_a_pose_that_is_not_finite_is_refused_before_it_reaches_a_result(monkeyp
 def test_bad_input_still_raises_a_frame_error(monkeypatch):
     monkeypatch.setattr(server.pipeline, "solve_pose", _raise(FrameError("no such thing", field="camera")))
     with pytest.raises(FrameError):
+        locate(FIXTURE, ONE)
+
+
+@pytest.mark.parametrize("error", [ValueError("too many values to unpack"), KeyError("x")], ids=lambda e: type(e).__name__)
+def test_a_plain_bug_in_a_stage_is_not_passed_off_as_a_numerical_failure(monkeypatch, error):
+    monkeypatch.setattr(server.pipeline, "solve_pose", _raise(error))
+    with pytest.raises(type(error)):
         locate(FIXTURE, ONE)
