@@ -73,33 +73,33 @@ def _raw_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
     return rows
 
 
-def png_size(data: bytes | memoryview) -> tuple[int, int] | None:
-    """(width, height) from a PNG's IHDR chunk, or None when `data` does not start like a PNG."""
-    if len(data) < 24 or bytes(data[:8]) != PNG_SIGNATURE or bytes(data[12:16]) != b"IHDR":
+def png_header(data: bytes | memoryview) -> tuple[int, int, int, int] | None:
+    """(width, height, bit depth, colour type) from a PNG's IHDR chunk, or None when `data` does not
+    start like a PNG."""
+    if len(data) < 26 or bytes(data[:8]) != PNG_SIGNATURE or bytes(data[12:16]) != b"IHDR":
         return None
-    width, height = struct.unpack(">II", bytes(data[16:24]))
-    return width, height
+    width, height, depth, colour = struct.unpack(">IIBB", bytes(data[16:26]))
+    return width, height, depth, colour
 
 
 def _png_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
-    # The header says the size before anything is decoded: a small file may claim a small image
-    # in its metadata and hold 20000 x 20000 pixels (gigabytes once decoded).
-    size = png_size(data)
-    if size is None:
+    # The header says size, depth and colours before anything is decoded: a small file may hold
+    # 20000 x 20000 pixels, or 16-bit colour (8 bytes a pixel), gigabytes once decoded.
+    header = png_header(data)
+    if header is None:
         raise FrameError("frame is not a readable PNG", field="frame")
-    if size != (meta.width, meta.height):
-        raise FrameError(f"PNG is {size[0]}x{size[1]} but metadata says {meta.width}x{meta.height}", field="width")
+    width, height, depth, colour = header
+    if (width, height) != (meta.width, meta.height):
+        raise FrameError(f"PNG is {width}x{height} but metadata says {meta.width}x{meta.height}", field="width")
+    if depth != 8:
+        raise FrameError(f"PNG must be 8-bit, got {depth}-bit", field="frame")
+    if colour != 0:
+        channels = {2: "3 channels (RGB)", 3: "a palette", 4: "2 channels (grey + alpha)", 6: "4 channels (RGBA)"}
+        got = channels.get(colour, f"colour type {colour}")
+        raise FrameError(f"PNG must be single-channel luma, got {got}", field="frame")
     image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
-    if image is None:
+    if image is None or image.dtype != np.uint8 or image.shape != (meta.height, meta.width):
         raise FrameError("frame is not a readable PNG", field="frame")
-    if image.dtype != np.uint8:
-        raise FrameError(f"PNG must be 8-bit, got {image.dtype}", field="frame")
-    if image.ndim != 2:
-        raise FrameError(f"PNG must be single-channel luma, got {image.shape[2]} channels", field="frame")
-    if image.shape != (meta.height, meta.width):
-        raise FrameError(
-            f"PNG is {image.shape[1]}x{image.shape[0]} but metadata says {meta.width}x{meta.height}", field="width"
-        )
     image.flags.writeable = False
     return image
 

@@ -520,10 +520,16 @@ class SampleStore:
         return self._damage.names("samples")
 
     def get(self, sample_id: str) -> SampleInfo:
-        return SampleInfo.model_validate_json((self._checked(sample_id) / "sample.json").read_bytes())
+        return SampleInfo.model_validate_json(self._read(sample_id, "sample.json"))
 
     def frame(self, sample_id: str) -> bytes:
-        return (self._checked(sample_id) / "frame.bin").read_bytes()
+        return self._read(sample_id, "frame.bin")
+
+    def _read(self, sample_id: str, name: str) -> bytes:
+        try:
+            return (self._checked(sample_id) / name).read_bytes()
+        except FileNotFoundError:  # deleted between the check and the read
+            raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id") from None
 
     def delete(self, sample_id: str) -> None:
         """Remove the sample, whole or damaged."""

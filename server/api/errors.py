@@ -14,6 +14,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
+from starlette.requests import ClientDisconnect
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from server.outcomes import FrameError
@@ -110,6 +111,8 @@ class BugCatcher:
 
         try:
             await self.app(scope, receive, noting_start)
+        except ClientDisconnect:
+            log.info("client went away during %s %s", scope.get("method"), scope.get("path"))
         except Exception as error:
             log.exception("unhandled error on %s %s", scope.get("method"), scope.get("path"))
             self.on_bug()

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import zstandard
 from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
-from starlette.requests import Request
+from starlette.requests import ClientDisconnect, Request
 
 from server.api.errors import ApiError
 from server.ingest import parse_meta
@@ -32,7 +32,7 @@ class FrameUpload:
 
 
 def _too_large(limit: int) -> ApiError:
-    return ApiError(413, "too_large", f"the upload exceeds the limit of {limit} bytes", field="body")
+    return ApiError(413, "too_large", f"the upload exceeds the limit of {limit} bytes", field="body").closing()
 
 
 async def _receive(request: Request, limit: int, timeout_s: float) -> bytes | bytearray:
@@ -62,7 +62,9 @@ async def _receive(request: Request, limit: int, timeout_s: float) -> bytes | by
     try:
         await asyncio.wait_for(read_all(), timeout_s)
     except TimeoutError:
-        raise ApiError(408, "timeout", f"the upload took longer than {timeout_s:g} s", field="body") from None
+        raise ApiError(408, "timeout", f"the upload took longer than {timeout_s:g} s", field="body").closing() from None
+    except ClientDisconnect:  # a phone that lost its network: not a bug of ours
+        raise ApiError(400, "disconnected", "the client went away before the upload was sent", "body") from None
     if expected is not None and size != expected:
         raise ApiError(400, "bad_length", f"the body has {size} bytes but Content-Length says {expected}", field="body")
     return body

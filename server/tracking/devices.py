@@ -113,7 +113,7 @@ class Devices:
             self._devices.move_to_end(device_id)
             device.users += 1
         try:
-            with device.lock:  # one device's frames are taken in order, one at a time
+            with device.lock:  # one device's frames are taken one at a time
                 yield device
         finally:
             with self._lock:

@@ -254,6 +254,46 @@ def test_an_unknown_map_name_and_bad_numbers_in_the_query_are_4xx(server):
     assert response.status_code == 422 and response.json()["field"] == "beacon_id"
 
 
+def test_one_endless_header_line_is_a_431_before_it_ends(server):
+    with socket.create_connection(("127.0.0.1", server.port), timeout=5) as sock:
+        sock.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Long: " + b"a" * (100 << 10))  # no end of line
+        answer = sock.recv(4096)
+    assert answer.startswith(b"HTTP/1.1 431"), answer[:200]
+
+
+def test_a_body_nobody_reads_does_not_hold_the_connection(server):
+    start = time.perf_counter()
+    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as sock:
+        sock.sendall(b"POST /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\n\r\n")
+        answer = b""
+        for _ in range(20):  # a byte every 0.2 s: the answer is sent, then the connection must end
+            try:
+                sock.sendall(b"x")
+                chunk = sock.recv(4096) if answer == b"" else b""
+            except OSError:
+                break
+            answer += chunk
+            time.sleep(0.2)
+        sock.settimeout(3)
+        try:
+            while sock.recv(4096):
+                pass
+        except OSError:
+            pass
+    assert answer.startswith(b"HTTP/1.1 405"), answer[:200]
+    assert time.perf_counter() - start < 6.0
+
+
+def test_a_client_that_hangs_up_mid_upload_is_not_a_server_error(server):
+    header = json.dumps(frame_header())
+    with socket.create_connection(("127.0.0.1", server.port), timeout=5) as sock:
+        sock.sendall(f"POST /v1/locate HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\n"
+                     f"X-Lumipose-Frame: {header}\r\nContent-Length: 1257120\r\n\r\n".encode() + b"\0" * 1000)
+        time.sleep(0.3)
+    time.sleep(0.5)
+    still_healthy(server)
+
+
 def test_no_server_error_was_counted(server):
     metrics = httpx.get(server.url + "/metrics", timeout=5).text
     errors = [line for line in metrics.splitlines() if line.startswith("lumipose_server_errors_total")]
