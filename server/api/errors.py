@@ -30,10 +30,11 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         400: "unreadable frame, metadata or body",
         401: "missing or wrong API key",
         404: "unknown map or sample",
-        408: "upload too slow",
-        413: "upload too large",
+        408: "headers or body too slow",
+        413: "upload or body too large",
         415: "unsupported content type or encoding",
         422: "invalid parameter",
+        503: "too many frame uploads held at once (frame routes); try again",
     }.items()
 }
 

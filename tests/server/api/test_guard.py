@@ -1,0 +1,44 @@
+"""Every API route is guarded: write routes check their key before any body is read."""
+
+import time
+
+import httpx
+from fastapi.routing import APIRoute
+
+from server.api.config import Settings
+from server.api.deps import require_api_key
+from server.api.guard import GuardedRoute
+from server.api.main import create_app
+
+
+def api_routes():
+    """The app's API routes (newer FastAPI keeps an included router whole, its routes in `original_router`)."""
+    app = create_app(Settings())
+    return [route for route in app.router.routes if isinstance(route, APIRoute)] or [
+        route for router in (r for r in app.router.routes if hasattr(r, "original_router"))
+        for route in router.original_router.routes if isinstance(route, APIRoute)
+    ]
+
+
+def test_every_v1_route_is_guarded_and_every_write_but_locate_needs_the_key():
+    routes = [r for r in api_routes() if r.path.startswith("/v1")]
+    assert len(routes) >= 12
+    assert all(isinstance(r, GuardedRoute) for r in routes), [r.path for r in routes if not isinstance(r, GuardedRoute)]
+    for route in routes:
+        keyed = any(getattr(d, "dependency", None) is require_api_key for d in route.dependencies)
+        writes = bool(route.methods - {"GET"}) and route.path != "/v1/locate"
+        assert keyed == writes, (route.path, route.methods)
+
+
+def test_keyless_writes_with_big_bodies_are_refused_before_the_body(server_url):
+    big = b"x" * (3 << 20)  # under the test server's 4 MB frame limit: only the key stops it
+    for method, path, content_type in [("POST", "/v1/samples", "application/octet-stream"),
+                                       ("PUT", "/v1/maps/active", "application/json"),
+                                       ("PUT", "/v1/maps/some", "application/json"),
+                                       ("DELETE", "/v1/samples/" + "0" * 32, "application/json")]:
+        start = time.perf_counter()
+        response = httpx.request(method, server_url + path, content=big, headers={"Content-Type": content_type},
+                                 timeout=10)
+        assert response.status_code == 401 and response.json()["field"] == "X-API-Key", (path, response.text)
+        assert response.headers.get("connection") == "close"
+        assert time.perf_counter() - start < 2.0
