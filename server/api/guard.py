@@ -27,7 +27,7 @@ from starlette.types import Message, Receive
 from server.api.config import Settings
 from server.api.deps import api_key_problem, require_api_key
 from server.api.errors import ApiError
-from server.api.routes.frames import frame_upload
+from server.api.params import frame_upload
 
 
 class GuardedRoute(APIRoute):

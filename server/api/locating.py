@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import Services
-from server.api.routes.frames import LocateQuery
+from server.api.params import LocateQuery
 from server.api.upload import FrameUpload
 from server.ingest import decode_frame
 from server.locator import locate
@@ -38,8 +38,8 @@ async def locate_upload(
 ) -> Located:
     """The result for `upload` in map `map_name` (default: the active map); with a `device`, in its
     session (tracking, ID frames combined) when the map has several beacons."""
-    name = map_name or services.maps.active_name()
-    beacon_map = services.maps.get(name)
+    name = map_name if map_name else await run_in_threadpool(services.maps.active_name)
+    beacon_map = await run_in_threadpool(services.maps.get, name)  # reads the data folder: off the event loop
     async with services.pipeline_limiter:
         result = await run_in_threadpool(_locate_now, services, upload, beacon_map, query, device)
     services.metrics.record_result(result)

@@ -2,45 +2,16 @@
 
 import numpy as np
 
-from server.camera import intrinsics_from_profile
-from server.geometry import rotation_from_ypr
-from server.ingest import LumaFrame
 from server.locator import locate
 from server.outcomes import Fix, Refusal
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from server.rooms import PanelFix, choose_and_fuse, locate_panel
 from server.vision.beacons import find_beacon_blobs
-from server.vlc.codec import LedWaveform
-from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, FrameKind, device_profiles
-from simulator.fixtures import fixture_meta
-from simulator.led import row_gains
-from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_emitters
+from shared_schemas import BeaconIdSource, FailureReason
+from tests.helpers import POSE, TWO_PANELS, WIDTH, two_panel_frame
 
-WIDTH, HEIGHT = 970, 1296
-CAMERA = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], WIDTH, HEIGHT)
-MAP = BeaconMap(name="two", beacons=[
-    Beacon(id=17, center_m=[-0.12, -0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
-    Beacon(id=42, center_m=[0.12, 0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
-])
-POSE = CameraPose(np.array([0.02, -0.03, 0.0]), rotation_from_ypr(10.0, 2.0, -1.0))
-
-
-def two_panel_frame(level_dn=1000.0, exposure_s=0.01, seed=0, t_s=0.0) -> LumaFrame:
-    rng = np.random.default_rng(seed)
-    emitters = []
-    for beacon in MAP.beacons:
-        gain = None
-        if exposure_s < 1e-3:
-            wave = LedWaveform.for_beacon(beacon.id, phase_s=0.001 * beacon.id)
-            gain = row_gains(wave, HEIGHT, 0.03 / (HEIGHT - 1), exposure_s, t_s)
-        emitters.append(Emitter(beacon_outline_px(beacon, CAMERA, POSE), level_dn, gain))
-    pixels = render_emitters(emitters, WIDTH, HEIGHT, SensorModel(psf_sigma_px=1.0), rng)
-    gravity = (POSE.rotation_wc.T @ [0, 0, -1.0]).tolist()
-    meta = fixture_meta(CAMERA, WIDTH, HEIGHT, POSE, gravity_camera=gravity).model_copy(update={
-        "exposure_s": exposure_s, "rolling_shutter_skew_s": 0.03, "timestamp_ns": int(t_s * 1e9),
-        "frame_kind": FrameKind.id if exposure_s < 1e-3 else FrameKind.pose})
-    return LumaFrame(pixels, meta, CAMERA)
+MAP = TWO_PANELS
 
 
 def test_every_panel_is_found_and_located_on_its_own_crop():

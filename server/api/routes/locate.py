@@ -8,8 +8,8 @@ from server.api.deps import ServicesDep
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
 from server.api.locating import locate_upload
+from server.api.params import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
 from server.api.routes import DAMAGED_RESPONSES
-from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
 from shared_schemas import LocateResult
 
 router = APIRouter(prefix="/v1", tags=["locate"], responses=ERROR_RESPONSES, route_class=GuardedRoute)

@@ -11,8 +11,8 @@ from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
 from server.api.locating import locate_upload
+from server.api.params import FRAME_REQUEST_BODY, DeviceHeader, LocateQuery, MapQuery, QueryDep, UploadDep
 from server.api.routes import DAMAGED_RESPONSES
-from server.api.routes.frames import FRAME_REQUEST_BODY, DeviceHeader, LocateQuery, MapQuery, QueryDep, UploadDep
 from server.api.upload import FRAME_HEADER, FrameUpload
 from server.evaluation import evaluate
 from server.store import StoreError

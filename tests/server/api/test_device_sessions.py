@@ -55,7 +55,7 @@ def test_many_devices_at_once_lose_no_state_and_get_no_error(server_url, client)
     again: every ID frame must find the ones its device sent before (its record kept, not another's)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from tests.server.tracking.test_devices import ROOM, dark_frame
+    from tests.helpers import ROOM, dark_frame
 
     client.put_map(ROOM)
     bursts, devices = 4, 120

@@ -25,7 +25,7 @@ import pytest
 from lumipose_client import Client
 from shared_schemas import FrameKind, FrameMeta
 from simulator.local_server import LocalServer
-from tests.server.tracking.test_devices import ROOM
+from tests.helpers import ROOM
 
 API_KEY = "hard-key"
 READ_TIMEOUT_S = 2.0
@@ -228,7 +228,7 @@ def test_request_headers_past_the_limit_are_a_431(server):
 
 def id_frame(seed: int) -> tuple[bytes, FrameMeta]:
     """A 4-megapixel ID frame with two striped panels (the stripes, not the pixels, must be kept)."""
-    from tests.server.test_rooms import two_panel_frame
+    from tests.helpers import two_panel_frame
 
     frame = two_panel_frame(level_dn=200.0, exposure_s=1 / 8000, seed=seed, t_s=0.01 * seed)
     pixels = np.zeros((2048, 2048), np.uint8)

@@ -6,26 +6,12 @@ import threading
 import numpy as np
 import pytest
 
-from server.camera import intrinsics_from_profile
 from server.ingest import LumaFrame
 from server.tracking.devices import DeviceRules, Devices
-from shared_schemas import Beacon, BeaconMap, FrameKind, FrameMeta, device_profiles
-
-WIDTH, HEIGHT = 48, 64
-CAMERA = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], WIDTH, HEIGHT)
-ROOM = BeaconMap(name="room", beacons=[Beacon(id=1, center_m=[0, 0, 2], side_m=0.2),
-                                       Beacon(id=2, center_m=[1.2, 0, 2], side_m=0.2)])
-OTHER_ROOM = ROOM.model_copy(update={"name": "other"})
+from shared_schemas import FrameKind
+from tests.helpers import DARK_CAMERA, OTHER_ROOM, ROOM, dark_frame
 
 
-def dark_frame(kind: FrameKind = FrameKind.pose, t_s: float = 0.0) -> LumaFrame:
-    """A tiny frame with nothing in it: the session runs, finds no panel, and answers at once."""
-    meta = FrameMeta(width=WIDTH, height=HEIGHT, format="Y8", camera=CAMERA, timestamp_ns=int(t_s * 1e9),
-                     frame_kind=kind, exposure_s=1 / 8000 if kind is FrameKind.id else 0.01,
-                     rolling_shutter_skew_s=0.03)
-    pixels = np.full((HEIGHT, WIDTH), 10, np.uint8)
-    pixels.flags.writeable = False
-    return LumaFrame(pixels, meta, CAMERA)
 
 
 class Clock:
@@ -82,7 +68,7 @@ def test_id_frames_wait_for_the_next_pose_frame_and_a_new_burst_replaces_an_old_
 
 def test_an_id_frame_that_cannot_carry_stripes_is_refused_with_the_reason():
     frame = dark_frame(FrameKind.id)
-    slow = LumaFrame(frame.pixels, frame.meta.model_copy(update={"exposure_s": 0.01}), CAMERA)
+    slow = LumaFrame(frame.pixels, frame.meta.model_copy(update={"exposure_s": 0.01}), DARK_CAMERA)
     result = Devices().locate("p", slow, ROOM)
     assert not result.ok and result.reason.value == "id_frame" and "not kept" in result.message
 
