@@ -12,8 +12,6 @@ from shared_schemas import FrameKind
 from tests.helpers import DARK_CAMERA, OTHER_ROOM, ROOM, dark_frame
 
 
-
-
 class Clock:
     def __init__(self):
         self.now = 1000.0
