@@ -14,7 +14,6 @@ A refusal before the body is read closes the connection after the answer.
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import Callable, Coroutine
 from typing import Any
 
@@ -28,6 +27,7 @@ from server.api.config import Settings
 from server.api.deps import api_key_problem, require_api_key
 from server.api.errors import ApiError
 from server.api.params import frame_upload
+from server.api.upload import receive_body, too_large
 
 
 class GuardedRoute(APIRoute):
@@ -49,14 +49,10 @@ class GuardedRoute(APIRoute):
             _check_length(request.headers.get("content-length"), limit)
             if takes_frame:
                 return await services.frame_slots.run(settings.read_timeout_s, lambda: handler(request))
-            body = await _read_body(request.receive, limit, settings.read_timeout_s)
+            body = await _read_json_body(request, limit, settings.read_timeout_s)
             return await handler(Request(request.scope, _replay(body, request.receive)))
 
         return guarded
-
-
-def _too_large(limit: int) -> ApiError:
-    return ApiError(413, "too_large", f"the body exceeds the limit of {limit} bytes for this route", "body").closing()
 
 
 def _check_length(declared: str | None, limit: int) -> None:
@@ -67,32 +63,11 @@ def _check_length(declared: str | None, limit: int) -> None:
             400, "bad_length", f"Content-Length '{declared[:40]}' is not a number", "Content-Length"
         ).closing()
     if int(declared) > limit:
-        raise _too_large(limit)
+        raise too_large(limit)
 
 
-async def _read_body(receive: Receive, limit: int, timeout_s: float) -> bytes:
-    chunks: list[bytes] = []
-    size = 0
-
-    async def read_all() -> None:
-        nonlocal size
-        while True:
-            message = await receive()
-            if message["type"] == "http.disconnect":
-                raise ApiError(400, "disconnected", "the client went away before the body was sent", "body")
-            chunk = message.get("body", b"")
-            size += len(chunk)
-            if size > limit:
-                raise _too_large(limit)
-            chunks.append(chunk)
-            if not message.get("more_body", False):
-                return
-
-    try:
-        await asyncio.wait_for(read_all(), timeout_s)
-    except TimeoutError:
-        raise ApiError(408, "timeout", f"the body took longer than {timeout_s:g} s", field="body").closing() from None
-    body = b"".join(chunks)
+async def _read_json_body(request: Request, limit: int, timeout_s: float) -> bytes:
+    body = bytes(await receive_body(request, limit, timeout_s))
     if body[:1] in (b"{", b"["):
         try:  # pydantic's parser stops at a nesting limit; the standard one recurses until it crashes
             pydantic_core.from_json(body)

@@ -31,15 +31,16 @@ class FrameUpload:
     data: bytes | bytearray  # uncompressed frame bytes as the contract's fixture file holds them
 
 
-def _too_large(limit: int) -> ApiError:
-    return ApiError(413, "too_large", f"the upload exceeds the limit of {limit} bytes", field="body").closing()
+def too_large(limit: int) -> ApiError:
+    return ApiError(413, "too_large", f"the body exceeds the limit of {limit} bytes", field="body").closing()
 
 
-async def _receive(request: Request, limit: int, timeout_s: float) -> bytes | bytearray:
+async def receive_body(request: Request, limit: int, timeout_s: float) -> bytes | bytearray:
+    """The request's body, at most `limit` bytes, within `timeout_s`; 413, 408 or 400 otherwise."""
     declared = request.headers.get("content-length")
     expected = int(declared) if declared is not None and declared.isdigit() else None
     if expected is not None and expected > limit:
-        raise _too_large(limit)
+        raise too_large(limit)
     # With a declared length the chunks land in one buffer: no second copy of a 20 MB frame.
     body = bytearray(expected) if expected is not None else bytearray()
     size = 0
@@ -50,7 +51,7 @@ async def _receive(request: Request, limit: int, timeout_s: float) -> bytes | by
             end = size + len(chunk)
             if end > limit or (expected is not None and end > expected):
                 raise (
-                    _too_large(limit)
+                    too_large(limit)
                     if end > limit
                     else ApiError(
                         400, "bad_length", f"the body is longer than its Content-Length {expected}", field="body"
@@ -62,7 +63,7 @@ async def _receive(request: Request, limit: int, timeout_s: float) -> bytes | by
     try:
         await asyncio.wait_for(read_all(), timeout_s)
     except TimeoutError:
-        raise ApiError(408, "timeout", f"the upload took longer than {timeout_s:g} s", field="body").closing() from None
+        raise ApiError(408, "timeout", f"the body took longer than {timeout_s:g} s", field="body").closing() from None
     except ClientDisconnect:  # a phone that lost its network: not a bug of ours
         raise ApiError(400, "disconnected", "the client went away before the upload was sent", "body") from None
     if expected is not None and size != expected:
@@ -104,7 +105,7 @@ def _decompress(body: bytes | bytearray, encoding: str, limit: int) -> bytes | b
             400, "bad_encoding", f"the body is not valid {encoding}: {error}", field="Content-Encoding"
         ) from None
     if len(data) > limit:
-        raise _too_large(limit)
+        raise too_large(limit)
     if not complete:
         raise ApiError(400, "bad_encoding", f"the {encoding} stream is truncated", field="Content-Encoding")
     return data
@@ -145,7 +146,7 @@ async def receive_frame(request: Request, frame_header: str | None, limit: int, 
             f"{', '.join(RAW_TYPES)} with the {FRAME_HEADER} header, or {MULTIPART}",
             field="Content-Type",
         )
-    body = await _receive(request, limit, timeout_s)
+    body = await receive_body(request, limit, timeout_s)
     body = _decompress(body, request.headers.get("content-encoding", "").strip().lower(), limit)
     if content_type == MULTIPART:
         meta_text, data = await _multipart_parts(request, body)
