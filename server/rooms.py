@@ -136,8 +136,8 @@ def locate_in_room(
     rules: RoomRules = RoomRules(),
 ) -> LocateResult:
     """A fix from a frame of a multi-beacon map whose IDs come from the frame's own stripes."""
-    reading = read_id_frame(frame, rules.candidates, rules.stripes)
     found = find_beacon_blobs(frame.pixels, rules.candidates)
+    reading = read_id_frame(frame, rules.candidates, rules.stripes, found)
     if reading.problem is not None:
         return refused(
             Refusal(

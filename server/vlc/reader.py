@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from server.ingest import LumaFrame
-from server.vision.beacons import BeaconBlob, CandidateRules, blob_mask, find_beacon_blobs
+from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
 from server.vlc.capture import id_frame_problem
 from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
 
@@ -24,9 +24,13 @@ class IdFrameReading:
 
 
 def read_id_frame(
-    frame: LumaFrame, candidates: CandidateRules = CandidateRules(), rules: StripeRules = StripeRules()
+    frame: LumaFrame,
+    candidates: CandidateRules = CandidateRules(),
+    rules: StripeRules = StripeRules(),
+    found: Candidates | None = None,
 ) -> IdFrameReading:
-    """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included)."""
+    """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included); `found`: the
+    frame's blobs when the caller has them already."""
     problem = id_frame_problem(frame, rules)
     if problem is not None:
         return IdFrameReading((), problem)
@@ -35,7 +39,7 @@ def read_id_frame(
     assert skew_s is not None and timestamp_ns is not None and exposure_s is not None  # id_frame_problem checked
     row_time = row_time_s(skew_s, meta.full_size[1])  # the sensor's rows, crop or not
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
-    found = find_beacon_blobs(frame.pixels, candidates)
+    found = find_beacon_blobs(frame.pixels, candidates) if found is None else found
     panels = []
     for blob in found.blobs:
         y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
