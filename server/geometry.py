@@ -54,10 +54,16 @@ def distortion_vector(camera: CameraIntrinsics) -> np.ndarray | None:
     return coefficients if coefficients.size and np.any(coefficients) else None
 
 
-def model_corners_m(side_m: float) -> np.ndarray:
-    """The 4 square corners in the beacon frame, shape (4, 3), in the module's corner order."""
-    h = side_m / 2.0
-    return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
+def model_corners_m(width_m: float, height_m: float | None = None) -> np.ndarray:
+    """The 4 corners of a width x height rectangle (a square without `height_m`) in the beacon
+    frame, shape (4, 3), in the module's corner order."""
+    w, h = width_m / 2.0, (width_m if height_m is None else height_m) / 2.0
+    return np.array([[-w, h, 0.0], [w, h, 0.0], [w, -h, 0.0], [-w, -h, 0.0]])
+
+
+def beacon_corners_m(beacon: Beacon) -> np.ndarray:
+    """The corners (4, 3) of the rectangle circumscribing `beacon`'s outline, beacon frame."""
+    return model_corners_m(*beacon.extent_m)
 
 
 def beacon_rotation(beacon: Beacon) -> np.ndarray:
@@ -70,25 +76,56 @@ def beacon_to_world(beacon: Beacon, points_b: np.ndarray) -> np.ndarray:
     return np.asarray(points_b) @ beacon_rotation(beacon).T + np.asarray(beacon.center_m)
 
 
-def rounded_square_outline_m(side_m: float, radius_m: float, points_per_arc: int = 64) -> np.ndarray:
-    """Closed outline of the rounded square in the beacon frame, shape (N, 3), z = 0.
+def rounded_rectangle_outline_m(
+    width_m: float, height_m: float, radius_m: float, points_per_arc: int = 64
+) -> np.ndarray:
+    """Closed outline of a rounded rectangle in the beacon frame, shape (N, 3), z = 0.
 
-    Counter-clockwise seen from +z_B; the straight sides are the chords between arcs.
+    Counter-clockwise seen from +z_B; the straight sides are the chords between arcs. A circle
+    is the rectangle whose radius is half its (equal) sides: four quarter arcs, no sides.
     """
-    h = side_m / 2.0
-    inner = h - radius_m
+    inner_x, inner_y = width_m / 2.0 - radius_m, height_m / 2.0 - radius_m
     outline: list[np.ndarray] = []
     for k, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
         start = math.pi / 2 * k
-        angles = np.linspace(start, start + math.pi / 2, max(points_per_arc, 2))
-        cx, cy = sx * inner, sy * inner
+        cx, cy = sx * inner_x, sy * inner_y
         if radius_m == 0:
             outline.append(np.array([[cx, cy, 0.0]]))
             continue
+        angles = np.linspace(start, start + math.pi / 2, max(points_per_arc, 2))
         outline.append(
             np.stack([cx + radius_m * np.cos(angles), cy + radius_m * np.sin(angles), np.zeros_like(angles)], axis=1)
         )
     return np.concatenate(outline, axis=0)
+
+
+def rounded_square_outline_m(side_m: float, radius_m: float, points_per_arc: int = 64) -> np.ndarray:
+    """`rounded_rectangle_outline_m` of a square."""
+    return rounded_rectangle_outline_m(side_m, side_m, radius_m, points_per_arc)
+
+
+def beacon_outline_m(beacon: Beacon, points_per_arc: int = 64) -> np.ndarray:
+    """The closed outline (N, 3) of `beacon`'s luminous area in its own frame, any shape."""
+    width, height = beacon.extent_m
+    return rounded_rectangle_outline_m(width, height, beacon.outline_radius_m, points_per_arc)
+
+
+def dense_beacon_outline_m(beacon: Beacon, span_px: float, max_step_px: float = 1.0) -> np.ndarray:
+    """`beacon_outline_m` with points about `max_step_px` apart when the panel's longer size
+    spans `span_px` pixels (the projection's scale): straight sides cut into steps, arcs too."""
+    width, height = beacon.extent_m
+    size = max(width, height)
+    radius = beacon.outline_radius_m
+    per_arc = max(8, int(math.ceil(math.pi / 2 * radius / size * span_px / max_step_px)) + 1)
+    closed = beacon_outline_m(beacon, per_arc)
+    closed = np.vstack([closed, closed[:1]])
+    steps = np.linalg.norm(np.diff(closed, axis=0), axis=1) / size * span_px / max_step_px
+    return np.concatenate(
+        [
+            np.linspace(a, b, max(1, int(np.ceil(n))), endpoint=False)
+            for a, b, n in zip(closed[:-1], closed[1:], steps, strict=True)
+        ]
+    )
 
 
 def world_to_camera(points_w: np.ndarray, position_m: np.ndarray, rotation_wc: np.ndarray) -> np.ndarray:

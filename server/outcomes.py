@@ -59,6 +59,7 @@ class Fix:
     corners_px: np.ndarray | None = None
     orientation_rule: OrientationRule | None = None
     ambiguity_ratio: float | None = None
+    covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame, from the fit
     warnings: tuple[str, ...] = ()
     timing_ms: Mapping[str, float] = field(default_factory=dict)
 
@@ -96,6 +97,8 @@ def located(
         reprojection_error_px=fix.reprojection_error_px,
         ambiguity_ratio=fix.ambiguity_ratio,
         gravity_used=fix.gravity_used,
+        position_sigma_m=None if fix.covariance_m2 is None else np.sqrt(np.diag(fix.covariance_m2)).tolist(),
+        position_covariance_m2=_list(fix.covariance_m2),
         warnings=list(fix.warnings),
         timing_ms=dict(fix.timing_ms),
         vlc=vlc,

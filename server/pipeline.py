@@ -118,7 +118,7 @@ def locate_beacon(
     with timer.stage("subpixel"):
         edges = None
         if options.subpixel:
-            straight = 1.0 - 2.0 * beacon.corner_radius_m / beacon.side_m
+            straight = 1.0 - 2.0 * beacon.corner_radius_m / min(beacon.extent_m)
             edges = refine_edges(
                 window, (roi.x0, roi.y0), quad.corners, roi.levels, straight, matrix, distortion, options.edges
             )

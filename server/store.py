@@ -375,7 +375,7 @@ class MapStore:
         path = self._stored_dir / f"{name}.json"
         self._stored_dir.mkdir(parents=True, exist_ok=True)
         with _data_lock(self.data_dir, exclusive=False):
-            write_atomic(path, beacon_map.model_dump_json(by_alias=True, indent=2).encode())
+            write_atomic(path, beacon_map.model_dump_json(by_alias=True, exclude_none=True, indent=2).encode())
         self._damage.update(path.relative_to(self.data_dir).as_posix(), {})
         return beacon_map
 

@@ -17,7 +17,14 @@ import math
 from enum import StrEnum
 from typing import Annotated, Final, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
@@ -305,22 +312,75 @@ class FrameMeta(Open):
         return (x_px + column) / width, (y_px + row) / height
 
 
+_SIZE_FIELDS: Final = ("side_m", "width_m", "height_m", "diameter_m")
+
+
+class PanelShape(StrEnum):
+    rounded_rectangle = "rounded_rectangle"  # squares too: side_m, or width_m and height_m
+    circle = "circle"  # a round downlight: diameter_m; it shows no yaw (docs/contract.md, "Panel shapes")
+
+
 class Beacon(Strict):
-    """A square luminous panel on the ceiling, facing down (-Z)."""
+    """A luminous panel on the ceiling, facing down (-Z): a rounded rectangle (a square by
+    default) or a circle, centred at `center_m`, its width along the beacon frame's x_B axis."""
 
     id: int = Field(ge=0, le=255, description="VLC code of the beacon")
     center_m: PositionM
     yaw_deg: float = Field(default=0.0, ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)
-    side_m: float = Field(ge=MIN_SIDE_M, le=MAX_SIDE_M, description="outer side of the rounded square")
+    shape: PanelShape = PanelShape.rounded_rectangle
+    side_m: float | None = Field(
+        default=None, ge=MIN_SIDE_M, le=MAX_SIDE_M, description="outer side of a rounded square"
+    )
+    width_m: float | None = Field(
+        default=None, ge=MIN_SIDE_M, le=MAX_SIDE_M, description="rounded rectangle: outer size along x_B"
+    )
+    height_m: float | None = Field(
+        default=None, ge=MIN_SIDE_M, le=MAX_SIDE_M, description="rounded rectangle: outer size along y_B"
+    )
+    diameter_m: float | None = Field(default=None, ge=MIN_SIDE_M, le=MAX_SIDE_M, description="circle: its diameter")
     corner_radius_m: float = Field(default=0.0, ge=0, le=MAX_SIDE_M / 2)
 
     @model_validator(mode="after")
     def _geometry(self) -> Beacon:
         _require_finite("center_m", self.center_m)
         _require_finite("yaw_deg", [self.yaw_deg])
-        if self.corner_radius_m * 2 >= self.side_m:
-            raise ValueError("corner_radius_m must be less than half of side_m")
+        given = {name for name in _SIZE_FIELDS if getattr(self, name) is not None}
+        if self.shape is PanelShape.circle:
+            if given != {"diameter_m"}:
+                raise ValueError(f"a circle has diameter_m and no other size, got {sorted(given)}")
+            if self.corner_radius_m:
+                raise ValueError("a circle has no corner_radius_m")
+            return self
+        if given not in ({"side_m"}, {"width_m", "height_m"}):
+            raise ValueError(f"a rounded rectangle has side_m, or width_m and height_m, got {sorted(given)}")
+        if self.corner_radius_m * 2 >= min(self.extent_m):
+            raise ValueError("corner_radius_m must be less than half of the panel's shorter side")
         return self
+
+    @property
+    def extent_m(self) -> tuple[float, float]:
+        """(width along x_B, height along y_B) of the panel's outline."""
+        if self.diameter_m is not None:
+            return self.diameter_m, self.diameter_m
+        if self.side_m is not None:
+            return self.side_m, self.side_m
+        assert self.width_m is not None and self.height_m is not None  # the validator's
+        return self.width_m, self.height_m
+
+    @property
+    def outline_radius_m(self) -> float:
+        """The radius of the outline's corner arcs (a circle: all arc, half its diameter)."""
+        return self.diameter_m / 2 if self.diameter_m is not None else self.corner_radius_m
+
+    @property
+    def size_m(self) -> float:
+        """The panel's longer outer size (its side, its width or its diameter)."""
+        return max(self.extent_m)
+
+    @property
+    def has_corners(self) -> bool:
+        """A rounded rectangle has four corners (their order is the contract's); a circle none."""
+        return self.shape is PanelShape.rounded_rectangle
 
 
 class BeaconMap(Strict):
@@ -404,6 +464,12 @@ class LocateResult(Strict):
         default=None, description="reprojection error of the best over the alternative pose"
     )
     gravity_used: bool = False
+    position_sigma_m: Vec3 | None = Field(
+        default=None, description="1-sigma uncertainty of position_m along the map's X, Y, Z (m), from the fit"
+    )
+    position_covariance_m2: Mat3 | None = Field(
+        default=None, description="covariance of position_m in the map frame (m^2); its XY block gives the 2D ellipse"
+    )
     reason: FailureReason | None = None
     message: str | None = None
     warnings: list[str] = Field(default_factory=list)

@@ -237,7 +237,7 @@ def plot_walk(report: dict, path: Path) -> None:
         qx = area.x_min_m if b.center_m[0] < 0 else 0.0
         qy = area.y_min_m if b.center_m[1] < 0 else 0.0
         ax.add_patch(plt.Rectangle((qx, qy), area.x_max_m, area.y_max_m, color=colours[b.id], alpha=0.08))
-        s = b.side_m
+        s = b.size_m
         ax.add_patch(plt.Rectangle((b.center_m[0] - s / 2, b.center_m[1] - s / 2), s, s, color=colours[b.id]))
         ax.annotate(f"ID {b.id}", (b.center_m[0], b.center_m[1] + 0.12), ha="center", fontsize=8)
     truth = np.array([r["truth_m"] for r in records])

@@ -26,7 +26,7 @@ def distance_scene(base: Scene, distance_m: float, points_per_side: int = 5, yaw
     yaw within +-`yaw_jitter_deg`; 0 = exactly face to face)."""
     beacon = base.beacons[0]
     profile = device_profiles()[base.camera.profile]
-    extent = fov_grid(profile, distance_m, 0.05, beacon.side_m).beacon_adjusted_m
+    extent = fov_grid(profile, distance_m, 0.05, beacon.size_m).beacon_adjusted_m
     half = [0.45 * e for e in extent]
     steps = [2 * h / (points_per_side - 1) for h in half]
     series = SeriesSpec(path=GridSeries(x_m=[-half[0], half[0], steps[0]], y_m=[-half[1], half[1], steps[1]]),

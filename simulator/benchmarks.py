@@ -65,7 +65,7 @@ def _noisy_gravity(rotation_wc: np.ndarray, sigma_deg: float, rng: np.random.Gen
 
 def _draw_pose(config: AccuracyConfig, beacon: Beacon, camera, width, height, rng) -> CameraPose:
     profile = device_profiles()[PROFILE_ID]
-    extent = fov_grid(profile, config.distance_m, 0.05, beacon.side_m).beacon_adjusted_m
+    extent = fov_grid(profile, config.distance_m, 0.05, beacon.size_m).beacon_adjusted_m
     margin_px = 8.0
     while True:
         xy = rng.uniform(-0.5, 0.5, 2) * extent

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from server.geometry import beacon_to_world, rounded_square_outline_m
+from server.geometry import beacon_outline_m, beacon_to_world
 from shared_schemas import Beacon, CameraIntrinsics
 from simulator.render import CameraPose, beacon_outline_px
 
@@ -110,7 +110,7 @@ def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, w
     world[:3, :3], world[:3, 3] = rotation, pose.position_m
     camera_object.matrix_world = Matrix(world.tolist())
 
-    points = beacon_to_world(beacon, rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, 64))
+    points = beacon_to_world(beacon, beacon_outline_m(beacon, 64))
     mesh = bpy.data.meshes.new("panel")
     builder = bmesh.new()
     builder.faces.new([builder.verts.new(tuple(p)) for p in points])

@@ -24,7 +24,8 @@ from server.geometry import (
     beacon_to_world,
     camera_matrix,
     distortion_vector,
-    rounded_square_outline_m,
+    beacon_outline_m,
+    dense_beacon_outline_m,
     world_to_camera,
 )
 from shared_schemas import Beacon, CameraIntrinsics
@@ -66,20 +67,14 @@ class CameraPose:
 
 
 def beacon_outline_px(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, max_step_px: float = 0.5) -> np.ndarray:
-    """Closed outline (N, 2) of the panel in the frame's pixels, points <= ~max_step_px apart."""
-    coarse = rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, 16)
+    """Closed outline (N, 2) of the panel in the frame's pixels, points <= ~max_step_px apart
+    (the straight sides too, so that distortion bends them)."""
+    coarse = beacon_outline_m(beacon, 16)
     in_camera = world_to_camera(beacon_to_world(beacon, coarse), pose.position_m, pose.rotation_wc)
     if np.any(in_camera[:, 2] <= 0):
         raise ValueError("the beacon is not entirely in front of the camera")
-    span_px = camera.fx * beacon.side_m / in_camera[:, 2].min()
-    per_arc = max(16, int(np.pi / 2 * beacon.corner_radius_m / beacon.side_m * span_px / max_step_px))
-    outline = rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, per_arc)
-    # densify the straight sides too, so that distortion bends them
-    closed = np.vstack([outline, outline[:1]])
-    lengths_px = np.linalg.norm(np.diff(closed, axis=0), axis=1) / beacon.side_m * span_px
-    pieces = [np.linspace(a, b, max(1, int(np.ceil(n / max_step_px))), endpoint=False)
-              for a, b, n in zip(closed[:-1], closed[1:], lengths_px)]
-    dense = np.concatenate(pieces)
+    span_px = camera.fx * beacon.size_m / in_camera[:, 2].min()
+    dense = dense_beacon_outline_m(beacon, span_px, max_step_px)
     in_camera = world_to_camera(beacon_to_world(beacon, dense), pose.position_m, pose.rotation_wc)
     pixels, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), camera_matrix(camera),
                                   distortion_vector(camera))

@@ -65,7 +65,7 @@ def fov_grid_positions(scene: Scene, series: FovGridSeries) -> tuple[np.ndarray,
         raise ValueError("a fov_grid series needs a camera with a device profile (paper eq. 2: R * P)")
     profile = device_profiles()[camera.profile]
     updates = {k: getattr(camera, k) for k in ("pixel_size_m", "focal_length_m") if getattr(camera, k) is not None}
-    grid = fov_grid(profile.model_copy(update=updates), distance_m, series.cell_m, beacon.side_m)
+    grid = fov_grid(profile.model_copy(update=updates), distance_m, series.cell_m, beacon.size_m)
     labels, offsets = grid_points(grid)
     positions = np.column_stack([offsets + beacon.center_m[:2], np.full(len(offsets), series.height_m)])
     return labels, positions

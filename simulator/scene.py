@@ -22,8 +22,8 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from server.camera import intrinsics_from_profile
-from server.geometry import beacon_to_world, rotation_from_ypr, rounded_square_outline_m
-from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, device_profiles
+from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr
+from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, PanelShape, device_profiles
 from shared_schemas.models import Facing, Strict, Vec3
 from simulator.render import CameraPose, Emitter, ReadoutMotion, SensorModel, render_emitters, world_polygon_px
 
@@ -52,13 +52,21 @@ class RoomSpec(Strict):
         return value
 
 
+DEFAULT_SIDE_M = 0.174  # the paper's panel
+
+
 class BeaconSpec(Strict):
-    """A map beacon (`shared_schemas.Beacon`) with its light."""
+    """A map beacon (`shared_schemas.Beacon`) with its light; a 0.174 m square unless its shape
+    or size is given."""
 
     id: int = Field(ge=0, le=255)
     center_m: Vec3
     yaw_deg: float = 0.0
-    side_m: Positive = 0.174
+    shape: PanelShape = PanelShape.rounded_rectangle
+    side_m: Positive | None = None
+    width_m: Positive | None = None
+    height_m: Positive | None = None
+    diameter_m: Positive | None = None
     corner_radius_m: float = Field(default=0.02, ge=0)
     luminance_nits: Positive = 1000.0
     vlc_code: int | None = Field(default=None, ge=0, le=255,
@@ -66,8 +74,16 @@ class BeaconSpec(Strict):
     vlc_phase_s: float = Field(default=0.0, description="the message start on the LED's clock")
 
     def beacon(self) -> Beacon:
-        return Beacon(id=self.id, center_m=self.center_m, yaw_deg=self.yaw_deg, side_m=self.side_m,
-                      corner_radius_m=self.corner_radius_m)
+        sizes = {name: getattr(self, name) for name in ("side_m", "width_m", "height_m", "diameter_m")}
+        if self.shape is PanelShape.rounded_rectangle and all(v is None for v in sizes.values()):
+            sizes["side_m"] = DEFAULT_SIDE_M
+        radius = 0.0 if self.shape is PanelShape.circle else self.corner_radius_m
+        return Beacon(id=self.id, center_m=self.center_m, yaw_deg=self.yaw_deg, shape=self.shape,
+                      corner_radius_m=radius, **{k: v for k, v in sizes.items() if v is not None})
+
+    @property
+    def size_m(self) -> float:
+        return self.beacon().size_m
 
     @model_validator(mode="after")
     def _geometry(self) -> BeaconSpec:
@@ -321,10 +337,10 @@ def find_scene(name_or_path: str) -> Scene:
 
 
 def _beacon_outline_m(spec: BeaconSpec, camera: CameraIntrinsics, distance_m: float) -> np.ndarray:
-    """The rounded square in map coordinates, arcs fine enough for its size in the frame."""
-    span_px = camera.fx * spec.side_m / max(distance_m, 1e-3)
-    per_arc = max(16, int(np.pi / 2 * spec.corner_radius_m / spec.side_m * span_px / 0.5))
-    return beacon_to_world(spec.beacon(), rounded_square_outline_m(spec.side_m, spec.corner_radius_m, per_arc))
+    """The panel's outline in map coordinates, arcs fine enough for its size in the frame."""
+    beacon = spec.beacon()
+    span_px = camera.fx * beacon.size_m / max(distance_m, 1e-3)
+    return beacon_to_world(beacon, dense_beacon_outline_m(beacon, span_px, 0.5))
 
 
 def _row_gain(spec: BeaconSpec, sensor: SensorSpec, height: int, t_s: float) -> np.ndarray | None:

@@ -118,7 +118,7 @@ def fit_cut_off_panel(
         return None
     rotation = _attitude(gravity, yaw_deg)
     points = edge_points(frame.pixels, blob.bounding_box, level, rules.partial)
-    distance_m = frame.camera.fx * template.side_m / max(blob.bounding_box[2], blob.bounding_box[3], 1)
+    distance_m = frame.camera.fx * template.size_m / max(blob.bounding_box[2], blob.bounding_box[3], 1)
     ray = _ray(frame.camera, rotation, blob.centroid_px)
     start_m = -ray * distance_m / ray[2]
     fit = fit_partial([(template, points)], frame.camera, gravity, start_m, yaw_deg, growth_px, rules.partial)

@@ -29,11 +29,12 @@ from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
 from server.geometry import (
+    beacon_outline_m,
     beacon_to_world,
     camera_matrix,
+    dense_beacon_outline_m,
     distortion_vector,
     rotation_from_ypr,
-    rounded_square_outline_m,
 )
 from server.outcomes import Refusal
 from server.vision.subpixel import level_crossings, profile_offsets, sample_profiles
@@ -111,19 +112,10 @@ def edge_points(
 
 def _outline_px(beacon: Beacon, position_m, rotation_wc, camera: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
     """Projected outline points (N, 2) about 1 px apart and their outward image normals."""
-    rough = beacon_to_world(beacon, rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, 8))
+    rough = beacon_to_world(beacon, beacon_outline_m(beacon, 8))
     in_camera = (rough - position_m) @ rotation_wc
-    span_px = camera.fx * beacon.side_m / max(float(in_camera[:, 2].min()), 1e-3)
-    per_arc = max(8, int(math.pi / 2 * beacon.corner_radius_m / beacon.side_m * span_px))
-    outline = rounded_square_outline_m(beacon.side_m, beacon.corner_radius_m, per_arc)
-    closed = np.vstack([outline, outline[:1]])
-    lengths = np.linalg.norm(np.diff(closed, axis=0), axis=1) / beacon.side_m * span_px
-    dense = np.concatenate(
-        [
-            np.linspace(a, b, max(1, int(np.ceil(n))), endpoint=False)
-            for a, b, n in zip(closed[:-1], closed[1:], lengths, strict=True)
-        ]
-    )
+    span_px = camera.fx * beacon.size_m / max(float(in_camera[:, 2].min()), 1e-3)
+    dense = dense_beacon_outline_m(beacon, span_px)
     world = beacon_to_world(beacon, dense)
     rvec, _ = cv2.Rodrigues(np.ascontiguousarray(rotation_wc.T))
     tvec = -rotation_wc.T @ position_m

@@ -33,7 +33,7 @@ from enum import StrEnum
 import cv2
 import numpy as np
 
-from server.geometry import beacon_rotation, beacon_to_world, model_corners_m, rotation_z
+from server.geometry import beacon_corners_m, beacon_rotation, beacon_to_world, rotation_z
 from server.outcomes import Refusal
 from shared_schemas import Beacon, FailureReason
 
@@ -105,7 +105,7 @@ def pose_with_gravity(
     rays = np.linalg.solve(camera_matrix, np.vstack([points_px.T, np.ones(len(points_px))]))
     level = tilt @ rays
     q = (level[:2] / level[2]).T
-    model = np.vstack([model_corners_m(beacon.side_m), np.zeros(3)])
+    model = np.vstack([beacon_corners_m(beacon), np.zeros(3)])
     world = beacon_to_world(beacon, model)
     # [Px, Py] = [[a, -b], [b, a]] q + C_xy, with a = h cos(yaw), b = h sin(yaw)
     design = np.zeros((2 * len(q), 4))
@@ -269,7 +269,7 @@ def solve_pose(
     rules: PoseRules = PoseRules(),
 ) -> PoseSolution | Refusal:
     """Camera pose in the map from corners (4, 2) in model order and the centre (2,)."""
-    corners4 = model_corners_m(beacon.side_m)
+    corners4 = beacon_corners_m(beacon)
     object_points = np.vstack([corners4, np.zeros(3)])
     image_points = np.vstack([corners_px, center_px]).astype(np.float64)
     ok, rvec, tvec = cv2.solvePnP(object_points, image_points, camera_matrix, None, flags=cv2.SOLVEPNP_SQPNP)

@@ -62,8 +62,9 @@ class SessionStats:
     foreign_ids: int = 0  # confident codes of beacons not in the map
 
 
-def _geometry(beacon: Beacon) -> tuple[float, float, float]:
-    return (round(beacon.side_m, 6), round(beacon.corner_radius_m, 6), round(beacon.yaw_deg % 360.0, 6))
+def _geometry(beacon: Beacon) -> tuple:
+    sizes = (*beacon.extent_m, beacon.outline_radius_m, beacon.yaw_deg % 360.0)
+    return (beacon.shape, *(round(v, 6) for v in sizes))
 
 
 def template_beacon(beacon_map: BeaconMap) -> Beacon | None:

@@ -23,5 +23,5 @@ def test_map_rejects_duplicate_ids_and_impossible_radius():
     beacon = {"id": 1, "center_m": [0, 0, 2.7], "side_m": 0.174}
     with pytest.raises(ValidationError, match="unique"):
         BeaconMap.model_validate({"name": "x", "beacons": [beacon, beacon]})
-    with pytest.raises(ValidationError, match="half of side_m"):
+    with pytest.raises(ValidationError, match="half of the panel.s shorter side"):
         BeaconMap.model_validate({"name": "x", "beacons": [{**beacon, "corner_radius_m": 0.1}]})
