@@ -168,6 +168,7 @@ def locate_beacon(
         corners_px=reported[:4],
         orientation_rule=ordered.rule,
         ambiguity_ratio=pose.ambiguity_ratio,
+        covariance_m2=pose.covariance_m2,
         warnings=tuple(warnings),
         timing_ms=timer.total(),
     )

@@ -59,6 +59,7 @@ class PoseSolution:
     ambiguity_ratio: float
     alternative_distance_m: float  # between the two IPPE minima's camera positions
     gravity_used: bool
+    covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame
 
 
 def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
