@@ -51,6 +51,17 @@ def add_commands(commands) -> None:
     accuracy.add_argument("--workers", type=int, default=None)
     accuracy.add_argument("--json", action="store_true")
     accuracy.set_defaults(run=_run_accuracy)
+    partial = benches.add_parser("partial", help="panels cut by the image border: coverage and error by visible share")
+    partial.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0])
+    partial.add_argument("--frames", type=int, default=40, help="per distance and resolution")
+    partial.add_argument("--scales", type=float, nargs="+", default=[1.0, 0.25],
+                         help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
+    partial.add_argument("--seed", type=int, default=1)
+    partial.add_argument("--workers", type=int, default=None)
+    partial.add_argument("--out", type=Path, default=None,
+                         help="also write partial.json and partial.png (error against visible share) here")
+    partial.add_argument("--json", action="store_true")
+    partial.set_defaults(run=_run_partial)
     speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
     speed.add_argument("--repeats", type=int, default=50)
     speed.add_argument("--distance", type=float, default=1.0)
@@ -223,6 +234,29 @@ def _run_accuracy(args) -> int:
                 continue
             print(f"{report['distance_m']:>7.1f}m {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
                   f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%")
+    return 0
+
+
+def _run_partial(args) -> int:
+    from simulator.bench_partial import PartialConfig, format_partial, plot_partial, run_partial
+
+    if args.frames < 1 or min(args.scales) <= 0:
+        print("error: --frames must be at least 1 and every --scales positive", file=sys.stderr)
+        return 2
+    config = PartialConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
+                           seed=args.seed)
+    report = run_partial(config, args.workers)
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "partial.json").write_text(json.dumps(report, indent=2) + "\n")
+        plot_partial(report, args.out / "partial.png")
+        report["figures"] = [str(args.out / "partial.png")]
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(format_partial(report))
+    for figure in report.get("figures", []):
+        print(f"  figure {figure}")
     return 0
 
 
