@@ -101,6 +101,22 @@ def test_map_numbers_out_of_range_are_refused_naming_the_field(key, value, field
     assert _refused_field(BeaconMap, _changed(MAP, f"beacons.0.{key}", value)) == field
 
 
+SHAPES_MAP = json.loads((EXAMPLES / "map_shapes.json").read_text())
+BAD_SHAPED_BEACONS = [  # beacon 1 is a rectangle, beacon 2 a circle
+    ("beacons.1.width_m", 1e-300),
+    ("beacons.1.width_m", 10.5),
+    ("beacons.1.height_m", 0.004),
+    ("beacons.1.height_m", 1e308),
+    ("beacons.2.diameter_m", 0.004),
+    ("beacons.2.diameter_m", 1e308),
+]
+
+
+@pytest.mark.parametrize("dotted, value", BAD_SHAPED_BEACONS, ids=[f"{d}={v}" for d, v in BAD_SHAPED_BEACONS])
+def test_shaped_beacons_sizes_out_of_range_are_refused_naming_the_field(dotted, value):
+    assert _refused_field(BeaconMap, _changed(SHAPES_MAP, dotted, value)) == dotted
+
+
 BAD_PROFILES = [
     ("pixel_size_m", 1e-300),
     ("focal_length_m", 1e308),
@@ -162,6 +178,7 @@ def test_the_golden_examples_and_bundled_files_are_within_the_ranges():
     FrameMeta.model_validate(FRAME)
     FrameMeta.model_validate(PROFILE_FRAME)
     BeaconMap.model_validate(MAP)
+    BeaconMap.model_validate(SHAPES_MAP)
     assert device_profiles()
 
 
@@ -180,6 +197,7 @@ def test_the_exported_schemas_carry_the_bounds():
     assert _bounds(frame["properties"]["timestamp_ns"]) == (0, None, None, 2**63)
     assert _bounds(frame["properties"]["gravity_camera"]) == (-models.MAX_GRAVITY, None, models.MAX_GRAVITY, None)
     beacon = json.loads((SCHEMA_DIR / "map.schema.json").read_text())["$defs"]["Beacon"]["properties"]
-    assert _bounds(beacon["side_m"]) == (models.MIN_SIDE_M, None, models.MAX_SIDE_M, None)
     openapi = json.loads((PACKAGE_DIR / "openapi.json").read_text())["components"]["schemas"]
-    assert _bounds(openapi["Beacon"]["properties"]["side_m"]) == (models.MIN_SIDE_M, None, models.MAX_SIDE_M, None)
+    for size in ("side_m", "width_m", "height_m", "diameter_m"):
+        assert _bounds(beacon[size]) == (models.MIN_SIDE_M, None, models.MAX_SIDE_M, None), size
+        assert _bounds(openapi["Beacon"]["properties"][size]) == (models.MIN_SIDE_M, None, models.MAX_SIDE_M, None)
