@@ -14,8 +14,10 @@ import io.lumipose.client.map.Beacon;
 import io.lumipose.client.map.MapViewport;
 import io.lumipose.client.map.RoomMap;
 
-/** A small floor plan: the room's beacons with their IDs, the recent track and the current pose. */
+/** A small floor plan: the room's beacons, each in its shape, with their IDs, the recent track and the current pose. */
 final class BeaconMapView extends View {
+    /** Points per corner arc of a panel's outline: a circle is four of them. */
+    private static final int OUTLINE_POINTS_PER_ARC = 12;
     private final Paint beaconPaint = new Paint(Paint.ANTI_ALIAS_FLAG);
     private final Paint textPaint = new Paint(Paint.ANTI_ALIAS_FLAG);
     private final Paint trackPaint = new Paint(Paint.ANTI_ALIAS_FLAG);
@@ -58,9 +60,9 @@ final class BeaconMapView extends View {
         MapViewport v = MapViewport.fit(map, track, getWidth(), getHeight(), 40, 1.0);
         for (Beacon b : map.beacons) {
             Path p = new Path();
-            double[][] c = b.cornersXyM();
+            double[][] c = b.outlineXyM(OUTLINE_POINTS_PER_ARC);
             p.moveTo((float) v.screenX(c[0][0]), (float) v.screenY(c[0][1]));
-            for (int i = 1; i < 4; i++) {
+            for (int i = 1; i < c.length; i++) {
                 p.lineTo((float) v.screenX(c[i][0]), (float) v.screenY(c[i][1]));
             }
             p.close();

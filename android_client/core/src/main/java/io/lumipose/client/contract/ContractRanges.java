@@ -84,9 +84,9 @@ public final class ContractRanges {
     public static final long MIN_TIMESTAMP_NS = 0;
     /** Each coordinate of a beacon's center_m, metres (room for projected coordinates). */
     public static final Range COORDINATE_M = new Range(-1e7, 1e7);
-    /** A beacon's side_m. */
-    public static final Range BEACON_SIDE_M = new Range(0.005, 10);
-    /** A beacon's corner_radius_m (also below half its side). */
+    /** A beacon's side_m, width_m, height_m and diameter_m (whichever its shape gives). */
+    public static final Range BEACON_SIZE_M = new Range(0.005, 10);
+    /** A beacon's corner_radius_m (also below half its shorter side; a circle has none). */
     public static final Range CORNER_RADIUS_M = new Range(0, 5);
 
     /** @throws ContractException when {@code v} is negative (a Long is always below 2^63) */

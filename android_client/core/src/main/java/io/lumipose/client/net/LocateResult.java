@@ -11,6 +11,11 @@ import io.lumipose.client.json.Json;
 /** The contract's result JSON ({@code lumipose.result/1}): a fix, or a refusal with a reason. */
 public final class LocateResult {
     public static final String SCHEMA = "lumipose.result/1";
+    /**
+     * The chi-square quantile of 2 degrees of freedom at 95 %: the XY block of the position's
+     * covariance scaled by it is the 95 % error ellipse on the floor plan (docs/contract.md, "Uncertainty").
+     */
+    public static final double CHI2_2DOF_95 = 5.991;
 
     public final boolean ok;
     private final double[] positionM;
@@ -22,6 +27,8 @@ public final class LocateResult {
     private final double[] centerPx;
     public final Double reprojectionErrorPx;
     public final boolean gravityUsed;
+    private final double[] positionSigmaM;
+    private final double[][] positionCovarianceM2;
     /** Machine-readable refusal, e.g. {@code no_beacon}; null on success. */
     public final String reason;
     public final String message;
@@ -29,8 +36,8 @@ public final class LocateResult {
 
     private LocateResult(boolean ok, double[] positionM, double[][] rotationWc, double[] yawPitchRollDeg,
                          Integer beaconId, String beaconIdSource, String orientationRule, double[] centerPx,
-                         Double reprojectionErrorPx, boolean gravityUsed, String reason, String message,
-                         List<String> warnings) {
+                         Double reprojectionErrorPx, boolean gravityUsed, double[] positionSigmaM,
+                         double[][] positionCovarianceM2, String reason, String message, List<String> warnings) {
         this.ok = ok;
         this.positionM = positionM;
         this.rotationWc = rotationWc;
@@ -41,6 +48,8 @@ public final class LocateResult {
         this.centerPx = centerPx;
         this.reprojectionErrorPx = reprojectionErrorPx;
         this.gravityUsed = gravityUsed;
+        this.positionSigmaM = positionSigmaM;
+        this.positionCovarianceM2 = positionCovarianceM2;
         this.reason = reason;
         this.message = message;
         this.warnings = Collections.unmodifiableList(warnings);
@@ -52,14 +61,7 @@ public final class LocateResult {
     }
 
     public double[][] rotationWc() {
-        if (rotationWc == null) {
-            return null;
-        }
-        double[][] out = new double[3][];
-        for (int i = 0; i < 3; i++) {
-            out[i] = rotationWc[i].clone();
-        }
-        return out;
+        return copy(rotationWc);
     }
 
     /** R_wc = Rz(yaw) Ry(pitch) Rx(roll), degrees; all zero = looking straight up. */
@@ -69,6 +71,50 @@ public final class LocateResult {
 
     public double[] centerPx() {
         return centerPx == null ? null : centerPx.clone();
+    }
+
+    /**
+     * 1-sigma uncertainty of {@link #positionM()} along the map's X, Y, Z, m: the square roots of the
+     * covariance's diagonal. Null on a refusal, and from a server that does not give it.
+     */
+    public double[] positionSigmaM() {
+        return positionSigmaM == null ? null : positionSigmaM.clone();
+    }
+
+    /** Covariance of {@link #positionM()} in the map frame (rows and columns X, Y, Z), m^2; null as the sigmas. */
+    public double[][] positionCovarianceM2() {
+        return copy(positionCovarianceM2);
+    }
+
+    /**
+     * The 95 % error ellipse of the position on the floor plan, from the covariance's XY block:
+     * {semi-major axis m, semi-minor axis m, direction of the major axis in deg counter-clockwise
+     * from +X, in (-90, 90]}; null without a covariance.
+     */
+    public double[] errorEllipse95XyM() {
+        if (positionCovarianceM2 == null) {
+            return null;
+        }
+        double a = positionCovarianceM2[0][0];
+        double b = (positionCovarianceM2[0][1] + positionCovarianceM2[1][0]) / 2;
+        double d = positionCovarianceM2[1][1];
+        double mean = (a + d) / 2;
+        double half = Math.hypot((a - d) / 2, b);
+        double major = Math.sqrt(CHI2_2DOF_95 * Math.max(mean + half, 0));
+        double minor = Math.sqrt(CHI2_2DOF_95 * Math.max(mean - half, 0));
+        double angle = Math.toDegrees(0.5 * Math.atan2(2 * b, a - d));
+        return new double[] {major, minor, angle == -90 ? 90 : angle};
+    }
+
+    private static double[][] copy(double[][] rows) {
+        if (rows == null) {
+            return null;
+        }
+        double[][] out = new double[rows.length][];
+        for (int i = 0; i < rows.length; i++) {
+            out[i] = rows[i].clone();
+        }
+        return out;
     }
 
     public static LocateResult fromJson(String text) {
@@ -98,7 +144,9 @@ public final class LocateResult {
                 Json.optString(o, "orientation_rule", "orientation_rule"),
                 Json.optDoubles(o, "center_px", "center_px", 2),
                 Json.optDouble(o, "reprojection_error_px", "reprojection_error_px"),
-                gravityUsed != null && gravityUsed, reason, Json.optString(o, "message", "message"),
+                gravityUsed != null && gravityUsed, Json.optDoubles(o, "position_sigma_m", "position_sigma_m", 3),
+                Json.optRows(o, "position_covariance_m2", "position_covariance_m2", 3, 3), reason,
+                Json.optString(o, "message", "message"),
                 Json.optStrings(o, "warnings", "warnings"));
     }
 }

@@ -23,6 +23,7 @@ import org.junit.jupiter.api.Test;
 
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.json.ContractException;
+import io.lumipose.client.map.Beacon;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.testutil.Repo;
 
@@ -60,7 +61,10 @@ class ContractRangesTest {
         MIRRORED.put("frame#Crop.full_height", ContractRanges.SIDE_PX);
         MIRRORED.put("map#Beacon.center_m", ContractRanges.COORDINATE_M);
         MIRRORED.put("map#Beacon.yaw_deg", ContractRanges.ANGLE_DEG);
-        MIRRORED.put("map#Beacon.side_m", ContractRanges.BEACON_SIDE_M);
+        MIRRORED.put("map#Beacon.side_m", ContractRanges.BEACON_SIZE_M);
+        MIRRORED.put("map#Beacon.width_m", ContractRanges.BEACON_SIZE_M);
+        MIRRORED.put("map#Beacon.height_m", ContractRanges.BEACON_SIZE_M);
+        MIRRORED.put("map#Beacon.diameter_m", ContractRanges.BEACON_SIZE_M);
         MIRRORED.put("map#Beacon.corner_radius_m", ContractRanges.CORNER_RADIUS_M);
         NOT_MIRRORED.put("frame#FrameMeta.timestamp_ns", "[0, 2^63): checked by timestampIsAnyNonNegativeLong");
         NOT_MIRRORED.put("frame#GroundTruth.position_m", "ground truth: simulator and test-bench fixtures only");
@@ -233,5 +237,31 @@ class ContractRangesTest {
         fields.add(assertThrows(ContractException.class, () -> RoomMap.fromJson(far.toString())).field);
         assertEquals(new TreeSet<String>(java.util.Arrays.asList("beacons[0].side_m", "beacons[0].yaw_deg",
                 "beacons[0].corner_radius_m", "beacons[0].center_m[2]")), new TreeSet<String>(fields));
+    }
+
+    @Test
+    void shapedBeaconsSizesOutOfRangeAreRefusedNamingTheField() throws IOException {
+        String map = Repo.text("shared_schemas/examples/map_shapes.json");
+        RoomMap.fromJson(map);
+        // beacon 1 is a rectangle, beacon 2 a circle
+        Object[][] cases = {{1, "width_m", 1e-300}, {1, "width_m", 10.5}, {1, "height_m", 0.004},
+            {1, "height_m", 1e308}, {2, "diameter_m", 0.004}, {2, "diameter_m", 1e308}};
+        for (Object[] c : cases) {
+            JSONObject o = new JSONObject(map);
+            o.getJSONArray("beacons").getJSONObject((Integer) c[0]).put((String) c[1], c[2]);
+            assertEquals("beacons[" + c[0] + "]." + c[1],
+                    assertThrows(ContractException.class, () -> RoomMap.fromJson(o.toString())).field,
+                    c[1] + " = " + c[2]);
+        }
+    }
+
+    @Test
+    void theJavaShapesAreTheContractsPanelShapes() throws IOException {
+        JSONArray values = schema("map").getJSONObject("$defs").getJSONObject("PanelShape").getJSONArray("enum");
+        assertEquals(new TreeSet<Object>(java.util.Arrays.asList(Beacon.ROUNDED_RECTANGLE, Beacon.CIRCLE)),
+                new TreeSet<Object>(values.toList()));
+        JSONObject shape = schema("map").getJSONObject("$defs").getJSONObject("Beacon").getJSONObject("properties")
+                .getJSONObject("shape");
+        assertEquals(Beacon.ROUNDED_RECTANGLE, shape.getString("default"), "a beacon without a shape is a");
     }
 }

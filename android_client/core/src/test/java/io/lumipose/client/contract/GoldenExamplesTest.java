@@ -22,6 +22,7 @@ import io.lumipose.client.camera.PixelSize;
 import io.lumipose.client.frame.CaptureValues;
 import io.lumipose.client.frame.FrameAssembler;
 import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.map.Beacon;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.net.ServerRejectedException;
@@ -134,6 +135,28 @@ class GoldenExamplesTest {
     }
 
     @Test
+    void okResultExampleCarriesItsUncertainty() throws Exception {
+        LocateResult r = LocateResult.fromJson(Repo.text(EXAMPLES + "result_ok.json"));
+        double[] sigma = r.positionSigmaM();
+        double[][] covariance = r.positionCovarianceM2();
+        assertEquals(3, sigma.length);
+        assertEquals(3, covariance.length);
+        for (int i = 0; i < 3; i++) {
+            assertEquals(Math.sqrt(covariance[i][i]), sigma[i], sigma[i] * 1e-12, "sigma = sqrt of the diagonal");
+            for (int j = 0; j < 3; j++) {
+                assertEquals(covariance[i][j], covariance[j][i], 0, "symmetric");
+            }
+        }
+        double[] ellipse = r.errorEllipse95XyM();
+        assertTrue(ellipse[0] >= ellipse[1] && ellipse[1] > 0, "semi-axes " + ellipse[0] + ", " + ellipse[1]);
+        assertTrue(ellipse[0] < 0.01, "the 95 % ellipse of a 1 m fix is millimetres: " + ellipse[0]);
+        LocateResult refused = LocateResult.fromJson(Repo.text(EXAMPLES + "result_no_fix.json"));
+        assertNull(refused.positionSigmaM());
+        assertNull(refused.positionCovarianceM2());
+        assertNull(refused.errorEllipse95XyM());
+    }
+
+    @Test
     void refusedResultExampleParses() throws Exception {
         LocateResult r = LocateResult.fromJson(Repo.text(EXAMPLES + "result_no_fix.json"));
         assertFalse(r.ok);
@@ -156,7 +179,45 @@ class GoldenExamplesTest {
         RoomMap office = RoomMap.fromJson(Repo.text(EXAMPLES + "map.json"));
         assertEquals(4, office.beacons.size());
         assertArrayEquals(new double[] {1.8, 2.7, 2.72}, office.beacon(22).centerM(), 0);
+        assertEquals(0.02, office.beacon(22).cornerRadiusM, 0);
         RoomMap demo = RoomMap.fromJson(Repo.text("shared_schemas/maps/demo.json"));
-        assertEquals(0.174, demo.beacon(0).sideM, 0);
+        assertEquals(Beacon.ROUNDED_RECTANGLE, demo.beacon(0).shape);
+        assertEquals(0.174, demo.beacon(0).widthM, 0);
+        assertEquals(0.174, demo.beacon(0).heightM, 0);
+    }
+
+    @Test
+    void shapesMapExampleParses() throws Exception {
+        RoomMap shapes = RoomMap.fromJson(Repo.text(EXAMPLES + "map_shapes.json"));
+        Beacon square = shapes.beacon(3);
+        assertEquals(Beacon.ROUNDED_RECTANGLE, square.shape);
+        assertEquals(0.174, square.widthM, 0);
+        assertEquals(0.174, square.heightM, 0);
+        Beacon rectangle = shapes.beacon(12);
+        assertEquals(Beacon.ROUNDED_RECTANGLE, rectangle.shape);
+        assertEquals(1.195, rectangle.widthM, 0);
+        assertEquals(0.295, rectangle.heightM, 0);
+        assertEquals(0.01, rectangle.cornerRadiusM, 0);
+        assertEquals(90, rectangle.yawDeg, 0);
+        assertTrue(rectangle.hasCorners());
+        Beacon circle = shapes.beacon(40);
+        assertEquals(Beacon.CIRCLE, circle.shape);
+        assertEquals(0.2, circle.widthM, 0);
+        assertFalse(circle.hasCorners());
+        assertEquals(0.1, circle.outlineRadiusM(), 0);
+    }
+
+    @Test
+    void everyExampleIsReadHere() throws Exception {
+        Set<String> names = new java.util.TreeSet<String>();
+        try (java.nio.file.DirectoryStream<java.nio.file.Path> files =
+                java.nio.file.Files.newDirectoryStream(Repo.root().resolve(EXAMPLES), "*.json")) {
+            for (java.nio.file.Path f : files) {
+                names.add(f.getFileName().toString());
+            }
+        }
+        assertEquals(new java.util.TreeSet<String>(java.util.Arrays.asList("error.json", "frame.json",
+                "frame_profile_nv21.json", "map.json", "map_shapes.json", "result_no_fix.json", "result_ok.json")),
+                names, "a new golden example needs a test here");
     }
 }
