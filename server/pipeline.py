@@ -1,7 +1,10 @@
 """The one-panel pipeline: chains the stages and times each one. No vision happens here.
 
 coarse ROI -> blur -> threshold -> beacon contour -> hull / RDP / sides -> sub-pixel sides
--> centre from the diagonals -> corner order -> pose, for one known map beacon. Every refusal
+-> centre from the diagonals -> corner order -> pose, for one known map beacon: the paper's
+corner path, for a square panel wholly in view. A panel cut by the frame border, and any
+panel that is not square (a rectangle, a circle), takes the outline path instead: beacon
+contour -> sub-pixel outline points -> outline fit (`server.pose.outline`). Every refusal
 is a `Refusal` with a reason; only unreadable input raises (in `server.ingest`). Which beacon
 is in view, and rooms of several panels, are decided above (`server.locator`).
 """
@@ -17,13 +20,15 @@ from enum import StrEnum
 import cv2
 import numpy as np
 
-from server.geometry import camera_matrix, distortion_vector
+from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, distortion_vector, world_to_camera
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.pose.ordering import order_corners
+from server.pose.outline import OutlineFitRules, fit_outline
 from server.pose.solve import GravityMode, PoseRules, solve_pose
-from server.vision.binarize import blur, threshold
-from server.vision.contour import BlobRules, find_beacon_blob
+from server.vision.binarize import Levels, blur, threshold
+from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
+from server.vision.outline import OutlineRules, outline_points
 from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
 from server.vision.roi import RoiRules, find_roi
 from server.vision.subpixel import EdgeRules, refine_edges
@@ -48,6 +53,8 @@ class PipelineOptions:
     polygon: PolygonRules = PolygonRules()
     edges: EdgeRules = EdgeRules()
     pose: PoseRules = PoseRules()
+    outline_points: OutlineRules = OutlineRules()
+    outline_fit: OutlineFitRules = OutlineFitRules()
 
 
 @dataclass
@@ -85,9 +92,10 @@ def locate_beacon(
     """The pose of the camera that took `frame`, which shows map beacon `beacon`, or why there is none."""
     timer = _Timer()
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
+    look = PanelLook.of(beacon)
 
     with timer.stage("roi"):
-        roi = find_roi(frame.pixels, options.roi, options.blobs)
+        roi = find_roi(frame.pixels, options.roi, options.blobs, look)
     if isinstance(roi, Refusal):
         return timer.refusal(roi)
     window = frame.pixels[roi.y0 : roi.y1, roi.x0 : roi.x1]
@@ -100,9 +108,13 @@ def locate_beacon(
     with timer.stage("threshold"):
         mask = threshold(blurred, roi.levels)
     with timer.stage("contour"):
-        blob = find_beacon_blob(mask, options.blobs)
+        blob = find_beacon_blob(mask, options.blobs, look)
     if isinstance(blob, Refusal):
         return timer.refusal(blob)
+    if blob.cut or not _corner_path_fits(beacon):
+        x, y, w, h = blob.bounding_box
+        box = (roi.x0 + x * step, roi.y0 + y * step, w * step, h * step)
+        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=blob.cut)
     with timer.stage("polygon"):
         quad = (
             rounded_square_corners(blob.contour, options.polygon)
@@ -170,6 +182,65 @@ def locate_beacon(
         ambiguity_ratio=pose.ambiguity_ratio,
         covariance_m2=pose.covariance_m2,
         warnings=tuple(warnings),
+        timing_ms=timer.total(),
+    )
+
+
+def _corner_path_fits(beacon: Beacon) -> bool:
+    """The paper's corner path is for squares; rectangles and circles take the outline path."""
+    width, height = beacon.extent_m
+    return beacon.has_corners and width == height
+
+
+def _locate_by_outline(
+    frame: LumaFrame,
+    beacon: Beacon,
+    box: tuple[int, int, int, int],
+    levels: Levels,
+    options: PipelineOptions,
+    id_source: BeaconIdSource,
+    timer: _Timer,
+    cut: bool,
+) -> Fix | Refusal:
+    """The pose from the visible outline of the blob in `box` (frame pixels)."""
+    matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
+    with timer.stage("outline"):
+        found = outline_points(frame.pixels, box, levels, options.outline_points)
+        points = _undistorted(found.points_px, matrix, distortion)
+    gravity = None
+    if frame.meta.gravity_camera is not None and options.gravity_mode is not GravityMode.never:
+        gravity = np.asarray(frame.meta.gravity_camera, dtype=float)
+    with timer.stage("pose"):
+        fit = fit_outline(
+            points,
+            found.level_gap_px,
+            beacon,
+            matrix,
+            gravity,
+            options.gravity_sigma_deg,
+            frame.meta.heading_deg,
+            rules=options.outline_fit,
+        )
+    if isinstance(fit, Refusal):
+        return timer.refusal(fit)
+    corners_m = beacon_to_world(beacon, beacon_corners_m(beacon)) if beacon.has_corners else np.zeros((0, 3))
+    model = np.vstack([corners_m, np.asarray(beacon.center_m, float)[None, :]])
+    in_camera = world_to_camera(model, fit.position_m, fit.rotation_wc)
+    projected, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), matrix, distortion)
+    projected = projected.reshape(-1, 2)
+    what = "a panel cut by the frame border" if cut else "the panel"
+    return Fix(
+        position_m=fit.position_m,
+        rotation_wc=fit.rotation_wc,
+        beacon_id=beacon.id,
+        id_source=id_source,
+        reprojection_error_px=fit.rms_px,
+        gravity_used=gravity is not None,
+        center_px=projected[-1],
+        corners_px=projected[:4] if beacon.has_corners else None,
+        orientation_rule=fit.orientation_rule,
+        covariance_m2=fit.covariance_m2,
+        warnings=(f"pose from the visible outline of {what} ({fit.points} points, growth {fit.growth_px:.2f} px)",),
         timing_ms=timer.total(),
     )
 

@@ -416,6 +416,7 @@ class FailureReason(StrEnum):
 class OrientationRule(StrEnum):
     heading = "heading"
     yaw_within_45deg = "yaw_within_45deg"
+    yaw_within_90deg = "yaw_within_90deg"  # a rectangle: its aspect settles two of the square's four orientations
 
 
 class BeaconIdSource(StrEnum):

@@ -15,7 +15,7 @@ import numpy as np
 
 from server.outcomes import Refusal
 from server.vision.binarize import Levels, estimate_levels, threshold
-from server.vision.contour import BlobRules, find_beacon_blob
+from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
 from shared_schemas import FailureReason
 
 
@@ -82,8 +82,11 @@ def coarse_to_frame(points: np.ndarray, step: int, shape: tuple[int, int]) -> np
     return np.minimum(np.asarray(points, dtype=float) * step, [width - 1, height - 1])
 
 
-def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobRules = BlobRules()) -> Roi | Refusal:
-    """The beacon's region of interest in a full frame (height, width) uint8."""
+def find_roi(
+    pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobRules = BlobRules(), look: PanelLook = PanelLook()
+) -> Roi | Refusal:
+    """The beacon's region of interest in a full frame (height, width) uint8 (the panel's blob
+    may be cut by the frame border: see `contour.find_beacon_blob`)."""
     height, width = pixels.shape
     step = rules.coarse_step(pixels.shape)
     small = coarse_view(pixels, step)
@@ -95,7 +98,7 @@ def find_roi(pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobR
         )
     # No blur here: it would spread a panel a few pixels from the frame edge onto the border
     # of the small view, and at this scale the panel stands hundreds of DN above the noise.
-    blob = find_beacon_blob(threshold(small, levels), blob_rules)
+    blob = find_beacon_blob(threshold(small, levels), blob_rules, look)
     if isinstance(blob, Refusal):
         return blob
     x, y, w, h = blob.bounding_box

@@ -86,10 +86,30 @@ def test_square_corner_path_refuses_the_rounded_panel():
 def test_frames_without_a_usable_beacon_are_refused():
     dark = LumaFrame(np.full((HEIGHT, WIDTH), 9, np.uint8), frame_at([0, 0, 0], (0, 0, 0)).meta, CAMERA)
     assert locate(dark, MAP).reason is FailureReason.no_beacon
-    cut = frame_at([0.5, 0.0, 0.0], (0, 0, 0))  # the panel crosses the left border
-    assert locate(cut, MAP).reason is FailureReason.beacon_cut_off
+    sliver = frame_at([0.58, 0.0, 0.0], (8, 0, 0))  # a few pixels of one side at the left border
+    refused = locate(sliver, MAP)
+    assert refused.reason is FailureReason.beacon_cut_off, refused
     two = BeaconMap(name="two", beacons=[BEACON, BEACON.model_copy(update={"id": 1, "center_m": [2, 0, 1]})])
     assert locate(frame_at([0, 0, 0], (0, 0, 0)), two).reason is FailureReason.unknown_beacon
+
+
+@pytest.mark.parametrize(
+    "position, ypr", [([0.5, 0.03, 0.0], (7, 2, -1)), ([0.0, 0.62, 0.0], (5, 1, 1))], ids=["left-border", "top-border"]
+)
+def test_a_panel_half_cut_by_the_border_is_fixed_from_its_visible_outline(position, ypr):
+    result = locate(frame_at(position, ypr, seed=2), MAP)
+    assert result.ok, result.message
+    assert "cut by the frame border" in result.warnings[0]
+    sigma = np.asarray(result.position_sigma_m)
+    assert np.all(sigma > 0) and np.all(sigma < 0.005)
+    assert error_2d_mm(result, position) < 3.0
+    assert result.corners_px is not None and result.orientation_rule is not None
+
+
+def test_a_cut_panel_whose_visible_part_fits_two_poses_is_refused_not_guessed():
+    result = locate(frame_at([0.5, 0.03, 0.0], (25, 4, -3), seed=2), MAP)
+    assert result.reason is FailureReason.pose_ambiguous, result
+    assert "two poses" in result.message
 
 
 def test_cli_locates_the_bundled_fixture_as_the_readme_says():

@@ -1,0 +1,468 @@
+"""The camera pose from points on whatever part of a panel's outline is in view (beyond the paper).
+
+The corner path needs four corners; a panel cut by the frame border, a rectangle seen at a
+steep angle or a round downlight has none to give. Here the pose is fitted to the outline
+points of `server.vision.outline` directly:
+
+- model: the panel's exact outline (straight sides and corner arcs, any `Beacon` shape) as a
+  signed distance in its own plane. Each point's viewing ray is cut with the ceiling plane
+  and its signed distance to the outline there is turned into pixels by the projection's
+  scale along the outline's normal: the residual is the point's distance to the projected
+  outline, to first order, without projecting a dense outline or searching nearest points.
+- growth: the mid-level contour of an overexposed, blurred panel lies outside its outline by
+  some D px (`server.vision.subpixel`); D is a parameter of the fit (the corner arcs and
+  opposite sides tell it from the distance), or known from the device's complete panels.
+- unknowns: yaw, pitch, roll and the camera's 3-D position, and D; pitch and roll are
+  weighed against the gravity vector (sensor sigma), yaw against the heading for a circle
+  (nothing else in a circle shows it).
+- starts: tilt from gravity (level without it); in the levelled view the panel's image is a
+  similarity of its outline, so the visible straight sides give the yaw (modulo the shape's
+  symmetry, settled by the contract's orientation rule), and opposite sides or the panel's
+  known size the distance; without any opposite pair, a few distances are tried.
+- uncertainty: the position's covariance from the fit's information (edge-point noise and
+  its correlation along the outline measured from the fit's own residuals, and the gravity
+  sensor's sigma). A fit whose position it does not pin down to `max_sigma_m` is refused.
+
+All image points here are undistorted pixel coordinates.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from server.geometry import beacon_rotation, rotation_from_ypr, ypr_from_rotation
+from server.outcomes import Refusal
+from server.vision.subpixel import blur_sigma_px
+from shared_schemas import Beacon, FailureReason, OrientationRule
+
+CHI2_2DOF_95 = 5.991
+HELD_GROWTH_PX = 1.0  # a typical growth (docs/accuracy.md: 0.5-2 px), only to start from
+
+
+@dataclass(frozen=True)
+class OutlineFitRules:
+    min_points: int = 40
+    max_rms_px: float = 0.8  # the fit's RMS distance (px) of the points to the outline
+    max_sigma_m: float = 0.01  # 1-sigma 2-D position error above this: refused (the map's need)
+    point_sigma_floor_px: float = 0.02  # what one frame cannot show: lens calibration, quantisation
+    # Pixel locking: a level crossing interpolated between pixels is off by up to ~0.1 px as a
+    # function of the edge's sub-pixel phase (docs/accuracy.md); along a side near the pixel
+    # grid's direction the phase hardly changes, so the whole side shares one such error.
+    segment_sigma_px: float = 0.05
+    heading_sigma_deg: float = 5.0  # a phone compass, for the yaw of a circle
+    growth_sigma_px: float = 0.1  # of a growth measured on the device's complete panels
+    huber_px: float = 1.0  # points further than this from the outline count linearly
+    distances_m: tuple[float, ...] = (0.8, 1.2, 1.8, 2.7, 4.0)  # starts when nothing gives the distance
+    growth_probes_px: tuple[float, ...] = (0.3, 2.5)  # where a second minimum is looked for
+    ambiguous_apart_m: float = 0.005  # two minima further apart than this are two answers ...
+    ambiguity_chi2: float = 9.0  # ... unless the worse one's chi-square is this much higher (3 sigma)
+
+
+@dataclass(frozen=True)
+class OutlineFit:
+    position_m: np.ndarray  # (3,) camera optical centre, map frame
+    rotation_wc: np.ndarray  # (3, 3)
+    covariance_m2: np.ndarray  # (3, 3) of position_m
+    growth_px: float
+    rms_px: float
+    point_sigma_px: float  # the points' noise, correlation included
+    points: int
+    orientation_rule: OrientationRule | None  # None: a circle, whose yaw came from the heading
+
+    @property
+    def sigma_2d_m(self) -> float:
+        """The 2-D position's 1-sigma along its worst direction."""
+        return float(math.sqrt(max(np.linalg.eigvalsh(self.covariance_m2[:2, :2]).max(), 0.0)))
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """One fit's fixed inputs: rays (3, N) of the points, the panel, the priors."""
+
+    rays: np.ndarray
+    beacon: Beacon
+    focal_px: tuple[float, float]
+    tilt_rad: tuple[float, float] | None  # measured (pitch, roll)
+    tilt_sigma_rad: float
+    yaw_prior_rad: float | None
+    yaw_sigma_rad: float
+    growth_prior_px: float | None
+    growth_sigma_px: float
+    blur_px: float  # the edge's blur: a curved edge's level set lies s^2 / (2 R) inside its offset
+    on_arc: np.ndarray | None = None  # (N,) bool: the points on a corner arc, for that term
+
+    def distances_px(self, params: np.ndarray) -> np.ndarray:
+        """Signed distance (px, outward positive) of each point to the outline grown by D:
+        (N,) for one parameter vector (7,), (k, N) for k of them (k, 7) at once."""
+        batch = np.atleast_2d(params)
+        rotation = _rotations(batch[:, 0], batch[:, 1], batch[:, 2])  # (k, 3, 3) camera to map
+        centre = np.asarray(self.beacon.center_m, float)
+        along = rotation @ self.rays  # (k, 3, N)
+        rise = np.where(np.abs(along[:, 2]) > 1e-9, along[:, 2], 1e-9)
+        reach = (centre[2] - batch[:, 5, None]) / rise  # ray length to the ceiling plane, in ray units
+        to_beacon = beacon_rotation(self.beacon)
+        offset = batch[:, 3:6, None] + reach[:, None, :] * along - centre[None, :, None]
+        plane = np.einsum("ji,kjn->kin", to_beacon[:, :2], offset)  # (k, 2, N) in the panel's axes
+        width, height = self.beacon.extent_m
+        radius = self.beacon.outline_radius_m
+        qx, qy = np.abs(plane[:, 0]) - (width / 2 - radius), np.abs(plane[:, 1]) - (height / 2 - radius)
+        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+        signed = outside + np.minimum(np.maximum(qx, qy), 0.0) - radius
+        # the outline's normal in the plane: radial beyond a corner's centre, else the nearer side's
+        corner = (qx > 0) & (qy > 0)
+        gx = np.where(corner, np.maximum(qx, 0.0) / np.maximum(outside, 1e-12), (qx >= qy)) * np.sign(plane[:, 0])
+        gy = np.where(corner, np.maximum(qy, 0.0) / np.maximum(outside, 1e-12), (qx < qy)) * np.sign(plane[:, 1])
+        # ... in the camera frame: R_wc^T R_wb (gx, gy, 0)
+        turn = np.einsum("kji,jl->kil", rotation, to_beacon[:, :2])  # (k, 3, 2)
+        normal = turn[:, :, :1] * gx[:, None, :] + turn[:, :, 1:] * gy[:, None, :]
+        x, y, z = self.rays[:, None, :] * reach[None]  # the point on the panel, camera frame (3, k, N)
+        fx, fy = self.focal_px
+        du = fx / z * (normal[:, 0] - x / z * normal[:, 2])
+        dv = fy / z * (normal[:, 1] - y / z * normal[:, 2])
+        scale = np.hypot(du, dv)  # px per metre across the outline
+        growth = batch[:, 6, None]
+        # (which points lie on an arc is frozen per fit: a point crossing from side to arc would
+        # make the term jump, and the Jacobian's differences with it)
+        on_arc = corner if self.on_arc is None else self.on_arc
+        arc_px = np.where(on_arc, radius * scale + growth, np.inf)
+        distances = signed * scale - growth + self.blur_px**2 / (2 * np.maximum(arc_px, 1.0))
+        return distances if np.ndim(params) == 2 else distances[0]
+
+    def segments(self, params: np.ndarray) -> np.ndarray:
+        """Which part of the outline (N,) each point lies on at `params`: 0-3 the four sides
+        (left, right, bottom, top in the panel's axes), 4-7 the four corner arcs."""
+        rotation = _rotations(*params[:3, None])[0]
+        centre = np.asarray(self.beacon.center_m, float)
+        along = rotation @ self.rays
+        reach = (centre[2] - params[5]) / np.where(np.abs(along[2]) > 1e-9, along[2], 1e-9)
+        plane = beacon_rotation(self.beacon)[:, :2].T @ (params[3:6, None] + reach * along - centre[:, None])
+        width, height = self.beacon.extent_m
+        radius = self.beacon.outline_radius_m
+        qx, qy = np.abs(plane[0]) - (width / 2 - radius), np.abs(plane[1]) - (height / 2 - radius)
+        corner = (qx > 0) & (qy > 0)
+        side = np.where(qx >= qy, (plane[0] > 0).astype(int), 2 + (plane[1] > 0))
+        arc = 4 + (plane[0] > 0) + 2 * (plane[1] > 0)
+        return np.where(corner, arc, side)
+
+    def priors(self, params: np.ndarray) -> np.ndarray:
+        """The gravity, heading and growth residuals, each in its own sigmas: (m,) or (k, m)."""
+        batch = np.atleast_2d(params)
+        terms = []
+        if self.tilt_rad is not None:
+            terms += [
+                (batch[:, 1] - self.tilt_rad[0]) / self.tilt_sigma_rad,
+                (batch[:, 2] - self.tilt_rad[1]) / self.tilt_sigma_rad,
+            ]
+        if self.yaw_prior_rad is not None:
+            terms.append(((batch[:, 0] - self.yaw_prior_rad + math.pi) % (2 * math.pi) - math.pi) / self.yaw_sigma_rad)
+        if self.growth_prior_px is not None:
+            terms.append((batch[:, 6] - self.growth_prior_px) / self.growth_sigma_px)
+        stacked = np.stack(terms, axis=1) if terms else np.zeros((len(batch), 0))
+        return stacked if np.ndim(params) == 2 else stacked[0]
+
+    def residuals(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
+        """Points' distances in their sigma, then the priors: (n,) or (k, n)."""
+        return np.concatenate([self.distances_px(params) / point_sigma_px, self.priors(params)], axis=-1)
+
+    def jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
+        """d residuals / d params (n, 7), central differences, all fourteen in one batch."""
+        steps = np.diag(_STEPS)
+        values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
+        return ((values[:7] - values[7:]) / (2 * _STEPS[:, None])).T
+
+
+_STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4])  # rad, m, px
+
+
+def _rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray) -> np.ndarray:
+    """R_wc = Rz(yaw) Ry(pitch) Rx(roll) (`server.geometry.rotation_from_ypr`), radians, (k, 3, 3)."""
+    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    return np.stack(
+        [
+            np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
+            np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
+            np.stack([-sp, cp * sr, cp * cr], axis=-1),
+        ],
+        axis=-2,
+    )
+
+
+def _blur_px(growth_px: float, level_gap_px: float) -> float:
+    """The edge's blur from its growth and level gap; 0 (no curvature term) when unmeasured."""
+    return blur_sigma_px(growth_px, level_gap_px) or 0.0
+
+
+def _wrap(angle_rad: float) -> float:
+    return (angle_rad + math.pi) % (2 * math.pi) - math.pi
+
+
+def tilt_from_gravity(gravity_camera: np.ndarray) -> tuple[float, float]:
+    """(pitch, roll) in degrees of R_wc = Rz(yaw) Ry(pitch) Rx(roll) from gravity in the camera frame."""
+    g = np.asarray(gravity_camera, float)
+    g = g / np.linalg.norm(g)
+    return math.degrees(math.asin(max(-1.0, min(1.0, g[0])))), math.degrees(math.atan2(-g[1], -g[2]))
+
+
+def _side_direction_deg(level_xy: np.ndarray, fold: int) -> float:
+    """The dominant direction (degrees, modulo 360 / fold) of the tangents along points (N, 2)
+    in contour order: straight sides agree on it, arcs spread evenly and cancel."""
+    tangent = np.roll(level_xy, -2, axis=0) - np.roll(level_xy, 2, axis=0)
+    angle = np.arctan2(tangent[:, 1], tangent[:, 0])
+    length = np.linalg.norm(tangent, axis=1)
+    # neighbours across a gap (where the frame border cut the outline) give no direction
+    ordinary = length < 3 * np.median(length)
+    total = np.sum(np.exp(1j * fold * angle[ordinary]))
+    return math.degrees(np.angle(total) / fold)
+
+
+def _extent_start(v: np.ndarray, size: tuple[float, float]) -> list[tuple[float, np.ndarray]]:
+    """(height above camera, panel-frame camera offset (2,)) starts from levelled points v (N, 2)
+    already turned to the panel's axes: opposite sides give the scale, one side the offset."""
+    seen = []
+    for axis in (0, 1):
+        lo, hi = v[:, axis].min(), v[:, axis].max()
+        tolerance = 0.02 * (hi - lo)
+        # a side of the panel is in view when many points share its extreme coordinate
+        seen.append((np.mean(v[:, axis] < lo + tolerance) > 0.08, np.mean(v[:, axis] > hi - tolerance) > 0.08))
+    heights = [size[a] / (v[:, a].max() - v[:, a].min()) for a in (0, 1) if all(seen[a])]
+    if not heights:
+        span = max(np.ptp(v[:, 0]), np.ptp(v[:, 1]), 1e-6)
+        heights = [h for h in _DISTANCE_STARTS if size[0] / h > 0.9 * span] or [size[0] / span]
+    starts = []
+    for height in heights:
+        offset = np.zeros(2)
+        for axis in (0, 1):
+            low_seen, high_seen = seen[axis]
+            if low_seen and not high_seen:
+                offset[axis] = -size[axis] / 2 - height * v[:, axis].min()
+            elif high_seen and not low_seen:
+                offset[axis] = size[axis] / 2 - height * v[:, axis].max()
+            else:
+                offset[axis] = -height * (v[:, axis].min() + v[:, axis].max()) / 2
+        starts.append((height, offset))
+    return starts
+
+
+_DISTANCE_STARTS = OutlineFitRules().distances_m
+
+
+def _starts(problem: _Problem, heading_deg: float | None) -> list[tuple[np.ndarray, OrientationRule | None]]:
+    """Start parameters, each with the orientation rule that chose its yaw."""
+    beacon = problem.beacon
+    pitch, roll = problem.tilt_rad or (0.0, 0.0)
+    level = rotation_from_ypr(0.0, math.degrees(pitch), math.degrees(roll)) @ problem.rays
+    level_xy = (level[:2] / level[2]).T  # where the rays meet a plane 1 m above, camera yaw 0
+    beacon_yaw = math.radians(beacon.yaw_deg)
+    width, height = beacon.extent_m
+    if not beacon.has_corners:
+        yaws: list[tuple[float, OrientationRule | None]] = [(problem.yaw_prior_rad or 0.0, None)]
+    else:
+        square = math.isclose(width, height)
+        # perpendicular sides agree modulo 90 degrees; arcs spread evenly and cancel
+        side = math.radians(_side_direction_deg(level_xy, 4))
+        expected = beacon_yaw - math.radians(heading_deg) if heading_deg is not None else 0.0
+        rule: OrientationRule | None
+        if heading_deg is not None:
+            rule = OrientationRule.heading
+        else:
+            rule = OrientationRule.yaw_within_45deg if square else OrientationRule.yaw_within_90deg
+        # the panel's x_B axis appears at angle beacon_yaw - camera_yaw in the levelled view; a
+        # square looks the same every quarter turn, a rectangle every half turn, and which of
+        # its two side directions is the width the fit tells
+        symmetry = math.pi / 2 if square else math.pi
+        yaws = []
+        for seen in [side] if square else [side, side + math.pi / 2]:
+            seen -= symmetry * round((seen - expected) / symmetry)
+            yaws.append((_wrap(beacon_yaw - seen), rule))
+    starts: list[tuple[np.ndarray, OrientationRule | None]] = []
+    for yaw, yaw_rule in yaws:
+        to_panel = np.array([[math.cos(yaw - beacon_yaw), -math.sin(yaw - beacon_yaw)],
+                             [math.sin(yaw - beacon_yaw), math.cos(yaw - beacon_yaw)]])  # fmt: skip
+        v = level_xy @ to_panel.T
+        for above, offset in _extent_start(v, (width, height)):
+            offset_map = np.asarray(beacon.center_m[:2]) + beacon_rotation(beacon)[:2, :2] @ offset
+            position = [offset_map[0], offset_map[1], beacon.center_m[2] - above]
+            growth = problem.growth_prior_px if problem.growth_prior_px is not None else HELD_GROWTH_PX
+            starts.append((np.array([yaw, pitch, roll, *position, growth]), yaw_rule))
+    return starts
+
+
+def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float):
+    return least_squares(
+        problem.residuals,
+        start,
+        jac=problem.jacobian,
+        args=(point_sigma_px,),
+        loss="huber",
+        f_scale=huber_px / point_sigma_px,
+        x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5],
+        max_nfev=60,
+    )
+
+
+def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
+    """Twice the fit's cost (Huber beyond `huber_px`) in the points' sigma: comparable between minima."""
+    residuals = problem.residuals(params, point_sigma_px)
+    limit = huber_px / point_sigma_px
+    size = np.abs(residuals)
+    return float(np.sum(np.where(size <= limit, size**2, 2 * limit * size - limit**2)))
+
+
+def _explain_probes(
+    problem: _Problem,
+    best: np.ndarray,
+    probes: list[np.ndarray],
+    covariance_m2: np.ndarray,
+    sigma_px: float,
+    huber_px: float,
+) -> np.ndarray:
+    """The position's covariance widened until it explains the probes (fits with the growth
+    held elsewhere): a probe that moves the position by d at a chi-square cost c says the
+    variance along d is at least |d|^2 / c. Where growth trades against distance along a
+    curved valley the linear covariance at the minimum does not see how far the valley goes."""
+    chi2 = _robust_chi2(problem, best, sigma_px, huber_px)
+    for probe in probes:
+        moved = probe[3:6] - best[3:6]
+        cost = max(_robust_chi2(problem, probe, sigma_px, huber_px) - chi2, 1.0)
+        if moved @ np.linalg.solve(covariance_m2, moved) > cost:
+            covariance_m2 = covariance_m2 + np.outer(moved, moved) / cost
+    return covariance_m2
+
+
+def _noise_px(distances: np.ndarray, floor_px: float) -> float:
+    """The points' noise as one sigma per independent point: robust spread, times the
+    square root of how many neighbours along the outline share an error (lag-one correlation
+    of the residuals in contour order, as an AR(1) process's variance inflation)."""
+    centred = distances - np.median(distances)
+    spread = 1.4826 * float(np.median(np.abs(centred)))
+    if len(centred) > 3 and np.var(centred) > 0:
+        rho = float(np.clip(np.corrcoef(centred[:-1], centred[1:])[0, 1], 0.0, 0.96))
+    else:
+        rho = 0.0
+    return max(spread, floor_px) * math.sqrt((1 + rho) / (1 - rho))
+
+
+def _covariance(
+    problem: _Problem, params: np.ndarray, point_sigma_px: float, segment_sigma_px: float
+) -> np.ndarray | None:
+    """The parameters' covariance (7, 7) from the residuals' Jacobian, with the points' errors
+    white (`point_sigma_px`) plus one shared offset per side or arc (`segment_sigma_px`): the
+    information J^T Sigma^-1 J, Sigma's inverse per part by the Sherman-Morrison formula."""
+    jacobian = problem.jacobian(params, point_sigma_px)  # rows of the points in point sigmas
+    points = len(problem.rays[0])
+    information = jacobian.T @ jacobian
+    share = (segment_sigma_px / point_sigma_px) ** 2
+    parts = problem.segments(params)
+    for part in np.unique(parts):
+        rows = jacobian[:points][parts == part]
+        total = rows.sum(axis=0)
+        information -= share / (1.0 + share * len(rows)) * np.outer(total, total)
+    if not np.all(np.isfinite(information)) or np.linalg.cond(information) > 1e14:
+        return None
+    return np.linalg.inv(information)
+
+
+def fit_outline(
+    points_px: np.ndarray,
+    level_gap_px: float,
+    beacon: Beacon,
+    camera_matrix: np.ndarray,
+    gravity_camera: np.ndarray | None,
+    gravity_sigma_deg: float,
+    heading_deg: float | None,
+    growth_px: float | None = None,
+    rules: OutlineFitRules = OutlineFitRules(),
+) -> OutlineFit | Refusal:
+    """Camera pose from undistorted points (N, 2) on the visible outline of map beacon `beacon`."""
+    if len(points_px) < rules.min_points:
+        return Refusal(FailureReason.beacon_cut_off, f"only {len(points_px)} points of the panel's outline in view")
+    if not beacon.has_corners and heading_deg is None:
+        return Refusal(
+            FailureReason.pose_failed,
+            "a round panel shows no yaw: the frame needs heading_deg (or a second panel in view)",
+        )
+    rays = np.linalg.solve(camera_matrix, np.vstack([points_px.T, np.ones(len(points_px))]))
+    tilt = None
+    if gravity_camera is not None:
+        pitch, roll = tilt_from_gravity(gravity_camera)
+        tilt = (math.radians(pitch), math.radians(roll))
+    problem = _Problem(
+        rays=rays,
+        beacon=beacon,
+        focal_px=(float(camera_matrix[0, 0]), float(camera_matrix[1, 1])),
+        tilt_rad=tilt,
+        tilt_sigma_rad=math.radians(max(gravity_sigma_deg, 1e-3)),
+        yaw_prior_rad=None if beacon.has_corners or heading_deg is None else math.radians(heading_deg),
+        yaw_sigma_rad=math.radians(rules.heading_sigma_deg),
+        growth_prior_px=growth_px,
+        growth_sigma_px=rules.growth_sigma_px,
+        blur_px=_blur_px(HELD_GROWTH_PX if growth_px is None else growth_px, level_gap_px),
+    )
+    sigma = 0.1  # a first guess of the points' noise; measured from the residuals below
+    # first with the growth held near its start (far from the answer, a free growth can
+    # run off and trade itself for distance), then free
+    held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
+    fits = [(_fit(held, start, sigma, rules.huber_px), rule) for start, rule in _starts(problem, heading_deg)]
+    first, rule = min(fits, key=lambda item: item[0].cost)
+    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.segments(first.x) >= 4)
+    seeds = [first.x]
+    if growth_px is None:
+        # Growth trades against distance where no opposite sides are in view, and the trade
+        # can make a second minimum: look for it from the growth held low and high.
+        for probe in rules.growth_probes_px:
+            probed = replace(problem, growth_prior_px=probe, growth_sigma_px=0.3)
+            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe]]), sigma, rules.huber_px).x)
+    minima = [_fit(problem, seed, sigma, rules.huber_px).x for seed in seeds]
+    best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
+    problem = replace(problem, on_arc=problem.segments(best) >= 4)
+    measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
+    if tilt is not None and not math.isclose(measured, sigma, rel_tol=0.5):
+        best = _fit(problem, best, measured, rules.huber_px).x  # the gravity weight depends on it
+    distances = problem.distances_px(best)
+    rms = float(np.sqrt(np.mean(distances**2)))
+    if rms > rules.max_rms_px or not np.all(np.isfinite(best)):
+        return Refusal(
+            FailureReason.beacon_cut_off, f"the visible edges do not fit the panel's outline (RMS {rms:.2f} px)"
+        )
+    chi2 = _robust_chi2(problem, best, measured, rules.huber_px)
+    for other in minima:
+        apart = float(np.linalg.norm(other[3:6] - best[3:6]))
+        gap = _robust_chi2(problem, other, measured, rules.huber_px) - chi2
+        if apart > rules.ambiguous_apart_m and gap < rules.ambiguity_chi2:
+            return Refusal(
+                FailureReason.pose_ambiguous,
+                f"two poses {apart * 1000:.0f} mm apart fit the visible part of the panel almost equally "
+                f"(chi-square {chi2:.0f} and {chi2 + gap:.0f})",
+            )
+    covariance = _covariance(problem, best, measured, rules.segment_sigma_px)
+    if covariance is None:
+        return Refusal(FailureReason.beacon_cut_off, "the visible part of the panel does not fix the position")
+    position_covariance = _explain_probes(problem, best, seeds, covariance[3:6, 3:6], measured, rules.huber_px)
+    solution = SimpleNamespace(x=best)
+    rotation = rotation_from_ypr(*np.degrees(solution.x[:3]))
+    fit = OutlineFit(
+        position_m=solution.x[3:6].copy(),
+        rotation_wc=rotation,
+        covariance_m2=position_covariance,
+        growth_px=float(solution.x[6]),
+        rms_px=rms,
+        point_sigma_px=measured,
+        points=len(points_px),
+        orientation_rule=rule,
+    )
+    if fit.sigma_2d_m > rules.max_sigma_m:
+        return Refusal(
+            FailureReason.beacon_cut_off,
+            f"the visible part of the panel ({len(points_px)} outline points) fixes the position only to "
+            f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); {rules.max_sigma_m * 1000:.0f} mm is needed",
+        )
+    return fit
+
+
+def yaw_deg(fit: OutlineFit) -> float:
+    return ypr_from_rotation(fit.rotation_wc)[0]
