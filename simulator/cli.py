@@ -43,13 +43,16 @@ def add_commands(commands) -> None:
     benches = bench.add_subparsers(dest="bench", required=True)
     accuracy = benches.add_parser("accuracy", help="position error over rendered test-bench frames")
     accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0])
-    accuracy.add_argument("--frames", type=int, default=200)
+    accuracy.add_argument("--frames", type=int, default=None, help="per distance (200); with --shape, per shape (100)")
     accuracy.add_argument("--scale", type=float, default=1.0)
     accuracy.add_argument("--max-tilt", type=float, default=10.0)
     accuracy.add_argument("--gravity-sigma", type=float, default=0.1, help="gravity sensor error, degrees")
     accuracy.add_argument("--seed", type=int, default=1)
     accuracy.add_argument("--workers", type=int, default=None)
     accuracy.add_argument("--json", action="store_true")
+    accuracy.add_argument("--shape", action="store_true",
+                          help="instead of the distance table, the panel-shape table (issue 11: 600 x 600 mm, "
+                               "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)")
     accuracy.set_defaults(run=_run_accuracy)
     partial = benches.add_parser("partial", help="panels cut by the image border: coverage and error by visible share")
     partial.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0])
@@ -216,11 +219,16 @@ def _run_load(args) -> int:
 
 
 def _run_accuracy(args) -> int:
+    if args.shape:
+        from simulator.bench_shapes import run_shapes_command
+
+        return run_shapes_command(args)
     from simulator.benchmarks import AccuracyConfig, run_accuracy
 
     reports = []
+    frames = 200 if args.frames is None else args.frames
     for distance in args.distances:
-        config = AccuracyConfig(distance_m=distance, frames=args.frames, scale=args.scale,
+        config = AccuracyConfig(distance_m=distance, frames=frames, scale=args.scale,
                                 max_tilt_deg=args.max_tilt, gravity_sigma_deg=args.gravity_sigma, seed=args.seed)
         reports.append(run_accuracy(config, args.workers))
     if args.json:
