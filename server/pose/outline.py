@@ -292,7 +292,11 @@ def _starts(problem: _Problem, heading_deg: float | None) -> list[tuple[np.ndarr
     return starts
 
 
-def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float):
+def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
+    """The robust least-squares fit from `start` (x, cost); cost infinite when the start itself
+    is not a pose the residuals exist for (the panel's plane behind or edge-on to a ray)."""
+    if not np.all(np.isfinite(problem.residuals(start, point_sigma_px))):
+        return SimpleNamespace(x=start, cost=math.inf)
     return least_squares(
         problem.residuals,
         start,
@@ -308,6 +312,8 @@ def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: 
 def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
     """Twice the fit's cost (Huber beyond `huber_px`) in the points' sigma: comparable between minima."""
     residuals = problem.residuals(params, point_sigma_px)
+    if not np.all(np.isfinite(residuals)):
+        return math.inf
     limit = huber_px / point_sigma_px
     size = np.abs(residuals)
     return float(np.sum(np.where(size <= limit, size**2, 2 * limit * size - limit**2)))
@@ -409,6 +415,8 @@ def fit_outline(
     held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
     fits = [(_fit(held, start, sigma, rules.huber_px), rule) for start, rule in _starts(problem, heading_deg)]
     first, rule = min(fits, key=lambda item: item[0].cost)
+    if not math.isfinite(first.cost):
+        return Refusal(FailureReason.pose_failed, "no start pose puts the panel's outline in front of the camera")
     problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.segments(first.x) >= 4)
     seeds = [first.x]
     if growth_px is None:
@@ -419,6 +427,8 @@ def fit_outline(
             seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe]]), sigma, rules.huber_px).x)
     minima = [_fit(problem, seed, sigma, rules.huber_px).x for seed in seeds]
     best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
+    if not math.isfinite(_robust_chi2(problem, best, sigma, rules.huber_px)):
+        return Refusal(FailureReason.pose_failed, "the outline fit left the poses the panel can be seen from")
     problem = replace(problem, on_arc=problem.segments(best) >= 4)
     measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
     if tilt is not None and not math.isclose(measured, sigma, rel_tol=0.5):
