@@ -1,21 +1,26 @@
 """Rooms with many beacons: one fix per panel in view, the best chosen, agreeing ones fused.
 
-`server.pipeline.locate` handles one panel. Here every beacon-shaped blob of the frame
-(`server.vision.beacons`) that has an ID gets its own crop (the other panels blanked to the
-background level, the principal point shifted, so OpenCV's distortion model stays exact) and
-its own `locate`. The fix of the largest complete panel is the best conditioned (the error
-of a square's pose grows with distance over its image size); the other fixes are averaged
-in, weighted by that same measure, only when they agree with it within `fuse_gate_m` (a
-panel with a wrong ID would move the fix by a beacon spacing, so it is left out, and said).
+`server.pipeline.locate` handles one panel. Here every blob of the frame that looks like one
+of the map's panels (`server.vision.beacons`, any shape) and has an ID gets its own crop (the
+other panels blanked to the background level, the principal point shifted, so OpenCV's
+distortion model stays exact) and its own `locate`; a panel cut by the frame border too (the
+pipeline fits its visible outline). The fix of the largest panel in view is the best
+conditioned (the error of a panel's pose grows with distance over its visible image size); the
+other fixes are averaged in, weighted by that same measure, only when they agree with it
+within `fuse_gate_m` (a panel with a wrong ID would move the fix by a beacon spacing, so it is
+left out, and said).
 
 `locate_in_room` serves a multi-beacon map without a given ID and without a device session
 (`server.locator` chooses): it reads the frame's own stripes (a short-exposure frame,
-docs/vlc.md); a device's session (`server.tracking`) instead brings IDs read from the ID
-frames beside a pose frame, and uses `locate_panel` and `choose_and_fuse` from here.
+docs/vlc.md), names each panel by them (`read_room`; a cut panel from the rows still in view),
+and measures the named panels on the frame with their stripes flattened by their codes; a
+device's session (`server.tracking`) instead brings IDs read from the ID frames beside a pose
+frame, and uses `locate_panel` and `choose_and_fuse` from here.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -23,8 +28,10 @@ import numpy as np
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal, located, refused
 from server.pipeline import PipelineOptions, locate_beacon
-from server.vision.beacons import BeaconBlob, CandidateRules, find_beacon_blobs
-from server.vlc.decoder import IdEvidence, StripeRules
+from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
+from server.vlc.codec import DATA_BITS, MESSAGE_CHIPS
+from server.vlc.decoder import IdEvidence, StripeRules, row_time_s
+from server.vlc.flatten import FlattenRules, flatten_stripes
 from server.vlc.reader import read_id_frame
 from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult, VlcReading
 
@@ -36,6 +43,12 @@ class RoomRules:
     fuse: bool = True
     candidates: CandidateRules = CandidateRules()
     stripes: StripeRules = StripeRules()
+    flatten: FlattenRules = FlattenRules()
+    # A panel cut by the frame border is named like a whole one, by the decoder's own confidence,
+    # but never from fewer visible rows than span the message's data part (16 of its 21 chips):
+    # with less, some of the ID's 8 bits were not seen. 20 chips (all but the one BMC restores)
+    # always suffice; between the two the decoder names it only when the unseen chips are the header's.
+    min_cut_chips: float = 2 * DATA_BITS
 
 
 @dataclass(frozen=True, eq=False)  # identity: fixes hold numpy arrays
@@ -129,62 +142,190 @@ def vlc_reading(evidence: IdEvidence) -> VlcReading:
     )
 
 
+def rows_for_chips(chips: float, row_time_s: float, exposure_s: float, rules: StripeRules = StripeRules()) -> int:
+    """Rows of a panel whose exposure windows span `chips` chips, with the stripe reader's edge margin
+    at each end: a panel cut by the top or bottom border must show this many to be named from one frame."""
+    span_s = chips / rules.chip_rate_hz - exposure_s
+    return int(math.ceil(max(span_s, 0.0) / row_time_s)) + 2 * rules.edge_margin_px
+
+
+@dataclass(frozen=True, eq=False)  # identity: holds blobs and fixes
+class RoomPanel:
+    """One panel of a room frame: its blob, what its stripes read, the map beacon they name (None:
+    not named), its fix or the refusal of the one-panel pipeline (None: not tried), and why it
+    is not named when that is worth saying (`note`)."""
+
+    blob: BeaconBlob
+    vlc: VlcReading | None
+    beacon: Beacon | None
+    fix: Fix | Refusal | None
+    note: str | None = None
+
+
+@dataclass(frozen=True)
+class RoomReading:
+    panels: tuple[RoomPanel, ...]
+    in_view: int
+    problem: str | None  # why this frame cannot carry the code, if it cannot
+
+
+def _where(blob: BeaconBlob) -> str:
+    return f"at ({blob.centroid_px[0]:.0f}, {blob.centroid_px[1]:.0f}) px"
+
+
+def _cut_panel_note(
+    blob: BeaconBlob, chips: float, vlc: VlcReading | None, frame: LumaFrame, rules: RoomRules
+) -> str | None:
+    """Why the panel cut by the frame border is not named, or None when it is."""
+    if chips >= rules.min_cut_chips and vlc is not None and vlc.confident:
+        return None
+    meta = frame.meta
+    assert meta.rolling_shutter_skew_s is not None and meta.exposure_s is not None  # an ID frame's
+    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.full_size[1])
+    whole = rows_for_chips(MESSAGE_CHIPS - 1, row_time, meta.exposure_s, rules.stripes)
+    seen = f"its {blob.bounding_box[3]} visible rows span {chips:.1f} chips of the {MESSAGE_CHIPS}-chip message"
+    if chips < rules.min_cut_chips:
+        why = f"a cut panel needs at least the {rules.min_cut_chips:g} chips of the ID's bits"
+    else:
+        best = "nothing" if vlc is None or vlc.beacon_id is None else f"ID {vlc.beacon_id}"
+        why = f"they read {best} at posterior {0.0 if vlc is None else vlc.confidence:.2f} only"
+    return (
+        f"the panel cut by the frame border {_where(blob)} is not named: {seen}, {why}; "
+        f"{MESSAGE_CHIPS - 1} chips ({whole} rows at this frame's row time) always name it"
+    )
+
+
+def read_room(
+    frame: LumaFrame,
+    beacon_map: BeaconMap,
+    options: PipelineOptions = PipelineOptions(),
+    rules: RoomRules = RoomRules(),
+) -> RoomReading:
+    """Every panel of an ID frame of a multi-beacon map: named by its own stripes, and located.
+
+    Blobs are judged by the looks of the map's panels (`CandidateRules.for_beacons`). A panel
+    cut by the frame border is named like a whole one, from the rows still in view (the stripes
+    run along the rows: a panel cut at its left or right keeps all of them), when they span at
+    least `rules.min_cut_chips`; if not, or the decoder is not confident, it is not named and the
+    panel's `note` says why, with the rows that would do. A named cut panel is located from its
+    visible outline by the one-panel pipeline. The named panels are measured on a copy of the
+    frame whose stripes are flattened by their codes (`server.vlc.flatten`): the pipeline's
+    threshold would cut a striped panel into bars.
+    """
+    candidates = rules.candidates.for_beacons(beacon_map.beacons)
+    found = find_beacon_blobs(frame.pixels, candidates)
+    reading = read_id_frame(frame, candidates, rules.stripes, found)
+    if reading.problem is not None:
+        return RoomReading((), len(found.blobs), reading.problem)
+    ids = tuple(sorted(b.id for b in beacon_map.beacons))  # preferred, never the only candidates
+    named: list[tuple[BeaconBlob, VlcReading | None, Beacon | None, str | None]] = []
+    for panel in reading.panels:
+        blob = panel.blob
+        vlc: VlcReading | None = None
+        note: str | None = None
+        if panel.observation is not None:
+            evidence = IdEvidence(preferred=ids, rules=rules.stripes)
+            evidence.add(panel.observation)
+            vlc = vlc_reading(evidence)
+        if blob.cut_off:
+            chips = 0.0 if panel.observation is None else panel.observation.chips_seen
+            note = _cut_panel_note(blob, chips, vlc, frame, rules)
+        beacon = None
+        if note is None and vlc is not None and vlc.confident and vlc.beacon_id is not None:
+            beacon = beacon_map.beacon(vlc.beacon_id)
+            if beacon is None:
+                note = f"the panel {_where(blob)} reads ID {vlc.beacon_id}, which is not in map '{beacon_map.name}'"
+        named.append((blob, vlc, beacon, note))
+    plain, flat_notes = flattened(frame, found, [(blob, beacon) for blob, _, beacon, _ in named], candidates, rules)
+    blobs = [blob for blob, *_ in named]
+    panels: list[RoomPanel] = []
+    for blob, vlc, beacon, note in named:
+        fix: Fix | Refusal | None = None
+        if beacon is not None:
+            others = [b for b in blobs if b is not blob]
+            fix = locate_panel(plain, blob, others, beacon, BeaconIdSource.vlc, options, found.levels.background, rules)
+            if isinstance(fix, Fix) and blob in flat_notes:
+                fix = fix.warned(flat_notes[blob])
+            elif isinstance(fix, Refusal) and blob in flat_notes:
+                fix = replace(fix, warnings=fix.warnings + (flat_notes[blob],))
+        panels.append(RoomPanel(blob, vlc, beacon, fix, note))
+    return RoomReading(tuple(panels), len(found.blobs), None)
+
+
+def flattened(
+    frame: LumaFrame,
+    found: Candidates,
+    named: list[tuple[BeaconBlob, Beacon | None]],
+    candidates: CandidateRules,
+    rules: RoomRules,
+) -> tuple[LumaFrame, dict[BeaconBlob, str]]:
+    """A copy of ID frame `frame` with the stripes of every named panel flattened by its own code
+    (`server.vlc.flatten`), and, per panel that could not be, why."""
+    meta = frame.meta
+    assert meta.rolling_shutter_skew_s is not None and meta.exposure_s is not None  # an ID frame's
+    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.full_size[1])
+    pixels = np.array(frame.pixels)
+    notes: dict[BeaconBlob, str] = {}
+    for blob, beacon in named:
+        if beacon is None:
+            continue
+        y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates, margin_px=rules.flatten.grow_px + 4)
+        problem = flatten_stripes(
+            pixels,
+            mask,
+            (y0, x0),
+            found.levels.background,
+            beacon.id,
+            row_time,
+            meta.exposure_s,
+            rules.flatten,
+            rules.stripes.chip_rate_hz,
+        )
+        if problem is not None:
+            notes[blob] = f"the stripes of beacon {beacon.id} were not flattened before measuring it: {problem}"
+    pixels.flags.writeable = False
+    return LumaFrame(pixels=pixels, meta=meta, camera=frame.camera), notes
+
+
 def locate_in_room(
     frame: LumaFrame,
     beacon_map: BeaconMap,
     options: PipelineOptions = PipelineOptions(),
     rules: RoomRules = RoomRules(),
 ) -> LocateResult:
-    """A fix from a frame of a multi-beacon map whose IDs come from the frame's own stripes."""
-    found = find_beacon_blobs(frame.pixels, rules.candidates)
-    reading = read_id_frame(frame, rules.candidates, rules.stripes, found)
-    if reading.problem is not None:
+    """A fix from a frame of a multi-beacon map whose IDs come from the frame's own stripes (`read_room`)."""
+    return room_result(read_room(frame, beacon_map, options, rules), beacon_map, rules)
+
+
+def room_result(room: RoomReading, beacon_map: BeaconMap, rules: RoomRules = RoomRules()) -> LocateResult:
+    """The contract's result of a room frame's panels: the best fix with the agreeing ones fused, or why
+    there is none; every panel's note (a cut panel not named) among the warnings either way."""
+    if room.problem is not None:
         return refused(
             Refusal(
                 FailureReason.unknown_beacon,
                 f"map '{beacon_map.name}' has {len(beacon_map.beacons)} beacons and no beacon ID was read: "
-                f"this frame cannot carry the code ({reading.problem}); send ID frames (docs/vlc.md)",
+                f"this frame cannot carry the code ({room.problem}); send ID frames (docs/vlc.md)",
             ),
-            beacons_in_view=len(found.blobs),
+            beacons_in_view=room.in_view,
         )
-    ids = tuple(sorted(b.id for b in beacon_map.beacons))  # preferred, never the only candidates
-    blobs = [p.blob for p in reading.panels]
-    fixes: list[PanelFix] = []
-    refusals: list[Refusal] = []
-    readings: list[VlcReading] = []
-    for panel in reading.panels:
-        if panel.observation is None:
-            continue
-        evidence = IdEvidence(preferred=ids, rules=rules.stripes)
-        evidence.add(panel.observation)
-        vlc = vlc_reading(evidence)
-        readings.append(vlc)
-        beacon = beacon_map.beacon(vlc.beacon_id) if vlc.confident and vlc.beacon_id is not None else None
-        if beacon is None or panel.blob.cut_off:
-            continue
-        fix = locate_panel(
-            frame,
-            panel.blob,
-            [b for b in blobs if b is not panel.blob],
-            beacon,
-            BeaconIdSource.vlc,
-            options,
-            found.levels.background,
-            rules,
-        )
-        if isinstance(fix, Refusal):
-            refusals.append(fix)
-        else:
-            fixes.append(PanelFix(panel.blob, beacon, fix, vlc))
+    notes = tuple(p.note for p in room.panels if p.note is not None)
+    fixes = [
+        PanelFix(p.blob, p.beacon, p.fix, p.vlc) for p in room.panels if isinstance(p.fix, Fix) and p.beacon is not None
+    ]
+    refusals = [p.fix for p in room.panels if isinstance(p.fix, Refusal)]
     best = choose_and_fuse(fixes, rules)
     if best is None:
         refusal = (
             refusals[0]
             if refusals
             else Refusal(
-                FailureReason.unknown_beacon, f"no complete panel with a confidently read ID among {len(blobs)} in view"
+                FailureReason.unknown_beacon,
+                f"no panel with a confidently read ID among {room.in_view} in view",
             )
         )
+        refusal = replace(refusal, warnings=refusal.warnings + notes)
+        readings = [p.vlc for p in room.panels if p.vlc is not None]
         top = max(readings, key=lambda r: r.confidence, default=None)
-        return refused(refusal, vlc=top, beacons_in_view=len(blobs))
-    return located(best.fix, vlc=best.vlc, beacons_in_view=len(blobs))
+        return refused(refusal, vlc=top, beacons_in_view=room.in_view)
+    return located(best.fix.warned(*notes), vlc=best.vlc, beacons_in_view=room.in_view)

@@ -1,7 +1,11 @@
 """`lumipose bench vlc`: ID success rate against distance (the paper's Fig. 16), and exposure.
 
-Each trial: a random beacon ID (0-255), a random phone pose under the panel (anywhere the
-whole panel stays in the frame, tilt up to `max_tilt_deg`, any yaw), an LED with a random
+Each trial: a random beacon ID (0-255), a panel of `shape` (`square`: a rounded square of side
+`side_m`; `rect`: a rounded rectangle `side_m` long and `aspect` x `side_m` wide, e.g. 1200 x
+300 mm; `circle`: a round downlight of diameter `side_m`), judged by the blob rules of a map of
+that panel (`CandidateRules.for_beacons`), a random phone pose under the panel (anywhere the
+whole panel stays in the frame, tilt up to `max_tilt_deg`, any yaw: a rectangle's long side
+lies at any angle to the sensor's rows), an LED with a random
 message phase and a crystal error of up to +-50 ppm, and a burst of ID frames (quarter
 resolution of the Mi 8 front camera, 1/8000 s, rolling_shutter_skew_s = 30 ms, frames
 `stepped_interval_s(1/30)` apart, hand jitter between frames). Frames are rendered by
@@ -26,6 +30,7 @@ from server.camera import intrinsics_from_profile
 from server.fov import fov_grid
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
+from server.vision.beacons import CandidateRules
 from server.vlc.capture import ID_EXPOSURE_S, stepped_interval_s
 from server.vlc.codec import LedWaveform
 from server.vlc.decoder import IdEvidence
@@ -36,6 +41,7 @@ from simulator.led import row_gains
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
 
 PROFILE_ID = "xiaomi-mi8-front"
+SHAPES = ("square", "rect", "circle")
 
 
 @dataclass(frozen=True)
@@ -43,8 +49,10 @@ class VlcConfig:
     distance_m: float = 1.0
     trials: int = 100
     max_frames: int = 12
-    side_m: float = 0.174
-    corner_radius_m: float = 0.02
+    side_m: float = 0.174  # a square's side, a rectangle's long side, a circle's diameter
+    corner_radius_m: float = 0.02  # squares and rectangles
+    shape: str = "square"  # one of SHAPES
+    aspect: float = 0.25  # a rectangle's short side over its long side
     exposure_s: float = ID_EXPOSURE_S
     skew_s: float = 0.03
     scale: float = 0.25
@@ -56,6 +64,20 @@ class VlcConfig:
     read_noise_dn: float = 2.0
     low_level: float = 0.3
     seed: int = 1
+
+
+def bench_beacon(config: VlcConfig, beacon_id: int) -> Beacon:
+    """The panel of `config`'s shape, `config.distance_m` above the origin."""
+    centre = [0.0, 0.0, config.distance_m]
+    if config.shape == "circle":
+        return Beacon(id=beacon_id, center_m=centre, shape="circle", diameter_m=config.side_m)
+    if config.shape == "rect":
+        short = config.side_m * config.aspect
+        radius = min(config.corner_radius_m, 0.4 * short)
+        return Beacon(id=beacon_id, center_m=centre, width_m=config.side_m, height_m=short, corner_radius_m=radius)
+    if config.shape == "square":
+        return Beacon(id=beacon_id, center_m=centre, side_m=config.side_m, corner_radius_m=config.corner_radius_m)
+    raise ValueError(f"shape must be one of {SHAPES}, got {config.shape!r}")
 
 
 def id_sensor(config: VlcConfig, rng: np.random.Generator) -> SensorModel:
@@ -90,8 +112,8 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
     width, height = round(profile.width * config.scale), round(profile.height * config.scale)
     camera = intrinsics_from_profile(profile, width, height)
     beacon_id = int(rng.integers(0, 256))
-    beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, config.distance_m], side_m=config.side_m,
-                    corner_radius_m=config.corner_radius_m)
+    beacon = bench_beacon(config, beacon_id)
+    candidates = CandidateRules().for_beacons([beacon])
     wave = LedWaveform.for_beacon(beacon_id, low_level=config.low_level, phase_s=rng.uniform(0, 1),
                                   clock_error_ppm=rng.uniform(-1, 1) * config.clock_error_ppm)
     pose = _draw_pose(config, beacon, camera, width, height, rng)
@@ -106,7 +128,7 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
         meta = fixture_meta(camera, width, height, pose).model_copy(update={
             "exposure_s": config.exposure_s, "rolling_shutter_skew_s": config.skew_s,
             "timestamp_ns": int(round(t_s * 1e9)), "frame_kind": FrameKind.id})
-        reading = read_id_frame(LumaFrame(pixels, meta, camera))
+        reading = read_id_frame(LumaFrame(pixels, meta, camera), candidates)
         panels = [p for p in reading.panels if p.observation is not None]
         if panels:
             evidence.add(max(panels, key=lambda p: p.blob.area_px).observation)
@@ -125,8 +147,8 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
 
 def _rates(rows: list[list], truth: list[int]) -> dict:
     confident = [r[1] for r in rows]
-    right = [c and r[0] == t for r, c, t in zip(rows, confident, truth)]
-    wrong = [c and r[0] != t for r, c, t in zip(rows, confident, truth)]
+    right = [c and r[0] == t for r, c, t in zip(rows, confident, truth, strict=True)]
+    wrong = [c and r[0] != t for r, c, t in zip(rows, confident, truth, strict=True)]
     return {"success_pct": 100.0 * np.mean(right), "confident_wrong": int(np.sum(wrong)),
             "no_decision": int(len(rows) - np.sum(confident))}
 
@@ -142,10 +164,21 @@ def run_vlc(config: VlcConfig, workers: int | None = None) -> dict:
     frames = [t["combined"][2] for t in trials if t["combined"][1]]
     combined["mean_frames"] = float(np.mean(frames)) if frames else math.nan
     combined["max_frames_used"] = int(max(frames)) if frames else 0
-    print(f"vlc at {config.distance_m:.2f} m, exposure {config.exposure_s:.2g} s: single {single['success_pct']:.0f} %, "
-          f"combined {combined['success_pct']:.0f} %", file=sys.stderr)
+    print(f"vlc, {config.shape} {config.side_m} m, at {config.distance_m:.2f} m, exposure {config.exposure_s:.2g} s: "
+          f"single {single['success_pct']:.0f} %, combined {combined['success_pct']:.0f} %", file=sys.stderr)
+    extent = bench_beacon(config, 0).extent_m
     return {"distance_m": config.distance_m, "exposure_s": config.exposure_s, "side_m": config.side_m,
-            "trials": config.trials, "max_frames": config.max_frames, "single": single, "combined": combined}
+            "shape": config.shape, "extent_m": list(extent), "trials": config.trials, "max_frames": config.max_frames,
+            "single": single, "combined": combined}
+
+
+def panel_name(report: dict) -> str:
+    """"0.174 m panel" (a square, as the figures before shapes said), "1200 x 300 mm rect", "0.2 m circle"."""
+    shape = report.get("shape", "square")
+    if shape == "rect":
+        width, height = report["extent_m"]
+        return f"{width * 1000:.0f} x {height * 1000:.0f} mm rect"
+    return f"{report['side_m']} m {'circle' if shape == 'circle' else 'panel'}"
 
 
 def plot_vlc(reports: list[dict], path, title: str) -> None:
@@ -155,12 +188,15 @@ def plot_vlc(reports: list[dict], path, title: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    for side in sorted({r["side_m"] for r in reports}):
-        rows = sorted((r for r in reports if r["side_m"] == side), key=lambda r: r["distance_m"])
+    panels = sorted({(r.get("shape", "square"), r["side_m"]) for r in reports})
+    for shape, side in panels:
+        rows = sorted((r for r in reports if (r.get("shape", "square"), r["side_m"]) == (shape, side)),
+                      key=lambda r: r["distance_m"])
         d = [r["distance_m"] for r in rows]
-        ax.plot(d, [r["single"]["success_pct"] for r in rows], "o--", label=f"single frame, {side} m panel")
+        name = panel_name(rows[0])
+        ax.plot(d, [r["single"]["success_pct"] for r in rows], "o--", label=f"single frame, {name}")
         ax.plot(d, [r["combined"]["success_pct"] for r in rows], "s-",
-                label=f"combined (<= {rows[0]['max_frames']} frames), {side} m panel")
+                label=f"combined (<= {rows[0]['max_frames']} frames), {name}")
     ax.plot([1.0, 1.3, 3.0], [100, 100, 0], "kx", markersize=9, label="paper Fig. 16 (stated points)")
     ax.set_xlabel("distance camera - panel (m)")
     ax.set_ylabel("confident correct ID (%)")

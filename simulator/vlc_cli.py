@@ -11,7 +11,11 @@ from pathlib import Path
 def add_vlc_benches(benches) -> None:
     vlc = benches.add_parser("vlc", help="VLC ID success against distance, single frame and combined (Fig. 16)")
     vlc.add_argument("--distances", type=float, nargs="+", default=[1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0])
-    vlc.add_argument("--sides", type=float, nargs="+", default=[0.174], help="panel sides, metres")
+    vlc.add_argument("--sides", type=float, nargs="+", default=[0.174],
+                     help="panel sizes, metres: a square's side, a rectangle's long side, a circle's diameter")
+    vlc.add_argument("--shape", choices=["square", "rect", "circle"], default="square",
+                     help="panel shape (rect: --aspect x as wide as long)")
+    vlc.add_argument("--aspect", type=float, default=0.25, help="a rect's short side over its long side")
     vlc.add_argument("--trials", type=int, default=100)
     vlc.add_argument("--max-frames", type=int, default=12, help="ID frames combined at most")
     vlc.add_argument("--exposures", type=float, nargs="+", default=None,
@@ -38,7 +42,8 @@ def _run_vlc(args) -> int:
     from simulator.bench_vlc import VlcConfig, plot_vlc, run_vlc
 
     reports = []
-    base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed)
+    base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed, shape=args.shape,
+                     aspect=args.aspect)
     if args.exposures:
         for side in args.sides:
             for exposure in args.exposures:
@@ -49,18 +54,19 @@ def _run_vlc(args) -> int:
             for distance in args.distances:
                 reports.append(run_vlc(replace(base, distance_m=distance, side_m=side), args.workers))
     if args.figure and not args.exposures:
-        plot_vlc(reports, args.figure, "ID success, 1/8000 s ID frames, 256 candidate IDs")
+        title = "ID success, 1/8000 s ID frames, 256 candidate IDs"
+        plot_vlc(reports, args.figure, title if args.shape == "square" else f"{title}, {args.shape}")
         print(f"wrote {args.figure}", file=sys.stderr)
     if args.json:
         print(json.dumps({"vlc": reports}, indent=2, default=float))
         return 0
-    print(f"{'side':>6} {'dist':>5} {'exposure':>9} {'chips/fr':>8} {'single':>7} {'combined':>8} "
+    print(f"{'shape':>6} {'side':>6} {'dist':>5} {'exposure':>9} {'chips/fr':>8} {'single':>7} {'combined':>8} "
           f"{'frames':>6} {'max':>4} {'wrong':>5}")
     for r in reports:
         s, c = r["single"], r["combined"]
-        print(f"{r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} {s['chips_per_frame']:8.1f} "
-              f"{s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} {c['max_frames_used']:4d} "
-              f"{s['confident_wrong'] + c['confident_wrong']:5d}")
+        print(f"{r['shape']:>6} {r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} "
+              f"{s['chips_per_frame']:8.1f} {s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} "
+              f"{c['max_frames_used']:4d} {s['confident_wrong'] + c['confident_wrong']:5d}")
     return 0
 
 

@@ -4,21 +4,26 @@ Works on the same subsampled view as `roi.py` (`roi.coarse_view`, which keeps th
 row and column, and the same step rule, `CoarseRules`), thresholded lower (at `level_fraction`
 of the way from background to plateau) so that a short-exposure ID frame, whose panel is
 striped between the LED's low and high levels, stays one blob. Every blob goes through the
-shape rules of `contour.find_beacon_blob` on its own padded mask; blobs that touch the frame
-border are kept and flagged `cut_off` (they may still carry an ID, not a pose).
+shape rules of `contour.find_beacon_blob` on its own padded mask, judged against the look of
+each panel the map has (`CandidateRules.looks`, `panel_looks`: a blob is a candidate when it
+looks like any of them; none given: the paper's rounded square); blobs that touch the frame
+border cannot be judged by their shape and are kept, flagged `cut_off` (the visible rows
+still carry the ID, docs/vlc.md; the one-panel pipeline fits the visible outline).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from server.outcomes import Refusal
 from server.vision.binarize import Levels, estimate_levels
-from server.vision.contour import BlobRules, find_beacon_blob
+from server.vision.contour import Blob, BlobRules, PanelLook, find_beacon_blob
 from server.vision.roi import CoarseRules, coarse_to_frame, coarse_view
+from shared_schemas import Beacon
 
 
 @dataclass(frozen=True)
@@ -26,6 +31,24 @@ class CandidateRules(CoarseRules):  # coarse_short_side_px, min_contrast_dn: sha
     level_fraction: float = 0.2  # of plateau - background; below the LED's low level of 0.3
     close_px: int = 3  # bridges dark stripes and noise holes in the small view
     blobs: BlobRules = BlobRules()
+    # how the map's panels look (`panel_looks`); a blob is a candidate if it looks like any of them.
+    # Empty: the paper's rounded square (`PanelLook()`), which rejects round lamps and long strips.
+    looks: tuple[PanelLook, ...] = ()
+
+    def for_beacons(self, beacons: Iterable[Beacon]) -> CandidateRules:
+        """These rules judging blobs by the looks of `beacons` (a map's), unless looks are set already."""
+        return self if self.looks else replace(self, looks=panel_looks(beacons))
+
+
+def panel_looks(beacons: Iterable[Beacon]) -> tuple[PanelLook, ...]:
+    """The distinct looks (outline fill and aspect) of `beacons`, in their order."""
+    looks: list[PanelLook] = []
+    for beacon in beacons:
+        look = PanelLook.of(beacon)
+        rounded = PanelLook(fill=round(look.fill, 3), aspect=round(look.aspect, 3))
+        if rounded not in looks:
+            looks.append(rounded)
+    return tuple(looks)
 
 
 @dataclass(frozen=True, eq=False)  # identity: blobs hold numpy arrays
@@ -81,6 +104,8 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
     if levels.contrast < rules.min_contrast_dn:
         return Candidates((), levels, step, ("nothing stands out of the background",))
     mask = candidate_mask(small, levels, rules)
+    shape_rules = replace(rules.blobs, min_area_px=rules.blobs.min_area_px / step**2)
+    looks = rules.looks or (PanelLook(),)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     blobs: list[BeaconBlob] = []
     rejected: list[str] = []
@@ -91,16 +116,10 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
         # the component alone, padded so that the shape rules never see the frame border
         alone = np.zeros((h + 4, w + 4), np.uint8)
         alone[2:-2, 2:-2] = np.where(labels[y : y + h, x : x + w] == label, 255, 0)
-        shape_rules = BlobRules(
-            min_area_px=rules.blobs.min_area_px / step**2,
-            min_convexity=rules.blobs.min_convexity,
-            min_rectangle_fill=rules.blobs.min_rectangle_fill,
-            min_aspect=rules.blobs.min_aspect,
-        )
-        found = find_beacon_blob(alone, shape_rules)
+        found = _judged(alone, shape_rules, looks)
         cut_off = x <= 0 or y <= 0 or x + w >= small.shape[1] or y + h >= small.shape[0]
         if isinstance(found, Refusal):
-            if not cut_off:  # a cut-off panel is not square either; keep it, flagged
+            if not cut_off:  # a cut-off panel's shape cannot be judged; keep it, flagged
                 rejected.append(found.message)
                 continue
             contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
@@ -120,6 +139,24 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
         )
     blobs.sort(key=lambda b: b.area_px, reverse=True)
     return Candidates(tuple(blobs), levels, step, tuple(rejected))
+
+
+_PREFIX = "the brightest blob is not the beacon: "  # contour.find_beacon_blob's, said once
+
+
+def _judged(alone: np.ndarray, rules: BlobRules, looks: tuple[PanelLook, ...]) -> Blob | Refusal:
+    """The blob of `alone` if it looks like any of `looks`, else the refusal of the first look
+    (the others' reasons appended when the map has several)."""
+    refusals: list[Refusal] = []
+    for look in looks:
+        found = find_beacon_blob(alone, rules, look)
+        if not isinstance(found, Refusal):
+            return found
+        refusals.append(found)
+    if len(refusals) == 1:
+        return refusals[0]
+    reasons = "; ".join(dict.fromkeys(r.message.removeprefix(_PREFIX) for r in refusals))
+    return replace(refusals[0], message=f"{_PREFIX}it looks like none of the map's {len(looks)} panels ({reasons})")
 
 
 def blob_mask(

@@ -74,3 +74,41 @@ def test_a_panel_on_the_far_border_is_cut_off_and_stays_in_the_frame():
     assert len(found.blobs) == 1 and found.blobs[0].cut_off
     x, y, w, h = found.blobs[0].bounding_box
     assert y + h == 300 and found.blobs[0].contour_px[:, 1].max() == 299
+
+
+def shapes_frame() -> np.ndarray:
+    image = np.full((600, 800), 10, np.uint8)
+    image[100:200, 100:200] = 250  # a square panel
+    cv2.circle(image, (650, 150), 50, 250, -1)  # a round downlight
+    image[350:390, 100:260] = 250  # a 4 : 1 strip (a 1200 x 300 mm panel)
+    return image
+
+
+def test_blobs_are_judged_by_the_looks_of_the_map_s_panels():
+    from server.vision.beacons import panel_looks
+    from shared_schemas import Beacon
+
+    square = Beacon(id=1, center_m=[0, 0, 2], side_m=0.6)
+    circle = Beacon(id=2, center_m=[1, 0, 2], shape="circle", diameter_m=0.2)
+    strip = Beacon(id=3, center_m=[2, 0, 2], width_m=1.2, height_m=0.3)
+
+    def found_centres(rules):
+        found = find_beacon_blobs(shapes_frame(), rules)
+        return sorted((round(b.centroid_px[0] / 50) * 50, round(b.centroid_px[1] / 50) * 50) for b in found.blobs)
+
+    # no looks: the paper's square only (the default, as before)
+    assert found_centres(CandidateRules()) == [(150, 150)]
+    assert found_centres(CandidateRules().for_beacons([square])) == [(150, 150)]
+    # a map of downlights: the square fills too much of its box to be one, the strip is too long
+    found = find_beacon_blobs(shapes_frame(), CandidateRules().for_beacons([circle]))
+    assert [round(b.centroid_px[0]) for b in found.blobs] == [650]
+    # a map with all three shapes: a blob is a candidate if it looks like any of them
+    rules = CandidateRules().for_beacons([square, circle, strip, square.model_copy(update={"id": 4})])
+    assert len(rules.looks) == 3  # one look per distinct shape
+    assert found_centres(rules) == [(150, 150), (200, 350), (650, 150)]
+    # looks already set are kept; what is rejected says it looks like none of them
+    assert rules.for_beacons([square]) is rules
+    image = shapes_frame()
+    image[450:560, 500:740] = 250  # 2.2 : 1, like none of them
+    found = find_beacon_blobs(image, CandidateRules(looks=panel_looks([square, circle])))
+    assert any("none of the map's 2 panels" in r for r in found.rejected)

@@ -19,10 +19,12 @@ SKEW_S = 0.03
 
 
 def id_frames(beacon_id: int, distance_m: float, exposure_s: float, count: int, seed: int,
-              ypr=(20.0, 4.0, -3.0), offset_m=(0.05, -0.08)) -> list[LumaFrame]:
-    """`count` ID frames of one panel, `stepped_interval_s(1/30)` apart, LED at a random phase."""
+              ypr=(20.0, 4.0, -3.0), offset_m=(0.05, -0.08), shape: dict | None = None) -> list[LumaFrame]:
+    """`count` ID frames of one panel, `stepped_interval_s(1/30)` apart, LED at a random phase;
+    `shape`: the panel's shape fields (default: the paper's 0.174 m rounded square)."""
     rng = np.random.default_rng(seed)
-    beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, distance_m], side_m=0.174, corner_radius_m=0.02)
+    shape = shape or {"side_m": 0.174, "corner_radius_m": 0.02}
+    beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, distance_m], **shape)
     wave = LedWaveform.for_beacon(beacon_id, phase_s=rng.uniform(0, 1), clock_error_ppm=rng.uniform(-50, 50))
     pose = CameraPose(np.array([*offset_m, 0.0]), rotation_from_ypr(*ypr))
     sensor = SensorModel(background_dn=3.0, plateau_dn=200.0, psf_sigma_px=1.2, electrons_per_dn=4.0,
@@ -32,7 +34,8 @@ def id_frames(beacon_id: int, distance_m: float, exposure_s: float, count: int, 
         t_s = 5.0 + k * stepped_interval_s(1 / 30)
         gains = row_gains(wave, HEIGHT, SKEW_S / (HEIGHT - 1), exposure_s, t_s)
         pixels = render_frame(beacon, CAMERA, pose, WIDTH, HEIGHT, sensor, rng, row_gain=gains)
-        meta = fixture_meta(CAMERA, WIDTH, HEIGHT, pose).model_copy(update={
+        gravity = (pose.rotation_wc.T @ [0, 0, -1.0]).tolist()  # the phone sends it: the pose needs it
+        meta = fixture_meta(CAMERA, WIDTH, HEIGHT, pose, gravity_camera=gravity).model_copy(update={
             "exposure_s": exposure_s, "rolling_shutter_skew_s": SKEW_S, "timestamp_ns": int(t_s * 1e9),
             "frame_kind": FrameKind.id})
         frames.append(LumaFrame(pixels, meta, CAMERA))
