@@ -60,6 +60,7 @@ class Fix:
     orientation_rule: OrientationRule | None = None
     ambiguity_ratio: float | None = None
     covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame, from the fit
+    growth_px: float | None = None  # how far the panel's mid-level contour lies outside its outline
     warnings: tuple[str, ...] = ()
     timing_ms: Mapping[str, float] = field(default_factory=dict)
 

@@ -55,6 +55,9 @@ class PipelineOptions:
     pose: PoseRules = PoseRules()
     outline_points: OutlineRules = OutlineRules()
     outline_fit: OutlineFitRules = OutlineFitRules()
+    # the contour growth this device's whole panels showed (`Fix.growth_px`): given, the outline
+    # fit of a cut panel need not tell it from distance (`server.tracking.session` keeps it)
+    growth_px: float | None = None
 
 
 @dataclass
@@ -181,6 +184,7 @@ def locate_beacon(
         orientation_rule=ordered.rule,
         ambiguity_ratio=pose.ambiguity_ratio,
         covariance_m2=pose.covariance_m2,
+        growth_px=-edges.edge_shift_px if edges is not None and edges.edge_shift_px else None,
         warnings=tuple(warnings),
         timing_ms=timer.total(),
     )
@@ -219,6 +223,7 @@ def _locate_by_outline(
             gravity,
             options.gravity_sigma_deg,
             frame.meta.heading_deg,
+            growth_px=options.growth_px if cut else None,
             rules=options.outline_fit,
         )
     if isinstance(fit, Refusal):
@@ -240,6 +245,7 @@ def _locate_by_outline(
         corners_px=projected[:4] if beacon.has_corners else None,
         orientation_rule=fit.orientation_rule,
         covariance_m2=fit.covariance_m2,
+        growth_px=fit.growth_px,
         warnings=(f"pose from the visible outline of {what} ({fit.points} points, growth {fit.growth_px:.2f} px)",),
         timing_ms=timer.total(),
     )

@@ -4,7 +4,8 @@ For each panel of the pose frame, whole or cut by the frame border, the session:
 1. locates the camera relative to the panel (`server.rooms.locate_panel` with a template
    beacon at the origin: every map beacon with the same shape, size and yaw gives the same
    pose, shifted; a cut panel's visible outline is fitted by the one-panel pipeline's
-   outline path, `server.pose.outline`, as for a single frame);
+   outline path, `server.pose.outline`, as for a single frame, with the contour growth
+   its whole panels showed);
 2. attaches the stripes of the ID frames to the nearest panel and names it
    (`server.tracking.naming`: VLC evidence gathered across captures, or the track's hand-over);
 3. chooses among the named panels and fuses agreeing ones (`server.rooms.choose_and_fuse`),
@@ -15,7 +16,7 @@ For each panel of the pose frame, whole or cut by the frame border, the session:
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, Loc
 @dataclass(frozen=True)
 class SessionRules:
     id_frame_gate_norm: float = 0.15  # ID-frame blob to pose-frame blob, in frame widths/heights
+    growth_memory: int = 10  # whole panels whose contour growth is remembered, for cut ones
     naming: NamingRules = NamingRules()
     track: TrackRules = TrackRules()
 
@@ -91,6 +93,7 @@ class DeviceSession:
     namer: PanelNamer = field(init=False)
     track: Track = field(init=False)
     captures: int = 0
+    growths_px: list[float] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.namer = PanelNamer(self.beacon_map, self.rules.naming)
@@ -130,12 +133,23 @@ class DeviceSession:
             if template is None:
                 continue
             others = [b for b in blobs if b is not blob]
+            growth = float(np.median(self.growths_px)) if self.growths_px else None
+            panel_options = replace(options, growth_px=growth) if blob.cut_off else options
             relative = locate_panel(
-                pose_frame, blob, others, template, BeaconIdSource.vlc, options, candidates.levels.background, room
+                pose_frame,
+                blob,
+                others,
+                template,
+                BeaconIdSource.vlc,
+                panel_options,
+                candidates.levels.background,
+                room,
             )
             if isinstance(relative, Refusal):
                 refusals.append(relative)
                 continue
+            if not blob.cut_off and relative.growth_px is not None:
+                self.growths_px = (self.growths_px + [relative.growth_px])[-self.rules.growth_memory :]
             named = self.namer.name(blob, relative, stripes.get(index, []), t_s, self.track, claimed)
             if named is not None:
                 fixes.append(named)
