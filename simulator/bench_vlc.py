@@ -207,3 +207,154 @@ def plot_vlc(reports: list[dict], path, title: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+@dataclass(frozen=True)
+class CutConfig:
+    """`lumipose bench vlc --cut`: one ID frame of a panel cut by the frame border, read by the room path.
+
+    The panel (a 600 x 600 mm square by default) is cut by the frame's bottom border (`edge =
+    "bottom"`: only `share` of its rows in view) or its right border (`"side"`: `share` of its
+    columns, every row) by placing the camera; the frame goes through `server.rooms.read_room`
+    with a two-beacon map (the second panel far out of view), as a phone without a session would
+    send it. Per trial: named (right, wrong or not) and, when named, the 2D error of its fix.
+    """
+
+    share: float = 0.7
+    edge: str = "bottom"  # or "side"
+    distance_m: float = 1.2
+    side_m: float = 0.6
+    corner_radius_m: float = 0.01
+    trials: int = 20
+    max_yaw_deg: float = 30.0  # a square's corner order needs the phone's yaw within 45 degrees of the panel's
+    max_tilt_deg: float = 5.0
+    seed: int = 1
+
+
+def _cut_pose(config: CutConfig, beacon: Beacon, camera, width: int, height: int, rng) -> CameraPose | None:
+    """A camera pose whose frame shows `config.share` of the panel's rows (bottom) or columns (side)."""
+    tilt, azimuth = rng.uniform(0.0, config.max_tilt_deg), rng.uniform(0.0, 2 * math.pi)
+    yaw = rng.uniform(-1, 1) * config.max_yaw_deg
+    rotation = rotation_from_ypr(yaw, tilt * math.cos(azimuth), tilt * math.sin(azimuth))
+    axis, limit = (1, height) if config.edge == "bottom" else (0, width)
+    # the camera moves along its image axis `axis`, levelled; the panel moves the other way in the image
+    direction = rotation[:, axis] * [1.0, 1.0, 0.0]
+    direction /= np.linalg.norm(direction)
+    across = np.cross([0.0, 0.0, 1.0], direction) * rng.uniform(-0.05, 0.05)
+
+    def pose_at(offset: float) -> CameraPose:
+        return CameraPose(offset * direction + across, rotation)
+
+    def shown(offset: float) -> float:
+        outline = beacon_outline_px(beacon, camera, pose_at(offset))
+        low, high = outline[:, axis].min(), outline[:, axis].max()
+        return float(np.clip((limit - low) / (high - low), 0.0, 1.0))
+
+    more, less = 2.0, -2.0  # offsets showing more and less of the panel than wanted
+    if shown(more) < shown(less):
+        more, less = less, more
+    if not shown(more) > config.share > shown(less):
+        return None
+    for _ in range(40):
+        middle = (more + less) / 2
+        if shown(middle) > config.share:
+            more = middle
+        else:
+            less = middle
+    return pose_at((more + less) / 2)
+
+
+def _cut_trial(args: tuple[CutConfig, int]) -> dict:
+    from server.rooms import read_room
+    from shared_schemas import BeaconMap
+
+    config, index = args
+    rng = np.random.default_rng([config.seed, index, int(config.share * 1000), config.edge == "side"])
+    profile = device_profiles()[PROFILE_ID]
+    width, height = round(profile.width * 0.25), round(profile.height * 0.25)
+    camera = intrinsics_from_profile(profile, width, height)
+    beacon_id = int(rng.integers(0, 255))
+    beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, config.distance_m], side_m=config.side_m,
+                    corner_radius_m=config.corner_radius_m)
+    far = Beacon(id=beacon_id + 1, center_m=[30.0, 0.0, config.distance_m], side_m=config.side_m,
+                 corner_radius_m=config.corner_radius_m)
+    beacon_map = BeaconMap(name="cut", beacons=[beacon, far])
+    pose = _cut_pose(config, beacon, camera, width, height, rng)
+    if pose is None:
+        raise RuntimeError(f"no pose shows {config.share} of the panel at its {config.edge}")
+    wave = LedWaveform.for_beacon(beacon_id, phase_s=rng.uniform(0, 1), clock_error_ppm=rng.uniform(-50, 50))
+    t_s = float(rng.uniform(0, 10))
+    skew_s, exposure_s = 0.03, ID_EXPOSURE_S
+    gains = row_gains(wave, height, skew_s / (height - 1), exposure_s, t_s)
+    sensor = SensorModel(background_dn=3.0, plateau_dn=200.0, psf_sigma_px=rng.uniform(0.8, 1.5), electrons_per_dn=4.0,
+                         read_noise_dn=2.0)
+    pixels = render_frame(beacon, camera, pose, width, height, sensor, rng, row_gain=gains)
+    gravity = (pose.rotation_wc.T @ [0, 0, -1.0]).tolist()
+    meta = fixture_meta(camera, width, height, pose, gravity_camera=gravity).model_copy(update={
+        "exposure_s": exposure_s, "rolling_shutter_skew_s": skew_s, "timestamp_ns": int(round(t_s * 1e9)),
+        "frame_kind": FrameKind.id})
+    room = read_room(LumaFrame(pixels, meta, camera), beacon_map)
+    cut = [p for p in room.panels if p.blob.cut_off]
+    record: dict = {"id": beacon_id, "found": bool(cut), "rows": None, "chips": None, "named": None,
+                    "error_mm": None, "refusal": None}
+    if cut:
+        panel = max(cut, key=lambda p: p.blob.area_px)
+        record["rows"] = panel.blob.bounding_box[3]
+        record["chips"] = None if panel.vlc is None else panel.vlc.chips_seen
+        record["named"] = None if panel.beacon is None else panel.beacon.id
+        if panel.fix is not None and hasattr(panel.fix, "position_m"):
+            record["error_mm"] = 1000 * float(np.linalg.norm(panel.fix.position_m[:2] - pose.position_m[:2]))
+        elif panel.fix is not None:
+            record["refusal"] = panel.fix.reason.value
+    return record
+
+
+def run_cut(config: CutConfig, workers: int | None = None) -> dict:
+    workers = workers or os.cpu_count() or 1
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        records = list(pool.map(_cut_trial, [(config, i) for i in range(config.trials)], chunksize=2))
+    named = [r for r in records if r["named"] is not None]
+    right = [r for r in named if r["named"] == r["id"]]
+    errors = [r["error_mm"] for r in right if r["error_mm"] is not None]
+    chips = [r["chips"] for r in records if r["chips"] is not None]
+    rows = [r["rows"] for r in records if r["rows"] is not None]
+    refusals: dict[str, int] = {}
+    for r in right:
+        if r["refusal"]:
+            refusals[r["refusal"]] = refusals.get(r["refusal"], 0) + 1
+    summary = {
+        "edge": config.edge, "share": config.share, "distance_m": config.distance_m, "side_m": config.side_m,
+        "trials": config.trials, "found": sum(r["found"] for r in records),
+        "rows": float(np.mean(rows)) if rows else math.nan,
+        "chips": float(np.mean(chips)) if chips else math.nan,
+        "named_pct": 100.0 * len(right) / config.trials, "named_wrong": len(named) - len(right),
+        "located": len(errors), "mean_mm": float(np.mean(errors)) if errors else math.nan,
+        "max_mm": float(np.max(errors)) if errors else math.nan, "refusals": refusals,
+    }
+    print(f"vlc cut at the {config.edge}, {config.share:.2f} in view: named {summary['named_pct']:.0f} %, "
+          f"located {len(errors)}", file=sys.stderr)
+    return summary
+
+
+def plot_cut(reports: list[dict], path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for edge, label in (("bottom", "cut by the bottom border (rows lost)"), ("side", "cut by a side (rows kept)")):
+        rows = sorted((r for r in reports if r["edge"] == edge), key=lambda r: r["share"])
+        if rows:
+            ax.plot([100 * r["share"] for r in rows], [r["named_pct"] for r in rows], "o-", label=label)
+    ax.set_xlabel("share of the panel's rows (bottom) or columns (side) in view (%)")
+    ax.set_ylabel("named by VLC from one ID frame (%)")
+    ax.set_ylim(-5, 105)
+    ax.grid(alpha=0.3)
+    side = reports[0]["side_m"] if reports else 0.6
+    distance = reports[0]["distance_m"] if reports else 1.2
+    ax.set_title(f"a {side} m panel cut by the frame border, {distance} m, one 1/8000 s frame")
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

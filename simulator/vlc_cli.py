@@ -7,10 +7,12 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+DEFAULT_DISTANCES = [1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0]
+
 
 def add_vlc_benches(benches) -> None:
     vlc = benches.add_parser("vlc", help="VLC ID success against distance, single frame and combined (Fig. 16)")
-    vlc.add_argument("--distances", type=float, nargs="+", default=[1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0])
+    vlc.add_argument("--distances", type=float, nargs="+", default=DEFAULT_DISTANCES)
     vlc.add_argument("--sides", type=float, nargs="+", default=[0.174],
                      help="panel sizes, metres: a square's side, a rectangle's long side, a circle's diameter")
     vlc.add_argument("--shape", choices=["square", "rect", "circle"], default="square",
@@ -20,9 +22,14 @@ def add_vlc_benches(benches) -> None:
     vlc.add_argument("--max-frames", type=int, default=12, help="ID frames combined at most")
     vlc.add_argument("--exposures", type=float, nargs="+", default=None,
                      help="exposure sweep (s) at the first distance instead of the distance sweep")
+    vlc.add_argument("--cut", nargs="+", choices=["bottom", "side"], default=None,
+                     help="instead: one ID frame of a 0.6 m panel cut by the bottom border or a side, read by the "
+                          "room path (named, located), per --shares; at the first of --distances (default 1.2 m)")
+    vlc.add_argument("--shares", type=float, nargs="+", default=None,
+                     help="--cut: shares of the panel's rows (bottom) or columns (side) in view")
     vlc.add_argument("--seed", type=int, default=1)
     vlc.add_argument("--workers", type=int, default=None)
-    vlc.add_argument("--figure", type=Path, default=None, help="PNG of success against distance")
+    vlc.add_argument("--figure", type=Path, default=None, help="PNG of success against distance (--cut: share)")
     vlc.add_argument("--json", action="store_true")
     vlc.set_defaults(run=_run_vlc)
     office = benches.add_parser("office", help="the paper's office walks with four coded beacons (Figs. 17-18)")
@@ -40,6 +47,9 @@ def add_vlc_benches(benches) -> None:
 
 def _run_vlc(args) -> int:
     from simulator.bench_vlc import VlcConfig, plot_vlc, run_vlc
+
+    if args.cut:
+        return _run_cut(args)
 
     reports = []
     base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed, shape=args.shape,
@@ -67,6 +77,30 @@ def _run_vlc(args) -> int:
         print(f"{r['shape']:>6} {r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} "
               f"{s['chips_per_frame']:8.1f} {s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} "
               f"{c['max_frames_used']:4d} {s['confident_wrong'] + c['confident_wrong']:5d}")
+    return 0
+
+
+def _run_cut(args) -> int:
+    from simulator.bench_vlc import CutConfig, plot_cut, run_cut
+
+    distance = args.distances[0] if args.distances != DEFAULT_DISTANCES else 1.2
+    reports = []
+    for edge in args.cut:
+        shares = args.shares or ([0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9] if edge == "bottom" else [0.2, 0.4, 0.6])
+        for share in shares:
+            config = CutConfig(share=share, edge=edge, distance_m=distance, trials=args.trials, seed=args.seed)
+            reports.append(run_cut(config, args.workers))
+    if args.figure:
+        plot_cut(reports, args.figure)
+        print(f"wrote {args.figure}", file=sys.stderr)
+    if args.json:
+        print(json.dumps({"vlc_cut": reports}, indent=2, default=float))
+        return 0
+    print(f"{'edge':>6} {'share':>5} {'rows':>5} {'chips':>5} {'named':>6} {'wrong':>5} {'located':>7} {'mean mm':>7} "
+          f"{'max mm':>6}  refusals")
+    for r in reports:
+        print(f"{r['edge']:>6} {r['share']:5.2f} {r['rows']:5.0f} {r['chips']:5.1f} {r['named_pct']:5.0f}% "
+              f"{r['named_wrong']:5d} {r['located']:7d} {r['mean_mm']:7.1f} {r['max_mm']:6.1f}  {r['refusals']}")
     return 0
 
 

@@ -37,3 +37,16 @@ def test_the_bench_command_takes_a_shape():
     assert report["shape"] == "rect" and report["extent_m"] == [1.2, pytest.approx(0.3)]
     assert panel_name(report) == "1200 x 300 mm rect"
     assert report["combined"]["confident_wrong"] == 0
+
+
+def test_the_cut_panel_bench_names_a_panel_cut_at_its_side_and_not_one_with_a_third_of_its_rows(tmp_path):
+    from simulator.bench_vlc import CutConfig, plot_cut, run_cut
+
+    side = run_cut(CutConfig(edge="side", share=0.4, trials=1, seed=1), workers=1)
+    assert side["found"] == 1 and side["chips"] > 21 and side["named_pct"] == 100.0 and side["named_wrong"] == 0
+    assert side["located"] == 1 and side["mean_mm"] < 5.0
+    bottom = run_cut(CutConfig(edge="bottom", share=0.3, trials=1, seed=1), workers=1)
+    assert bottom["found"] == 1 and bottom["chips"] < 16 and bottom["named_pct"] == 0.0 and bottom["located"] == 0
+    path = tmp_path / "cut.png"
+    plot_cut([side, bottom], path)
+    assert path.stat().st_size > 1000
