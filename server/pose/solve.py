@@ -22,11 +22,22 @@ Gravity prior, two ways:
   `subpixel.py`), with a floor (`corner_sigma_floor_px`) for what one frame cannot show,
   such as the residual of the lens calibration across the panel.
 
+The position's covariance (`PoseSolution.covariance_m2`) is that of the fit that gave the pose,
+by the chain rule from the corners' noise (`corner_covariance`, see there for what it holds):
+the sandwich H^-1 J^T N J H^-1 of the fit's own weights (so the centre, which is computed
+from the corners and adds nothing they do not know, enters with its true correlation), with
+the gravity sensor's sigma for the tilt residual; "always" pins the tilt to the sensor's, so
+its covariance is that of the constrained fit. A frame whose corners are further from any
+view of the panel than their noise allows (errors the sides' own residuals cannot show, such
+as a brightness gradient along a not quite saturated edge) has its corner noise scaled by
+the fit's chi-square per degree of freedom (`consistency_factor`).
+
 All image points here are undistorted pixel coordinates.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -35,6 +46,7 @@ import numpy as np
 
 from server.geometry import beacon_corners_m, beacon_rotation, beacon_to_world, rotation_z
 from server.outcomes import Refusal
+from server.vision.subpixel import MIN_PHASE_SPAN_PX, EdgeRules
 from shared_schemas import Beacon, FailureReason
 
 
@@ -48,7 +60,20 @@ class GravityMode(StrEnum):
 class PoseRules:
     max_ambiguity_ratio: float = 0.2
     max_ambiguous_disagreement_m: float = 0.005
-    corner_sigma_floor_px: float = 0.01  # unmodelled errors: lens calibration residual across the panel
+    corner_sigma_floor_px: float = 0.01  # the fits' weights: lens calibration residual across the panel
+    # The covariance's noise model (`corner_covariance`): what the sides' measured error leaves out.
+    # Each side's crossings sit on OpenCV's 1/32 px sampling grid (~0.009 px rms), ~100 per side:
+    side_sigma_floor_px: float = 0.001
+    # rms of a level crossing's pixel-locking error (the Fourier term `subpixel.py` fits, 0.058-0.065 px
+    # on the tilt bench's frames, PSF 1 px): the corner arcs keep it, and so does a side along the
+    # pixel grid, as an offset, when no side crosses the grid (then nothing is fitted)
+    pixel_locking_sigma_px: float = 0.06
+    # a panel whose corner radius is under EdgeRules.min_corner_radius_px has its sides at the mid
+    # level, out by the whole clipped-edge growth (a fraction of a pixel to a few pixels)
+    unmeasured_growth_sigma_px: float = 1.0
+    # scale the corner noise by the fit's chi-square per degree of freedom when above 1 (`consistency_factor`)
+    consistency_scaling: bool = True
+    consistency_chi_square: float = 9.21
 
 
 @dataclass(frozen=True)
@@ -60,6 +85,7 @@ class PoseSolution:
     alternative_distance_m: float  # between the two IPPE minima's camera positions
     gravity_used: bool
     covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame
+    consistency_factor: float = 1.0  # corner noise scale from the fit's chi-square (>= 1)
 
 
 def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -142,12 +168,18 @@ def _map_residuals(params, object_points, image_points, camera_matrix, across_gr
     pixel_weight, gravity_weight = weights
     projected, jacobian = cv2.projectPoints(object_points, params[:3], params[3:], camera_matrix, None)
     image = (projected.reshape(-1) - image_points.reshape(-1)) * pixel_weight
-    rotation, rotation_jacobian = cv2.Rodrigues(params[:3])  # d R / d rvec, (3, 9) row-major R
-    down_column = -rotation[:, 2]
+    tilt, d_tilt = _tilt_residual(params[:3], across_gravity)
+    return np.concatenate([image, tilt * gravity_weight]), np.vstack(
+        [jacobian[:, :6] * pixel_weight, d_tilt * gravity_weight]
+    )
+
+
+def _tilt_residual(rvec: np.ndarray, across_gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted gravity R_cb (0, 0, -1) across the measured one (2,), radians, and its Jacobian
+    (2, 6) over (rvec, tvec)."""
+    rotation, rotation_jacobian = cv2.Rodrigues(rvec)  # d R / d rvec, (3, 9) row-major R
     d_down = -rotation_jacobian.reshape(3, 3, 3)[:, :, 2].T  # (3 components, 3 rvec)
-    tilt = across_gravity @ down_column * gravity_weight
-    d_tilt = np.hstack([across_gravity @ d_down, np.zeros((2, 3))]) * gravity_weight
-    return np.concatenate([image, tilt]), np.vstack([jacobian[:, :6] * pixel_weight, d_tilt])
+    return across_gravity @ -rotation[:, 2], np.hstack([across_gravity @ d_down, np.zeros((2, 3))])
 
 
 def fuse_gravity(
@@ -258,6 +290,250 @@ def _square_ambiguity(
     return float(ratio), float(np.linalg.norm(positions[0] - positions[1]))
 
 
+def _side_geometry(corners: np.ndarray) -> tuple[list[tuple[float, float]], list[float], list[float]]:
+    """Unit outward normals of the sides (side k joins corner k to corner k + 1), their lengths,
+    and how far each runs across its outward axis (px: the smaller of its x and y extents).
+
+    Plain floats: for four corners Python arithmetic is several times faster than numpy's calls.
+    """
+    points = corners.tolist()
+    mean_x, mean_y = sum(p[0] for p in points) / 4.0, sum(p[1] for p in points) / 4.0
+    normals, lengths, across = [], [], []
+    for k in range(4):
+        (x0, y0), (x1, y1) = points[k], points[(k + 1) % 4]
+        dx, dy = x1 - x0, y1 - y0
+        length = math.hypot(dx, dy)
+        nx, ny = dy / length, -dx / length
+        if nx * ((x0 + x1) / 2 - mean_x) + ny * ((y0 + y1) / 2 - mean_y) < 0:
+            nx, ny = -nx, -ny
+        normals.append((nx, ny))
+        lengths.append(length)
+        across.append(min(abs(dx), abs(dy)))
+    return normals, lengths, across
+
+
+@dataclass(frozen=True)
+class SideErrors:
+    """What moves the sides the corners are cut from (px), for `corner_covariance`.
+
+    side_sigma: each side's measured position error (noise and slow wave; independent sides);
+    locking_sigma: each side's pixel-locking offset, kept when no side crossed the pixel grid;
+    growth_sigma: the error of the clipped-edge growth, measured on the corner arcs, that moved
+    all four sides; growth_coupling: how much that growth measurement moves per unit common
+    outward move of the sides it is measured against (they define the corners of the arcs).
+    """
+
+    side_sigma: float
+    locking_sigma: float
+    growth_sigma: float
+    growth_coupling: float
+    fit_fraction: float  # share of each side (its middle) the line was fitted to
+
+
+def side_errors(
+    corners: np.ndarray,
+    beacon: Beacon,
+    side_sigma_px: float,
+    growth_sigma_px: float | None = None,
+    rules: PoseRules = PoseRules(),
+    geometry: tuple[list[tuple[float, float]], list[float], list[float]] | None = None,
+) -> SideErrors:
+    """The sides' error model of one frame from the sides' measured error and the panel's geometry.
+
+    Mirrors `server.vision.subpixel.refine_edges`: each side is fitted over its straight middle
+    less a margin; the corner arcs (radius r = rho side) are sampled over their middle
+    `arc_span_deg` with up to `max_profiles_per_corner` crossings each, and the growth is read
+    off them in the unit square the four sides make, where a crossing on the circle of radius
+    R = x + y + sqrt(2 x y) (x, y from the corner along the sides) gives the growth
+    (R - rho) / (1 - 2 rho). A crossing moved by e across the arc (at 45 degrees) moves it by
+    (1 + sqrt 2) e / (1 - 2 rho); the sides moved out together by s move it by
+    2 (1 + 1 / sqrt 2) s / (1 - 2 rho) (the coupling), and the sides are then moved in by it.
+    The arc crossings keep their pixel-locking error (only the sides' is fitted), so each has
+    sqrt(noise^2 + locking^2), the noise being the side's error times sqrt(crossings per side);
+    the growth is their median (1.2533 sigma / sqrt(n)).
+    """
+    _, lengths, across = geometry or _side_geometry(corners)
+    edges = EdgeRules()
+    rho = beacon.corner_radius_m / min(beacon.extent_m)
+    fit_fraction = max(1.0 - 2.0 * rho - 2.0 * edges.corner_margin, 0.1)
+    # a side crosses the pixel grid when its line drifts over MIN_PHASE_SPAN_PX of its outward axis
+    crosses_grid = fit_fraction * max(across) >= MIN_PHASE_SPAN_PX
+    locking = 0.0 if crosses_grid else rules.pixel_locking_sigma_px
+    side_sigma = max(side_sigma_px, rules.side_sigma_floor_px)
+    radius_px = rho * sum(lengths) / 4.0
+    if radius_px < edges.min_corner_radius_px:  # no growth measured: the sides stay at the mid level
+        growth = rules.unmeasured_growth_sigma_px if growth_sigma_px is None else growth_sigma_px
+        return SideErrors(side_sigma, locking, growth, 0.0, fit_fraction)
+    if growth_sigma_px is None:
+        per_side = min(max(min(lengths) / 2.0, 12.0), edges.max_profiles_per_side)
+        per_arc = min(max(math.radians(edges.arc_span_deg) * radius_px, 6.0), edges.max_profiles_per_corner)
+        crossing = math.hypot(side_sigma * math.sqrt(per_side), rules.pixel_locking_sigma_px)
+        growth_sigma_px = 1.2533 * (1.0 + math.sqrt(2.0)) / (1.0 - 2.0 * rho) * crossing / math.sqrt(4.0 * per_arc)
+    coupling = 2.0 * (1.0 + math.sqrt(0.5)) / (1.0 - 2.0 * rho)
+    return SideErrors(side_sigma, locking, float(growth_sigma_px), coupling, fit_fraction)
+
+
+def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> tuple[np.ndarray, np.ndarray]:
+    """(sides (8, 8), growth (8,)): the corners' moves (x0 y0 x1 y1 ...) per unit of each
+    independent error, scaled by its sigma: 4 side offsets and 4 side turns, and the growth's.
+    Their covariance is sides sides^T + growth growth^T (see `corner_covariance`)."""
+    own = math.hypot(errors.side_sigma, errors.locking_sigma)
+    turn = errors.side_sigma * math.sqrt(12.0) / errors.fit_fraction
+    share = errors.growth_coupling / 4.0 * own
+    sides = [[0.0] * 8 for _ in range(8)]
+    growth = [0.0] * 8
+    for k in range(4):
+        before = (k - 1) % 4
+        (ax, ay), (lx, ly) = normals[before], normals[k]  # side k - 1 ends at corner k, side k starts there
+        determinant = ax * ly - ay * lx
+        # columns of [arriving; leaving]^-1: the corner's move per unit outward move of each side
+        by_arriving = (ly / determinant, -lx / determinant)
+        by_leaving = (-ay / determinant, ax / determinant)
+        for axis in (0, 1):
+            row = sides[2 * k + axis]
+            out = by_arriving[axis] + by_leaving[axis]  # both sides out by one
+            growth[2 * k + axis] = out * errors.growth_sigma
+            for j in range(4):  # every side's offset moves the growth measured against all four
+                row[j] = -out * share
+            row[before] += by_arriving[axis] * own
+            row[k] += by_leaving[axis] * own
+            row[4 + before] = 0.5 * by_arriving[axis] * turn
+            row[4 + k] = -0.5 * by_leaving[axis] * turn
+    return np.array(sides), np.array(growth)
+
+
+def corner_covariance(corners: np.ndarray, errors: SideErrors) -> tuple[np.ndarray, np.ndarray]:
+    """Covariance (8, 8) of the corners (4, 2), x0 y0 x1 y1 ..., from the errors of the sides they
+    join: (the sides' own part, the growth's part); the covariance is their sum.
+
+    The corners are not measured one by one: each is where two fitted sides meet. Side k
+    (corner k to k + 1) moves by its own offset d_k (sigma side_sigma, plus locking_sigma when
+    it kept its pixel-locking offset) and turns so that its ends move by -+ a_k / 2, a_k of
+    sigma side_sigma sqrt(12) / fit_fraction (a least-squares slope over the middle of the side,
+    extrapolated to its corners). Then all four are moved in by the measured growth, which is
+    off by its own error and by the coupling times the mean of the d_k (the turns cancel
+    between a side's two corners). Corner k moves so that side k - 1's end and side k's
+    start move along their normals as they do. Corners of neighbouring sides correlate; the
+    growth is a change of scale, the main error of the range.
+    """
+    sides, growth = _corner_design(_side_geometry(corners)[0], errors)
+    return sides @ sides.T, np.outer(growth, growth)
+
+
+def _centre_jacobian(corners: np.ndarray) -> np.ndarray:
+    """d centre / d corners (2, 8) of the diagonals' intersection.
+
+    Moving a corner turns its diagonal about the opposite corner, which moves the diagonal at
+    the centre by the part of the move across it times the centre's share of the way from the
+    opposite corner; the centre then slides along the other diagonal onto the moved one.
+    """
+    points = corners.tolist()
+    jacobian = [[0.0] * 8, [0.0] * 8]
+    for first, second, start, end in ((0, 2, 1, 3), (1, 3, 0, 2)):
+        ux, uy = points[second][0] - points[first][0], points[second][1] - points[first][1]
+        vx, vy = points[end][0] - points[start][0], points[end][1] - points[start][1]
+        wx, wy = points[start][0] - points[first][0], points[start][1] - points[first][1]
+        t = (wx * vy - wy * vx) / (ux * vy - uy * vx)  # centre = corner first + t u
+        scale = 1.0 / (-uy * vx + ux * vy)  # 1 / (across u . v), across u = (-uy, ux)
+        slide = ((vx * -uy * scale, vx * ux * scale), (vy * -uy * scale, vy * ux * scale))
+        for row in (0, 1):
+            for column in (0, 1):
+                jacobian[row][2 * first + column] = (1.0 - t) * slide[row][column]
+                jacobian[row][2 * second + column] = t * slide[row][column]
+    return np.array(jacobian)
+
+
+def consistency_factor(
+    residuals_px: np.ndarray, jacobian: np.ndarray, covariance: np.ndarray, significant_chi_square: float = 0.0
+) -> float:
+    """chi-square / dof of the corners against the best pose under their noise model, when the
+    chi-square exceeds `significant_chi_square` (else 1).
+
+    residuals_px (8,): projected minus measured corners at any pose near the fit; jacobian (8, 6)
+    there. The generalised least-squares chi-square e^T (S^-1 - S^-1 J (J^T S^-1 J)^-1 J^T S^-1) e
+    does not depend on the pose it is taken at (to first order): it measures only how far the
+    corners are from every view of the panel, 8 - 6 = 2 degrees of freedom.
+    """
+    ok, solved = cv2.solve(covariance, np.column_stack([residuals_px, jacobian]), flags=cv2.DECOMP_CHOLESKY)
+    if not ok:
+        return 1.0
+    b = jacobian.T @ solved[:, 0]
+    ok, step = cv2.solve(jacobian.T @ solved[:, 1:], b, flags=cv2.DECOMP_CHOLESKY)
+    if not ok:
+        return 1.0
+    chi_square = float(residuals_px @ solved[:, 0] - b @ step.ravel())
+    return chi_square / 2.0 if chi_square > significant_chi_square else 1.0
+
+
+def _position_covariance(
+    beacon: Beacon,
+    image_points: np.ndarray,
+    fit: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    sigmas: tuple[float, float, float | None],
+    gravity: tuple[np.ndarray, float, GravityMode] | None,
+    rules: PoseRules,
+) -> tuple[np.ndarray | None, float]:
+    """(covariance (3, 3) of the camera's position in the map, m^2, None when a solve fails; the
+    sides' noise scale).
+
+    fit: (rvec, tvec, projected (5, 1, 2), Jacobian (10, >= 6)) of the final pose; sigmas: the
+    sides' measured error, the corner sigma the fits weighed with, the growth's error (px, None:
+    predicted); gravity: (measured vector, sensor sigma in degrees, mode) when the fit used it.
+
+    With the corners' noise as D D^T (D = `_corner_design`, scaled columns) and the fit's
+    normal matrix H, the parameters move by X = H^-1 J^T L D (L: corners to the five points)
+    per unit of each error, so their covariance is X X^T; the gravity sensor's error adds
+    columns of its own. The position's is P X (P X)^T, P = d position / d parameters.
+    """
+    rvec, tvec, projected, jacobian = fit
+    side_sigma, weight_sigma, growth_sigma = sigmas
+    corners = image_points[:4]
+    geometry = _side_geometry(corners)
+    sides, growth = _corner_design(geometry[0], side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry))
+    pixel_jacobian = jacobian[:, :6]
+    design = np.column_stack([sides, growth])  # (8, 9): the corners' noise is design design^T
+    factor = 1.0
+    if rules.consistency_scaling:
+        residuals = projected.reshape(-1)[:8] - image_points[:4].reshape(-1)
+        factor = consistency_factor(residuals, pixel_jacobian[:8], design @ design.T, rules.consistency_chi_square)
+        if factor != 1.0:
+            design[:, :8] *= math.sqrt(factor)
+    # J^T L, L = [I; d centre / d corners]: the centre is the corners' function, not a measurement
+    lifted = pixel_jacobian[:8].T + pixel_jacobian[8:].T @ _centre_jacobian(corners)
+    moves = lifted @ design  # (6, 9): J^T L D
+    normal = pixel_jacobian.T @ pixel_jacobian
+    rotation, rotation_jacobian = cv2.Rodrigues(rvec)  # d R[r, c] / d rvec_i at [i, 3 r + c]
+    by_rvec = rotation_jacobian.reshape(3, 3, 3)
+    if gravity is None:
+        ok, parameters = cv2.solve(normal, moves, flags=cv2.DECOMP_CHOLESKY)
+    else:
+        vector, sigma_deg, mode = gravity
+        sigma_rad = math.radians(sigma_deg)
+        across = _orthonormal_pair(vector / np.linalg.norm(vector))
+        tilt = np.zeros((2, 6))
+        tilt[:, :3] = -across @ by_rvec[:, :, 2].T  # d (across . -R[:, 2]) / d rvec
+        if mode is GravityMode.always:
+            # the tilt taken as measured: min |J d - dz|^2 subject to T d = dg (KKT system)
+            system = np.zeros((8, 8))
+            system[:6, :6], system[:6, 6:], system[6:, :6] = normal, tilt.T, tilt
+            right = np.zeros((8, moves.shape[1] + 2))
+            right[:6, :-2] = moves
+            right[6:, -2:] = sigma_rad * np.eye(2)
+            ok, solution = cv2.solve(system, right, flags=cv2.DECOMP_LU)
+            parameters = solution[:6]
+        else:
+            # the MAP fit: tilt residual weighted by corner sigma / gravity sigma against unit pixels
+            weight = weight_sigma / sigma_rad
+            right = np.hstack([moves, weight**2 * sigma_rad * tilt.T])
+            ok, parameters = cv2.solve(normal + weight**2 * (tilt.T @ tilt), right, flags=cv2.DECOMP_CHOLESKY)
+    if not ok:
+        return None, factor
+    by_rotation = -(tvec.ravel() @ by_rvec).T  # d (-R^T t) / d rvec
+    to_map = beacon_rotation(beacon) @ np.hstack([by_rotation, -rotation.T])
+    position = to_map @ parameters
+    return position @ position.T, factor
+
+
 def solve_pose(
     corners_px: np.ndarray,
     center_px: np.ndarray,
@@ -268,8 +544,15 @@ def solve_pose(
     gravity_mode: GravityMode = GravityMode.auto,
     corner_sigma_px: float = 0.03,
     rules: PoseRules = PoseRules(),
+    growth_sigma_px: float | None = None,
 ) -> PoseSolution | Refusal:
-    """Camera pose in the map from corners (4, 2) in model order and the centre (2,)."""
+    """Camera pose in the map from corners (4, 2) in model order and the centre (2,).
+
+    corner_sigma_px: the sides' measured position error (`EdgeFit.line_sigma_px`);
+    growth_sigma_px: the error of the clipped-edge growth that moved all four sides, when the
+    sides' stage measured it (else `side_errors` predicts it from the panel's geometry). Both
+    set the position's covariance; the first also the fits' weights.
+    """
     corners4 = beacon_corners_m(beacon)
     object_points = np.vstack([corners4, np.zeros(3)])
     image_points = np.vstack([corners_px, center_px]).astype(np.float64)
@@ -304,7 +587,20 @@ def solve_pose(
             try_level=ratio > rules.max_ambiguity_ratio / 4,
         )
     position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
-    projected, _ = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
+    projected, jacobian = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
+    try:
+        covariance, factor = _position_covariance(
+            beacon,
+            image_points,
+            (rvec, tvec, projected, jacobian),
+            (corner_sigma_px, corner_sigma, growth_sigma_px),
+            (np.asarray(gravity_camera, dtype=float), gravity_sigma_deg, gravity_mode) if use_gravity else None,
+            rules,
+        )
+    except (ZeroDivisionError, np.linalg.LinAlgError, cv2.error):  # a degenerate quad: no uncertainty, not no fix
+        covariance, factor = None, 1.0
+    if covariance is not None and not (np.all(np.isfinite(covariance)) and np.all(np.diag(covariance) >= 0)):
+        covariance = None  # extreme intrinsics overflow the arithmetic: a fix without an uncertainty
     return PoseSolution(
         position_m=position,
         rotation_wc=rotation_wc,
@@ -312,4 +608,6 @@ def solve_pose(
         ambiguity_ratio=ratio,
         alternative_distance_m=disagreement,
         gravity_used=use_gravity,
+        covariance_m2=covariance,
+        consistency_factor=factor,
     )
