@@ -38,6 +38,7 @@ from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_
 
 PROFILE_ID = "xiaomi-mi8-front"
 MODES = {"vision": GravityMode.never, "gravity": GravityMode.always, "auto": GravityMode.auto}
+CHI2_2DOF_95 = 5.991  # a 2D Gaussian error lies inside d^T C^-1 d <= 5.991 with probability 95 %
 
 
 @dataclass(frozen=True)
@@ -104,10 +105,41 @@ def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
         if result.ok:
             delta = np.subtract(result.position_m, pose.position_m)
             errors[mode] = (float(np.hypot(*delta[:2])), float(np.linalg.norm(delta)),
-                            _tilt_error_deg(np.asarray(result.rotation_wc), pose.rotation_wc))
+                            _tilt_error_deg(np.asarray(result.rotation_wc), pose.rotation_wc),
+                            *ellipse_test(delta[:2], result.position_covariance_m2))
         else:
-            errors[mode] = (math.nan, math.nan, result.reason.value)
+            errors[mode] = (math.nan, math.nan, result.reason.value, None, None)
     return {"index": index, "errors": errors}
+
+
+def ellipse_test(delta_xy, covariance_m2) -> tuple[bool | None, float | None]:
+    """(is the 2D error `delta_xy` inside the reported 95 % ellipse, the reported 2D sigma (m)).
+
+    The ellipse is the XY block C of the position's covariance: inside when
+    d^T C^-1 d <= 5.991 (chi-square, 2 dof, 95 %). The 2D sigma is sqrt(trace C), the RMS
+    horizontal error the covariance predicts. (None, None) without a covariance.
+    """
+    if covariance_m2 is None:
+        return None, None
+    block = np.asarray(covariance_m2, dtype=float)[:2, :2]
+    d = np.asarray(delta_xy, dtype=float)
+    try:
+        inside = float(d @ np.linalg.solve(block, d)) <= CHI2_2DOF_95
+    except np.linalg.LinAlgError:
+        inside = False
+    return bool(inside), float(np.sqrt(max(np.trace(block), 0.0)))
+
+
+def calibration(tests: list[tuple[bool | None, float | None]]) -> dict:
+    """Share (%) of fixes whose 2D error is inside their reported 95 % ellipse, and the mean
+    reported 2D sigma (mm), over the fixes that carry a covariance (`ellipse_test`'s results).
+    A calibrated covariance puts ~95 % inside; fewer means it claims too much."""
+    known = [(inside, sigma) for inside, sigma in tests if inside is not None and sigma is not None]
+    if not known:
+        return {}
+    return {"ellipse95_pct": 100.0 * sum(inside for inside, _ in known) / len(known),
+            "mean_sigma_2d_mm": 1000.0 * float(np.mean([sigma for _, sigma in known])),
+            "with_covariance": len(known)}
 
 
 def _tilt_error_deg(rotation_wc: np.ndarray, truth_wc: np.ndarray) -> float:
@@ -157,6 +189,7 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
         if tilts:
             summary[mode]["mean_tilt_error_deg"] = float(np.mean(tilts))
             summary[mode]["p95_tilt_error_deg"] = float(np.percentile(tilts, 95))
+        summary[mode].update(calibration([(e[3], e[4]) for e in located]))
     return {"distance_m": config.distance_m, "frames": config.frames, "scale": config.scale,
             "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
 

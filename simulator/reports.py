@@ -4,7 +4,8 @@ Every benchmark (`lumipose bench grid|bench-real|distance|tilt`) is a scene plus
 `locate_series` renders each sample in memory (the same frames `lumipose simulate` writes),
 runs the pipeline on it and compares with the ground truth. As in the paper (Section IV-B/C)
 a fix whose 2D error exceeds the confidence margin (the 0.05 m cell) is an outlier: it counts
-against coverage and is left out of the error statistics.
+against coverage and is left out of the error statistics. The fixes' reported uncertainty is
+checked against their errors: the share inside the reported 95 % ellipse (`calibration`).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from shared_schemas import CameraIntrinsics
-from simulator.benchmarks import summarize
+from simulator.benchmarks import calibration, ellipse_test, summarize
 from simulator.sampling import SamplePose, parallel_map, render_pose
 from simulator.scene import Scene, readout_motion
 
@@ -42,6 +43,15 @@ class Outcome:
     warnings: tuple[str, ...] = ()
     # a moving camera: where it was when the rolling shutter read the panel's centre row
     at_panel_rows_m: tuple[float, float, float] | None = None
+    # the XY block of the fix's reported position covariance (m^2), rows
+    covariance_xy_m2: tuple[tuple[float, float], tuple[float, float]] | None = None
+
+    @property
+    def ellipse_test(self) -> tuple[bool | None, float | None]:
+        """(2D error inside the reported 95 % ellipse, reported 2D sigma m); None without a fix or covariance."""
+        if self.estimate_m is None:
+            return None, None
+        return ellipse_test(np.subtract(self.estimate_m[:2], self.true_m[:2]), self.covariance_xy_m2)
 
     @property
     def error_at_panel_rows_2d_m(self) -> float:
@@ -90,7 +100,15 @@ def locate_sample(job: LocateJob) -> Outcome:
         reason=None if result.ok else result.reason.value, message=result.message,
         reprojection_px=result.reprojection_error_px, warnings=tuple(result.warnings),
         at_panel_rows_m=_at_panel_rows(job.scene, job.sample, meta.camera),
+        covariance_xy_m2=_xy_block(result.position_covariance_m2) if result.ok else None,
     )
+
+
+def _xy_block(covariance_m2) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    if covariance_m2 is None:
+        return None
+    (a, b), (c, d) = (row[:2] for row in covariance_m2[:2])
+    return (float(a), float(b)), (float(c), float(d))
 
 
 def _at_panel_rows(scene: Scene, sample: SamplePose, camera: CameraIntrinsics) -> tuple[float, float, float] | None:
@@ -127,6 +145,8 @@ def table(outcomes: list[Outcome], margin_m: float = OUTLIER_M) -> dict:
         "mean_3d_mm": float(np.nanmean([o.error_3d_m if o.error_2d_m <= margin_m else math.nan
                                         for o in outcomes]) * 1000) if summary.get("mean_mm") is not None else None,
     })
+    # the reported uncertainty against the errors it describes, over the fixes within the margin
+    summary.update(calibration([o.ellipse_test for o in outcomes if o.error_2d_m <= margin_m]))
     if any(o.at_panel_rows_m is not None for o in outcomes):
         summary["at_panel_rows"] = summarize([e if e <= margin_m else math.nan
                                               for e in (o.error_at_panel_rows_2d_m for o in outcomes)])
@@ -167,7 +187,14 @@ def format_table(summary: dict, title: str) -> str:
         f"  coverage     {summary['coverage_pct']:8.2f} %  ({summary['samples']} samples, "
         f"{summary['no_fix']} without a fix, {summary['outliers']} outliers > {OUTLIER_M * 1000:.0f} mm)",
         f"  refusals     {summary['refusals'] or 'none'}",
-    ] + _panel_rows_line(summary))
+    ] + _calibration_line(summary) + _panel_rows_line(summary))
+
+
+def _calibration_line(summary: dict) -> list[str]:
+    if "ellipse95_pct" not in summary:
+        return []
+    return [f"  uncertainty  {summary['ellipse95_pct']:8.2f} % of the 2D errors inside the reported 95 % ellipse "
+            f"(calibrated: ~95), mean reported 2D sigma {summary['mean_sigma_2d_mm']:.3f} mm"]
 
 
 def _panel_rows_line(summary: dict) -> list[str]:
