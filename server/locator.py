@@ -96,6 +96,7 @@ def _dispatch(
     device_id: str | None,
     devices: Devices | None,
 ) -> LocateResult:
+    options = options.for_map(beacon_map)
     if beacon_id is not None:
         beacon = beacon_map.beacon(beacon_id)
         if beacon is None:

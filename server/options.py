@@ -7,11 +7,12 @@ vision and pose stage), rooms of several panels `room`, device sessions `session
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from server.pipeline import PipelineOptions
 from server.rooms import RoomRules
 from server.tracking.session import SessionRules
+from shared_schemas import BeaconMap
 
 
 @dataclass(frozen=True)
@@ -19,3 +20,8 @@ class LocateOptions:
     pipeline: PipelineOptions = PipelineOptions()
     room: RoomRules = RoomRules()
     session: SessionRules = SessionRules()
+
+    def for_map(self, beacon_map: BeaconMap) -> LocateOptions:
+        """These options with what the map states: the position error a fix must reach."""
+        fit = replace(self.pipeline.outline_fit, max_sigma_m=beacon_map.required_sigma_m)
+        return replace(self, pipeline=replace(self.pipeline, outline_fit=fit))

@@ -68,6 +68,7 @@ MAX_COORDINATE_M: Final = 1e7  # map coordinates: a room is metres, projected co
 MAX_ROTATION_ENTRY: Final = 1.001  # entries of a rotation matrix are within [-1, 1]; room for rounding
 MIN_SIDE_M: Final = 0.005  # a panel of 5 mm is a single LED; smaller cannot be seen as a square
 MAX_SIDE_M: Final = 10.0  # a 10 m luminous ceiling
+MIN_REQUIRED_SIGMA_M: Final = 1e-4  # a map may ask for a tenth of a millimetre, not for nothing
 MAX_GRAVITY_SIGMA_DEG: Final = 90.0  # a tilt error beyond 90 degrees says nothing
 
 Distortion = list[Annotated[float, Field(ge=-MAX_DISTORTION, le=MAX_DISTORTION)]]
@@ -387,6 +388,12 @@ class BeaconMap(Strict):
     schema_: Literal["lumipose.map/1"] = Field(default=MAP_SCHEMA, alias="schema")
     name: str
     beacons: list[Beacon] = Field(min_length=1)
+    required_sigma_m: float = Field(
+        default=0.01,
+        ge=MIN_REQUIRED_SIGMA_M,
+        le=MAX_SIDE_M,
+        description="the 1-sigma 2-D position error a fix must reach; a fit that does not is refused",
+    )
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
 

@@ -48,7 +48,7 @@ HELD_GROWTH_PX = 1.0  # a typical growth (docs/accuracy.md: 0.5-2 px), only to s
 class OutlineFitRules:
     min_points: int = 40
     max_rms_px: float = 0.8  # the fit's RMS distance (px) of the points to the outline
-    max_sigma_m: float = 0.01  # 1-sigma 2-D position error above this: refused (the map's need)
+    max_sigma_m: float = 0.01  # 1-sigma 2-D position error above this: refused (the map's required_sigma_m)
     point_sigma_floor_px: float = 0.02  # what one frame cannot show: lens calibration, quantisation
     # Pixel locking: a level crossing interpolated between pixels is off by up to ~0.1 px as a
     # function of the edge's sub-pixel phase (docs/accuracy.md); along a side near the pixel
@@ -292,6 +292,33 @@ def _starts(problem: _Problem, heading_deg: float | None) -> list[tuple[np.ndarr
     return starts
 
 
+def _as_the_rule_expects(params: np.ndarray, beacon: Beacon, heading_deg: float | None) -> np.ndarray:
+    """The pose among the panel's symmetric copies that the orientation rule expects.
+
+    A rectangle looks the same turned by half a turn about its centre, a square by a quarter:
+    a fit may end in any copy (from a start with the width along the other side, say). The
+    copy turned by k * symmetry about the panel's vertical axis has the camera's yaw + k *
+    symmetry and its position turned likewise about the panel's centre; the rule (heading, or
+    the camera's yaw within half the symmetry of the beacon's) picks k.
+    """
+    width, height = beacon.extent_m
+    if not beacon.has_corners:
+        return params
+    symmetry = math.pi / 2 if math.isclose(width, height) else math.pi
+    expected = math.radians(beacon.yaw_deg - heading_deg) if heading_deg is not None else 0.0
+    seen = math.radians(beacon.yaw_deg) - params[0]
+    turn = symmetry * round(_wrap(seen - expected) / symmetry)
+    if turn == 0:
+        return params
+    centre = np.asarray(beacon.center_m[:2], float)
+    cos, sin = math.cos(turn), math.sin(turn)
+    offset = params[3:5] - centre
+    turned = params.copy()
+    turned[0] = _wrap(params[0] + turn)
+    turned[3:5] = centre + [cos * offset[0] - sin * offset[1], sin * offset[0] + cos * offset[1]]
+    return turned
+
+
 def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
     """The robust least-squares fit from `start` (x, cost); cost infinite when the start itself
     is not a pose the residuals exist for (the panel's plane behind or edge-on to a ray)."""
@@ -425,7 +452,7 @@ def fit_outline(
         for probe in rules.growth_probes_px:
             probed = replace(problem, growth_prior_px=probe, growth_sigma_px=0.3)
             seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe]]), sigma, rules.huber_px).x)
-    minima = [_fit(problem, seed, sigma, rules.huber_px).x for seed in seeds]
+    minima = [_as_the_rule_expects(_fit(problem, seed, sigma, rules.huber_px).x, beacon, heading_deg) for seed in seeds]
     best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
     if not math.isfinite(_robust_chi2(problem, best, sigma, rules.huber_px)):
         return Refusal(FailureReason.pose_failed, "the outline fit left the poses the panel can be seen from")
@@ -433,6 +460,7 @@ def fit_outline(
     measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
     if tilt is not None and not math.isclose(measured, sigma, rel_tol=0.5):
         best = _fit(problem, best, measured, rules.huber_px).x  # the gravity weight depends on it
+    best = _as_the_rule_expects(best, beacon, heading_deg)
     distances = problem.distances_px(best)
     rms = float(np.sqrt(np.mean(distances**2)))
     if rms > rules.max_rms_px or not np.all(np.isfinite(best)):
@@ -440,19 +468,24 @@ def fit_outline(
             FailureReason.beacon_cut_off, f"the visible edges do not fit the panel's outline (RMS {rms:.2f} px)"
         )
     chi2 = _robust_chi2(problem, best, measured, rules.huber_px)
+    covariance = _covariance(problem, best, measured, rules.segment_sigma_px)
+    if covariance is None:
+        return Refusal(FailureReason.beacon_cut_off, "the visible part of the panel does not fix the position")
+    probes = [_as_the_rule_expects(seed, beacon, heading_deg) for seed in seeds]
+    position_covariance = _explain_probes(problem, best, probes, covariance[3:6, 3:6], measured, rules.huber_px)
     for other in minima:
-        apart = float(np.linalg.norm(other[3:6] - best[3:6]))
+        moved = other[3:6] - best[3:6]
+        apart = float(np.linalg.norm(moved))
         gap = _robust_chi2(problem, other, measured, rules.huber_px) - chi2
-        if apart > rules.ambiguous_apart_m and gap < rules.ambiguity_chi2:
+        # a second answer: far, about as good, and not within the first one's own uncertainty
+        # (along a flat valley the fits stop anywhere; the covariance already says how flat)
+        unexplained = moved @ np.linalg.solve(position_covariance, moved) > rules.ambiguity_chi2
+        if apart > rules.ambiguous_apart_m and gap < rules.ambiguity_chi2 and unexplained:
             return Refusal(
                 FailureReason.pose_ambiguous,
                 f"two poses {apart * 1000:.0f} mm apart fit the visible part of the panel almost equally "
                 f"(chi-square {chi2:.0f} and {chi2 + gap:.0f})",
             )
-    covariance = _covariance(problem, best, measured, rules.segment_sigma_px)
-    if covariance is None:
-        return Refusal(FailureReason.beacon_cut_off, "the visible part of the panel does not fix the position")
-    position_covariance = _explain_probes(problem, best, seeds, covariance[3:6, 3:6], measured, rules.huber_px)
     solution = SimpleNamespace(x=best)
     rotation = rotation_from_ypr(*np.degrees(solution.x[:3]))
     fit = OutlineFit(
@@ -469,7 +502,8 @@ def fit_outline(
         return Refusal(
             FailureReason.beacon_cut_off,
             f"the visible part of the panel ({len(points_px)} outline points) fixes the position only to "
-            f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); {rules.max_sigma_m * 1000:.0f} mm is needed",
+            f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); the map's required_sigma_m is "
+            f"{rules.max_sigma_m * 1000:.0f} mm",
         )
     return fit
 

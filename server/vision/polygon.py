@@ -82,7 +82,9 @@ def rounded_square_corners(contour: np.ndarray, rules: PolygonRules = PolygonRul
     polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2).astype(float)
     following = np.roll(polygon, -1, axis=0)
     lengths = np.hypot(*(following - polygon).T)
-    long_enough = lengths >= lengths.mean()  # the corner arcs' short segments go
+    # the corner arcs' short segments go (not "shorter than the mean": when RDP leaves one
+    # vertex per corner, as for a large panel with small corners, that drops two real sides)
+    long_enough = lengths >= 0.5 * lengths.max()
     sides = _merge_collinear(polygon[long_enough], following[long_enough], rules.merge_angle_deg)
     if len(sides) < 4:
         return Refusal(FailureReason.not_four_sides, f"the outline has {len(sides)} straight sides, not 4")

@@ -121,7 +121,8 @@ def test_a_stored_map_of_squares_is_unchanged_but_for_the_default_shape(tmp_path
     store = MapStore(tmp_path)
     store.put(original["name"], BeaconMap.model_validate(original))
     stored = json.loads((tmp_path / "maps" / f"{original['name']}.json").read_text())
-    expected = {**original, "beacons": [{**b, "shape": "rounded_rectangle"} for b in original["beacons"]]}
+    beacons = [{**b, "shape": "rounded_rectangle"} for b in original["beacons"]]
+    expected = {**original, "beacons": beacons, "required_sigma_m": 0.01}  # and the map's default need
     assert stored == expected
     assert store.get(original["name"]) == BeaconMap.model_validate(original)
 
