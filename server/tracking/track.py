@@ -45,14 +45,17 @@ class Track:
             return None
         return predict(self.state, t_s, self.rules.motion).position_m
 
-    def add(self, t_s: float, fix_m: np.ndarray, beacon_id_carried: bool = False) -> TrackState:
-        """Feed one fix; the filtered state, and whether the fix was an outlier."""
+    def add(
+        self, t_s: float, fix_m: np.ndarray, beacon_id_carried: bool = False, covariance_m2: np.ndarray | None = None
+    ) -> TrackState:
+        """Feed one fix (with its position covariance, `Fix.covariance_m2`, which weighs it);
+        the filtered state, and whether the fix was an outlier."""
         self.fixes += 1
         outlier = False
         if self.state is None or t_s < self.state.t_s:
-            self.state = start(t_s, fix_m, self.rules.motion)
+            self.state = start(t_s, fix_m, self.rules.motion, covariance_m2)
         else:
-            step = update(self.state, t_s, fix_m, self.rules.motion)
+            step = update(self.state, t_s, fix_m, self.rules.motion, covariance_m2)
             self.state, outlier = step.state, not step.accepted
             self.outliers += int(outlier)
             if step.restarted:

@@ -49,3 +49,49 @@ def test_bad_input_is_named():
         update(state, 2.0, np.array([np.nan, 0, 0]))
     with pytest.raises(ValueError, match="t_s"):
         predict(state, 0.5)
+
+
+def settled():
+    """A track standing still at the origin: 1 s of 1 mm fixes at 20 per second (video)."""
+    state = start(0.0, np.zeros(3))
+    for k in range(1, 21):
+        state = update(state, 0.05 * k, np.zeros(3), covariance_m2=np.eye(3) * 1e-6).state
+    return state
+
+
+def test_a_fix_with_a_large_covariance_moves_the_track_less():
+    state = settled()
+    fix = np.array([0.004, -0.002, 0.0])
+    sure = update(state, 1.05, fix, covariance_m2=np.diag([1e-6, 1e-6, 4e-6])).state  # 1 mm: a near panel
+    unsure = update(state, 1.05, fix, covariance_m2=np.diag([1e-4, 1e-4, 4e-4])).state  # 10 mm: gravity only
+    assert np.linalg.norm(unsure.position_m) < 0.5 * np.linalg.norm(sure.position_m)
+    assert np.linalg.norm(sure.position_m - fix) < 0.001
+    # and the track knows it: its own position variance stays larger
+    assert np.trace(unsure.covariance[:3, :3]) > np.trace(sure.covariance[:3, :3])
+
+
+def test_a_fix_that_is_only_sure_along_one_axis_moves_the_track_along_the_other():
+    state = settled()
+    elongated = np.diag([1e-6, 1e-3, 1e-6])  # 1 mm in x, 32 mm in y
+    after = update(state, 1.05, np.array([0.004, 0.004, 0.0]), covariance_m2=elongated).state
+    assert after.position_m[0] > 0.003 and abs(after.position_m[1]) < 0.001
+
+
+def test_without_a_covariance_the_rules_sigma_is_the_noise_and_a_floor_stays_under_a_tiny_one():
+    state = settled()
+    fix = np.array([0.004, 0.0, 0.0])
+    plain = update(state, 1.05, fix).state
+    as_rule = update(state, 1.05, fix, covariance_m2=np.eye(3) * (0.005**2 - 0.001**2)).state
+    np.testing.assert_allclose(plain.position_m, as_rule.position_m, atol=1e-12)
+    tiny = update(state, 1.05, fix, covariance_m2=np.zeros((3, 3))).state  # the floor: 1 mm per axis
+    floor = update(state, 1.05, fix, FilterRules(fix_sigma_m=0.001)).state
+    np.testing.assert_allclose(tiny.position_m, floor.position_m, atol=1e-12)
+    with pytest.raises(ValueError, match="covariance_m2"):
+        update(state, 1.05, fix, covariance_m2=np.full((3, 3), np.nan))
+
+
+def test_the_gate_weighs_the_fix_by_its_covariance():
+    state = settled()
+    far = np.array([0.0, 0.3, 0.0])  # 30 cm off a still track
+    assert not update(state, 1.05, far, covariance_m2=np.eye(3) * 1e-6).accepted
+    assert update(state, 1.05, far, covariance_m2=np.eye(3) * 0.01).accepted  # 10 cm sigma: plausible

@@ -38,3 +38,12 @@ def test_a_silent_track_stops_predicting_but_still_coasts_for_the_answer():
 def test_the_carried_flag_is_passed_through():
     track = Track()
     assert track.add(0.0, np.zeros(3), beacon_id_carried=True).beacon_id_carried
+
+
+def test_the_fix_covariance_weighs_the_fix():
+    sure, unsure = Track(), Track()
+    for track, covariance in ((sure, np.eye(3) * 1e-6), (unsure, np.eye(3) * 1e-4)):
+        for k in range(20):  # 1 s of video frames, 1 mm fixes
+            track.add(0.05 * k, np.zeros(3), covariance_m2=np.eye(3) * 1e-6)
+        track.add(1.0, np.array([0.004, 0.0, 0.0]), covariance_m2=covariance)
+    assert unsure.state.position_m[0] < 0.5 * sure.state.position_m[0]
