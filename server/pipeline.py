@@ -24,7 +24,7 @@ from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, di
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.pose.ordering import order_corners
-from server.pose.outline import OutlineFitRules, fit_outline
+from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
 from server.pose.solve import GravityMode, PoseRules, solve_pose
 from server.vision.binarize import Levels, blur, threshold
 from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
@@ -228,25 +228,80 @@ def _locate_by_outline(
         )
     if isinstance(fit, Refusal):
         return timer.refusal(fit)
+    what = "a panel cut by the frame border" if cut else "the panel"
+    note = f"pose from the visible outline of {what} ({fit.points} points, growth {fit.growth_px:.2f} px)"
+    return _outline_fix(frame, beacon, fit, id_source, gravity is not None, note, timer)
+
+
+def locate_by_outlines(
+    frame: LumaFrame,
+    panels: list[tuple[Beacon, tuple[int, int, int, int]]],
+    levels: Levels,
+    options: PipelineOptions,
+    start_position_m: np.ndarray,
+    start_yaw_deg: float,
+) -> Fix | Refusal:
+    """The pose from the visible outlines of several map panels together (boxes in frame
+    pixels), from a start: a device's cut panels, named by its track. The fix names the first."""
+    timer = _Timer()
+    matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
+    with timer.stage("outline"):
+        found = [outline_points(frame.pixels, box, levels, options.outline_points) for _, box in panels]
+        points = [
+            (beacon, _undistorted(f.points_px, matrix, distortion))
+            for (beacon, _), f in zip(panels, found, strict=True)
+        ]
+    gravity = None
+    if frame.meta.gravity_camera is not None and options.gravity_mode is not GravityMode.never:
+        gravity = np.asarray(frame.meta.gravity_camera, dtype=float)
+    gaps = [f.level_gap_px for f in found if np.isfinite(f.level_gap_px)]
+    with timer.stage("pose"):
+        fit = fit_outlines(
+            points,
+            float(np.median(gaps)) if gaps else float("nan"),
+            matrix,
+            gravity,
+            options.gravity_sigma_deg,
+            start_position_m,
+            start_yaw_deg,
+            options.growth_px,
+            options.outline_fit,
+        )
+    if isinstance(fit, Refusal):
+        return timer.refusal(fit)
+    note = f"pose from the visible outlines of cut panels {[b.id for b, _ in panels]} together ({fit.points} points)"
+    return _outline_fix(frame, panels[0][0], fit, BeaconIdSource.track, gravity is not None, note, timer)
+
+
+def _outline_fix(
+    frame: LumaFrame,
+    beacon: Beacon,
+    fit: OutlineFit,
+    id_source: BeaconIdSource,
+    gravity_used: bool,
+    note: str,
+    timer: _Timer,
+) -> Fix:
+    """The `Fix` of an outline fit, with `beacon`'s corners and centre projected into the frame."""
+    matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
     corners_m = beacon_to_world(beacon, beacon_corners_m(beacon)) if beacon.has_corners else np.zeros((0, 3))
     model = np.vstack([corners_m, np.asarray(beacon.center_m, float)[None, :]])
     in_camera = world_to_camera(model, fit.position_m, fit.rotation_wc)
     projected, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), matrix, distortion)
     projected = projected.reshape(-1, 2)
-    what = "a panel cut by the frame border" if cut else "the panel"
     return Fix(
         position_m=fit.position_m,
         rotation_wc=fit.rotation_wc,
         beacon_id=beacon.id,
         id_source=id_source,
         reprojection_error_px=fit.rms_px,
-        gravity_used=gravity is not None,
+        gravity_used=gravity_used,
         center_px=projected[-1],
         corners_px=projected[:4] if beacon.has_corners else None,
         orientation_rule=fit.orientation_rule,
         covariance_m2=fit.covariance_m2,
         growth_px=fit.growth_px,
-        warnings=(f"pose from the visible outline of {what} ({fit.points} points, growth {fit.growth_px:.2f} px)",),
+        warnings=(note,),
         timing_ms=timer.total(),
     )
 

@@ -29,13 +29,15 @@ All image points here are undistorted pixel coordinates.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import cached_property
 from types import SimpleNamespace
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from server.geometry import beacon_rotation, rotation_from_ypr, ypr_from_rotation
+from server.geometry import beacon_rotation, rotation_from_ypr
 from server.outcomes import Refusal
 from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
@@ -82,10 +84,12 @@ class OutlineFit:
 
 @dataclass(frozen=True)
 class _Problem:
-    """One fit's fixed inputs: rays (3, N) of the points, the panel, the priors."""
+    """One fit's fixed inputs: rays (3, N) of the points, the panel each point is on
+    (`panel_of`, an index into `panels`), the priors."""
 
     rays: np.ndarray
-    beacon: Beacon
+    panels: tuple[Beacon, ...]
+    panel_of: np.ndarray
     focal_px: tuple[float, float]
     tilt_rad: tuple[float, float] | None  # measured (pitch, roll)
     tilt_sigma_rad: float
@@ -96,21 +100,41 @@ class _Problem:
     blur_px: float  # the edge's blur: a curved edge's level set lies s^2 / (2 R) inside its offset
     on_arc: np.ndarray | None = None  # (N,) bool: the points on a corner arc, for that term
 
+    @property
+    def beacon(self) -> Beacon:
+        return self.panels[0]
+
+    @cached_property
+    def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per point: its panel's centre (3, N), axes x_B, y_B in the map (3, 2, N), the half
+        size of the rectangle of the arcs' centres (2, N) and the arcs' radius (N,)."""
+        centres = np.array([b.center_m for b in self.panels], float)[self.panel_of].T
+        axes = np.array([beacon_rotation(b)[:, :2] for b in self.panels])[self.panel_of].transpose(1, 2, 0)
+        inner = np.array([[w / 2 - b.outline_radius_m, h / 2 - b.outline_radius_m] for b in self.panels
+                          for w, h in [b.extent_m]])[self.panel_of].T  # fmt: skip
+        radius = np.array([b.outline_radius_m for b in self.panels])[self.panel_of]
+        return centres, axes, inner, radius
+
+    def _on_panels(self, batch: np.ndarray):
+        """For k parameter vectors (k, 7): each ray's length to its panel's plane (k, N), the
+        rotations (k, 3, 3), the points in their panel's axes (k, 2, N) and the q of the
+        signed distance (k, 2, N): |point| - inner (both > 0 beyond an arc's centre)."""
+        centres, axes, inner, _ = self._geometry
+        rotation = _rotations(batch[:, 0], batch[:, 1], batch[:, 2])  # (k, 3, 3) camera to map
+        along = rotation @ self.rays  # (k, 3, N)
+        rise = np.where(np.abs(along[:, 2]) > 1e-9, along[:, 2], 1e-9)
+        reach = (centres[2] - batch[:, 5, None]) / rise  # ray length to the ceiling plane, in ray units
+        offset = batch[:, 3:6, None] + reach[:, None, :] * along - centres[None]
+        plane = np.sum(axes[None] * offset[:, :, None, :], axis=1)  # (k, 2, N) in the panel's axes
+        return reach, rotation, plane, np.abs(plane) - inner[None]
+
     def distances_px(self, params: np.ndarray) -> np.ndarray:
         """Signed distance (px, outward positive) of each point to the outline grown by D:
         (N,) for one parameter vector (7,), (k, N) for k of them (k, 7) at once."""
         batch = np.atleast_2d(params)
-        rotation = _rotations(batch[:, 0], batch[:, 1], batch[:, 2])  # (k, 3, 3) camera to map
-        centre = np.asarray(self.beacon.center_m, float)
-        along = rotation @ self.rays  # (k, 3, N)
-        rise = np.where(np.abs(along[:, 2]) > 1e-9, along[:, 2], 1e-9)
-        reach = (centre[2] - batch[:, 5, None]) / rise  # ray length to the ceiling plane, in ray units
-        to_beacon = beacon_rotation(self.beacon)
-        offset = batch[:, 3:6, None] + reach[:, None, :] * along - centre[None, :, None]
-        plane = np.einsum("ji,kjn->kin", to_beacon[:, :2], offset)  # (k, 2, N) in the panel's axes
-        width, height = self.beacon.extent_m
-        radius = self.beacon.outline_radius_m
-        qx, qy = np.abs(plane[:, 0]) - (width / 2 - radius), np.abs(plane[:, 1]) - (height / 2 - radius)
+        _, axes, _, radius = self._geometry
+        reach, rotation, plane, q = self._on_panels(batch)
+        qx, qy = q[:, 0], q[:, 1]
         outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
         signed = outside + np.minimum(np.maximum(qx, qy), 0.0) - radius
         # the outline's normal in the plane: radial beyond a corner's centre, else the nearer side's
@@ -118,8 +142,8 @@ class _Problem:
         gx = np.where(corner, np.maximum(qx, 0.0) / np.maximum(outside, 1e-12), (qx >= qy)) * np.sign(plane[:, 0])
         gy = np.where(corner, np.maximum(qy, 0.0) / np.maximum(outside, 1e-12), (qx < qy)) * np.sign(plane[:, 1])
         # ... in the camera frame: R_wc^T R_wb (gx, gy, 0)
-        turn = np.einsum("kji,jl->kil", rotation, to_beacon[:, :2])  # (k, 3, 2)
-        normal = turn[:, :, :1] * gx[:, None, :] + turn[:, :, 1:] * gy[:, None, :]
+        in_map = axes[None, :, 0] * gx[:, None, :] + axes[None, :, 1] * gy[:, None, :]  # (k, 3, N)
+        normal = np.matmul(rotation.transpose(0, 2, 1), in_map)
         x, y, z = self.rays[:, None, :] * reach[None]  # the point on the panel, camera frame (3, k, N)
         fx, fy = self.focal_px
         du = fx / z * (normal[:, 0] - x / z * normal[:, 2])
@@ -134,20 +158,13 @@ class _Problem:
         return distances if np.ndim(params) == 2 else distances[0]
 
     def segments(self, params: np.ndarray) -> np.ndarray:
-        """Which part of the outline (N,) each point lies on at `params`: 0-3 the four sides
-        (left, right, bottom, top in the panel's axes), 4-7 the four corner arcs."""
-        rotation = _rotations(*params[:3, None])[0]
-        centre = np.asarray(self.beacon.center_m, float)
-        along = rotation @ self.rays
-        reach = (centre[2] - params[5]) / np.where(np.abs(along[2]) > 1e-9, along[2], 1e-9)
-        plane = beacon_rotation(self.beacon)[:, :2].T @ (params[3:6, None] + reach * along - centre[:, None])
-        width, height = self.beacon.extent_m
-        radius = self.beacon.outline_radius_m
-        qx, qy = np.abs(plane[0]) - (width / 2 - radius), np.abs(plane[1]) - (height / 2 - radius)
-        corner = (qx > 0) & (qy > 0)
-        side = np.where(qx >= qy, (plane[0] > 0).astype(int), 2 + (plane[1] > 0))
-        arc = 4 + (plane[0] > 0) + 2 * (plane[1] > 0)
-        return np.where(corner, arc, side)
+        """Which part of which panel's outline (N,) each point lies on at `params`: 8 per panel,
+        0-3 its four sides (left, right, bottom, top in its axes), 4-7 its four corner arcs."""
+        _, _, plane, q = self._on_panels(params[None])
+        (px, py), (qx, qy) = plane[0], q[0]
+        side = np.where(qx >= qy, (px > 0).astype(int), 2 + (py > 0))
+        arc = 4 + (px > 0) + 2 * (py > 0)
+        return np.where((qx > 0) & (qy > 0), arc, side) + 8 * self.panel_of
 
     def priors(self, params: np.ndarray) -> np.ndarray:
         """The gravity, heading and growth residuals, each in its own sigmas: (m,) or (k, m)."""
@@ -400,6 +417,36 @@ def _covariance(
     return np.linalg.inv(information)
 
 
+def _problem(
+    panels: list[tuple[Beacon, np.ndarray]],
+    level_gap_px: float,
+    camera_matrix: np.ndarray,
+    gravity_camera: np.ndarray | None,
+    gravity_sigma_deg: float,
+    yaw_prior_deg: float | None,
+    growth_px: float | None,
+    rules: OutlineFitRules,
+) -> _Problem:
+    points = np.vstack([p for _, p in panels])
+    tilt = None
+    if gravity_camera is not None:
+        pitch, roll = tilt_from_gravity(gravity_camera)
+        tilt = (math.radians(pitch), math.radians(roll))
+    return _Problem(
+        rays=np.linalg.solve(camera_matrix, np.vstack([points.T, np.ones(len(points))])),
+        panels=tuple(b for b, _ in panels),
+        panel_of=np.concatenate([np.full(len(p), k) for k, (_, p) in enumerate(panels)]),
+        focal_px=(float(camera_matrix[0, 0]), float(camera_matrix[1, 1])),
+        tilt_rad=tilt,
+        tilt_sigma_rad=math.radians(max(gravity_sigma_deg, 1e-3)),
+        yaw_prior_rad=None if yaw_prior_deg is None else math.radians(yaw_prior_deg),
+        yaw_sigma_rad=math.radians(rules.heading_sigma_deg),
+        growth_prior_px=growth_px,
+        growth_sigma_px=rules.growth_sigma_px,
+        blur_px=_blur_px(HELD_GROWTH_PX if growth_px is None else growth_px, level_gap_px),
+    )
+
+
 def fit_outline(
     points_px: np.ndarray,
     level_gap_px: float,
@@ -419,22 +466,16 @@ def fit_outline(
             FailureReason.pose_failed,
             "a round panel shows no yaw: the frame needs heading_deg (or a second panel in view)",
         )
-    rays = np.linalg.solve(camera_matrix, np.vstack([points_px.T, np.ones(len(points_px))]))
-    tilt = None
-    if gravity_camera is not None:
-        pitch, roll = tilt_from_gravity(gravity_camera)
-        tilt = (math.radians(pitch), math.radians(roll))
-    problem = _Problem(
-        rays=rays,
-        beacon=beacon,
-        focal_px=(float(camera_matrix[0, 0]), float(camera_matrix[1, 1])),
-        tilt_rad=tilt,
-        tilt_sigma_rad=math.radians(max(gravity_sigma_deg, 1e-3)),
-        yaw_prior_rad=None if beacon.has_corners or heading_deg is None else math.radians(heading_deg),
-        yaw_sigma_rad=math.radians(rules.heading_sigma_deg),
-        growth_prior_px=growth_px,
-        growth_sigma_px=rules.growth_sigma_px,
-        blur_px=_blur_px(HELD_GROWTH_PX if growth_px is None else growth_px, level_gap_px),
+    yaw_prior = None if beacon.has_corners else heading_deg
+    problem = _problem(
+        [(beacon, points_px)],
+        level_gap_px,
+        camera_matrix,
+        gravity_camera,
+        gravity_sigma_deg,
+        yaw_prior,
+        growth_px,
+        rules,
     )
     sigma = 0.1  # a first guess of the points' noise; measured from the residuals below
     # first with the growth held near its start (far from the answer, a free growth can
@@ -454,13 +495,62 @@ def fit_outline(
             seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe]]), sigma, rules.huber_px).x)
     minima = [_as_the_rule_expects(_fit(problem, seed, sigma, rules.huber_px).x, beacon, heading_deg) for seed in seeds]
     best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
+    probes = [_as_the_rule_expects(seed, beacon, heading_deg) for seed in seeds]
+    return _finish(
+        problem, best, sigma, probes, minima, rule, lambda x: _as_the_rule_expects(x, beacon, heading_deg), rules
+    )
+
+
+def fit_outlines(
+    panels: list[tuple[Beacon, np.ndarray]],
+    level_gap_px: float,
+    camera_matrix: np.ndarray,
+    gravity_camera: np.ndarray | None,
+    gravity_sigma_deg: float,
+    start_position_m: np.ndarray,
+    start_yaw_deg: float,
+    growth_px: float | None,
+    rules: OutlineFitRules = OutlineFitRules(),
+) -> OutlineFit | Refusal:
+    """Camera pose from the visible outlines of several map panels at once, each with its
+    undistorted points (N_i, 2), from a start (a device's track): two panels cut by the frame
+    border pin down together what neither does alone (their distance apart is the scale)."""
+    panels = [(b, p) for b, p in panels if len(p) > 0]
+    count = sum(len(p) for _, p in panels)
+    if count < rules.min_points:
+        return Refusal(FailureReason.beacon_cut_off, f"only {count} points of the panels' outlines in view")
+    problem = _problem(panels, level_gap_px, camera_matrix, gravity_camera, gravity_sigma_deg, None, growth_px, rules)
+    pitch, roll = problem.tilt_rad or (0.0, 0.0)
+    growth = HELD_GROWTH_PX if growth_px is None else growth_px
+    start = np.array([math.radians(start_yaw_deg), pitch, roll, *start_position_m, growth])
+    sigma = 0.1
+    held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
+    first = _fit(held, start, sigma, rules.huber_px)
+    if not math.isfinite(first.cost):
+        return Refusal(FailureReason.pose_failed, "the track's pose puts the panels' outlines behind the camera")
+    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.segments(first.x) >= 4)
+    best = _fit(problem, first.x, sigma, rules.huber_px).x
+    return _finish(problem, best, sigma, [first.x], [best], None, lambda x: x, rules)
+
+
+def _finish(
+    problem: _Problem,
+    best: np.ndarray,
+    sigma: float,
+    probes: list[np.ndarray],
+    minima: list[np.ndarray],
+    rule: OrientationRule | None,
+    as_expected: Callable[[np.ndarray], np.ndarray],
+    rules: OutlineFitRules,
+) -> OutlineFit | Refusal:
+    """The fit refined with its measured noise, checked, with its covariance; or why it is no fix."""
     if not math.isfinite(_robust_chi2(problem, best, sigma, rules.huber_px)):
         return Refusal(FailureReason.pose_failed, "the outline fit left the poses the panel can be seen from")
     problem = replace(problem, on_arc=problem.segments(best) >= 4)
     measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
-    if tilt is not None and not math.isclose(measured, sigma, rel_tol=0.5):
+    if problem.tilt_rad is not None and not math.isclose(measured, sigma, rel_tol=0.5):
         best = _fit(problem, best, measured, rules.huber_px).x  # the gravity weight depends on it
-    best = _as_the_rule_expects(best, beacon, heading_deg)
+    best = as_expected(best)
     distances = problem.distances_px(best)
     rms = float(np.sqrt(np.mean(distances**2)))
     if rms > rules.max_rms_px or not np.all(np.isfinite(best)):
@@ -471,7 +561,6 @@ def fit_outline(
     covariance = _covariance(problem, best, measured, rules.segment_sigma_px)
     if covariance is None:
         return Refusal(FailureReason.beacon_cut_off, "the visible part of the panel does not fix the position")
-    probes = [_as_the_rule_expects(seed, beacon, heading_deg) for seed in seeds]
     position_covariance = _explain_probes(problem, best, probes, covariance[3:6, 3:6], measured, rules.huber_px)
     for other in minima:
         moved = other[3:6] - best[3:6]
@@ -486,27 +575,21 @@ def fit_outline(
                 f"two poses {apart * 1000:.0f} mm apart fit the visible part of the panel almost equally "
                 f"(chi-square {chi2:.0f} and {chi2 + gap:.0f})",
             )
-    solution = SimpleNamespace(x=best)
-    rotation = rotation_from_ypr(*np.degrees(solution.x[:3]))
     fit = OutlineFit(
-        position_m=solution.x[3:6].copy(),
-        rotation_wc=rotation,
+        position_m=best[3:6].copy(),
+        rotation_wc=rotation_from_ypr(*np.degrees(best[:3])),
         covariance_m2=position_covariance,
-        growth_px=float(solution.x[6]),
+        growth_px=float(best[6]),
         rms_px=rms,
         point_sigma_px=measured,
-        points=len(points_px),
+        points=len(distances),
         orientation_rule=rule,
     )
     if fit.sigma_2d_m > rules.max_sigma_m:
         return Refusal(
             FailureReason.beacon_cut_off,
-            f"the visible part of the panel ({len(points_px)} outline points) fixes the position only to "
+            f"the visible part of the panel ({len(distances)} outline points) fixes the position only to "
             f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); the map's required_sigma_m is "
             f"{rules.max_sigma_m * 1000:.0f} mm",
         )
     return fit
-
-
-def yaw_deg(fit: OutlineFit) -> float:
-    return ypr_from_rotation(fit.rotation_wc)[0]

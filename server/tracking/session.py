@@ -18,11 +18,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
+import cv2
 import numpy as np
 
+from server.geometry import camera_matrix, distortion_vector, rotation_from_ypr, world_to_camera, ypr_from_rotation
 from server.ingest import LumaFrame
 from server.outcomes import Refusal, located, refused
-from server.pipeline import PipelineOptions
+from server.pipeline import PipelineOptions, locate_by_outlines
+from server.pose.outline import tilt_from_gravity
 from server.rooms import PanelFix, RoomRules, choose_and_fuse, locate_panel
 from server.tracking.naming import NamingRules, PanelNamer
 from server.tracking.track import Track, TrackRules
@@ -35,6 +38,7 @@ from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, Loc
 class SessionRules:
     id_frame_gate_norm: float = 0.15  # ID-frame blob to pose-frame blob, in frame widths/heights
     growth_memory: int = 10  # whole panels whose contour growth is remembered, for cut ones
+    name_gate: float = 0.5  # a cut blob's nearest predicted panel centre / the next nearest, to name it
     naming: NamingRules = NamingRules()
     track: TrackRules = TrackRules()
 
@@ -94,6 +98,7 @@ class DeviceSession:
     track: Track = field(init=False)
     captures: int = 0
     growths_px: list[float] = field(default_factory=list)
+    last_rotation_wc: np.ndarray | None = None  # of the last fix: the yaw that cut panels start from
 
     def __post_init__(self) -> None:
         self.namer = PanelNamer(self.beacon_map, self.rules.naming)
@@ -154,9 +159,54 @@ class DeviceSession:
             if named is not None:
                 fixes.append(named)
         best = choose_and_fuse(fixes, room)
+        if best is None and any(b.cut_off for b in blobs):
+            together = self._cut_panels_together(pose_frame, [b for b in blobs if b.cut_off], candidates, options, t_s)
+            if isinstance(together, Refusal):
+                refusals.insert(0, together)
+            else:
+                best = together
         if best is not None:
+            self.last_rotation_wc = np.asarray(best.fix.rotation_wc)
             return self._tracked(best, len(blobs), t_s)
         return refused(self._why_no_fix(blobs, refusals), beacons_in_view=len(blobs), track=self.track.coasting(t_s))
+
+    def _cut_panels_together(
+        self, frame: LumaFrame, cut: list[BeaconBlob], candidates, options: PipelineOptions, t_s: float
+    ) -> PanelFix | Refusal | None:
+        """One fix from the visible parts of all the cut panels the track expects, fitted together
+        from the predicted pose (each alone may not pin the position down); None when untried."""
+        predicted = self.track.predicted_m(t_s)
+        gravity = frame.meta.gravity_camera
+        if predicted is None or self.last_rotation_wc is None or gravity is None:
+            return None
+        yaw = ypr_from_rotation(self.last_rotation_wc)[0]
+        attitude = rotation_from_ypr(yaw, *tilt_from_gravity(np.asarray(gravity)))
+        beacons = list(self.beacon_map.beacons)
+        centres = world_to_camera(np.array([b.center_m for b in beacons], float), predicted, attitude)
+        matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
+        projected, _ = cv2.projectPoints(centres, np.zeros(3), np.zeros(3), matrix, distortion)
+        projected = projected.reshape(-1, 2)
+        named = []
+        for blob in cut:
+            gaps = np.linalg.norm(projected - np.asarray(blob.centroid_px), axis=1)
+            order = np.argsort(gaps)
+            # the nearest predicted panel names the blob when it is clearly nearer than the next one
+            if len(order) < 2 or gaps[order[0]] < self.rules.name_gate * gaps[order[1]]:
+                named.append((blob, beacons[int(order[0])]))
+        if not named:
+            return Refusal(FailureReason.beacon_cut_off, "no cut panel where the track expects one")
+        growth = float(np.median(self.growths_px)) if self.growths_px else None
+        fix = locate_by_outlines(
+            frame,
+            [(beacon, blob.bounding_box) for blob, beacon in named],
+            candidates.levels,
+            replace(options, growth_px=growth),
+            predicted,
+            yaw,
+        )
+        if isinstance(fix, Refusal):
+            return fix
+        return PanelFix(named[0][0], named[0][1], fix, None)
 
     def _why_no_fix(self, blobs: list[BeaconBlob], refusals: list[Refusal]) -> Refusal:
         if refusals:
