@@ -168,18 +168,12 @@ def _map_residuals(params, object_points, image_points, camera_matrix, across_gr
     pixel_weight, gravity_weight = weights
     projected, jacobian = cv2.projectPoints(object_points, params[:3], params[3:], camera_matrix, None)
     image = (projected.reshape(-1) - image_points.reshape(-1)) * pixel_weight
-    tilt, d_tilt = _tilt_residual(params[:3], across_gravity)
-    return np.concatenate([image, tilt * gravity_weight]), np.vstack(
-        [jacobian[:, :6] * pixel_weight, d_tilt * gravity_weight]
-    )
-
-
-def _tilt_residual(rvec: np.ndarray, across_gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted gravity R_cb (0, 0, -1) across the measured one (2,), radians, and its Jacobian
-    (2, 6) over (rvec, tvec)."""
-    rotation, rotation_jacobian = cv2.Rodrigues(rvec)  # d R / d rvec, (3, 9) row-major R
+    rotation, rotation_jacobian = cv2.Rodrigues(params[:3])  # d R / d rvec, (3, 9) row-major R
+    down_column = -rotation[:, 2]
     d_down = -rotation_jacobian.reshape(3, 3, 3)[:, :, 2].T  # (3 components, 3 rvec)
-    return across_gravity @ -rotation[:, 2], np.hstack([across_gravity @ d_down, np.zeros((2, 3))])
+    tilt = across_gravity @ down_column * gravity_weight
+    d_tilt = np.hstack([across_gravity @ d_down, np.zeros((2, 3))]) * gravity_weight
+    return np.concatenate([image, tilt]), np.vstack([jacobian[:, :6] * pixel_weight, d_tilt])
 
 
 def fuse_gravity(
@@ -312,6 +306,9 @@ def _side_geometry(corners: np.ndarray) -> tuple[list[tuple[float, float]], list
     return normals, lengths, across
 
 
+_EDGES = EdgeRules()  # the sides' stage's defaults, which `side_errors` mirrors
+
+
 @dataclass(frozen=True)
 class SideErrors:
     """What moves the sides the corners are cut from (px), for `corner_covariance`.
@@ -353,7 +350,7 @@ def side_errors(
     the growth is their median (1.2533 sigma / sqrt(n)).
     """
     _, lengths, across = geometry or _side_geometry(corners)
-    edges = EdgeRules()
+    edges = _EDGES
     rho = beacon.corner_radius_m / min(beacon.extent_m)
     fit_fraction = max(1.0 - 2.0 * rho - 2.0 * edges.corner_margin, 0.1)
     # a side crosses the pixel grid when its line drifts over MIN_PHASE_SPAN_PX of its outward axis
@@ -373,15 +370,14 @@ def side_errors(
     return SideErrors(side_sigma, locking, float(growth_sigma_px), coupling, fit_fraction)
 
 
-def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> tuple[np.ndarray, np.ndarray]:
-    """(sides (8, 8), growth (8,)): the corners' moves (x0 y0 x1 y1 ...) per unit of each
-    independent error, scaled by its sigma: 4 side offsets and 4 side turns, and the growth's.
-    Their covariance is sides sides^T + growth growth^T (see `corner_covariance`)."""
+def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> np.ndarray:
+    """(8, 9): the corners' moves (rows x0 y0 x1 y1 ...) per unit of each independent error,
+    scaled by its sigma: 4 side offsets, 4 side turns, the growth's error (last column). The
+    corners' covariance is design design^T (see `corner_covariance`)."""
     own = math.hypot(errors.side_sigma, errors.locking_sigma)
     turn = errors.side_sigma * math.sqrt(12.0) / errors.fit_fraction
     share = errors.growth_coupling / 4.0 * own
-    sides = [[0.0] * 8 for _ in range(8)]
-    growth = [0.0] * 8
+    rows = [[0.0] * 9 for _ in range(8)]
     for k in range(4):
         before = (k - 1) % 4
         (ax, ay), (lx, ly) = normals[before], normals[k]  # side k - 1 ends at corner k, side k starts there
@@ -390,16 +386,16 @@ def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> tu
         by_arriving = (ly / determinant, -lx / determinant)
         by_leaving = (-ay / determinant, ax / determinant)
         for axis in (0, 1):
-            row = sides[2 * k + axis]
+            row = rows[2 * k + axis]
             out = by_arriving[axis] + by_leaving[axis]  # both sides out by one
-            growth[2 * k + axis] = out * errors.growth_sigma
             for j in range(4):  # every side's offset moves the growth measured against all four
                 row[j] = -out * share
             row[before] += by_arriving[axis] * own
             row[k] += by_leaving[axis] * own
             row[4 + before] = 0.5 * by_arriving[axis] * turn
             row[4 + k] = -0.5 * by_leaving[axis] * turn
-    return np.array(sides), np.array(growth)
+            row[8] = out * errors.growth_sigma
+    return np.array(rows)
 
 
 def corner_covariance(corners: np.ndarray, errors: SideErrors) -> tuple[np.ndarray, np.ndarray]:
@@ -416,8 +412,8 @@ def corner_covariance(corners: np.ndarray, errors: SideErrors) -> tuple[np.ndarr
     start move along their normals as they do. Corners of neighbouring sides correlate; the
     growth is a change of scale, the main error of the range.
     """
-    sides, growth = _corner_design(_side_geometry(corners)[0], errors)
-    return sides @ sides.T, np.outer(growth, growth)
+    design = _corner_design(_side_geometry(corners)[0], errors)
+    return design[:, :8] @ design[:, :8].T, np.outer(design[:, 8], design[:, 8])
 
 
 def _centre_jacobian(corners: np.ndarray) -> np.ndarray:
@@ -484,23 +480,22 @@ def _position_covariance(
     normal matrix H, the parameters move by X = H^-1 J^T L D (L: corners to the five points)
     per unit of each error, so their covariance is X X^T; the gravity sensor's error adds
     columns of its own. The position's is P X (P X)^T, P = d position / d parameters.
+    Few, small numpy calls: this runs on every fix (~0.1 ms).
     """
     rvec, tvec, projected, jacobian = fit
     side_sigma, weight_sigma, growth_sigma = sigmas
     corners = image_points[:4]
     geometry = _side_geometry(corners)
-    sides, growth = _corner_design(geometry[0], side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry))
+    design = _corner_design(geometry[0], side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry))
     pixel_jacobian = jacobian[:, :6]
-    design = np.column_stack([sides, growth])  # (8, 9): the corners' noise is design design^T
     factor = 1.0
     if rules.consistency_scaling:
         residuals = projected.reshape(-1)[:8] - image_points[:4].reshape(-1)
         factor = consistency_factor(residuals, pixel_jacobian[:8], design @ design.T, rules.consistency_chi_square)
         if factor != 1.0:
             design[:, :8] *= math.sqrt(factor)
-    # J^T L, L = [I; d centre / d corners]: the centre is the corners' function, not a measurement
-    lifted = pixel_jacobian[:8].T + pixel_jacobian[8:].T @ _centre_jacobian(corners)
-    moves = lifted @ design  # (6, 9): J^T L D
+    # L D, L = [I; d centre / d corners]: the centre is the corners' function, not a measurement
+    moves = pixel_jacobian.T @ np.vstack((design, _centre_jacobian(corners) @ design))  # J^T L D (6, 9)
     normal = pixel_jacobian.T @ pixel_jacobian
     rotation, rotation_jacobian = cv2.Rodrigues(rvec)  # d R[r, c] / d rvec_i at [i, 3 r + c]
     by_rvec = rotation_jacobian.reshape(3, 3, 3)
@@ -509,28 +504,33 @@ def _position_covariance(
     else:
         vector, sigma_deg, mode = gravity
         sigma_rad = math.radians(sigma_deg)
-        across = _orthonormal_pair(vector / np.linalg.norm(vector))
-        tilt = np.zeros((2, 6))
-        tilt[:, :3] = -across @ by_rvec[:, :, 2].T  # d (across . -R[:, 2]) / d rvec
+        # d (across . -R[:, 2]) / d rvec (2, 3); tvec does not move the predicted gravity
+        tilt = -(_orthonormal_pair(vector / math.sqrt(float(vector @ vector))) @ by_rvec[:, :, 2].T)
         if mode is GravityMode.always:
             # the tilt taken as measured: min |J d - dz|^2 subject to T d = dg (KKT system)
             system = np.zeros((8, 8))
-            system[:6, :6], system[:6, 6:], system[6:, :6] = normal, tilt.T, tilt
-            right = np.zeros((8, moves.shape[1] + 2))
-            right[:6, :-2] = moves
-            right[6:, -2:] = sigma_rad * np.eye(2)
+            system[:6, :6] = normal
+            system[6:, :3] = tilt
+            system[:3, 6:] = tilt.T
+            right = np.zeros((8, 11))
+            right[:6, :9] = moves
+            right[6, 9] = right[7, 10] = sigma_rad
             ok, solution = cv2.solve(system, right, flags=cv2.DECOMP_LU)
             parameters = solution[:6]
         else:
             # the MAP fit: tilt residual weighted by corner sigma / gravity sigma against unit pixels
-            weight = weight_sigma / sigma_rad
-            right = np.hstack([moves, weight**2 * sigma_rad * tilt.T])
-            ok, parameters = cv2.solve(normal + weight**2 * (tilt.T @ tilt), right, flags=cv2.DECOMP_CHOLESKY)
+            weight2 = (weight_sigma / sigma_rad) ** 2
+            normal[:3, :3] += weight2 * (tilt.T @ tilt)
+            right = np.zeros((6, 11))
+            right[:, :9] = moves
+            right[:3, 9:] = weight2 * sigma_rad * tilt.T
+            ok, parameters = cv2.solve(normal, right, flags=cv2.DECOMP_CHOLESKY)
     if not ok:
         return None, factor
-    by_rotation = -(tvec.ravel() @ by_rvec).T  # d (-R^T t) / d rvec
-    to_map = beacon_rotation(beacon) @ np.hstack([by_rotation, -rotation.T])
-    position = to_map @ parameters
+    to_beacon = np.empty((3, 6))  # d (-R^T t) / d (rvec, tvec)
+    to_beacon[:, :3] = -(tvec.ravel() @ by_rvec).T
+    to_beacon[:, 3:] = -rotation.T
+    position = beacon_rotation(beacon) @ (to_beacon @ parameters)
     return position @ position.T, factor
 
 
