@@ -81,8 +81,9 @@ def _draw_pose(config: AccuracyConfig, beacon: Beacon, camera, width, height, rn
             return pose
 
 
-def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
-    config, index = args
+def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, BeaconMap, CameraPose]:
+    """Frame `index` of the accuracy benchmark at `config` (the same for the same seed), its map
+    and the camera's true pose."""
     rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000)])
     profile = device_profiles()[PROFILE_ID]
     width, height = round(profile.width * config.scale), round(profile.height * config.scale)
@@ -96,8 +97,12 @@ def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
     pixels = render_frame(beacon, camera, pose, width, height, sensor, rng)
     meta = fixture_meta(camera, width, height, pose,
                         gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng))
-    frame = LumaFrame(pixels=pixels, meta=meta, camera=camera)
-    beacon_map = BeaconMap(name="bench", beacons=[beacon])
+    return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
+
+
+def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
+    config, index = args
+    frame, beacon_map, pose = accuracy_frame(config, index)
     errors = {}
     for mode, gravity_mode in MODES.items():
         options = PipelineOptions(gravity_mode=gravity_mode, gravity_sigma_deg=config.gravity_sigma_deg)
@@ -192,6 +197,49 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
         summary[mode].update(calibration([(e[3], e[4]) for e in located]))
     return {"distance_m": config.distance_m, "frames": config.frames, "scale": config.scale,
             "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
+
+
+def run_speed_over_frames(frames: int = 10, distances_m: tuple[float, ...] = (1.0, 2.0, 3.0), rounds: int = 5,
+                          seed: int = 1) -> dict:
+    """The pipeline's time against one `cv2.threshold` pass of the same frame, over many frames.
+
+    The accuracy benchmark's frames (`frames` per distance, full resolution, tilts and yaws drawn,
+    gravity with its sensor error), each timed once per round, the threshold pass just before
+    the pipeline on the same frame; `rounds` passes over all of them. The ratio is the median of
+    the per-frame ratios; each round's median shows how much the machine moved it.
+    """
+    scenes = [accuracy_frame(AccuracyConfig(distance_m=d, seed=seed), i)[:2]
+              for d in distances_m for i in range(frames)]
+    for frame, beacon_map in scenes:
+        locate(frame, beacon_map)  # warm-up: first calls allocate
+    ratios: list[list[float]] = []
+    pipeline_ms: list[float] = []
+    refusals = 0
+    for _ in range(rounds):
+        ratios.append([])
+        for frame, beacon_map in scenes:
+            start = time.perf_counter()
+            cv2.threshold(frame.pixels, 128, 255, cv2.THRESH_BINARY)
+            threshold = time.perf_counter() - start
+            start = time.perf_counter()
+            result = locate(frame, beacon_map)
+            elapsed = time.perf_counter() - start
+            refusals += not result.ok
+            pipeline_ms.append(elapsed * 1000.0)
+            ratios[-1].append(elapsed / threshold)
+    every = [r for round_ratios in ratios for r in round_ratios]
+    return {
+        "frames": len(scenes),
+        "distances_m": list(distances_m),
+        "rounds": rounds,
+        "median_ratio_to_threshold": statistics.median(every),
+        "round_median_ratios": [statistics.median(r) for r in ratios],
+        "p90_ratio": float(np.percentile(every, 90)),
+        "median_ms": statistics.median(pipeline_ms),
+        "refusals": refusals,
+        "cv2_threads": cv2.getNumThreads(),
+        "cpu_count": os.cpu_count(),
+    }
 
 
 def run_speed(repeats: int = 50, distance_m: float = 1.0, seed: int = 7, gravity: bool = True) -> dict:
