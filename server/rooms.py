@@ -46,8 +46,9 @@ class RoomRules:
     flatten: FlattenRules = FlattenRules()
     # A panel cut by the frame border is named like a whole one, by the decoder's own confidence,
     # but never from fewer visible rows than span the message's data part (16 of its 21 chips):
-    # with less, some of the ID's 8 bits were not seen. 20 chips (all but the one BMC restores)
-    # always suffice; between the two the decoder names it only when the unseen chips are the header's.
+    # with less, some of the ID's 8 bits were not seen. From 20 chips (all but the one BMC restores)
+    # one frame holds the whole ID; between the two the decoder names it only when the unseen chips
+    # are the header's.
     min_cut_chips: float = 2 * DATA_BITS
 
 
@@ -191,7 +192,7 @@ def _cut_panel_note(
         why = f"they read {best} at posterior {0.0 if vlc is None else vlc.confidence:.2f} only"
     return (
         f"the panel cut by the frame border {_where(blob)} is not named: {seen}, {why}; "
-        f"{MESSAGE_CHIPS - 1} chips ({whole} rows at this frame's row time) always name it"
+        f"one frame holds the whole ID from {MESSAGE_CHIPS - 1} chips ({whole} rows at this frame's row time)"
     )
 
 

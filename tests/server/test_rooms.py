@@ -80,7 +80,7 @@ def test_a_short_exposure_frame_is_decoded_by_the_hook():
 
 # Issue 11: panels cut by the frame border, named by the rows still in view. Two 600 x 600 mm
 # panels 1.2 m above a quarter-resolution Mi 8 front camera (970 x 1296, 23.2 us per row): a
-# whole panel spans ~570 rows, 32 chips; one frame always names a panel from 20 chips, 346 rows.
+# whole panel spans ~570 rows, 32 chips; one frame holds a whole ID from 20 chips, 346 rows.
 CUT_POSE = CameraPose(np.array([0.02, -0.03, 0.0]), rotation_from_ypr(10.0, 2.0, -1.0))
 
 
