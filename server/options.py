@@ -22,6 +22,12 @@ class LocateOptions:
     session: SessionRules = SessionRules()
 
     def for_map(self, beacon_map: BeaconMap) -> LocateOptions:
-        """These options with what the map states: the position error a fix must reach."""
+        """These options with what the map states: the position error a fix must reach, and the
+        looks of its panels (rooms and device sessions judge blobs by them)."""
         fit = replace(self.pipeline.outline_fit, max_sigma_m=beacon_map.required_sigma_m)
-        return replace(self, pipeline=replace(self.pipeline, outline_fit=fit))
+        candidates = self.room.candidates.for_beacons(beacon_map.beacons)
+        return replace(
+            self,
+            pipeline=replace(self.pipeline, outline_fit=fit),
+            room=replace(self.room, candidates=candidates),
+        )

@@ -58,6 +58,10 @@ class OutlineFitRules:
     segment_sigma_px: float = 0.05
     heading_sigma_deg: float = 5.0  # a phone compass, for the yaw of a circle
     growth_sigma_px: float = 0.1  # of a growth measured on the device's complete panels
+    # Lenses vignette by 20-50 % towards the corners; with a panel a few times over saturation
+    # that moves the growth by up to ~1 px from the centre to a corner (~0.5 units of normalised
+    # image coordinate): the growth's gradient across a panel is a parameter with this prior.
+    growth_gradient_sigma_px: float = 2.0
     huber_px: float = 1.0  # points further than this from the outline count linearly
     distances_m: tuple[float, ...] = (0.8, 1.2, 1.8, 2.7, 4.0)  # starts when nothing gives the distance
     growth_probes_px: tuple[float, ...] = (0.3, 2.5)  # where a second minimum is looked for
@@ -98,11 +102,17 @@ class _Problem:
     growth_prior_px: float | None
     growth_sigma_px: float
     blur_px: float  # the edge's blur: a curved edge's level set lies s^2 / (2 R) inside its offset
+    gradient_sigma_px: float  # of the growth's change per unit of normalised image coordinate
     on_arc: np.ndarray | None = None  # (N,) bool: the points on a corner arc, for that term
 
     @property
     def beacon(self) -> Beacon:
         return self.panels[0]
+
+    @cached_property
+    def _spread(self) -> np.ndarray:
+        """The points' normalised image coordinates (2, N) about their mean."""
+        return self.rays[:2] - self.rays[:2].mean(axis=1, keepdims=True)
 
     @cached_property
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -116,7 +126,7 @@ class _Problem:
         return centres, axes, inner, radius
 
     def _on_panels(self, batch: np.ndarray):
-        """For k parameter vectors (k, 7): each ray's length to its panel's plane (k, N), the
+        """For k parameter vectors (k, 9): each ray's length to its panel's plane (k, N), the
         rotations (k, 3, 3), the points in their panel's axes (k, 2, N) and the q of the
         signed distance (k, 2, N): |point| - inner (both > 0 beyond an arc's centre)."""
         centres, axes, inner, _ = self._geometry
@@ -130,7 +140,7 @@ class _Problem:
 
     def distances_px(self, params: np.ndarray) -> np.ndarray:
         """Signed distance (px, outward positive) of each point to the outline grown by D:
-        (N,) for one parameter vector (7,), (k, N) for k of them (k, 7) at once."""
+        (N,) for one parameter vector (9,), (k, N) for k of them (k, 9) at once."""
         batch = np.atleast_2d(params)
         _, axes, _, radius = self._geometry
         reach, rotation, plane, q = self._on_panels(batch)
@@ -149,7 +159,10 @@ class _Problem:
         du = fx / z * (normal[:, 0] - x / z * normal[:, 2])
         dv = fy / z * (normal[:, 1] - y / z * normal[:, 2])
         scale = np.hypot(du, dv)  # px per metre across the outline
-        growth = batch[:, 6, None]
+        # growth varies across the image (vignetting, the lens's blur away from the centre):
+        # D + a gradient over the points' spread in normalised image coordinates
+        spread = self._spread
+        growth = batch[:, 6, None] + batch[:, 7, None] * spread[0] + batch[:, 8, None] * spread[1]
         # (which points lie on an arc is frozen per fit: a point crossing from side to arc would
         # make the term jump, and the Jacobian's differences with it)
         on_arc = corner if self.on_arc is None else self.on_arc
@@ -179,6 +192,7 @@ class _Problem:
             terms.append(((batch[:, 0] - self.yaw_prior_rad + math.pi) % (2 * math.pi) - math.pi) / self.yaw_sigma_rad)
         if self.growth_prior_px is not None:
             terms.append((batch[:, 6] - self.growth_prior_px) / self.growth_sigma_px)
+        terms += [batch[:, 7] / self.gradient_sigma_px, batch[:, 8] / self.gradient_sigma_px]
         stacked = np.stack(terms, axis=1) if terms else np.zeros((len(batch), 0))
         return stacked if np.ndim(params) == 2 else stacked[0]
 
@@ -187,13 +201,13 @@ class _Problem:
         return np.concatenate([self.distances_px(params) / point_sigma_px, self.priors(params)], axis=-1)
 
     def jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
-        """d residuals / d params (n, 7), central differences, all fourteen in one batch."""
+        """d residuals / d params (n, 9), central differences, all eighteen in one batch."""
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
-        return ((values[:7] - values[7:]) / (2 * _STEPS[:, None])).T
+        return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
 
 
-_STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4])  # rad, m, px
+_STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4, 1e-3, 1e-3])  # rad, m, px, px per unit
 
 
 def _rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray) -> np.ndarray:
@@ -211,7 +225,8 @@ def _rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray) -> np.ndarr
 
 def _blur_px(growth_px: float, level_gap_px: float) -> float:
     """The edge's blur from its growth and level gap; 0 (no curvature term) when unmeasured."""
-    return blur_sigma_px(growth_px, level_gap_px) or 0.0
+    blur = blur_sigma_px(growth_px, level_gap_px) if math.isfinite(growth_px) else None
+    return blur if blur is not None and math.isfinite(blur) else 0.0
 
 
 def _wrap(angle_rad: float) -> float:
@@ -305,7 +320,7 @@ def _starts(problem: _Problem, heading_deg: float | None) -> list[tuple[np.ndarr
             offset_map = np.asarray(beacon.center_m[:2]) + beacon_rotation(beacon)[:2, :2] @ offset
             position = [offset_map[0], offset_map[1], beacon.center_m[2] - above]
             growth = problem.growth_prior_px if problem.growth_prior_px is not None else HELD_GROWTH_PX
-            starts.append((np.array([yaw, pitch, roll, *position, growth]), yaw_rule))
+            starts.append((np.array([yaw, pitch, roll, *position, growth, 0.0, 0.0]), yaw_rule))
     return starts
 
 
@@ -348,7 +363,7 @@ def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: 
         args=(point_sigma_px,),
         loss="huber",
         f_scale=huber_px / point_sigma_px,
-        x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5],
+        x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
         max_nfev=60,
     )
 
@@ -400,7 +415,7 @@ def _noise_px(distances: np.ndarray, floor_px: float) -> float:
 def _covariance(
     problem: _Problem, params: np.ndarray, point_sigma_px: float, segment_sigma_px: float
 ) -> np.ndarray | None:
-    """The parameters' covariance (7, 7) from the residuals' Jacobian, with the points' errors
+    """The parameters' covariance (9, 9) from the residuals' Jacobian, with the points' errors
     white (`point_sigma_px`) plus one shared offset per side or arc (`segment_sigma_px`): the
     information J^T Sigma^-1 J, Sigma's inverse per part by the Sherman-Morrison formula."""
     jacobian = problem.jacobian(params, point_sigma_px)  # rows of the points in point sigmas
@@ -443,6 +458,7 @@ def _problem(
         yaw_sigma_rad=math.radians(rules.heading_sigma_deg),
         growth_prior_px=growth_px,
         growth_sigma_px=rules.growth_sigma_px,
+        gradient_sigma_px=rules.growth_gradient_sigma_px,
         blur_px=_blur_px(HELD_GROWTH_PX if growth_px is None else growth_px, level_gap_px),
     )
 
@@ -492,7 +508,7 @@ def fit_outline(
         # can make a second minimum: look for it from the growth held low and high.
         for probe in rules.growth_probes_px:
             probed = replace(problem, growth_prior_px=probe, growth_sigma_px=0.3)
-            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe]]), sigma, rules.huber_px).x)
+            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe], first.x[7:]]), sigma, rules.huber_px).x)
     minima = [_as_the_rule_expects(_fit(problem, seed, sigma, rules.huber_px).x, beacon, heading_deg) for seed in seeds]
     best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
     probes = [_as_the_rule_expects(seed, beacon, heading_deg) for seed in seeds]
@@ -522,7 +538,7 @@ def fit_outlines(
     problem = _problem(panels, level_gap_px, camera_matrix, gravity_camera, gravity_sigma_deg, None, growth_px, rules)
     pitch, roll = problem.tilt_rad or (0.0, 0.0)
     growth = HELD_GROWTH_PX if growth_px is None else growth_px
-    start = np.array([math.radians(start_yaw_deg), pitch, roll, *start_position_m, growth])
+    start = np.array([math.radians(start_yaw_deg), pitch, roll, *start_position_m, growth, 0.0, 0.0])
     sigma = 0.1
     held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
     first = _fit(held, start, sigma, rules.huber_px)
