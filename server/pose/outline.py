@@ -58,10 +58,12 @@ class OutlineFitRules:
     segment_sigma_px: float = 0.05
     heading_sigma_deg: float = 5.0  # a phone compass, for the yaw of a circle
     growth_sigma_px: float = 0.1  # of a growth measured on the device's complete panels
-    # Lenses vignette by 20-50 % towards the corners; with a panel a few times over saturation
-    # that moves the growth by up to ~1 px from the centre to a corner (~0.5 units of normalised
-    # image coordinate): the growth's gradient across a panel is a parameter with this prior.
-    growth_gradient_sigma_px: float = 2.0
+    # Lenses vignette by 20-50 % towards the corners. The growth of a clipped edge is s z with
+    # Phi(-z) = 0.5 / A (blur s, overexposure A), so dD / d ln A = s (0.5 / A) / phi(z): 0.9 px
+    # for s = 1.5 px, A = 4; 1.8 px for s = 2, A = 1.6. A 30 % fall over 0.6 units of normalised
+    # image coordinate (the frame's half width) is d ln A = 0.36 over it: 0.5-1.1 px per unit.
+    # The growth's gradient across a panel is a parameter with this prior sigma.
+    growth_gradient_sigma_px: float = 1.0
     huber_px: float = 1.0  # points further than this from the outline count linearly
     distances_m: tuple[float, ...] = (0.8, 1.2, 1.8, 2.7, 4.0)  # starts when nothing gives the distance
     growth_probes_px: tuple[float, ...] = (0.3, 2.5)  # where a second minimum is looked for

@@ -219,5 +219,7 @@ class DeviceSession:
 
     def _tracked(self, best: PanelFix, in_view: int, t_s: float) -> LocateResult:
         self.namer.count(best.fix.id_source)
-        state = self.track.add(t_s, np.asarray(best.fix.position_m), best.fix.id_source is BeaconIdSource.track)
+        state = self.track.add(
+            t_s, np.asarray(best.fix.position_m), best.fix.id_source is BeaconIdSource.track, best.fix.covariance_m2
+        )
         return located(best.fix, vlc=best.vlc, beacons_in_view=in_view, track=state)
