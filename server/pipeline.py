@@ -81,7 +81,7 @@ class _Timer:
 
 
 def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | None) -> np.ndarray:
-    if distortion is None:
+    if distortion is None or len(points) == 0:  # (OpenCV returns None for no points)
         return points
     return cv2.undistortPoints(points.reshape(-1, 1, 2), matrix, distortion, P=matrix).reshape(-1, 2)
 
@@ -250,7 +250,10 @@ def locate_by_outlines(
         points = [
             (beacon, _undistorted(f.points_px, matrix, distortion))
             for (beacon, _), f in zip(panels, found, strict=True)
+            if len(f.points_px)
         ]
+    if not points:
+        return timer.refusal(Refusal(FailureReason.beacon_cut_off, "no outline points of the cut panels in view"))
     gravity = None
     if frame.meta.gravity_camera is not None and options.gravity_mode is not GravityMode.never:
         gravity = np.asarray(frame.meta.gravity_camera, dtype=float)
@@ -269,8 +272,8 @@ def locate_by_outlines(
         )
     if isinstance(fit, Refusal):
         return timer.refusal(fit)
-    note = f"pose from the visible outlines of cut panels {[b.id for b, _ in panels]} together ({fit.points} points)"
-    return _outline_fix(frame, panels[0][0], fit, BeaconIdSource.track, gravity is not None, note, timer)
+    note = f"pose from the visible outlines of cut panels {[b.id for b, _ in points]} together ({fit.points} points)"
+    return _outline_fix(frame, points[0][0], fit, BeaconIdSource.track, gravity is not None, note, timer)
 
 
 def _outline_fix(

@@ -125,9 +125,17 @@ def choose_and_fuse(fixes: list[PanelFix], rules: RoomRules = RoomRules()) -> Pa
             f"{rules.fuse_gate_m * 1000:.0f} mm and were left out"
         )
     if len(agree) > 1:
-        weights = np.array([_conditioning(f) for f in agree])
+        covariances = [f.fix.covariance_m2 for f in agree]
+        if all(c is not None for c in covariances):
+            # weighed by their own uncertainty; the fused covariance is their weighted mean, the
+            # bound for errors that the fixes share (one frame: one gravity error, one lens)
+            weights = np.array([1.0 / np.trace(np.asarray(c)[:2, :2]) for c in covariances])
+            covariance = sum(w * np.asarray(c) for w, c in zip(weights, covariances, strict=True)) / weights.sum()
+        else:
+            weights, covariance = np.array([_conditioning(f) for f in agree]), None
         position = (weights[:, None] * np.array([f.fix.position_m for f in agree])).sum(axis=0) / weights.sum()
-        fix = replace(fix, position_m=position).warned(f"position fused from beacons {[f.beacon.id for f in agree]}")
+        fused = replace(fix, position_m=position, covariance_m2=covariance)
+        fix = fused.warned(f"position fused from beacons {[f.beacon.id for f in agree]}")
     return replace(best, fix=fix)
 
 

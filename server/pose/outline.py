@@ -42,7 +42,6 @@ from server.outcomes import Refusal
 from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
 
-CHI2_2DOF_95 = 5.991
 HELD_GROWTH_PX = 1.0  # a typical growth (docs/accuracy.md: 0.5-2 px), only to start from
 
 
@@ -57,7 +56,9 @@ class OutlineFitRules:
     # grid's direction the phase hardly changes, so the whole side shares one such error.
     segment_sigma_px: float = 0.05
     heading_sigma_deg: float = 5.0  # a phone compass, for the yaw of a circle
-    growth_sigma_px: float = 0.1  # of a growth measured on the device's complete panels
+    # of a growth measured on the device's complete panels: elsewhere in the frame, where the
+    # growth differs by up to ~0.5 px (its gradient, below)
+    growth_sigma_px: float = 0.3
     # Lenses vignette by 20-50 % towards the corners. The growth of a clipped edge is s z with
     # Phi(-z) = 0.5 / A (blur s, overexposure A), so dD / d ln A = s (0.5 / A) / phi(z): 0.9 px
     # for s = 1.5 px, A = 4; 1.8 px for s = 2, A = 1.6. A 30 % fall over 0.6 units of normalised
@@ -170,6 +171,8 @@ class _Problem:
         on_arc = corner if self.on_arc is None else self.on_arc
         arc_px = np.where(on_arc, radius * scale + growth, np.inf)
         distances = signed * scale - growth + self.blur_px**2 / (2 * np.maximum(arc_px, 1.0))
+        # a panel behind the camera (the ray meets its plane backwards) is no pose it can be seen from
+        distances = np.where(reach > 0, distances, np.inf)
         return distances if np.ndim(params) == 2 else distances[0]
 
     def segments(self, params: np.ndarray) -> np.ndarray:
@@ -180,6 +183,10 @@ class _Problem:
         side = np.where(qx >= qy, (px > 0).astype(int), 2 + (py > 0))
         arc = 4 + (px > 0) + 2 * (py > 0)
         return np.where((qx > 0) & (qy > 0), arc, side) + 8 * self.panel_of
+
+    def on_arcs(self, params: np.ndarray) -> np.ndarray:
+        """Whether each point (N,) lies on one of its panel's corner arcs at `params`."""
+        return self.segments(params) % 8 >= 4
 
     def priors(self, params: np.ndarray) -> np.ndarray:
         """The gravity, heading and growth residuals, each in its own sigmas: (m,) or (k, m)."""
@@ -254,7 +261,9 @@ def _side_direction_deg(level_xy: np.ndarray, fold: int) -> float:
     return math.degrees(np.angle(total) / fold)
 
 
-def _extent_start(v: np.ndarray, size: tuple[float, float]) -> list[tuple[float, np.ndarray]]:
+def _extent_start(
+    v: np.ndarray, size: tuple[float, float], distances_m: tuple[float, ...]
+) -> list[tuple[float, np.ndarray]]:
     """(height above camera, panel-frame camera offset (2,)) starts from levelled points v (N, 2)
     already turned to the panel's axes: opposite sides give the scale, one side the offset."""
     seen = []
@@ -266,7 +275,7 @@ def _extent_start(v: np.ndarray, size: tuple[float, float]) -> list[tuple[float,
     heights = [size[a] / (v[:, a].max() - v[:, a].min()) for a in (0, 1) if all(seen[a])]
     if not heights:
         span = max(np.ptp(v[:, 0]), np.ptp(v[:, 1]), 1e-6)
-        heights = [h for h in _DISTANCE_STARTS if size[0] / h > 0.9 * span] or [size[0] / span]
+        heights = [h for h in distances_m if max(size) / h > 0.9 * span] or [max(size) / span]
     starts = []
     for height in heights:
         offset = np.zeros(2)
@@ -282,11 +291,11 @@ def _extent_start(v: np.ndarray, size: tuple[float, float]) -> list[tuple[float,
     return starts
 
 
-_DISTANCE_STARTS = OutlineFitRules().distances_m
-
-
-def _starts(problem: _Problem, heading_deg: float | None) -> list[tuple[np.ndarray, OrientationRule | None]]:
-    """Start parameters, each with the orientation rule that chose its yaw."""
+def _starts(
+    problem: _Problem, heading_deg: float | None, distances_m: tuple[float, ...]
+) -> list[tuple[np.ndarray, OrientationRule | None]]:
+    """Start parameters, each with the orientation rule that chose its yaw (`distances_m`: the
+    distances tried when nothing in view gives the scale)."""
     beacon = problem.beacon
     pitch, roll = problem.tilt_rad or (0.0, 0.0)
     level = rotation_from_ypr(0.0, math.degrees(pitch), math.degrees(roll)) @ problem.rays
@@ -318,7 +327,7 @@ def _starts(problem: _Problem, heading_deg: float | None) -> list[tuple[np.ndarr
         to_panel = np.array([[math.cos(yaw - beacon_yaw), -math.sin(yaw - beacon_yaw)],
                              [math.sin(yaw - beacon_yaw), math.cos(yaw - beacon_yaw)]])  # fmt: skip
         v = level_xy @ to_panel.T
-        for above, offset in _extent_start(v, (width, height)):
+        for above, offset in _extent_start(v, (width, height), distances_m):
             offset_map = np.asarray(beacon.center_m[:2]) + beacon_rotation(beacon)[:2, :2] @ offset
             position = [offset_map[0], offset_map[1], beacon.center_m[2] - above]
             growth = problem.growth_prior_px if problem.growth_prior_px is not None else HELD_GROWTH_PX
@@ -431,7 +440,9 @@ def _covariance(
         information -= share / (1.0 + share * len(rows)) * np.outer(total, total)
     if not np.all(np.isfinite(information)) or np.linalg.cond(information) > 1e14:
         return None
-    return np.linalg.inv(information)
+    covariance = np.linalg.inv(information)
+    covariance = (covariance + covariance.T) / 2
+    return covariance if np.all(np.diag(covariance) > 0) else None
 
 
 def _problem(
@@ -499,11 +510,14 @@ def fit_outline(
     # first with the growth held near its start (far from the answer, a free growth can
     # run off and trade itself for distance), then free
     held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
-    fits = [(_fit(held, start, sigma, rules.huber_px), rule) for start, rule in _starts(problem, heading_deg)]
+    fits = [
+        (_fit(held, start, sigma, rules.huber_px), rule)
+        for start, rule in _starts(problem, heading_deg, rules.distances_m)
+    ]
     first, rule = min(fits, key=lambda item: item[0].cost)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "no start pose puts the panel's outline in front of the camera")
-    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.segments(first.x) >= 4)
+    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.on_arcs(first.x))
     seeds = [first.x]
     if growth_px is None:
         # Growth trades against distance where no opposite sides are in view, and the trade
@@ -546,7 +560,7 @@ def fit_outlines(
     first = _fit(held, start, sigma, rules.huber_px)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "the track's pose puts the panels' outlines behind the camera")
-    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.segments(first.x) >= 4)
+    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.on_arcs(first.x))
     best = _fit(problem, first.x, sigma, rules.huber_px).x
     return _finish(problem, best, sigma, [first.x], [best], None, lambda x: x, rules)
 
@@ -564,10 +578,10 @@ def _finish(
     """The fit refined with its measured noise, checked, with its covariance; or why it is no fix."""
     if not math.isfinite(_robust_chi2(problem, best, sigma, rules.huber_px)):
         return Refusal(FailureReason.pose_failed, "the outline fit left the poses the panel can be seen from")
-    problem = replace(problem, on_arc=problem.segments(best) >= 4)
+    problem = replace(problem, on_arc=problem.on_arcs(best))
     measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
-    if problem.tilt_rad is not None and not math.isclose(measured, sigma, rel_tol=0.5):
-        best = _fit(problem, best, measured, rules.huber_px).x  # the gravity weight depends on it
+    if not math.isclose(measured, sigma, rel_tol=0.5):
+        best = _fit(problem, best, measured, rules.huber_px).x  # the priors' weight against the points depends on it
     best = as_expected(best)
     distances = problem.distances_px(best)
     rms = float(np.sqrt(np.mean(distances**2)))

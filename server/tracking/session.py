@@ -186,13 +186,15 @@ class DeviceSession:
         matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
         projected, _ = cv2.projectPoints(centres, np.zeros(3), np.zeros(3), matrix, distortion)
         projected = projected.reshape(-1, 2)
-        named = []
+        named: list[tuple[BeaconBlob, Beacon]] = []
         for blob in cut:
             gaps = np.linalg.norm(projected - np.asarray(blob.centroid_px), axis=1)
             order = np.argsort(gaps)
             # the nearest predicted panel names the blob when it is clearly nearer than the next one
-            if len(order) < 2 or gaps[order[0]] < self.rules.name_gate * gaps[order[1]]:
-                named.append((blob, beacons[int(order[0])]))
+            beacon = beacons[int(order[0])]
+            clear = len(order) < 2 or gaps[order[0]] < self.rules.name_gate * gaps[order[1]]
+            if clear and all(beacon.id != other.id for _, other in named):  # one blob per beacon: the largest
+                named.append((blob, beacon))
         if not named:
             return Refusal(FailureReason.beacon_cut_off, "no cut panel where the track expects one")
         growth = float(np.median(self.growths_px)) if self.growths_px else None
@@ -206,7 +208,8 @@ class DeviceSession:
         )
         if isinstance(fix, Refusal):
             return fix
-        return PanelFix(named[0][0], named[0][1], fix, None)
+        blob, beacon = next((b, p) for b, p in named if p.id == fix.beacon_id)
+        return PanelFix(blob, beacon, fix, None)
 
     def _why_no_fix(self, blobs: list[BeaconBlob], refusals: list[Refusal]) -> Refusal:
         if refusals:
