@@ -99,11 +99,6 @@ def rounded_rectangle_outline_m(
     return np.concatenate(outline, axis=0)
 
 
-def rounded_square_outline_m(side_m: float, radius_m: float, points_per_arc: int = 64) -> np.ndarray:
-    """`rounded_rectangle_outline_m` of a square."""
-    return rounded_rectangle_outline_m(side_m, side_m, radius_m, points_per_arc)
-
-
 def beacon_outline_m(beacon: Beacon, points_per_arc: int = 64) -> np.ndarray:
     """The closed outline (N, 3) of `beacon`'s luminous area in its own frame, any shape."""
     width, height = beacon.extent_m

@@ -33,12 +33,11 @@ class OutlineRules:
 @dataclass(frozen=True)
 class OutlinePoints:
     """Points (N, 2) on the blob's mid-level outline, frame pixels (distorted), in contour order;
-    `spacing_px`, the mean distance between neighbours along the contour; `level_gap_px`, the
+    `level_gap_px`, the
     median distance from the mid-level to the quarter-level crossing (the edge's blur, NaN
     when unmeasured; `server.vision.subpixel.blur_sigma_px`)."""
 
     points_px: np.ndarray
-    spacing_px: float
     level_gap_px: float = float("nan")
 
 
@@ -66,7 +65,7 @@ def outline_points(
     mask = (window > level).astype(np.uint8)
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
-        return OutlinePoints(np.zeros((0, 2)), 1.0)
+        return OutlinePoints(np.zeros((0, 2)))
     largest = max(range(len(contours)), key=lambda i: cv2.contourArea(contours[i]))
     contour = contours[largest].reshape(-1, 2).astype(float)
     normal = _outward_normals(contour, mask)
@@ -82,21 +81,19 @@ def outline_points(
         cv2.drawContours(others, [c for i, c in enumerate(contours) if i != largest], -1, 0, cv2.FILLED)
         distance = cv2.distanceTransform(others, cv2.DIST_L2, 3)
         keep &= distance[contour[:, 1].astype(int), contour[:, 0].astype(int)] > rules.neighbour_px
-    spacing = 1.0
     if keep.sum() > rules.max_points:
-        spacing = keep.sum() / rules.max_points
         pick = np.flatnonzero(keep)[np.linspace(0, keep.sum() - 1, rules.max_points).astype(int)]
         keep = np.zeros_like(keep)
         keep[pick] = True
     contour, normal = contour[keep], normal[keep]
     if len(contour) == 0:
-        return OutlinePoints(np.zeros((0, 2)), spacing)
+        return OutlinePoints(np.zeros((0, 2)))
     offsets = profile_offsets(rules.half_window_px, rules.step_px, np.float64)
     profiles = sample_profiles(window, contour, normal, offsets)
     shift = level_crossings(profiles, offsets, level)
     gap = level_crossings(profiles, offsets, (level + background) / 2) - shift
     found = np.isfinite(shift)
-    return OutlinePoints(contour[found] + shift[found, None] * normal[found] + [x0, y0], spacing, _median(gap))
+    return OutlinePoints(contour[found] + shift[found, None] * normal[found] + [x0, y0], _median(gap))
 
 
 def _median(values: np.ndarray) -> float:
