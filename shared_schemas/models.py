@@ -392,7 +392,7 @@ class BeaconMap(Strict):
         default=0.01,
         ge=MIN_REQUIRED_SIGMA_M,
         le=MAX_SIDE_M,
-        description="the 1-sigma 2-D position error an outline fit (cut panel, rectangle, circle) must reach, or is refused",
+        description="the 1-sigma 2-D position error an outline fit (cut, rectangle, circle) must reach, or is refused",
     )
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
