@@ -10,18 +10,22 @@ points of `server.vision.outline` directly:
   scale along the outline's normal: the residual is the point's distance to the projected
   outline, to first order, without projecting a dense outline or searching nearest points.
 - growth: the mid-level contour of an overexposed, blurred panel lies outside its outline by
-  some D px (`server.vision.subpixel`); D is a parameter of the fit (the corner arcs and
-  opposite sides tell it from the distance), or known from the device's complete panels.
-- unknowns: yaw, pitch, roll and the camera's 3-D position, and D; pitch and roll are
-  weighed against the gravity vector (sensor sigma), yaw against the heading for a circle
-  (nothing else in a circle shows it).
+  some D px (`server.vision.subpixel`), less s^2 / (2 R) on the arcs (a blurred curved edge);
+  D is a parameter (the arcs and opposite sides tell it from the distance), or known from the
+  device's complete panels; so is its gradient across the image (vignetting), with a prior.
+- unknowns: yaw, pitch, roll, the camera's 3-D position, D and its gradient; pitch and roll
+  are weighed against the gravity vector (sensor sigma), yaw against the heading for a circle
+  (nothing else in a circle shows it). Several panels may share one fit (`fit_outlines`).
 - starts: tilt from gravity (level without it); in the levelled view the panel's image is a
   similarity of its outline, so the visible straight sides give the yaw (modulo the shape's
   symmetry, settled by the contract's orientation rule), and opposite sides or the panel's
   known size the distance; without any opposite pair, a few distances are tried.
-- uncertainty: the position's covariance from the fit's information (edge-point noise and
-  its correlation along the outline measured from the fit's own residuals, and the gravity
-  sensor's sigma). A fit whose position it does not pin down to `max_sigma_m` is refused.
+- uncertainty: the position's covariance from the fit's information (the points' noise and
+  its correlation along the outline measured from the fit's own residuals, a shared offset
+  per side or arc, the priors), widened until it explains fits with the growth held low and
+  high (growth trades against distance along a curved valley). A fit whose position it does
+  not pin down to `max_sigma_m` (the map's `required_sigma_m`) is refused; two minima it does
+  not explain are `pose_ambiguous`.
 
 All image points here are undistorted pixel coordinates.
 """
