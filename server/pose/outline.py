@@ -47,6 +47,7 @@ from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
 
 HELD_GROWTH_PX = 1.0  # a typical growth (docs/accuracy.md: 0.5-2 px), only to start from
+BEHIND_PX = 1e4  # the residual of a point whose panel is behind the camera
 
 
 @dataclass(frozen=True)
@@ -175,8 +176,9 @@ class _Problem:
         on_arc = corner if self.on_arc is None else self.on_arc
         arc_px = np.where(on_arc, radius * scale + growth, np.inf)
         distances = signed * scale - growth + self.blur_px**2 / (2 * np.maximum(arc_px, 1.0))
-        # a panel behind the camera (the ray meets its plane backwards) is no pose it can be seen from
-        distances = np.where(reach > 0, distances, np.inf)
+        # a panel behind the camera (the ray meets its plane backwards) is no pose it can be seen
+        # from: a residual far beyond any real one, finite so that the Jacobian's differences are
+        distances = np.where(reach > 0, distances, BEHIND_PX)
         return distances if np.ndim(params) == 2 else distances[0]
 
     def segments(self, params: np.ndarray) -> np.ndarray:
@@ -369,18 +371,26 @@ def _as_the_rule_expects(params: np.ndarray, beacon: Beacon, heading_deg: float 
 def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
     """The robust least-squares fit from `start` (x, cost); cost infinite when the start itself
     is not a pose the residuals exist for (the panel's plane behind or edge-on to a ray)."""
+    failed = SimpleNamespace(x=start, cost=math.inf)
     if not np.all(np.isfinite(problem.residuals(start, point_sigma_px))):
-        return SimpleNamespace(x=start, cost=math.inf)
-    return least_squares(
-        problem.residuals,
-        start,
-        jac=problem.jacobian,
-        args=(point_sigma_px,),
-        loss="huber",
-        f_scale=huber_px / point_sigma_px,
-        x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
-        max_nfev=60,
-    )
+        return failed
+    try:
+        return least_squares(
+            problem.residuals,
+            start,
+            jac=problem.jacobian,
+            args=(point_sigma_px,),
+            loss="huber",
+            f_scale=huber_px / point_sigma_px,
+            x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
+            max_nfev=60,
+        )
+    except ValueError as error:
+        # scipy's own check: the residuals or their Jacobian stopped being finite on the way
+        # (a ray grazing the panel's plane); this start gives no fit
+        if "finite" not in str(error) and "infs or NaNs" not in str(error):
+            raise
+        return failed
 
 
 def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
