@@ -137,11 +137,15 @@ def locate_beacon(
             edges = refine_edges(
                 window, (roi.x0, roi.y0), quad.corners, roi.levels, straight, matrix, distortion, options.edges
             )
-            if edges is None:
-                warnings.append("sub-pixel sides failed: corners from the polygon stage")
-            else:
+            if edges is not None:
                 warnings.extend(edges.warnings)
-        corners = edges.corners if edges is not None else _undistorted(quad.corners + origin, matrix, distortion)
+    if options.subpixel and edges is None:
+        # The polygon's corners were too far off for the sides' search windows (a large panel
+        # whose small corner arcs RDP takes for sharp corners): its visible outline measures it.
+        x, y, w, h = blob.bounding_box
+        box = (roi.x0 + x * step, roi.y0 + y * step, w * step, h * step)
+        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
+    corners = edges.corners if edges is not None else _undistorted(quad.corners + origin, matrix, distortion)
     with timer.stage("center"):
         center = intersect_lines(corners[0], corners[2], corners[1], corners[3])
     if center is None:

@@ -10,7 +10,7 @@ camera (Xiaomi Mi 8 front camera), beside the paper's 0.174 m square at the same
 - `circle-200`: a 0.2 m round downlight; the outline fit, its yaw from the frame's
   `heading_deg`, drawn as the true camera yaw plus a compass error of `heading_sigma_deg`
   (5 degrees, the sigma the fit weighs it with);
-- `circle-200-uncapped`: the same frames located with the outline fit's `max_sigma_m` (10 mm,
+- `circle-200-uncapped`: the same frames located with the map's `required_sigma_m` (the outline fit's cap, 10 mm,
   a refusal above it) lifted to 1 m: the compass error alone moves a circle's fix sideways by
   the horizontal distance times the error (5 degrees: 9 mm per 0.1 m), so by default only
   frames taken within about 0.1 m of the point under the downlight get a fix; this row shows
@@ -174,7 +174,9 @@ def shape_sample(args: tuple[ShapesConfig, str, int]) -> dict:
     pipeline = PipelineOptions(gravity_sigma_deg=config.gravity_sigma_deg, outline_fit=case.outline_fit)
     options = LocateOptions(pipeline=pipeline)
     start = time.perf_counter()
-    result = locate(frame, BeaconMap(name="bench-shapes", beacons=[case.beacon]), options)
+    # the map states the position error it needs (`required_sigma_m`): the outline fit's cap
+    beacon_map = BeaconMap(name="bench-shapes", beacons=[case.beacon], required_sigma_m=case.outline_fit.max_sigma_m)
+    result = locate(frame, beacon_map, options)
     locate_ms = (time.perf_counter() - start) * 1000.0
     tilt = math.degrees(math.acos(float(np.clip(pose.rotation_wc[2, 2], -1.0, 1.0))))
     sample = {
