@@ -215,9 +215,7 @@ def _locate_by_outline(
     with timer.stage("outline"):
         found = outline_points(frame.pixels, box, levels, options.outline_points)
         points = _undistorted(found.points_px, matrix, distortion)
-    gravity = None
-    if frame.meta.gravity_camera is not None and options.gravity_mode is not GravityMode.never:
-        gravity = np.asarray(frame.meta.gravity_camera, dtype=float)
+    gravity = _gravity(frame, options)
     with timer.stage("pose"):
         fit = fit_outline(
             points,
@@ -258,9 +256,7 @@ def locate_by_outlines(
         ]
     if not points:
         return timer.refusal(Refusal(FailureReason.beacon_cut_off, "no outline points of the cut panels in view"))
-    gravity = None
-    if frame.meta.gravity_camera is not None and options.gravity_mode is not GravityMode.never:
-        gravity = np.asarray(frame.meta.gravity_camera, dtype=float)
+    gravity = _gravity(frame, options)
     gaps = [f.level_gap_px for f in found if np.isfinite(f.level_gap_px)]
     with timer.stage("pose"):
         fit = fit_outlines(
@@ -278,6 +274,13 @@ def locate_by_outlines(
         return timer.refusal(fit)
     note = f"pose from the visible outlines of cut panels {[b.id for b, _ in points]} together ({fit.points} points)"
     return _outline_fix(frame, points[0][0], fit, BeaconIdSource.track, gravity is not None, note, timer)
+
+
+def _gravity(frame: LumaFrame, options: PipelineOptions) -> np.ndarray | None:
+    """The frame's gravity vector for the outline fit, unless there is none or it is not to be used."""
+    if frame.meta.gravity_camera is None or options.gravity_mode is GravityMode.never:
+        return None
+    return np.asarray(frame.meta.gravity_camera, dtype=float)
 
 
 def _outline_fix(

@@ -204,7 +204,7 @@ class _Problem:
                 (batch[:, 2] - self.tilt_rad[1]) / self.tilt_sigma_rad,
             ]
         if self.yaw_prior_rad is not None:
-            terms.append(((batch[:, 0] - self.yaw_prior_rad + math.pi) % (2 * math.pi) - math.pi) / self.yaw_sigma_rad)
+            terms.append(_wrap(batch[:, 0] - self.yaw_prior_rad) / self.yaw_sigma_rad)
         if self.growth_prior_px is not None:
             terms.append((batch[:, 6] - self.growth_prior_px) / self.growth_sigma_px)
         terms += [batch[:, 7] / self.gradient_sigma_px, batch[:, 8] / self.gradient_sigma_px]
@@ -244,7 +244,8 @@ def _blur_px(growth_px: float, level_gap_px: float) -> float:
     return blur if blur is not None and math.isfinite(blur) else 0.0
 
 
-def _wrap(angle_rad: float) -> float:
+def _wrap(angle_rad):
+    """An angle (or an array of them) in [-pi, pi)."""
     return (angle_rad + math.pi) % (2 * math.pi) - math.pi
 
 
@@ -366,6 +367,19 @@ def _as_the_rule_expects(params: np.ndarray, beacon: Beacon, heading_deg: float 
     turned[0] = _wrap(params[0] + turn)
     turned[3:5] = centre + [cos * offset[0] - sin * offset[1], sin * offset[0] + cos * offset[1]]
     return turned
+
+
+def _held(problem: _Problem) -> _Problem:
+    """The problem for a first fit: without a known growth, the growth held near a typical one
+    (far from the answer, a free growth can run off and trade itself for distance)."""
+    if problem.growth_prior_px is not None:
+        return problem
+    return replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
+
+
+def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) -> _Problem:
+    """The problem with the blur and the points on arcs taken at a first fit's `params`."""
+    return replace(problem, blur_px=_blur_px(params[6], level_gap_px), on_arc=problem.on_arcs(params))
 
 
 def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
@@ -521,9 +535,8 @@ def fit_outline(
         rules,
     )
     sigma = 0.1  # a first guess of the points' noise; measured from the residuals below
-    # first with the growth held near its start (far from the answer, a free growth can
-    # run off and trade itself for distance), then free
-    held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
+    # first with the growth held (`_held`), then free
+    held = _held(problem)
     fits = [
         (_fit(held, start, sigma, rules.huber_px), rule)
         for start, rule in _starts(problem, heading_deg, rules.distances_m)
@@ -531,7 +544,7 @@ def fit_outline(
     first, rule = min(fits, key=lambda item: item[0].cost)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "no start pose puts the panel's outline in front of the camera")
-    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.on_arcs(first.x))
+    problem = _from_first_fit(problem, first.x, level_gap_px)
     seeds = [first.x]
     if growth_px is None:
         # Growth trades against distance where no opposite sides are in view, and the trade
@@ -570,11 +583,10 @@ def fit_outlines(
     growth = HELD_GROWTH_PX if growth_px is None else growth_px
     start = np.array([math.radians(start_yaw_deg), pitch, roll, *start_position_m, growth, 0.0, 0.0])
     sigma = 0.1
-    held = problem if growth_px is not None else replace(problem, growth_prior_px=HELD_GROWTH_PX, growth_sigma_px=0.3)
-    first = _fit(held, start, sigma, rules.huber_px)
+    first = _fit(_held(problem), start, sigma, rules.huber_px)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "the track's pose puts the panels' outlines behind the camera")
-    problem = replace(problem, blur_px=_blur_px(first.x[6], level_gap_px), on_arc=problem.on_arcs(first.x))
+    problem = _from_first_fit(problem, first.x, level_gap_px)
     best = _fit(problem, first.x, sigma, rules.huber_px).x
     return _finish(problem, best, sigma, [first.x], [best], None, lambda x: x, rules)
 
