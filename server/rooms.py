@@ -29,12 +29,13 @@ from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal, located, refused
 from server.pipeline import PipelineOptions, locate_beacon
 from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
+from server.vision.binarize import Levels
 from server.vision.roi import FrameView
 from server.vlc.codec import DATA_BITS, MESSAGE_CHIPS
 from server.vlc.decoder import IdEvidence, StripeRules, row_time_s
 from server.vlc.flatten import FlattenRules, flatten_stripes
 from server.vlc.reader import read_id_frame
-from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult, VlcReading
+from shared_schemas import Beacon, BeaconIdSource, BeaconMap, Crop, FailureReason, LocateResult, VlcReading
 
 
 @dataclass(frozen=True)
@@ -64,13 +65,17 @@ class PanelFix:
 
 
 def crop_frame(
-    frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], margin_px: int, background_dn: float
+    frame: LumaFrame, blob: BeaconBlob, others: list[BeaconBlob], margin_px: int, levels: Levels
 ) -> tuple[LumaFrame, tuple[int, int]]:
-    """`frame` cut to `blob`'s box plus a margin (at least the box's size), other blobs blanked; and (x0, y0)."""
+    """`frame` cut to `blob`'s box plus a margin, other blobs blanked; and (x0, y0).
+
+    The crop keeps its place in the sensor frame and the frame's levels (its `crop` block), so
+    the one-panel pipeline reads it on the full frame's coarse grid with the full frame's levels:
+    a client's window of the frame gives the same crop and the same answer (docs/contract.md,
+    "Windows").
+    """
     height, width = frame.pixels.shape
     x, y, w, h = blob.bounding_box
-    # the pipeline takes the crop's median as its background: the panel must stay a small part of it
-    margin_px = max(margin_px, w, h)
     x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
     x1, y1 = min(width, x + w + margin_px), min(height, y + h + margin_px)
     pixels = np.array(frame.pixels[y0:y1, x0:x1])
@@ -80,14 +85,19 @@ def crop_frame(
         ax0, ay0 = max(ox - pad - x0, 0), max(oy - pad - y0, 0)
         ax1, ay1 = min(ox + ow + pad - x0, x1 - x0), min(oy + oh + pad - y0, y1 - y0)
         if ax1 > ax0 and ay1 > ay0:
-            pixels[ay0:ay1, ax0:ax1] = np.uint8(round(background_dn))
+            pixels[ay0:ay1, ax0:ax1] = np.uint8(round(levels.background))
     pixels.flags.writeable = False
+    (full_width, full_height), (column, row) = frame.meta.full_size, frame.meta.full_offset
+    crop = Crop(
+        x=column + x0,
+        y=row + y0,
+        full_width=full_width,
+        full_height=full_height,
+        levels_dn=[levels.background, levels.plateau],
+    )
+    # the meta keeps the full frame's camera (the contract's), the frame the crop's own
+    meta = frame.meta.model_copy(update={"width": x1 - x0, "height": y1 - y0, "row_stride": None, "crop": crop})
     camera = frame.camera.model_copy(update={"cx": frame.camera.cx - x0, "cy": frame.camera.cy - y0})
-    update: dict[str, object] = {"width": x1 - x0, "height": y1 - y0, "row_stride": None, "camera": camera}
-    window = frame.meta.crop
-    if window is not None:  # a client's window: its crop is placed in the sensor frame, whose camera the meta keeps
-        update.update(crop=window.model_copy(update={"x": window.x + x0, "y": window.y + y0}), camera=frame.meta.camera)
-    meta = frame.meta.model_copy(update=update)
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), (x0, y0)
 
 
@@ -98,11 +108,11 @@ def locate_panel(
     beacon: Beacon,
     id_source: BeaconIdSource,
     options: PipelineOptions,
-    background_dn: float,
+    levels: Levels,
     rules: RoomRules = RoomRules(),
 ) -> Fix | Refusal:
-    """The one-panel pipeline on `blob` alone as map beacon `beacon`; pixels in the full frame."""
-    crop, offset = crop_frame(frame, blob, others, rules.crop_margin_px, background_dn)
+    """The one-panel pipeline on `blob` alone as map beacon `beacon` (`levels`: the frame's); pixels in the frame."""
+    crop, offset = crop_frame(frame, blob, others, rules.crop_margin_px, levels)
     fix = locate_beacon(crop, beacon, options, id_source)
     return fix if isinstance(fix, Refusal) else fix.shifted(offset)
 
@@ -257,7 +267,7 @@ def read_room(
         fix: Fix | Refusal | None = None
         if beacon is not None:
             others = [b for b in blobs if b is not blob]
-            fix = locate_panel(plain, blob, others, beacon, BeaconIdSource.vlc, options, found.levels.background, rules)
+            fix = locate_panel(plain, blob, others, beacon, BeaconIdSource.vlc, options, found.levels, rules)
             if isinstance(fix, Fix) and blob in flat_notes:
                 fix = fix.warned(flat_notes[blob])
             elif isinstance(fix, Refusal) and blob in flat_notes:

@@ -148,7 +148,7 @@ class DeviceSession:
                 template,
                 BeaconIdSource.vlc,
                 panel_options,
-                candidates.levels.background,
+                candidates.levels,
                 room,
             )
             if isinstance(relative, Refusal):

@@ -30,7 +30,7 @@ def test_every_panel_is_found_and_located_on_its_own_crop():
         # which blob is which: the one left in the image is beacon 17 (x grows to the right)
         beacon = MAP.beacons[0] if blob.centroid_px[0] < WIDTH / 2 else MAP.beacons[1]
         others = [b for b in found.blobs if b is not blob]
-        fix = locate_panel(frame, blob, others, beacon, BeaconIdSource.vlc, options, found.levels.background)
+        fix = locate_panel(frame, blob, others, beacon, BeaconIdSource.vlc, options, found.levels)
         assert not isinstance(fix, Refusal), fix.message
         assert fix.beacon_id == beacon.id and fix.id_source is BeaconIdSource.vlc
         assert np.hypot(*(fix.position_m[:2] - POSE.position_m[:2])) < 0.004
