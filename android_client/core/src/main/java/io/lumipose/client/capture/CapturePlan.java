@@ -8,6 +8,7 @@ import io.lumipose.client.camera.ArrayRect;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.OutputSizeChooser;
 import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.protocol.CaptureProtocol;
 
 /**
  * What to ask one camera for: the output size, the pose request and, when the map has beacons to
@@ -95,13 +96,20 @@ public final class CapturePlan {
         if (!options.wantsIdFrames()) {
             return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
         }
-        CaptureSettings idSettings = IdCapturePlan.choose(ranges, options.idExposureNs, poseSettings,
-                IdCapturePlan.DEFAULT_BRIGHTNESS_FRACTION);
+        CaptureSettings idSettings;
+        try {
+            idSettings = IdCapturePlan.choose(ranges, options.idExposureNs, poseSettings,
+                    CaptureProtocol.ID_BRIGHTNESS_FRACTION);
+        } catch (UnsupportedCameraException e) {
+            // The pose frames are still good: position without beacon IDs.
+            notes.add(e.getMessage());
+            return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
+        }
         notes.addAll(idSettings.notes);
-        int n = IdCapturePlan.BURST_FRAMES;
+        int n = CaptureProtocol.ID_BURST_FRAMES;
         long idFramesNs = n * idSettings.frameDurationNs;
         long minimumCycleNs = poseSettings.frameDurationNs + idFramesNs;
-        long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, IdCapturePlan.GOLDEN_STEP);
+        long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, CaptureProtocol.GOLDEN_STEP);
         long poseFrameNs = cycleNs - idFramesNs;
         if (facts.maxFrameDurationNs != null && poseFrameNs > facts.maxFrameDurationNs) {
             notes.add("pose frame duration " + poseFrameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION: "

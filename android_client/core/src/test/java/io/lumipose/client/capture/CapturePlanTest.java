@@ -15,6 +15,7 @@ import io.lumipose.client.camera.ArrayRect;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.Devices;
 import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.protocol.CaptureProtocol;
 
 class CapturePlanTest {
     private static final double PERIOD_NS = IdCapturePlan.messagePeriodNs(); // 21 chips at 2.5 kHz: 8.4 ms
@@ -49,8 +50,8 @@ class CapturePlanTest {
         assertEquals(5, plan.burst().size());
         assertEquals(18_900_000L, plan.id.frameDurationNs);
         assertEquals(0.25, fraction(plan.id.frameDurationNs), 1e-6);
-        assertEquals(IdCapturePlan.GOLDEN_STEP, fraction(plan.burstIntervalNs), 1e-6);
-        assertEquals(11.0 + IdCapturePlan.GOLDEN_STEP, plan.burstIntervalNs / PERIOD_NS, 1e-6);
+        assertEquals(CaptureProtocol.GOLDEN_STEP, fraction(plan.burstIntervalNs), 1e-6);
+        assertEquals(11.0 + CaptureProtocol.GOLDEN_STEP, plan.burstIntervalNs / PERIOD_NS, 1e-6);
         assertEquals(plan.burstIntervalNs, plan.pose.frameDurationNs + 4 * plan.id.frameDurationNs);
         assertTrue(plan.pose.frameDurationNs >= 16_666_666L);
         // The ID frames keep the pose frames' geometry; only exposure, ISO and timing differ.
@@ -110,6 +111,15 @@ class CapturePlanTest {
         assertEquals(16_666_666L, poseOnly.pose.frameDurationNs, "no longer stretched for the burst");
         assertTrue(poseOnly.notes.contains("no rolling-shutter skew: beacon IDs off"));
         assertEquals(poseOnly, poseOnly.withoutIdFrames("again"));
+    }
+
+    /** A camera whose shortest exposure is longer than a code chip still positions, without beacon IDs. */
+    @Test
+    void anExposureTooLongForTheCodeLeavesPoseFrames() throws Exception {
+        CameraFacts slow = Devices.load(Devices.LOGICAL).toBuilder().exposureTimeRangeNs(1_000_000L, 500_000_000L).build();
+        CapturePlan plan = CapturePlan.plan(slow, options(4));
+        assertNull(plan.id);
+        assertTrue(plan.notes.get(plan.notes.size() - 1).contains("one code chip"), plan.notes.toString());
     }
 
     @Test
