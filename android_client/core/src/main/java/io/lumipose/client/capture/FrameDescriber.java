@@ -80,8 +80,8 @@ public final class FrameDescriber {
         }
         RequestSpec spec = plan.spec(kind);
         if (result.cropRegion != null && !near(result.cropRegion, spec.cropRegion)) {
-            return drop(kind, "SCALER_CROP_REGION " + text(result.cropRegion) + " is not the requested "
-                    + text(spec.cropRegion), warnings);
+            return drop(kind, "SCALER_CROP_REGION " + result.cropRegion + " is not the requested "
+                    + spec.cropRegion, warnings);
         }
         if (RequestSpec.ID.equals(kind) && result.rollingShutterSkewNs == null) {
             return drop(kind, "no rolling-shutter skew: beacon IDs off", warnings);
@@ -162,10 +162,6 @@ public final class FrameDescriber {
         return Math.abs(a.left - b.left) <= CROP_TOLERANCE_PX && Math.abs(a.top - b.top) <= CROP_TOLERANCE_PX
                 && Math.abs(a.left + a.width - b.left - b.width) <= CROP_TOLERANCE_PX
                 && Math.abs(a.top + a.height - b.top - b.height) <= CROP_TOLERANCE_PX;
-    }
-
-    private static String text(ArrayRect r) {
-        return "[" + r.left + ", " + r.top + ", " + r.width + ", " + r.height + "]";
     }
 
     private String syncName() {
