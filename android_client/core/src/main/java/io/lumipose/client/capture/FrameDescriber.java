@@ -95,6 +95,17 @@ public final class FrameDescriber {
         } catch (IllegalArgumentException e) {
             return drop(kind, e.getMessage(), warnings);
         }
+        try {
+            return new Described(meta(result, kind, spec, camera, gravityDevice, deviceToEnu, warnings), kind, null,
+                    warnings);
+        } catch (IllegalArgumentException e) {
+            return drop(kind, e.getMessage(), warnings); // a value the contract refuses, named
+        }
+    }
+
+    /** The frame's JSON in the contract's units: exposure, ISO and skew as the result reports them. */
+    private FrameMeta meta(FrameResult result, String kind, RequestSpec spec, Intrinsics camera, float[] gravityDevice,
+                           float[] deviceToEnu, List<String> warnings) {
         FrameMeta.Builder b = FrameMeta.builder(plan.output.width, plan.output.height)
                 .rowStride(plan.output.width)
                 .camera(camera)
@@ -121,11 +132,7 @@ public final class FrameDescriber {
         if (deviceToEnu != null && facing != null && mapXBearingDeg != null) {
             b.headingDeg(HeadingEstimator.cameraYawDeg(deviceToEnu, facts.sensorOrientationDeg, facing, mapXBearingDeg));
         }
-        try {
-            return new Described(b.build(), kind, null, warnings);
-        } catch (IllegalArgumentException e) {
-            return drop(kind, e.getMessage(), warnings);
-        }
+        return b.build();
     }
 
     /**
