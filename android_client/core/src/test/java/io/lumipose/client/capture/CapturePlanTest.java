@@ -123,6 +123,17 @@ class CapturePlanTest {
     }
 
     @Test
+    void theProtocolsExposuresByDefault() throws Exception {
+        CaptureOptions o = CaptureOptions.fromProtocol(true, 4, 2.0, 3_200_000L);
+        assertEquals(CaptureProtocol.POSE_EXPOSURE_NS, o.poseExposureNs);
+        assertEquals(CaptureProtocol.ID_EXPOSURE_NS, o.idExposureNs);
+        assertTrue(o.wantsIdFrames());
+        assertFalse(CaptureOptions.fromProtocol(true, 1, 2.0, 3_200_000L).wantsIdFrames());
+        assertFalse(CaptureOptions.fromProtocol(false, 4, 2.0, 3_200_000L).wantsIdFrames());
+        assertEquals(CaptureProtocol.ID_BURST_FRAMES, CapturePlan.plan(Devices.load(Devices.LOGICAL), o).idFramesPerBurst);
+    }
+
+    @Test
     void aCameraWithoutManualSensorIsRefused() {
         CameraFacts auto = Devices.load(Devices.LOGICAL).toBuilder().capabilities(Arrays.asList("backward_compatible"))
                 .build();
