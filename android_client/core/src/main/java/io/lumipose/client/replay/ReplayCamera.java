@@ -3,24 +3,35 @@ package io.lumipose.client.replay;
 import java.io.IOException;
 import java.nio.ByteBuffer;
 import java.util.ArrayList;
+import java.util.Collections;
+import java.util.Comparator;
 import java.util.List;
 import java.util.Random;
 
+import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.FrameResult;
+import io.lumipose.client.capture.CaptureOptions;
+import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.RequestSpec;
 import io.lumipose.client.flow.FrameSink;
+import io.lumipose.client.sensor.GravityHistory;
 
 /**
- * Plays a recording as a phone's camera would: for each frame its TotalCaptureResult (a
- * {@link FrameResult} read from the {@link SimulatedPhone}'s JSON) and its Y plane, on one thread,
- * in the order Camera2 gives no promise about: sometimes the image first, sometimes the result
- * only after the next frame's image. The Y plane comes in one reused direct buffer whose rows are
- * longer than the image is wide and whose last row has no padding, as real phones deliver it.
- * The phone's gravity reading for a frame reaches {@link Gravity} before the frame.
+ * Plays a recording as the phone's camera would, into the same {@link FrameSink} the app's Camera2
+ * controller feeds: the app reads the {@link #facts()} of a {@link SimulatedPhone} whose camera is
+ * exactly the recording's, plans its capture ({@link CapturePlan}), and the camera then delivers,
+ * for every recorded frame the plan asks for, its TotalCaptureResult (as a {@link FrameResult})
+ * and its Y plane, on one thread, in an order Camera2 allows: results in capture order, images in
+ * capture order, and between the two sometimes the image first, sometimes the result only after
+ * the next frame's image. The Y plane comes in one reused
+ * direct buffer whose rows are longer than the image is wide and whose last row has no padding,
+ * as phones deliver it. The phone's gravity reading at each frame reaches the
+ * {@link GravityHistory} before the frame.
  */
 public final class ReplayCamera {
-    /** Where the phone's TYPE_GRAVITY readings go (the app's sensor listener). */
-    public interface Gravity {
-        void onGravity(long timestampNs, float[] valuesDevice);
+    /** Called before each capture (a pose frame and its ID frames): where a test waits or a player paces. */
+    public interface Pace {
+        void beforeCapture(RecordedFrame poseFrame) throws InterruptedException;
     }
 
     /** What the camera writes over a buffer it takes back: a sink must copy what it keeps. */
@@ -33,7 +44,7 @@ public final class ReplayCamera {
         this(recording, 12);
     }
 
-    /** @param orderSeed picks which frames arrive image first and whose result comes late */
+    /** @param orderSeed draws when each result arrives relative to the images */
     public ReplayCamera(Recording recording, long orderSeed) {
         this.recording = recording;
         this.phone = new SimulatedPhone(recording.frames());
@@ -48,25 +59,50 @@ public final class ReplayCamera {
         return phone;
     }
 
+    /** The camera's characteristics as the app reads them. */
+    public CameraFacts facts() {
+        return phone.facts();
+    }
+
+    /** What the user set: the recording's exposures, for a map of {@code beaconsInMap} beacons. */
+    public CaptureOptions captureOptions(int beaconsInMap, double ceilingDistanceM) {
+        return phone.captureOptions(beaconsInMap, ceilingDistanceM);
+    }
+
     /** Camera2 aligns rows to 64 bytes; a row always ends in padding here so a sink must honour the stride. */
     public static int rowStride(int width) {
         return (width / 64 + 1) * 64;
     }
 
-    /** Hands every frame to {@code sink} on this thread, each frame's gravity to {@code gravity} first. */
-    public void play(FrameSink sink, Gravity gravity) throws IOException {
-        play(recording.frames(), sink, gravity);
-    }
-
-    /** As {@link #play(FrameSink, Gravity)}, for some of the recording's frames (in the order given). */
-    public void play(List<RecordedFrame> frames, FrameSink sink, Gravity gravity) throws IOException {
+    /**
+     * Hands every recorded frame the plan asks for to {@code sink} on this thread (an ID frame is
+     * left out when the plan takes none), each frame's gravity to {@code gravity} first.
+     *
+     * @throws IllegalStateException when the plan streams another size than the recording's
+     */
+    public void play(CapturePlan plan, FrameSink sink, GravityHistory gravity, Pace pace)
+            throws IOException, InterruptedException {
+        List<RecordedFrame> taken = new ArrayList<RecordedFrame>();
+        for (RecordedFrame f : recording.frames()) {
+            if (plan.spec(f.kind) == null) {
+                continue;
+            }
+            if (f.width != plan.output.width || f.height != plan.output.height) {
+                throw new IllegalStateException("the plan streams " + plan.output + ", " + f.name + " is " + f.width
+                        + "x" + f.height);
+            }
+            taken.add(f);
+        }
         ByteBuffer plane = null;
-        for (Event e : events(frames)) {
+        for (Event e : events(taken)) {
             RecordedFrame f = e.frame;
-            if (e.gravityFirst) {
+            if (e.first) {
+                if (!f.isIdFrame()) {
+                    pace.beforeCapture(f);
+                }
                 float[] g = phone.gravity(f);
                 if (g != null) {
-                    gravity.onGravity(f.timestampNs, g);
+                    gravity.addGravity(f.timestampNs, g);
                 }
             }
             if (e.image) {
@@ -79,7 +115,8 @@ public final class ReplayCamera {
                 sink.onImage(f.timestampNs, plane, f.width, f.height, stride, 1);
                 scribble(plane);
             } else {
-                sink.onResult(FrameResult.fromJson(phone.result(f)));
+                RequestSpec request = plan.spec(f.kind);
+                sink.onResult(FrameResult.fromJson(phone.result(f, request)));
             }
         }
     }
@@ -103,16 +140,19 @@ public final class ReplayCamera {
         plane.clear();
     }
 
-    /** One call to the sink: a frame's image, or its result. */
+    /** One call to the sink: a frame's image, or its result, at its delivery time. */
     static final class Event {
         final RecordedFrame frame;
         final boolean image;
-        /** The frame's gravity reading is delivered right before this, its first event. */
-        boolean gravityFirst;
+        /** In frame intervals from the first frame's start. */
+        final double at;
+        /** The frame's first call: its capture starts (and its gravity reading comes) here. */
+        boolean first;
 
-        Event(RecordedFrame frame, boolean image) {
+        Event(RecordedFrame frame, boolean image, double at) {
             this.frame = frame;
             this.image = image;
+            this.at = at;
         }
 
         @Override
@@ -122,41 +162,30 @@ public final class ReplayCamera {
     }
 
     /**
-     * The calls in delivery order: a third of the frames image first, and a quarter of the results
-     * late, after the next frame's image.
+     * The calls in delivery order. Camera2 delivers results in capture order and images in capture
+     * order, but promises nothing between the two: here an image comes half a frame after its
+     * capture starts, a result anywhere up to 1.8 frames after, never before the previous result.
+     * So about a third of the frames come result first, and a sixth of the results come only after
+     * the next frame's image.
      */
     List<Event> events(List<RecordedFrame> frames) {
         Random random = new Random(orderSeed);
         List<Event> out = new ArrayList<Event>();
-        Event late = null;
-        for (RecordedFrame f : frames) {
-            Event image = new Event(f, true);
-            Event result = new Event(f, false);
-            boolean imageFirst = random.nextInt(3) == 0;
-            boolean resultLate = random.nextInt(4) == 0;
-            List<Event> frameEvents = new ArrayList<Event>();
-            if (imageFirst || resultLate) {
-                frameEvents.add(image);
-                if (!resultLate) {
-                    frameEvents.add(result);
-                }
-            } else {
-                frameEvents.add(result);
-                frameEvents.add(image);
-            }
-            frameEvents.get(0).gravityFirst = true;
-            if (late != null) {
-                frameEvents.add(frameEvents.indexOf(image) + 1, late);  // the previous frame's result
-                late = null;
-            }
-            out.addAll(frameEvents);
-            if (resultLate) {
-                late = result;
-            }
+        double lastResult = Double.NEGATIVE_INFINITY;
+        for (int i = 0; i < frames.size(); i++) {
+            Event image = new Event(frames.get(i), true, i + 0.5);
+            lastResult = Math.max(lastResult + 1e-3, i + 1.8 * random.nextDouble());
+            Event result = new Event(frames.get(i), false, lastResult);
+            (result.at < image.at ? result : image).first = true;
+            out.add(image);
+            out.add(result);
         }
-        if (late != null) {
-            out.add(late);
-        }
+        Collections.sort(out, new Comparator<Event>() {
+            @Override
+            public int compare(Event a, Event b) {
+                return Double.compare(a.at, b.at);
+            }
+        });
         return out;
     }
 }

@@ -8,9 +8,12 @@ import org.json.JSONArray;
 import org.json.JSONObject;
 
 import io.lumipose.client.camera.ArrayRect;
+import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.Intrinsics;
 import io.lumipose.client.camera.IntrinsicsCalculator;
 import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.capture.CaptureOptions;
+import io.lumipose.client.capture.RequestSpec;
 import io.lumipose.client.json.Json;
 import io.lumipose.client.sensor.GravityTransform;
 import io.lumipose.client.sensor.LensFacing;
@@ -26,6 +29,7 @@ public final class SimulatedPhone {
     /** The Mi 8's front camera, the profile the simulator renders. */
     public static final LensFacing FACING = LensFacing.FRONT;
     public static final int SENSOR_ORIENTATION_DEG = 270;
+    /** The stream's minimum frame duration at every size: 30 fps. */
     static final long FRAME_DURATION_NS = 33333333L;
 
     private final PixelSize array;
@@ -36,6 +40,12 @@ public final class SimulatedPhone {
     /** Camera2's LENS_DISTORTION [k1, k2, k3, p1, p2], as floats. */
     private final double[] distortion;
     private final Set<PixelSize> outputs = new LinkedHashSet<PixelSize>();
+    /** The recording's pose frames' ISO: the lowest this phone has, as the plan takes the lowest. */
+    private final int lowestIso;
+    private final int highestIso;
+    private final long poseExposureNs;
+    /** 0 when the recording has no ID frames. */
+    private final long idExposureNs;
 
     public SimulatedPhone(List<RecordedFrame> frames) {
         RecordedFrame largest = frames.get(0);
@@ -54,10 +64,44 @@ public final class SimulatedPhone {
         focalLengthM = k.focalLengthM;
         calibration = floats(k.fx, k.fy, k.cx + 0.5, k.cy + 0.5, 0);
         distortion = floats(camera2Distortion(k.distortion(), largest.name));
+        int lowest = Integer.MAX_VALUE;
+        int highest = 3200;
+        long pose = 0;
+        long id = 0;
         for (RecordedFrame f : frames) {
             checkSameCamera(f);
             outputs.add(new PixelSize(f.width, f.height));
+            highest = Math.max(highest, iso(f));
+            if (f.isIdFrame()) {
+                id = exposureNs(f);
+            } else {
+                lowest = Math.min(lowest, iso(f));
+                pose = exposureNs(f);
+            }
         }
+        if (pose == 0) {
+            throw new IllegalArgumentException("the recording has no pose frame");
+        }
+        lowestIso = lowest;
+        highestIso = highest;
+        poseExposureNs = pose;
+        idExposureNs = id;
+    }
+
+    private static int iso(RecordedFrame f) {
+        return (int) Math.round(f.iso);
+    }
+
+    private static long exposureNs(RecordedFrame f) {
+        return Math.round(f.exposureS * 1e9);
+    }
+
+    /**
+     * What the user of this phone set: the recording's exposures (no ID frames when it has none),
+     * its largest frame as the size limit.
+     */
+    public CaptureOptions captureOptions(int beaconsInMap, double ceilingDistanceM) {
+        return new CaptureOptions(poseExposureNs, idExposureNs, beaconsInMap, ceilingDistanceM, array.pixels());
     }
 
     /** OpenCV (k1, k2, p1, p2[, k3]) to Camera2's [k1, k2, k3, p1, p2]. */
@@ -131,7 +175,7 @@ public final class SimulatedPhone {
         Json.put(o, "noise_reduction_modes", names("off", "fast", "high_quality"));
         Json.put(o, "distortion_correction_modes", names("off"));
         Json.put(o, "exposure_time_range_ns", ints(10000, 1000000000));
-        Json.put(o, "sensitivity_range", ints(100, 3200));
+        Json.put(o, "sensitivity_range", ints(lowestIso, highestIso));
         Json.put(o, "max_frame_duration_ns", 1000000000L);
         JSONArray yuv = new JSONArray();
         for (PixelSize s : outputs) {
@@ -141,24 +185,28 @@ public final class SimulatedPhone {
         return o;
     }
 
-    /** The FrameResult JSON of a frame: what the camera did, as its TotalCaptureResult says. */
-    public JSONObject result(RecordedFrame f) {
+    /**
+     * The FrameResult JSON of a frame taken for {@code request}: the exposure and ISO the frame
+     * was rendered with (what its pixels show), the request's other settings as applied.
+     */
+    public JSONObject result(RecordedFrame f, RequestSpec request) {
         JSONObject o = new JSONObject();
         Json.put(o, "sensor_timestamp_ns", f.timestampNs);
-        Json.put(o, "request", f.isIdFrame() ? "id" : "pose");
-        Json.put(o, "sensor_exposure_time_ns", Math.round(f.exposureS * 1e9));
-        Json.put(o, "sensor_sensitivity", Math.round(f.iso));
-        Json.put(o, "sensor_frame_duration_ns", FRAME_DURATION_NS);
+        Json.put(o, "request", request.kind);
+        Json.put(o, "sensor_exposure_time_ns", exposureNs(f));
+        Json.put(o, "sensor_sensitivity", iso(f));
+        Json.put(o, "sensor_frame_duration_ns", request.frameDurationNs);
         if (f.rollingShutterSkewS != null) {
             Json.put(o, "sensor_rolling_shutter_skew_ns", Math.round(f.rollingShutterSkewS * 1e9));
         }
         Json.put(o, "lens_focal_length_mm", (double) (float) (focalLengthM * 1e3));
         Json.put(o, "lens_intrinsic_calibration", Json.array(calibration));
         Json.put(o, "lens_distortion", Json.array(distortion));
-        Json.put(o, "scaler_crop_region", wholeArray());
-        Json.put(o, "lens_optical_stabilization_mode", "off");
-        Json.put(o, "tonemap_mode", "contrast_curve");
-        Json.put(o, "lens_focus_distance_diopters", 0.0);
+        ArrayRect crop = request.cropRegion;
+        Json.put(o, "scaler_crop_region", ints(crop.left, crop.top, crop.width, crop.height));
+        Json.put(o, "lens_optical_stabilization_mode", "off");  // the only mode this camera has
+        Json.put(o, "tonemap_mode", request.linearToneCurve() ? "contrast_curve" : "fast");
+        Json.put(o, "lens_focus_distance_diopters", 0.0);  // fixed focus
         Json.put(o, "distortion_correction_mode", "off");
         return o;
     }
@@ -167,6 +215,11 @@ public final class SimulatedPhone {
     public float[] gravity(RecordedFrame f) {
         double[] g = f.gravityCamera();
         return g == null ? null : GravityTransform.cameraToDevice(g, SENSOR_ORIENTATION_DEG, FACING);
+    }
+
+    /** The Camera2 characteristics as the app reads them. */
+    public CameraFacts facts() {
+        return CameraFacts.fromJson(characteristics());
     }
 
     private JSONArray wholeArray() {

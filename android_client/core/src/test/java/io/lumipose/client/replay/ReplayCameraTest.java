@@ -3,6 +3,7 @@ package io.lumipose.client.replay;
 import static org.junit.jupiter.api.Assertions.assertArrayEquals;
 import static org.junit.jupiter.api.Assertions.assertEquals;
 import static org.junit.jupiter.api.Assertions.assertNotNull;
+import static org.junit.jupiter.api.Assertions.assertNull;
 import static org.junit.jupiter.api.Assertions.assertThrows;
 import static org.junit.jupiter.api.Assertions.assertTrue;
 
@@ -13,6 +14,7 @@ import java.nio.charset.StandardCharsets;
 import java.nio.file.Files;
 import java.nio.file.Path;
 import java.util.ArrayList;
+import java.util.Arrays;
 import java.util.HashMap;
 import java.util.List;
 import java.util.Map;
@@ -23,8 +25,11 @@ import org.junit.jupiter.api.Test;
 import org.junit.jupiter.api.io.TempDir;
 
 import io.lumipose.client.camera.FrameResult;
+import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.frame.LumaPlane;
+import io.lumipose.client.sensor.GravityHistory;
 import io.lumipose.client.sensor.GravityTransform;
 import io.lumipose.client.sensor.LensFacing;
 
@@ -46,7 +51,9 @@ class ReplayCameraTest {
                 .put("focal_length_m", FOCAL_M);
         JSONObject o = new JSONObject().put("schema", "lumipose.frame/1").put("format", "Y8").put("width", W)
                 .put("height", H).put("row_stride", fileStride).put("camera", camera)
-                .put("exposure_s", "id".equals(kind) ? 1.25e-4 : 0.001).put("iso", 400.0)
+                .put("exposure_s", "id".equals(kind) ? 1.25e-4 : 0.001)
+                // the ID frames' ISO keeps a fifth of the pose frame's brightness, as the plan asks
+                .put("iso", "id".equals(kind) ? 640.0 : 400.0)
                 .put("rolling_shutter_skew_s", 0.03).put("timestamp_ns", 1000000000L + i * 33333333L)
                 .put("gravity_camera", new JSONArray(gravity)).put("frame_kind", kind)
                 .put("ground_truth", new JSONObject().put("position_m", new JSONArray(new double[] {0.1 * i, 0, 1.3}))
@@ -108,13 +115,30 @@ class ReplayCameraTest {
     }
 
     @Test
-    void eachResultSaysWhatTheFrameWasTakenWith() throws IOException {
+    void thePlanForThisPhoneAsksForTheRecordedFrames() throws Exception {
+        ReplayCamera camera = new ReplayCamera(recording(6));
+        CapturePlan plan = CapturePlan.plan(camera.facts(), camera.captureOptions(2, 2.0));
+        assertEquals(new PixelSize(W, H), plan.output);
+        assertEquals(1000000L, plan.pose.exposureNs);
+        assertEquals(400, plan.pose.sensitivityIso.intValue());
+        assertEquals(125000L, plan.id.exposureNs);
+        assertEquals(640, plan.id.sensitivityIso.intValue());
+        // One beacon: no ID frames asked for.
+        assertNull(CapturePlan.plan(camera.facts(), camera.captureOptions(1, 2.0)).id);
+    }
+
+    @Test
+    void eachResultSaysWhatTheFrameWasTakenWith() throws Exception {
         Recording r = recording(2);
-        JSONObject result = new SimulatedPhone(r.frames()).result(r.frames().get(1));
+        ReplayCamera camera = new ReplayCamera(r);
+        CapturePlan plan = CapturePlan.plan(camera.facts(), camera.captureOptions(2, 2.0));
+        JSONObject result = camera.phone().result(r.frames().get(1), plan.id);
         assertEquals(1033333333L, result.getLong("sensor_timestamp_ns"));
         assertEquals("id", result.getString("request"));
         assertEquals(125000L, result.getLong("sensor_exposure_time_ns"));
-        assertEquals(400, result.getInt("sensor_sensitivity"));
+        assertEquals(640, result.getInt("sensor_sensitivity"));
+        assertEquals(plan.id.frameDurationNs, result.getLong("sensor_frame_duration_ns"));
+        assertEquals("contrast_curve", result.getString("tonemap_mode"));
         assertEquals(30000000L, result.getLong("sensor_rolling_shutter_skew_ns"));
         assertEquals("[0,0,40,30]", result.getJSONArray("scaler_crop_region").toString());
         assertEquals(3.52, result.getDouble("lens_focal_length_mm"), 1e-6);
@@ -158,47 +182,61 @@ class ReplayCameraTest {
     }
 
     @Test
-    void playsEveryImageAndResultOnceWithGravityFirst() throws IOException {
+    void playsEveryImageAndResultOnceWithGravityFirst() throws Exception {
         Recording r = recording(12);
         ReplayCamera camera = new ReplayCamera(r);
+        CapturePlan plan = CapturePlan.plan(camera.facts(), camera.captureOptions(2, 2.0));
         Capture sink = new Capture();
-        final List<Long> gravityTimes = new ArrayList<Long>();
-        final Map<Long, float[]> gravity = new HashMap<Long, float[]>();
-        camera.play(sink, new ReplayCamera.Gravity() {
+        GravityHistory gravity = new GravityHistory();
+        final List<String> captures = new ArrayList<String>();
+        camera.play(plan, sink, gravity, new ReplayCamera.Pace() {
             @Override
-            public void onGravity(long timestampNs, float[] valuesDevice) {
-                gravityTimes.add(timestampNs);
-                gravity.put(timestampNs, valuesDevice);
+            public void beforeCapture(RecordedFrame poseFrame) {
+                captures.add(poseFrame.name);
             }
         });
+        assertEquals(Arrays.asList("walk_0000", "walk_0005", "walk_0010"), captures);
         assertEquals(12, sink.results.size());
         assertEquals(12, sink.images.size());
-        assertEquals(12, gravityTimes.size());
         for (RecordedFrame f : r.frames()) {
             assertArrayEquals(f.luma(), sink.images.get(f.timestampNs), f.name);
-            double[] back = GravityTransform.deviceToCamera(gravity.get(f.timestampNs),
+            double[] back = GravityTransform.deviceToCamera(gravity.gravityAt(f.timestampNs),
                     SimulatedPhone.SENSOR_ORIENTATION_DEG, LensFacing.FRONT);
             double[] g = f.gravityCamera();
             double norm = Math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
             assertArrayEquals(new double[] {g[0] / norm, g[1] / norm, g[2] / norm}, back, 1e-6, f.name);
         }
+        for (FrameResult result : sink.results) {
+            long index = (result.timestampNs - 1000000000L) / 33333333L;
+            assertEquals(index % 5 == 0 ? "pose" : "id", result.request);
+        }
         assertNotNull(sink.kept);
         assertEquals(ReplayCamera.REUSED, sink.kept.get(0), "the camera reuses its buffer");
+
+        // Without ID frames in the plan, the camera takes none.
+        Capture poseOnly = new Capture();
+        camera.play(CapturePlan.plan(camera.facts(), camera.captureOptions(1, 2.0)), poseOnly, gravity,
+                new ReplayCamera.Pace() {
+                    @Override
+                    public void beforeCapture(RecordedFrame poseFrame) {
+                    }
+                });
+        assertEquals(3, poseOnly.images.size());
     }
 
     @Test
-    void deliveryOrderMixesImageFirstAndLateResults() throws IOException {
+    void deliveryOrderMixesImageFirstAndLateResultsAsCamera2Allows() throws IOException {
         Recording r = recording(24);
         List<ReplayCamera.Event> events = new ReplayCamera(r).events(r.frames());
         assertEquals(48, events.size());
-        int imageFirst = 0;
-        int resultAfterNextImage = 0;
         Map<RecordedFrame, Integer> imageAt = new HashMap<RecordedFrame, Integer>();
         Map<RecordedFrame, Integer> resultAt = new HashMap<RecordedFrame, Integer>();
         for (int i = 0; i < events.size(); i++) {
             (events.get(i).image ? imageAt : resultAt).put(events.get(i).frame, i);
         }
         List<RecordedFrame> frames = r.frames();
+        int imageFirst = 0;
+        int resultAfterNextImage = 0;
         for (int i = 0; i < frames.size(); i++) {
             RecordedFrame f = frames.get(i);
             if (imageAt.get(f) < resultAt.get(f)) {
@@ -207,11 +245,12 @@ class ReplayCameraTest {
             if (i + 1 < frames.size() && resultAt.get(f) > imageAt.get(frames.get(i + 1))) {
                 resultAfterNextImage++;
             }
-            // Images keep the capture order; gravity comes with each frame's first call.
             if (i > 0) {
+                // Camera2 keeps each stream in capture order.
                 assertTrue(imageAt.get(f) > imageAt.get(frames.get(i - 1)));
+                assertTrue(resultAt.get(f) > resultAt.get(frames.get(i - 1)));
             }
-            assertTrue(events.get(Math.min(imageAt.get(f), resultAt.get(f))).gravityFirst);
+            assertTrue(events.get(Math.min(imageAt.get(f), resultAt.get(f))).first);
         }
         assertTrue(imageFirst > 0 && imageFirst < frames.size(), imageFirst + " of 24 image first");
         assertTrue(resultAfterNextImage > 0, "no result came after the next frame's image");
