@@ -10,7 +10,7 @@ import java.util.TreeMap;
 import java.util.concurrent.Executor;
 
 import io.lumipose.client.camera.CameraFacts;
-import io.lumipose.client.camera.FrameDescriber;
+import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.frame.BeaconWindow;
