@@ -7,6 +7,7 @@
 #   Output: android_client/app/target/apk/lumipose-debug.apk
 set -euo pipefail
 cd "$(dirname "$0")/.."
+ROOT="$PWD"
 FRAMEWORK_RES=/usr/share/android-framework-res/framework-res.apk
 DX_VERSION=11.0.0_r3
 
@@ -41,6 +42,12 @@ java -cp "$OUT/tools/dalvik-dx-$DX_VERSION.jar" com.android.dx.command.Main --de
     --output="$OUT/classes.dex" android_client/core/target/lumipose-client-core-*.jar \
     android_client/app/target/lumipose-android-app-*.jar
 (cd "$OUT" && aapt add unsigned.apk classes.dex >/dev/null)
+# The core's Java resource (the capture protocol, as core/pom.xml bundles it) at the APK's root, where
+# Android's class loader serves it to CaptureProtocol.
+PROTOCOL=io/lumipose/client/protocol/capture_protocol.json
+rm -rf "$OUT/resources" && mkdir -p "$OUT/resources/$(dirname "$PROTOCOL")"
+cp shared_schemas/capture_protocol.json "$OUT/resources/$PROTOCOL"
+(cd "$OUT/resources" && aapt add "$ROOT/$OUT/unsigned.apk" "$PROTOCOL" >/dev/null)
 
 zipalign -f 4 "$OUT/unsigned.apk" "$OUT/aligned.apk"
 KEYSTORE="$OUT/debug.keystore"
@@ -51,5 +58,6 @@ apksigner sign --ks "$KEYSTORE" --ks-pass pass:android --key-pass pass:android \
 rm -f "$OUT/unsigned.apk" "$OUT/aligned.apk"
 
 apksigner verify --verbose "$OUT/lumipose-debug.apk"
+aapt list "$OUT/lumipose-debug.apk" | grep -qx "$PROTOCOL" || { echo "the APK lacks $PROTOCOL" >&2; exit 1; }
 aapt dump badging "$OUT/lumipose-debug.apk" | grep -E "^(package|sdkVersion|targetSdkVersion|uses-permission|launchable-activity)"
 echo "APK: $OUT/lumipose-debug.apk ($(stat -c %s "$OUT/lumipose-debug.apk") bytes)"

@@ -31,6 +31,8 @@ from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS
 from server.vlc.decoder import StripeRules
 from shared_schemas import FrameKind
 
+# the paper's pose exposure (Section III-B) and the app's: 1.19 messages, a +-4 % ripple (8.4 ms would leave none)
+POSE_EXPOSURE_S = 0.01
 ID_EXPOSURE_S = 1.0 / 8000.0
 ID_BURST_FRAMES = 4  # ID frames after each pose frame (the app's IdCapturePlan.BURST_FRAMES)
 ID_BURST_STEP = 1.0 / ID_BURST_FRAMES  # message phase from one ID frame of a burst to the next
@@ -61,17 +63,19 @@ def id_frame_interval_s(nominal_s: float = 1.0 / 30.0, chip_rate_hz: float = CHI
     return stepped_interval_s(nominal_s, ID_BURST_STEP, chip_rate_hz)
 
 
-def id_frame_problem(frame: LumaFrame, rules: StripeRules = StripeRules()) -> str | None:
-    """None when `frame` can carry stripes, else the sentence saying why it cannot.
+def longest_id_exposure_s(rules: StripeRules = StripeRules()) -> float:
+    """The longest ID exposure the server reads: `rules.max_exposure_chips` at `rules.chip_rate_hz`."""
+    return rules.max_exposure_chips / rules.chip_rate_hz
 
-    The exposure limit is `rules.max_exposure_chips` at `rules.chip_rate_hz`.
-    """
+
+def id_frame_problem(frame: LumaFrame, rules: StripeRules = StripeRules()) -> str | None:
+    """None when `frame` can carry stripes, else the sentence saying why it cannot."""
     meta = frame.meta
     if meta.rolling_shutter_skew_s is None or meta.rolling_shutter_skew_s <= 0:
         return "rolling_shutter_skew_s is missing: the row times are unknown"
     if meta.exposure_s is None:
         return "exposure_s is missing"
-    longest_s = rules.max_exposure_chips / rules.chip_rate_hz
+    longest_s = longest_id_exposure_s(rules)
     if meta.exposure_s > longest_s:
         return f"exposure_s {meta.exposure_s:.2g} s is longer than {longest_s:.2g} s: the code is averaged away"
     if meta.timestamp_ns is None:

@@ -3,23 +3,19 @@ package io.lumipose.client.capture;
 import java.util.ArrayList;
 import java.util.List;
 
+import io.lumipose.client.protocol.CaptureProtocol;
+
 /**
  * Settings of the short-exposure beacon-ID (VLC) frames taken beside pose frames, after the
- * project's capture protocol (server/vlc/capture.py): exposure at most about a third of a code chip,
- * ISO raised so the panel stays well below clipping, and a burst of {@link #BURST_FRAMES} frames
- * whose interval advances the beacon's repeating message by {@link #BURST_STEP} of its period from
- * one ID frame to the next, so together they see the whole code (docs/vlc.md).
+ * project's capture protocol ({@link CaptureProtocol}, written from server/vlc/capture.py): an
+ * exposure the server still reads (at most {@link CaptureProtocol#ID_MAX_EXPOSURE_NS}, one code chip),
+ * ISO raised so the panel stays well below clipping, and a burst of {@link CaptureProtocol#ID_BURST_FRAMES}
+ * frames whose interval advances the beacon's repeating message by {@link CaptureProtocol#ID_BURST_STEP}
+ * of its period from one ID frame to the next, so together they see the whole code (docs/vlc.md).
  */
 public final class IdCapturePlan {
-    /** The beacons' chip rate and message length (5-bit header + 8 data bits in biphase mark code). */
-    public static final double CHIP_RATE_HZ = 2500.0;
-    public static final int MESSAGE_CHIPS = 21;
-    /** (3 - sqrt 5) / 2: the phase step that spreads any number of frames most evenly over the message. */
-    public static final double GOLDEN_STEP = (3.0 - Math.sqrt(5.0)) / 2.0;
-    /** ID frames after each pose frame; with {@link #BURST_STEP} they tile the message (server's office bench). */
-    public static final int BURST_FRAMES = 4;
-    /** A quarter message from one ID frame of a burst to the next. */
-    public static final double BURST_STEP = 1.0 / BURST_FRAMES;
+    /** ID frames after each pose frame: the protocol's burst. */
+    public static final int BURST_FRAMES = CaptureProtocol.ID_BURST_FRAMES;
     /** ID-frame brightness as a fraction of the pose frame's (exposure x ISO); the pose frame clips ~4x over. */
     public static final double DEFAULT_BRIGHTNESS_FRACTION = 0.2;
 
@@ -27,7 +23,7 @@ public final class IdCapturePlan {
     }
 
     public static long messagePeriodNs() {
-        return Math.round(MESSAGE_CHIPS / CHIP_RATE_HZ * 1e9);
+        return CaptureProtocol.messagePeriodNs();
     }
 
     /**
@@ -54,6 +50,8 @@ public final class IdCapturePlan {
      * @param idExposureNs       wanted ID exposure (see {@link CaptureSettingsChooser#DEFAULT_ID_EXPOSURE_NS})
      * @param pose               the pose frames' settings (their exposure x ISO is the reference brightness)
      * @param brightnessFraction ID-frame brightness relative to the pose frame's, in (0, 1]
+     * @throws UnsupportedCameraException when the exposure the camera can take is longer than the
+     *                                    server reads: its ID frames would all be refused
      */
     public static CaptureSettings choose(CameraRanges ranges, long idExposureNs, CaptureSettings pose,
                                          double brightnessFraction) throws UnsupportedCameraException {
@@ -61,12 +59,12 @@ public final class IdCapturePlan {
             throw new IllegalArgumentException("brightnessFraction must be in (0, 1], got " + brightnessFraction);
         }
         CaptureSettings base = CaptureSettingsChooser.choose(ranges, idExposureNs);
-        List<String> notes = new ArrayList<String>(base.notes);
-        long chipNs = Math.round(1e9 / CHIP_RATE_HZ);
-        if (base.exposureNs > chipNs / 2) {
-            notes.add("ID exposure " + base.exposureNs + " ns exceeds half a chip (" + chipNs / 2
-                    + " ns): the code will be smeared");
+        if (base.exposureNs > CaptureProtocol.ID_MAX_EXPOSURE_NS) {
+            throw new UnsupportedCameraException("ID exposure " + base.exposureNs + " ns is longer than the "
+                    + CaptureProtocol.ID_MAX_EXPOSURE_NS + " ns the server reads (one code chip): the code would be "
+                    + "averaged away, so beacon IDs cannot be read with this camera and exposure.");
         }
+        List<String> notes = new ArrayList<String>(base.notes);
         Integer iso = base.sensitivityIso;
         if (iso != null && pose.sensitivityIso != null) {
             double wanted = pose.sensitivityIso * ((double) pose.exposureNs / base.exposureNs) * brightnessFraction;
@@ -76,7 +74,7 @@ public final class IdCapturePlan {
             }
         }
         long frameNs = steppedIntervalNs(Math.max(base.frameDurationNs, ranges.streamMinFrameDurationNs),
-                Math.max(base.exposureNs, ranges.streamMinFrameDurationNs), BURST_STEP);
+                Math.max(base.exposureNs, ranges.streamMinFrameDurationNs), CaptureProtocol.ID_BURST_STEP);
         if (ranges.maxFrameDurationNs != null && frameNs > ranges.maxFrameDurationNs) {
             notes.add("stepped ID frame interval " + frameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION");
             frameNs = ranges.maxFrameDurationNs;
