@@ -8,6 +8,7 @@ import io.lumipose.client.camera.ArrayRect;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.OutputSizeChooser;
 import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.protocol.CaptureProtocol;
 
 /**
  * What to ask one camera for: the output size, the pose request and, when the map has beacons to
@@ -101,7 +102,7 @@ public final class CapturePlan {
         int n = IdCapturePlan.BURST_FRAMES;
         long idFramesNs = n * idSettings.frameDurationNs;
         long minimumCycleNs = poseSettings.frameDurationNs + idFramesNs;
-        long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, IdCapturePlan.GOLDEN_STEP);
+        long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, CaptureProtocol.GOLDEN_STEP);
         long poseFrameNs = cycleNs - idFramesNs;
         if (facts.maxFrameDurationNs != null && poseFrameNs > facts.maxFrameDurationNs) {
             notes.add("pose frame duration " + poseFrameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION: "
