@@ -3,6 +3,8 @@ package io.lumipose.client.frame;
 import java.nio.ByteBuffer;
 import java.util.Arrays;
 
+import io.lumipose.client.protocol.CaptureProtocol;
+
 /**
  * The window to upload around the brightest panel of a Y plane: a port of
  * {@code lumipose_client/crop.py}'s {@code beacon_window}, giving the same window on the same
@@ -21,11 +23,11 @@ import java.util.Arrays;
  * copied but the window itself, later ({@link LumaPlane#copyWindow}).
  */
 public final class BeaconWindow {
-    // crop.py's constants
-    static final double WINDOW_PER_PANEL = 2.0;
-    static final int BLOCK_DIVISOR = 240;
-    static final double MIN_CONTRAST_DN = 20.0;
-    static final int EDGE_BLOCKS = 3;
+    // crop.py's constants, from the one protocol file both read
+    static final double WINDOW_PER_PANEL = CaptureProtocol.WINDOW_PER_PANEL;
+    static final int BLOCK_DIVISOR = CaptureProtocol.WINDOW_BLOCK_DIVISOR;
+    static final double MIN_CONTRAST_DN = CaptureProtocol.WINDOW_MIN_CONTRAST_DN;
+    static final int EDGE_BLOCKS = CaptureProtocol.WINDOW_EDGE_BLOCKS;
 
     private BeaconWindow() {
     }

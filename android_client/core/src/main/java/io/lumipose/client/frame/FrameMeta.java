@@ -348,6 +348,9 @@ public final class FrameMeta {
 
         /** An extra top-level field (the contract allows and keeps them). */
         public Builder extra(String key, Object value) {
+            if ("tone_curve".equals(key)) { // it was an extra before it became a field
+                return toneCurve((String) value);
+            }
             if (KNOWN.contains(key)) {
                 throw new IllegalArgumentException("'" + key + "' is a contract field, set it with its own method");
             }

@@ -31,6 +31,11 @@ public final class Window {
         return x1 <= width && y1 <= height;
     }
 
+    /** True when {@code w} lies inside this window. */
+    public boolean contains(Window w) {
+        return w.x0 >= x0 && w.y0 >= y0 && w.x1 <= x1 && w.y1 <= y1;
+    }
+
     /** True when the window is the whole width x height frame. */
     public boolean isWhole(int width, int height) {
         return x0 == 0 && y0 == 0 && x1 == width && y1 == height;

@@ -16,7 +16,7 @@ class LensDistortionTest {
 
     @Test
     void absentOrZeroMeansNone() {
-        assertEquals(0, LensDistortion.toOpenCv(null).length);
+        assertEquals(0, LensDistortion.toOpenCv((double[]) null).length);
         assertEquals(0, LensDistortion.toOpenCv(new float[5]).length);
     }
 

@@ -12,7 +12,6 @@ import org.junit.jupiter.api.Test;
 
 import io.lumipose.client.camera.Intrinsics;
 import io.lumipose.client.json.ContractException;
-import io.lumipose.client.sensor.LensFacing;
 
 class FrameMetaTest {
     private static final Intrinsics K = new Intrinsics(800, 801, 319.5, 239.5,
@@ -78,38 +77,6 @@ class FrameMetaTest {
                 "{\"schema\": \"lumipose.frame/2\", \"width\": 4, \"height\": 4, \"camera\": {\"profile\": \"x\"}}"))
                 .field);
     }
-
-    @Test
-    void assemblerTurnsCaptureValuesIntoTheContractsUnits() {
-        FrameAssembler a = new FrameAssembler(640, 480, K, 270, LensFacing.FRONT);
-        FrameMeta m = a.assemble(new CaptureValues(10_000_000L, 100, 30_000_000L, 55L), new float[] {0, 0, 9.81f});
-        assertEquals(0.01, m.exposureS, 1e-15);
-        assertEquals(100.0, m.iso);
-        assertEquals(0.03, m.rollingShutterSkewS, 1e-15);
-        assertEquals(55L, m.timestampNs);
-        assertArrayEquals(new double[] {0, 0, -1}, m.gravityCamera(), 1e-12);
-        assertEquals(640, m.rowStride);
-
-        FrameMeta id = a.assemble(new CaptureValues(125_000L, 1600, 30_000_000L, 56L, true), null);
-        assertEquals("id", id.frameKind);
-        assertEquals("id", id.toJson().getString("frame_kind"));
-        assertNull(m.frameKind, "pose frames leave frame_kind to its default");
-        assertFalse(m.toJson().has("frame_kind"));
-        assertEquals("frame_kind", assertThrows(ContractException.class,
-                () -> FrameMeta.builder(640, 480).camera(K).frameKind("video").build()).field);
-        FrameMeta external = new FrameAssembler(640, 480, K, 0, null)
-                .assemble(new CaptureValues(null, null, null, null), new float[] {0, 0, 9.81f});
-        assertNull(external.gravityCamera(), "an external camera's attitude is unknown");
-        FrameMeta bare = a.assemble(new CaptureValues(null, null, null, null), null);
-        assertNull(a.assemble(new CaptureValues(null, null, null, null), null, new float[] {1, 0, 0, 0, 1, 0, 0, 0, 1})
-                .headingDeg, "no map bearing, no heading");
-        FrameAssembler withBearing = new FrameAssembler(640, 480, K, 270, LensFacing.FRONT, 90.0);
-        assertEquals(90.0, withBearing.assemble(new CaptureValues(null, null, null, null), null,
-                new float[] {1, 0, 0, 0, 1, 0, 0, 0, 1}).headingDeg, 1e-9);
-        assertNull(bare.exposureS);
-        assertNull(bare.gravityCamera());
-    }
-
     @Test
     void cropIsAFirstClassFieldAndAWindowKeepsTheFullFramesIntrinsics() {
         FrameMeta whole = FrameMeta.builder(640, 480).camera(K).timestampNs(5L).frameKind("id").toneCurve("linear")

@@ -1,0 +1,153 @@
+package io.lumipose.client.capture;
+
+import java.util.ArrayList;
+import java.util.Collections;
+import java.util.List;
+
+import io.lumipose.client.camera.ArrayRect;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.OutputSizeChooser;
+import io.lumipose.client.camera.PixelSize;
+import io.lumipose.client.protocol.CaptureProtocol;
+
+/**
+ * What to ask one camera for: the output size, the pose request and, when the map has beacons to
+ * tell apart and the camera can show their code, the ID request repeated after each pose frame.
+ * A pure function of the camera's facts and the options, so every phone's choice is testable.
+ *
+ * <p>Timing (docs/vlc.md): the ID frames of a burst start {@code 1/n} of a message apart, and the
+ * whole cycle (pose frame plus n ID frames) is a whole number of messages plus the golden step
+ * 0.382, so successive bursts see the message at evenly spread phases. The pose frame's duration
+ * takes up the slack.
+ */
+public final class CapturePlan {
+    /** The output stream's size (YUV_420_888). */
+    public final PixelSize output;
+    public final RequestSpec pose;
+    /** Null when no ID frames are taken. */
+    public final RequestSpec id;
+    /** ID frames after each pose frame; 0 without ID frames. */
+    public final int idFramesPerBurst;
+    /** From one pose frame's start to the next, ns. */
+    public final long burstIntervalNs;
+    /** What the user should know about this camera's capture, shown on screen. */
+    public final List<String> notes;
+    /** The pose frame's own minimum duration, before it was stretched to step the bursts. */
+    private final long poseMinimumFrameNs;
+
+    private CapturePlan(PixelSize output, RequestSpec pose, RequestSpec id, int idFramesPerBurst,
+                        long burstIntervalNs, List<String> notes, long poseMinimumFrameNs) {
+        this.output = output;
+        this.pose = pose;
+        this.id = id;
+        this.idFramesPerBurst = idFramesPerBurst;
+        this.burstIntervalNs = burstIntervalNs;
+        this.notes = Collections.unmodifiableList(new ArrayList<String>(notes));
+        this.poseMinimumFrameNs = poseMinimumFrameNs;
+    }
+
+    /**
+     * @throws UnsupportedCameraException when the camera cannot take manual frames (no
+     *         MANUAL_SENSOR, no exposure range) or offers no usable YUV output
+     */
+    public static CapturePlan plan(CameraFacts facts, CaptureOptions options) throws UnsupportedCameraException {
+        List<String> notes = new ArrayList<String>();
+        boolean correctionOff = facts.distortionCorrectionModes.contains("off");
+        if (!facts.distortionCorrectionModes.isEmpty() && !correctionOff) {
+            notes.add("distortion correction cannot be switched off: no distortion sent");
+        }
+        // With correction off the crop region is in the pre-correction array: ask for all of it.
+        ArrayRect cropArray = correctionOff ? facts.preCorrectionOrActive() : facts.activeArray;
+        ArrayRect crop = ArrayRect.ofSize(cropArray.width, cropArray.height);
+
+        PixelSize output;
+        try {
+            output = OutputSizeChooser.choose(facts.yuvSizes(), crop, options.maxPixels);
+        } catch (IllegalArgumentException e) {
+            throw new UnsupportedCameraException(e.getMessage());
+        }
+        CameraRanges ranges = ranges(facts, output);
+        CaptureSettings poseSettings = CaptureSettingsChooser.choose(ranges, options.poseExposureNs);
+        notes.addAll(poseSettings.notes);
+
+        Float focus = CaptureSettingsChooser.focusDiopters(options.ceilingDistanceM,
+                facts.minimumFocusDistanceDiopters == null ? null : facts.minimumFocusDistanceDiopters.floatValue());
+        if (focus != null && "uncalibrated".equals(facts.focusDistanceCalibration)) {
+            notes.add("focus distance uncalibrated: the ceiling may be out of focus");
+        }
+        float[] toneCurve = facts.tonemapModes.contains("contrast_curve") ? new float[] {0f, 0f, 1f, 1f} : null;
+        if (toneCurve == null) {
+            notes.add("no linear tone curve: the server assumes one");
+        }
+        if (!facts.oisModes.isEmpty() && !facts.oisModes.contains("off")) {
+            notes.add("optical stabilisation cannot be switched off: the principal point may move");
+        }
+        if (!facts.hasPerFrameControl()) {
+            notes.add("sync latency not per-frame: frames checked by their results");
+        }
+        RequestSpec pose = new RequestSpec(RequestSpec.POSE, poseSettings.exposureNs, poseSettings.sensitivityIso,
+                poseSettings.frameDurationNs, focus, crop, facts.oisModes.contains("off"), toneCurve,
+                facts.rotateAndCropModes != null && facts.rotateAndCropModes.contains("none"),
+                facts.edgeModes.contains("off"), facts.noiseReductionModes.contains("off"), correctionOff);
+
+        if (options.idExposureNs > 0 && options.beaconsInMap <= 1) {
+            notes.add("one beacon in the map: no ID frames");
+        }
+        if (!options.wantsIdFrames()) {
+            return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
+        }
+        CaptureSettings idSettings = IdCapturePlan.choose(ranges, options.idExposureNs, poseSettings,
+                IdCapturePlan.DEFAULT_BRIGHTNESS_FRACTION);
+        notes.addAll(idSettings.notes);
+        int n = IdCapturePlan.BURST_FRAMES;
+        long idFramesNs = n * idSettings.frameDurationNs;
+        long minimumCycleNs = poseSettings.frameDurationNs + idFramesNs;
+        long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, CaptureProtocol.GOLDEN_STEP);
+        long poseFrameNs = cycleNs - idFramesNs;
+        if (facts.maxFrameDurationNs != null && poseFrameNs > facts.maxFrameDurationNs) {
+            notes.add("pose frame duration " + poseFrameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION: "
+                    + "bursts are not golden-stepped");
+            poseFrameNs = facts.maxFrameDurationNs;
+            cycleNs = poseFrameNs + idFramesNs;
+        }
+        pose = pose.withExposure(RequestSpec.POSE, pose.exposureNs, pose.sensitivityIso, poseFrameNs);
+        RequestSpec id = pose.withExposure(RequestSpec.ID, idSettings.exposureNs, idSettings.sensitivityIso,
+                idSettings.frameDurationNs);
+        return new CapturePlan(output, pose, id, n, cycleNs, notes, poseSettings.frameDurationNs);
+    }
+
+    /** The same plan without ID frames (for example when the results show no rolling-shutter skew). */
+    public CapturePlan withoutIdFrames(String reason) {
+        if (id == null) {
+            return this;
+        }
+        List<String> more = new ArrayList<String>(notes);
+        more.add(reason);
+        RequestSpec alone = pose.withExposure(RequestSpec.POSE, pose.exposureNs, pose.sensitivityIso,
+                poseMinimumFrameNs);
+        return new CapturePlan(output, alone, null, 0, alone.frameDurationNs, more, poseMinimumFrameNs);
+    }
+
+    /** The repeating burst in capture order: the pose request, then the ID requests. */
+    public List<RequestSpec> burst() {
+        List<RequestSpec> out = new ArrayList<RequestSpec>();
+        out.add(pose);
+        for (int i = 0; i < idFramesPerBurst; i++) {
+            out.add(id);
+        }
+        return Collections.unmodifiableList(out);
+    }
+
+    /** The spec of the request tagged {@code kind}, or null. */
+    public RequestSpec spec(String kind) {
+        if (RequestSpec.POSE.equals(kind)) {
+            return pose;
+        }
+        return RequestSpec.ID.equals(kind) ? id : null;
+    }
+
+    static CameraRanges ranges(CameraFacts facts, PixelSize output) {
+        return new CameraRanges(facts.has("manual_sensor"), facts.exposureTimeMinNs, facts.exposureTimeMaxNs,
+                facts.sensitivityMin, facts.sensitivityMax, facts.maxFrameDurationNs, facts.minFrameDurationNs(output));
+    }
+}

@@ -1,0 +1,181 @@
+package io.lumipose.client.capture;
+
+import java.util.ArrayList;
+import java.util.Collections;
+import java.util.List;
+
+import io.lumipose.client.camera.ArrayRect;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.FrameResult;
+import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.camera.IntrinsicsCalculator;
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.sensor.GravityTransform;
+import io.lumipose.client.sensor.HeadingEstimator;
+import io.lumipose.client.sensor.LensFacing;
+
+/**
+ * Turns one frame's capture result into its contract JSON, or says why the frame must not be sent.
+ * A frame is what its result says, not what its request asked: without per-frame control
+ * (SYNC_MAX_LATENCY) a "pose" request can come back with the ID exposure. So each frame is
+ * classified by the exposure and sensitivity in its result, and one whose result differs from
+ * the request it claims is dropped.
+ */
+public final class FrameDescriber {
+    /** Relative difference between asked and reported exposure or ISO still counted as "as asked". */
+    public static final double TOLERANCE = 0.05;
+    /** Crop-region rounding a HAL may do, px per edge. */
+    private static final int CROP_TOLERANCE_PX = 2;
+
+    /** One frame's verdict. */
+    public static final class Described {
+        /** The frame's JSON; null when dropped. */
+        public final FrameMeta meta;
+        /** "pose" or "id" as the result shows; null when it matches neither request. */
+        public final String kind;
+        /** Why the frame is not sent; null when kept. */
+        public final String dropReason;
+        public final List<String> warnings;
+
+        Described(FrameMeta meta, String kind, String dropReason, List<String> warnings) {
+            this.meta = meta;
+            this.kind = kind;
+            this.dropReason = dropReason;
+            this.warnings = Collections.unmodifiableList(new ArrayList<String>(warnings));
+        }
+
+        public boolean kept() {
+            return meta != null;
+        }
+    }
+
+    private final CameraFacts facts;
+    private final CapturePlan plan;
+    private final Double mapXBearingDeg;
+
+    /**
+     * @param mapXBearingDeg compass bearing of the map's +X axis (deg clockwise from north), or null
+     *                       to send no heading
+     */
+    public FrameDescriber(CameraFacts facts, CapturePlan plan, Double mapXBearingDeg) {
+        this.facts = facts;
+        this.plan = plan;
+        this.mapXBearingDeg = mapXBearingDeg;
+    }
+
+    /**
+     * @param gravityDevice TYPE_GRAVITY [x, y, z] at the frame's timestamp (see GravityHistory), or null
+     * @param deviceToEnu   device-to-ENU rotation (row-major 3x3) at the frame's timestamp, or null
+     */
+    public Described describe(FrameResult result, float[] gravityDevice, float[] deviceToEnu) {
+        List<String> warnings = new ArrayList<String>();
+        String kind = classify(result);
+        if (kind == null) {
+            return drop(null, "exposure " + result.exposureNs + " ns, ISO " + result.sensitivityIso
+                    + " match neither the pose nor the ID request", warnings);
+        }
+        if (result.request != null && !result.request.equals(kind)) {
+            return drop(kind, "requested as " + result.request + " but taken as " + kind
+                    + " (settings lag: SYNC_MAX_LATENCY " + syncName() + ")", warnings);
+        }
+        RequestSpec spec = plan.spec(kind);
+        if (result.cropRegion != null && !near(result.cropRegion, spec.cropRegion)) {
+            return drop(kind, "SCALER_CROP_REGION " + text(result.cropRegion) + " is not the requested "
+                    + text(spec.cropRegion), warnings);
+        }
+        if (RequestSpec.ID.equals(kind) && result.rollingShutterSkewNs == null) {
+            return drop(kind, "no rolling-shutter skew: beacon IDs off", warnings);
+        }
+        if (spec.oisOff && "on".equals(result.oisMode)) {
+            warnings.add("optical stabilisation stayed on: the principal point may move");
+        }
+        Intrinsics camera;
+        try {
+            camera = IntrinsicsCalculator.forFrame(facts, result, plan.output, warnings);
+        } catch (IllegalArgumentException e) {
+            return drop(kind, e.getMessage(), warnings);
+        }
+        FrameMeta.Builder b = FrameMeta.builder(plan.output.width, plan.output.height)
+                .rowStride(plan.output.width)
+                .camera(camera)
+                .timestampNs(result.timestampNs)
+                .frameKind(kind)
+                .extra("tone_curve", toneCurve(result, spec));
+        if (result.exposureNs != null) {
+            b.exposureS(result.exposureNs / 1e9);
+        }
+        if (result.sensitivityIso != null) {
+            b.iso((double) result.sensitivityIso);
+        }
+        if (result.rollingShutterSkewNs != null) {
+            b.rollingShutterSkewS(result.rollingShutterSkewNs / 1e9);
+        }
+        LensFacing facing = facts.facing();
+        if (gravityDevice != null && facing != null) {
+            try {
+                b.gravityCamera(GravityTransform.deviceToCamera(gravityDevice, facts.sensorOrientationDeg, facing));
+            } catch (IllegalArgumentException e) {
+                warnings.add("gravity not sent: " + e.getMessage());
+            }
+        }
+        if (deviceToEnu != null && facing != null && mapXBearingDeg != null) {
+            b.headingDeg(HeadingEstimator.cameraYawDeg(deviceToEnu, facts.sensorOrientationDeg, facing, mapXBearingDeg));
+        }
+        try {
+            return new Described(b.build(), kind, null, warnings);
+        } catch (IllegalArgumentException e) {
+            return drop(kind, e.getMessage(), warnings);
+        }
+    }
+
+    /**
+     * "pose" or "id" by the result's exposure and ISO; null when it matches neither request.
+     * A result without an exposure can only be trusted when there is one kind of frame.
+     */
+    String classify(FrameResult result) {
+        if (result.exposureNs == null) {
+            return plan.id == null ? RequestSpec.POSE : null;
+        }
+        if (matches(result, plan.pose)) {
+            return RequestSpec.POSE;
+        }
+        return plan.id != null && matches(result, plan.id) ? RequestSpec.ID : null;
+    }
+
+    private static boolean matches(FrameResult result, RequestSpec spec) {
+        boolean exposure = close(result.exposureNs, spec.exposureNs);
+        boolean iso = spec.sensitivityIso == null || result.sensitivityIso == null
+                || close(result.sensitivityIso, spec.sensitivityIso);
+        return exposure && iso;
+    }
+
+    private static boolean close(double reported, double asked) {
+        return Math.abs(reported - asked) <= TOLERANCE * asked;
+    }
+
+    /** "linear" only when the device reports the contrast curve the plan asked for. */
+    private static String toneCurve(FrameResult result, RequestSpec spec) {
+        return spec.linearToneCurve() && "contrast_curve".equals(result.tonemapMode) ? "linear" : "device";
+    }
+
+    private static boolean near(ArrayRect a, ArrayRect b) {
+        return Math.abs(a.left - b.left) <= CROP_TOLERANCE_PX && Math.abs(a.top - b.top) <= CROP_TOLERANCE_PX
+                && Math.abs(a.left + a.width - b.left - b.width) <= CROP_TOLERANCE_PX
+                && Math.abs(a.top + a.height - b.top - b.height) <= CROP_TOLERANCE_PX;
+    }
+
+    private static String text(ArrayRect r) {
+        return "[" + r.left + ", " + r.top + ", " + r.width + ", " + r.height + "]";
+    }
+
+    private String syncName() {
+        if (facts.syncMaxLatency == CameraFacts.SYNC_PER_FRAME_CONTROL) {
+            return "per_frame_control";
+        }
+        return facts.syncMaxLatency == CameraFacts.SYNC_UNKNOWN ? "unknown" : facts.syncMaxLatency + " frames";
+    }
+
+    private static Described drop(String kind, String reason, List<String> warnings) {
+        return new Described(null, kind, reason, warnings);
+    }
+}
