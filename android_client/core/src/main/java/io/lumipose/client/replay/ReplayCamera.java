@@ -29,9 +29,9 @@ import io.lumipose.client.sensor.GravityHistory;
  * {@link GravityHistory} before the frame.
  */
 public final class ReplayCamera {
-    /** Called before each capture (a pose frame and its ID frames): where a test waits or a player paces. */
+    /** Called before each call to the sink: where a test waits for the uploader, or a player keeps time. */
     public interface Pace {
-        void beforeCapture(RecordedFrame poseFrame) throws InterruptedException;
+        void beforeDelivery(RecordedFrame frame) throws InterruptedException;
     }
 
     /** What the camera writes over a buffer it takes back: a sink must copy what it keeps. */
@@ -96,10 +96,8 @@ public final class ReplayCamera {
         ByteBuffer plane = null;
         for (Event e : events(taken)) {
             RecordedFrame f = e.frame;
+            pace.beforeDelivery(f);
             if (e.first) {
-                if (!f.isIdFrame()) {
-                    pace.beforeCapture(f);
-                }
                 float[] g = phone.gravity(f);
                 if (g != null) {
                     gravity.addGravity(f.timestampNs, g);

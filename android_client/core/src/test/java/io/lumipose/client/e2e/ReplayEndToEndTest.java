@@ -1,23 +1,28 @@
 package io.lumipose.client.e2e;
 
 import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertFalse;
 import static org.junit.jupiter.api.Assertions.assertNotNull;
 import static org.junit.jupiter.api.Assertions.assertTrue;
 import static org.junit.jupiter.api.Assertions.fail;
 
+import java.nio.charset.StandardCharsets;
 import java.nio.file.Files;
 import java.nio.file.Path;
 import java.util.List;
 
+import org.json.JSONArray;
+import org.json.JSONObject;
 import org.junit.jupiter.api.AfterAll;
 import org.junit.jupiter.api.Assumptions;
 import org.junit.jupiter.api.BeforeAll;
 import org.junit.jupiter.api.Test;
 
+import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.net.LocateResult;
-import io.lumipose.client.replay.RecordedFrame;
 import io.lumipose.client.replay.Recording;
 import io.lumipose.client.testutil.Lumipose;
+import io.lumipose.client.testutil.Repo;
 
 /**
  * The app's path end to end: rendered frames played by the replay camera through the capture
@@ -37,8 +42,14 @@ class ReplayEndToEndTest {
     private static final double WALK_TOLERANCE_MM = 50.0;
     /** The bound: the window must not change the answer. */
     private static final double WINDOW_TOLERANCE_MM = 0.01;
+    /**
+     * The office's fixes, one frame each at a quarter of the Mi 8's resolution from 1.4 m below
+     * the panels, while walking at 0.8 m/s (as the walk's); a wrong beacon is 1.2 m off.
+     */
+    private static final double OFFICE_TOLERANCE_MM = 60.0;
     private static Lumipose.Serve serve;
     private static Recording walk;
+    private static Recording office;
 
     @BeforeAll
     static void renderAndServe() throws Exception {
@@ -55,6 +66,9 @@ class ReplayEndToEndTest {
         Path walkDir = dir.resolve("walk");
         Lumipose.simulate("walk-one-panel", walkDir, "--scale", "0.25", "--limit", "6");
         walk = Recording.open(walkDir.toFile());
+        Path officeDir = dir.resolve("office");
+        Lumipose.simulate(officeAsTheAppCaptures(dir).toString(), officeDir, "--bursts", "--limit", "6");
+        office = Recording.open(officeDir.toFile());
         serve = Lumipose.Serve.start();
     }
 
@@ -93,6 +107,7 @@ class ReplayEndToEndTest {
     void theWindowDoesNotChangeTheAnswer() throws Exception {
         serve.putMap(walk.map());
         ReplayRun run = ReplayRun.play(walk, serve.baseUrl, "window-phone", true);
+        assertTrue(run.drops.isEmpty(), "dropped: " + run.drops);
         assertEquals(walk.frames().size(), run.sent.size());
         for (ReplayRun.Sent s : run.sent) {
             assertNotNull(s.whole, s.frame.name + " was not sent whole");
@@ -107,14 +122,93 @@ class ReplayEndToEndTest {
         }
     }
 
+    /**
+     * The office scene with its ID frames as this app takes them: the plan streams one size for
+     * both kinds (the scene's ID frames are a quarter of its pose frames'), and sets the ID
+     * frames' ISO to the protocol's fifth of the pose frame's brightness (the scene fixes 400).
+     */
+    private static Path officeAsTheAppCaptures(Path dir) throws Exception {
+        JSONObject scene = new JSONObject(Repo.text("simulator/scenes/office.json"));
+        scene.getJSONObject("camera").put("scale", 0.25);
+        JSONObject id = scene.getJSONObject("id_frames");
+        id.remove("scale");
+        id.remove("iso");
+        Path file = dir.resolve("office-app.json");
+        Files.write(file, scene.toString(2).getBytes(StandardCharsets.UTF_8));
+        return file;
+    }
+
+    @Test
+    void fourBeaconOfficeWithIdBursts() throws Exception {
+        serve.putMap(office.map());
+        ReplayRun run = ReplayRun.play(office, serve.baseUrl, "office-phone", false);
+        assertEquals(4, run.plan.idFramesPerBurst, "four beacons: ID bursts");
+        assertTrue(run.drops.isEmpty(), "dropped: " + run.drops);
+        assertTrue(run.failures.isEmpty(), "failed: " + run.failures);
+        assertEquals(office.frames().size(), run.sent.size(), "every frame of every burst sent");
+        for (FrameMeta meta : run.idResults) {
+            assertEquals("id", meta.frameKind);
+        }
+        for (FrameMeta meta : run.poseResults) {
+            assertEquals("pose", meta.frameKind, "an ID frame's answer went to the screen");
+        }
+        JSONObject previousTrack = null;
+        long previousNs = 0;
+        for (ReplayRun.Sent s : run.sent) {
+            LocateResult r = s.result();
+            if (s.isId()) {
+                assertFalse(r.ok, s.frame.name + ": an ID frame got a fix of its own");
+                assertEquals("id_frame", r.reason, s.frame.name);
+                continue;
+            }
+            assertTrue(r.ok, s.frame.name + ": no fix: " + r.reason + " " + r.message);
+            double[] truth = s.frame.truthPositionM();
+            double err = distanceMm(r.positionM(), truth);
+            JSONObject track = s.window.reply.optJSONObject("track");
+            System.out.printf("replay office %s: beacon %d (%s), error %.1f mm, track %s%n", s.frame.name,
+                    r.beaconId, r.beaconIdSource, err, track);
+            assertEquals(panelAbove(office.map(), truth), r.beaconId.intValue(), s.frame.name + ": beacon ID");
+            assertTrue(err <= OFFICE_TOLERANCE_MM, s.frame.name + ": " + err + " mm from the truth");
+            assertNotNull(track, s.frame.name + ": no track");
+            assertFalse(track.getBoolean("outlier"), s.frame.name + ": the track took the fix for an outlier");
+            if (previousTrack != null) {
+                // Continuous: the filtered position moves as the phone did, not by a panel's spacing.
+                double step = distanceMm(vector(track, "filtered_position_m"), vector(previousTrack,
+                        "filtered_position_m"));
+                double walked = 800.0 * (s.frame.timestampNs - previousNs) / 1e9;
+                assertTrue(step <= walked + OFFICE_TOLERANCE_MM, s.frame.name + ": the track jumped " + step
+                        + " mm while the phone walked " + walked + " mm");
+            }
+            previousTrack = track;
+            previousNs = s.frame.timestampNs;
+        }
+    }
+
+    /** The map beacon nearest the point above the camera: the panel it is under. */
+    private static int panelAbove(JSONObject map, double[] camera) {
+        JSONArray beacons = map.getJSONArray("beacons");
+        int best = -1;
+        double bestDistance = Double.POSITIVE_INFINITY;
+        for (int i = 0; i < beacons.length(); i++) {
+            JSONArray c = beacons.getJSONObject(i).getJSONArray("center_m");
+            double d = Math.hypot(c.getDouble(0) - camera[0], c.getDouble(1) - camera[1]);
+            if (d < bestDistance) {
+                bestDistance = d;
+                best = beacons.getJSONObject(i).getInt("id");
+            }
+        }
+        return best;
+    }
+
+    private static double[] vector(JSONObject o, String key) {
+        JSONArray a = o.getJSONArray(key);
+        return new double[] {a.getDouble(0), a.getDouble(1), a.getDouble(2)};
+    }
+
     static double distanceMm(double[] a, double[] b) {
         double dx = a[0] - b[0];
         double dy = a[1] - b[1];
         double dz = a[2] - b[2];
         return Math.sqrt(dx * dx + dy * dy + dz * dz) * 1000;
-    }
-
-    static RecordedFrame first(Recording r) {
-        return r.frames().get(0);
     }
 }

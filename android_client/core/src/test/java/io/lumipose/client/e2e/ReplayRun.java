@@ -31,9 +31,11 @@ import io.lumipose.client.sensor.GravityHistory;
 
 /**
  * One replay of a recording through the app's path (replay camera, plan, FramePipeline, burst
- * uploader, LumiposeClient) to a real server, with what was sent and what came back. Each
- * capture waits until the previous burst is answered, so no burst is dropped for a busy uploader
- * (the phone's pace at 2 captures a second against a server on the same desk).
+ * uploader, LumiposeClient) to a real server, with what was sent and what came back. The camera
+ * waits before each call until the uploader is idle, so every burst is sent (a phone taking 2
+ * captures a second against a server on the same desk) and the run does not depend on thread
+ * timing: BurstUploader counts a burst just submitted as waiting until its thread takes it, so
+ * a pose frame right behind a submit would be dropped as "busy" now and then.
  *
  * <p>With {@code compareWhole}, every frame the app sends as a window is also sent whole (the
  * same frame JSON without the crop, the recorded plane) as another device, so both answers can be
@@ -146,7 +148,7 @@ final class ReplayRun {
                 });
         camera.play(plan, pipeline, gravity, new ReplayCamera.Pace() {
             @Override
-            public void beforeCapture(RecordedFrame poseFrame) throws InterruptedException {
+            public void beforeDelivery(RecordedFrame frame) throws InterruptedException {
                 waitIdle(pipeline);
             }
         });
