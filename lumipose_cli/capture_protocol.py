@@ -33,6 +33,7 @@ def capture_protocol() -> dict[str, object]:
         "pose_exposure_s": capture.POSE_EXPOSURE_S,
         "id_exposure_s": capture.ID_EXPOSURE_S,
         "id_max_exposure_s": capture.longest_id_exposure_s(),
+        "id_brightness_fraction": capture.ID_BRIGHTNESS_FRACTION,
         "window_per_panel": crop.WINDOW_PER_PANEL,
         "window_block_divisor": crop.BLOCK_DIVISOR,
         "window_min_contrast_dn": crop.MIN_CONTRAST_DN,

@@ -1,12 +1,13 @@
 """`lumipose bench office`: the paper's office walks (Section IV-D, Figs. 17-18).
 
-Scene `simulator/scenes/office.json` (its ID-frame sensor, its walk, its light pollution): four coded panels on a 2.72 m ceiling over a
-2.4 m x 3.6 m area, the phone face up at 1.32 m. A walker follows the zig-zag or the
-converging square spiral (`simulator.trajectories`) at `speed_mps`, with hand shake, the
-phone's long side along the room's Y axis. Every capture (one every `stepped_interval_s(0.5)`
-= 0.499 s, paper: 0.5 s) is one pose frame (10 ms, overexposed, the code averaged away by
-`row_gains`) and `id_frames` ID frames right after it (1/8000 s, quarter resolution), all
-rendered with every panel in view and each panel's own LED (random phase, +-50 ppm clock).
+Scene `simulator/scenes/office.json` (its pose and ID frames, its walk, its light pollution): four
+coded panels on a 2.72 m ceiling over a 2.4 m x 3.6 m area, the phone face up at 1.32 m. A walker
+follows the zig-zag or the converging square spiral (`simulator.trajectories`) at `speed_mps`,
+with hand shake, the phone's long side along the room's Y axis. Every capture (one every
+`stepped_interval_s(0.5)` = 0.499 s, paper: 0.5 s) is one pose frame (8.4 ms, a whole message:
+overexposed, the code averaged away; half resolution) and `id_frames` ID frames right after it
+(1/8000 s, quarter resolution; `simulator.bursts`), all rendered with every panel in view and
+each panel's own LED (random phase, +-50 ppm clock).
 The captures go, in order, through `server.locator.locate` with one device's sessions
 (`server.tracking.devices.Devices`): ID frames first, then the pose frame, exactly as the
 service sees an app's uploads. Errors are horizontal (2-D) distances of the raw fixes to the
@@ -30,10 +31,11 @@ from server.geometry import camera_matrix, rotation_from_ypr, world_to_camera
 from server.ingest import LumaFrame
 from server.locator import locate
 from server.tracking.devices import Devices
-from server.vlc.capture import ID_BURST_FRAMES, id_frame_interval_s, message_period_s, stepped_interval_s
-from shared_schemas import Beacon, FrameKind, FrameMeta
+from server.vlc.capture import ID_BURST_FRAMES, id_frame_interval_s, stepped_interval_s
+from shared_schemas import Beacon, FrameMeta
+from simulator.bursts import burst_scenes, render_burst
 from simulator.render import CameraPose
-from simulator.scene import Scene, TrajectorySeries, find_scene, render_sample
+from simulator.scene import Scene, TrajectorySeries, find_scene
 from simulator.trajectories import Area, hand_shake_deg, square_spiral, zigzag
 
 PROFILE_ID = "xiaomi-mi8-front"
@@ -50,8 +52,8 @@ class OfficeConfig:
     shake_deg: float | None = None
     inset_m: float = 0.0  # walk this far inside the scene's area
     capture_interval_s: float = stepped_interval_s(0.5)
-    pose_scale: float = 0.5  # of the Mi 8 front camera's 3880 x 5184
-    pose_exposure_s: float = message_period_s()  # a whole message period: the code averages exactly away
+    pose_scale: float | None = None  # of the Mi 8 front camera's 3880 x 5184; None: the scene's (0.5)
+    pose_exposure_s: float | None = None  # None: the scene's (8.4 ms, a whole message: the code averages away)
     id_frames: int = ID_BURST_FRAMES
     id_interval_s: float = id_frame_interval_s()  # the app's burst: 4 frames a quarter message apart
     max_captures: int | None = None
@@ -59,14 +61,17 @@ class OfficeConfig:
 
 
 def office_scenes(config: OfficeConfig) -> tuple[Scene, Scene]:
-    """(pose-frame scene, ID-frame scene): the bundled scene's ID sensor, and a pose sensor beside it."""
+    """(pose-frame scene, ID-frame scene) of the bundled scene (`simulator.bursts`), each panel's LED
+    at a random phase."""
     scene = find_scene(config.scene)
     rng = np.random.default_rng([config.seed, 99])
     beacons = [b.model_copy(update={"vlc_phase_s": float(rng.uniform(0, 1))}) for b in scene.beacons]
-    id_scene = scene.model_copy(update={"beacons": beacons})
-    pose_sensor = scene.sensor.model_copy(update={"exposure_s": config.pose_exposure_s, "iso": 100.0})
-    pose_camera = scene.camera.model_copy(update={"scale": config.pose_scale})
-    return id_scene.model_copy(update={"sensor": pose_sensor, "camera": pose_camera}), id_scene
+    updates: dict = {"beacons": beacons}
+    if config.pose_exposure_s is not None:
+        updates["sensor"] = scene.sensor.model_copy(update={"exposure_s": config.pose_exposure_s})
+    if config.pose_scale is not None:
+        updates["camera"] = scene.camera.model_copy(update={"scale": config.pose_scale})
+    return burst_scenes(scene.model_copy(update=updates))
 
 
 def _walk(config: OfficeConfig, scene: Scene):
@@ -97,10 +102,9 @@ def true_beacon(beacons: list[Beacon], camera, pose: CameraPose, center_px) -> i
     return beacons[int(np.argmin(gaps))].id
 
 
-def _frame(scene: Scene, pose: CameraPose, t_s: float, kind: FrameKind, rng) -> LumaFrame:
-    pixels, meta = render_sample(scene, pose, rng, t_s, frame_kind=kind.value)
-    meta = FrameMeta.model_validate(meta.model_dump(by_alias=True))
-    return LumaFrame(pixels, meta, scene.camera.intrinsics())
+def _luma_frame(scene: Scene, rendered: tuple[np.ndarray, FrameMeta]) -> LumaFrame:
+    pixels, meta = rendered
+    return LumaFrame(pixels, FrameMeta.model_validate(meta.model_dump(by_alias=True)), scene.camera.intrinsics())
 
 
 @dataclass(frozen=True)
@@ -122,15 +126,15 @@ def walk_captures(config: OfficeConfig) -> Iterator[Capture]:
     times = np.array([p.t_s for p in path])
     positions = np.array([p.position_m for p in path])
     shake_seed = config.seed * 7919 + WALKS.index(config.walk)
-    for t_s in times:
-        pose = _pose_at(times, positions, t_s, shake_seed, shake)
-        pose_frame = _frame(pose_scene, pose, t_s, FrameKind.pose, rng)
-        id_frames = []
-        for j in range(config.id_frames):
-            t_id = t_s + config.pose_exposure_s + 0.02 + j * config.id_interval_s
-            id_pose = _pose_at(times, positions, t_id, shake_seed, shake)
-            id_frames.append(_frame(id_scene, id_pose, t_id, FrameKind.id, rng))
-        yield Capture(float(t_s), pose, pose_frame, tuple(id_frames))
+
+    def pose_at(t: float) -> CameraPose:
+        return _pose_at(times, positions, t, shake_seed, shake)
+
+    for t_s in map(float, times):
+        pose_frame, *id_frames = render_burst((pose_scene, id_scene), t_s, pose_at, rng, config.id_frames,
+                                              config.id_interval_s)
+        yield Capture(t_s, pose_at(t_s), _luma_frame(pose_scene, pose_frame),
+                      tuple(_luma_frame(id_scene, frame) for frame in id_frames))
 
 
 def run_walk(config: OfficeConfig) -> dict:

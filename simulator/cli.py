@@ -37,6 +37,9 @@ def add_commands(commands) -> None:
     simulate.add_argument("--scale", type=float, default=None, help="override the camera's resolution scale")
     simulate.add_argument("--seed", type=int, default=None, help="override the scene's seed")
     simulate.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    simulate.add_argument("--bursts", action="store_true",
+                          help="each sample as the app captures it: a pose frame, then ID frames (NAME_0000_0_pose, "
+                               "NAME_0000_1_id, ...; the scene's id_frames settings)")
     simulate.set_defaults(run=_run_simulate)
 
     bench = commands.add_parser("bench", help="benchmarks that print figures")
@@ -197,6 +200,9 @@ def _run_simulate(args) -> int:
             updates["seed"] = args.seed
         if args.scale is not None:
             updates["camera"] = scene.camera.model_copy(update={"scale": args.scale})
+            if scene.id_frames.scale is not None:  # the ID frames keep their size relative to the pose frames
+                ratio = args.scale / scene.camera.scale
+                updates["id_frames"] = scene.id_frames.model_copy(update={"scale": scene.id_frames.scale * ratio})
         scene = scene.model_validate(scene.model_copy(update=updates).model_dump(by_alias=True))
         if args.pose is not None:
             series = SeriesSpec(path=PosesSeries(poses=[PoseSpec(position_m=args.pose, ypr_deg=args.ypr)]))
@@ -207,7 +213,7 @@ def _run_simulate(args) -> int:
                               velocity_mps=list(p.velocity_mps), angular_velocity_dps=list(p.angular_velocity_dps))
                      for p in series_poses(scene)[: max(args.limit, 1)]]
             scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
-        stems = write_series(scene, args.out, args.workers)
+        stems = write_series(scene, args.out, args.workers, bursts=args.bursts)
     except (OSError, ValueError, ValidationError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -21,12 +21,14 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from server.fov import fov_grid, grid_points
 from server.geometry import rotation_from_ypr
 from shared_schemas import device_profiles
 from simulator import trajectories
+from simulator.bursts import burst_scenes, burst_span_s, capture_starts, render_burst
 from simulator.fixtures import write_fixture
 from simulator.render import CameraPose
 from simulator.scene import (
@@ -45,8 +47,12 @@ class SamplePose:
     velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)  # during readout, map frame
     angular_velocity_dps: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    def camera_pose(self) -> CameraPose:
-        return CameraPose(np.array(self.position_m), rotation_from_ypr(*self.ypr_deg))
+    def camera_pose(self, t_s: float | None = None) -> CameraPose:
+        """The camera at `t_s` (default: the sample's own time), moved on at the sample's velocities."""
+        dt = 0.0 if t_s is None else t_s - self.t_s
+        turn, _ = cv2.Rodrigues(np.radians(self.angular_velocity_dps) * dt)  # map frame, as ReadoutMotion
+        return CameraPose(np.add(self.position_m, np.multiply(self.velocity_mps, dt)),
+                          turn @ rotation_from_ypr(*self.ypr_deg))
 
 
 def sample_rng(seed: int, index: int, stream: int) -> np.random.Generator:
@@ -165,13 +171,16 @@ def series_poses(scene: Scene, series: SeriesSpec | None = None) -> list[SampleP
 
 def render_pose(scene: Scene, sample: SamplePose) -> tuple[np.ndarray, object]:
     """(pixels, FrameMeta) of one sample; its noise depends only on the scene's seed and the index."""
-    extra = {"simulator": {"scene": "scene.json", "sample": sample.index, "seed": scene.seed, "t_s": sample.t_s,
-                           "ypr_deg": list(sample.ypr_deg), "label": sample.label,
-                           "velocity_mps": list(sample.velocity_mps),
-                           "angular_velocity_dps": list(sample.angular_velocity_dps)}}
     motion = readout_motion(scene, sample.velocity_mps, sample.angular_velocity_dps)
     return render_sample(scene, sample.camera_pose(), sample_rng(scene.seed, sample.index, 1), sample.t_s, motion,
-                         **extra)
+                         simulator=_simulator_block(scene, sample))
+
+
+def _simulator_block(scene: Scene, sample: SamplePose) -> dict:
+    """The fixture's `simulator` block: how to render the sample again."""
+    return {"scene": "scene.json", "sample": sample.index, "seed": scene.seed, "t_s": sample.t_s,
+            "ypr_deg": list(sample.ypr_deg), "label": sample.label, "velocity_mps": list(sample.velocity_mps),
+            "angular_velocity_dps": list(sample.angular_velocity_dps)}
 
 
 def progress(done: int, total: int, label: str, stream=sys.stderr) -> None:
@@ -202,16 +211,34 @@ def parallel_map(function: Callable, items: list, workers: int | None, label: st
             pool.shutdown(cancel_futures=True)
 
 
-def _write_one(args: tuple[Scene, SamplePose, Path]) -> str:
+def _write_one(args: tuple[Scene, SamplePose, Path]) -> list[str]:
     scene, sample, out_dir = args
     pixels, meta = render_pose(scene, sample)
     raw, _ = write_fixture(out_dir / f"{scene.name}_{sample.index:04d}", pixels, meta)
-    return raw.stem
+    return [raw.stem]
 
 
-def write_series(scene: Scene, out_dir: Path, workers: int | None = None) -> list[str]:
+def _write_burst(args: tuple[Scene, SamplePose, Path, float]) -> list[str]:
+    """One capture of the sample (`simulator.bursts`) starting at `start_s`: NAME_0000_0_pose, NAME_0000_1_id, ..."""
+    scene, sample, out_dir, start_s = args
+    frames = render_burst(
+        burst_scenes(scene), start_s, lambda t: sample.camera_pose(sample.t_s + t - start_s),
+        sample_rng(scene.seed, sample.index, 1),
+        motion_of=lambda frame_scene: readout_motion(frame_scene, sample.velocity_mps, sample.angular_velocity_dps),
+        simulator=_simulator_block(scene, sample))
+    stems = []
+    for k, (pixels, meta) in enumerate(frames):
+        raw, _ = write_fixture(out_dir / f"{scene.name}_{sample.index:04d}_{k}_{meta.frame_kind.value}", pixels, meta)
+        stems.append(raw.stem)
+    return stems
+
+
+def write_series(scene: Scene, out_dir: Path, workers: int | None = None, bursts: bool = False) -> list[str]:
     """Render the scene's series into `out_dir` as fixtures, with scene.json and map.json.
 
+    With `bursts` each sample is a capture: its pose frame and ID frames (`simulator.bursts`),
+    named so that sorting by name gives capture order; captures that would overlap in time (an
+    untimed series, a walk faster than a burst) start when the previous one has ended.
     Returns the fixtures' stems. scene.json is the scene exactly as rendered (series and seed
     included), so `lumipose simulate out/scene.json` makes the same files again.
     """
@@ -220,5 +247,10 @@ def write_series(scene: Scene, out_dir: Path, workers: int | None = None) -> lis
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "scene.json").write_text(scene.to_json())
     (out_dir / "map.json").write_text(scene.beacon_map().model_dump_json(by_alias=True, indent=2) + "\n")
+    label = f"simulate {scene.name}"
+    if bursts:
+        starts = capture_starts([sample.t_s for sample in samples], burst_span_s(scene))
+        jobs: list = [(scene, sample, out_dir, start) for sample, start in zip(samples, starts)]
+        return [stem for stems in parallel_map(_write_burst, jobs, workers, label) for stem in stems]
     jobs = [(scene, sample, out_dir) for sample in samples]
-    return list(parallel_map(_write_one, jobs, workers, f"simulate {scene.name}"))
+    return [stem for stems in parallel_map(_write_one, jobs, workers, label) for stem in stems]

@@ -23,6 +23,7 @@ from pydantic import Field, field_validator, model_validator
 
 from server.camera import intrinsics_from_profile
 from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr
+from server.vlc.capture import ID_EXPOSURE_S
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, PanelShape, device_profiles
 from shared_schemas.models import Facing, Strict, Vec3
 from simulator.render import CameraPose, Emitter, ReadoutMotion, SensorModel, render_emitters, world_polygon_px
@@ -175,6 +176,16 @@ class SensorSpec(Strict):
         )
 
 
+class IdFramesSpec(Strict):
+    """The ID frames of the scene's bursts (`lumipose simulate --bursts`, `bench office`): what differs
+    from its pose frames, whose sensor and camera are the scene's own (docs/vlc.md, "Capture protocol")."""
+
+    exposure_s: Positive = ID_EXPOSURE_S
+    iso: float | None = Field(default=None, ge=25, le=12800,
+                              description="none: the pose frame's brightness times the protocol's ID_BRIGHTNESS_FRACTION")
+    scale: float | None = Field(default=None, gt=0, le=4, description="of the camera's native size; none: the pose frames'")
+
+
 class LightSourceSpec(Strict):
     """Another bright thing: a window or lamp (polygon), or a ceiling lamp / reflection (disc)."""
 
@@ -291,6 +302,7 @@ class Scene(Strict):
     beacons: list[BeaconSpec] = Field(min_length=1)
     camera: CameraSpec = CameraSpec()
     sensor: SensorSpec = SensorSpec()
+    id_frames: IdFramesSpec = IdFramesSpec()
     light_sources: list[LightSourceSpec] = Field(default_factory=list)
     gravity_sigma_deg: float | None = Field(default=0.1, ge=0, description="gravity sensor error; none = no gravity")
     series: SeriesSpec | None = None

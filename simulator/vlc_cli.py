@@ -34,7 +34,8 @@ def add_vlc_benches(benches) -> None:
     vlc.set_defaults(run=_run_vlc)
     office = benches.add_parser("office", help="the paper's office walks with four coded beacons (Figs. 17-18)")
     office.add_argument("--walks", nargs="+", default=["zigzag", "spiral"], choices=["zigzag", "spiral"])
-    office.add_argument("--pose-scale", type=float, default=0.5, help="pose frames, of the Mi 8 front resolution")
+    office.add_argument("--pose-scale", type=float, default=None,
+                        help="pose frames, of the Mi 8 front resolution (default: the scene's, 0.5)")
     office.add_argument("--id-frames", type=int, default=4, help="ID frames beside each pose frame")
     office.add_argument("--inset", type=float, default=0.0, help="walk this far inside the area, metres")
     office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")

@@ -34,6 +34,9 @@ from shared_schemas import FrameKind
 # the paper's pose exposure (Section III-B) and the app's: 1.19 messages, a +-4 % ripple (8.4 ms would leave none)
 POSE_EXPOSURE_S = 0.01
 ID_EXPOSURE_S = 1.0 / 8000.0
+# ID-frame brightness (exposure x ISO) as a fraction of the pose frame's: a pose frame's panel clips
+# about 4x over, so this keeps the striped panel around 200 DN
+ID_BRIGHTNESS_FRACTION = 0.2
 ID_BURST_FRAMES = 4  # ID frames after each pose frame (the app's IdCapturePlan.BURST_FRAMES)
 ID_BURST_STEP = 1.0 / ID_BURST_FRAMES  # message phase from one ID frame of a burst to the next
 GOLDEN_STEP = (3.0 - math.sqrt(5.0)) / 2.0  # 0.382: from one capture to the next, the most evenly spreading step

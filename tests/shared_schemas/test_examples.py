@@ -14,10 +14,13 @@ EXAMPLES = PACKAGE_DIR / "examples"
 MODEL_OF = {
     "frame.json": FrameMeta,
     "frame_profile_nv21.json": FrameMeta,
+    "frame_id.json": FrameMeta,
+    "frame_cropped.json": FrameMeta,
     "map.json": BeaconMap,
     "map_shapes.json": BeaconMap,
     "result_ok.json": LocateResult,
     "result_no_fix.json": LocateResult,
+    "result_vlc_track.json": LocateResult,
     "error.json": ErrorBody,
 }
 

@@ -16,8 +16,8 @@ import io.lumipose.client.protocol.CaptureProtocol;
 public final class IdCapturePlan {
     /** ID frames after each pose frame: the protocol's burst. */
     public static final int BURST_FRAMES = CaptureProtocol.ID_BURST_FRAMES;
-    /** ID-frame brightness as a fraction of the pose frame's (exposure x ISO); the pose frame clips ~4x over. */
-    public static final double DEFAULT_BRIGHTNESS_FRACTION = 0.2;
+    /** ID-frame brightness as a fraction of the pose frame's (exposure x ISO): the protocol's. */
+    public static final double DEFAULT_BRIGHTNESS_FRACTION = CaptureProtocol.ID_BRIGHTNESS_FRACTION;
 
     private IdCapturePlan() {
     }

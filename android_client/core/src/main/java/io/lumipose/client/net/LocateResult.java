@@ -1,7 +1,10 @@
 package io.lumipose.client.net;
 
 import java.util.Collections;
+import java.util.Iterator;
+import java.util.LinkedHashMap;
 import java.util.List;
+import java.util.Map;
 
 import org.json.JSONObject;
 
@@ -22,10 +25,14 @@ public final class LocateResult {
     private final double[][] rotationWc;
     private final double[] yawPitchRollDeg;
     public final Integer beaconId;
+    /** Where the beacon ID came from: {@code vlc}, {@code track}, {@code single_beacon_map}, ... */
     public final String beaconIdSource;
     public final String orientationRule;
+    private final double[][] cornersPx;
     private final double[] centerPx;
     public final Double reprojectionErrorPx;
+    /** Reprojection error of the best pose over the alternative's; null where there is no alternative. */
+    public final Double ambiguityRatio;
     public final boolean gravityUsed;
     private final double[] positionSigmaM;
     private final double[][] positionCovarianceM2;
@@ -33,26 +40,90 @@ public final class LocateResult {
     public final String reason;
     public final String message;
     public final List<String> warnings;
+    private final Map<String, Double> timingMs;
+    private final VlcReading vlc;
+    private final Integer beaconsInView;
+    private final Track track;
 
-    private LocateResult(boolean ok, double[] positionM, double[][] rotationWc, double[] yawPitchRollDeg,
-                         Integer beaconId, String beaconIdSource, String orientationRule, double[] centerPx,
-                         Double reprojectionErrorPx, boolean gravityUsed, double[] positionSigmaM,
-                         double[][] positionCovarianceM2, String reason, String message, List<String> warnings) {
+    /** A device's motion-filtered track at this frame (the contract's {@code TrackState}); the fix stays in positionM. */
+    public static final class Track {
+        private final double[] filteredPositionM;
+        private final double[] velocityMps;
+        /** The raw fix was rejected by the filter's gate. */
+        public final boolean outlier;
+        /** The beacon ID came from the track, not from this frame. */
+        public final boolean beaconIdCarried;
+
+        private Track(JSONObject o) {
+            filteredPositionM = requireDoubles(o, "filtered_position_m", "track.filtered_position_m");
+            velocityMps = requireDoubles(o, "velocity_mps", "track.velocity_mps");
+            outlier = requireBoolean(o, "outlier", "track.outlier");
+            Boolean carried = Json.optBoolean(o, "beacon_id_carried", "track.beacon_id_carried");
+            beaconIdCarried = carried != null && carried;
+        }
+
+        /** Filtered camera position in the map frame, m. */
+        public double[] filteredPositionM() {
+            return filteredPositionM.clone();
+        }
+
+        public double[] velocityMps() {
+            return velocityMps.clone();
+        }
+    }
+
+    /** The beacon ID read from rolling-shutter stripes (the contract's {@code VlcReading}, docs/vlc.md). */
+    public static final class VlcReading {
+        /** Best ID; null when no stripes were read. */
+        public final Integer beaconId;
+        /** Posterior probability of {@link #beaconId} among the candidate IDs. */
+        public final double confidence;
+        /** The confidence reached the decoder's threshold: only then is the ID used. */
+        public final boolean confident;
+        /** ID frames combined, and the message chips they covered (a message is 21). */
+        public final int frames;
+        public final double chipsSeen;
+        /** IDs considered (the map's, or all 256). */
+        public final int candidates;
+
+        private VlcReading(JSONObject o) {
+            Long id = Json.optLong(o, "beacon_id", "vlc.beacon_id");
+            beaconId = id == null ? null : Integer.valueOf(id.intValue());
+            confidence = Json.requireDouble(o, "confidence", "vlc.confidence");
+            confident = requireBoolean(o, "confident", "vlc.confident");
+            frames = Json.requireInt(o, "frames", "vlc.frames");
+            chipsSeen = Json.requireDouble(o, "chips_seen", "vlc.chips_seen");
+            candidates = Json.requireInt(o, "candidates", "vlc.candidates");
+        }
+    }
+
+    private LocateResult(JSONObject o, boolean ok, double[] positionM, String reason) {
         this.ok = ok;
         this.positionM = positionM;
-        this.rotationWc = rotationWc;
-        this.yawPitchRollDeg = yawPitchRollDeg;
-        this.beaconId = beaconId;
-        this.beaconIdSource = beaconIdSource;
-        this.orientationRule = orientationRule;
-        this.centerPx = centerPx;
-        this.reprojectionErrorPx = reprojectionErrorPx;
-        this.gravityUsed = gravityUsed;
-        this.positionSigmaM = positionSigmaM;
-        this.positionCovarianceM2 = positionCovarianceM2;
         this.reason = reason;
-        this.message = message;
-        this.warnings = Collections.unmodifiableList(warnings);
+        rotationWc = Json.optRows(o, "rotation_wc", "rotation_wc", 3, 3);
+        yawPitchRollDeg = Json.optDoubles(o, "yaw_pitch_roll_deg", "yaw_pitch_roll_deg", 3);
+        Long id = Json.optLong(o, "beacon_id", "beacon_id");
+        beaconId = id == null ? null : Integer.valueOf(id.intValue());
+        beaconIdSource = Json.optString(o, "beacon_id_source", "beacon_id_source");
+        orientationRule = Json.optString(o, "orientation_rule", "orientation_rule");
+        cornersPx = Json.optRows(o, "corners_px", "corners_px", 4, 2);
+        centerPx = Json.optDoubles(o, "center_px", "center_px", 2);
+        reprojectionErrorPx = Json.optDouble(o, "reprojection_error_px", "reprojection_error_px");
+        ambiguityRatio = Json.optDouble(o, "ambiguity_ratio", "ambiguity_ratio");
+        Boolean gravity = Json.optBoolean(o, "gravity_used", "gravity_used");
+        gravityUsed = gravity != null && gravity;
+        positionSigmaM = Json.optDoubles(o, "position_sigma_m", "position_sigma_m", 3);
+        positionCovarianceM2 = Json.optRows(o, "position_covariance_m2", "position_covariance_m2", 3, 3);
+        message = Json.optString(o, "message", "message");
+        warnings = Collections.unmodifiableList(Json.optStrings(o, "warnings", "warnings"));
+        timingMs = Collections.unmodifiableMap(timings(Json.optObject(o, "timing_ms", "timing_ms")));
+        JSONObject reading = Json.optObject(o, "vlc", "vlc");
+        vlc = reading == null ? null : new VlcReading(reading);
+        Long inView = Json.optLong(o, "beacons_in_view", "beacons_in_view");
+        beaconsInView = inView == null ? null : Integer.valueOf(inView.intValue());
+        JSONObject filtered = Json.optObject(o, "track", "track");
+        track = filtered == null ? null : new Track(filtered);
     }
 
     /** Camera optical centre in the map frame, m; null when not ok. */
@@ -71,6 +142,34 @@ public final class LocateResult {
 
     public double[] centerPx() {
         return centerPx == null ? null : centerPx.clone();
+    }
+
+    /**
+     * The panel's 4 corners in the beacon model's corner order, in the frame's pixels (the window's, for a
+     * cropped frame); null without corners (a refusal, a circle, a panel cut by the border).
+     */
+    public double[][] cornersPx() {
+        return copy(cornersPx);
+    }
+
+    /** Time of each pipeline stage and the {@code total}, ms (read-only); empty when not given. */
+    public Map<String, Double> timingMs() {
+        return timingMs;
+    }
+
+    /** The ID read by VLC for this fix; null when none was read. */
+    public VlcReading vlc() {
+        return vlc;
+    }
+
+    /** Beacon-shaped blobs the server saw in the frame; null when it does not say. */
+    public Integer beaconsInView() {
+        return beaconsInView;
+    }
+
+    /** The device's filtered track (when the frame came with a device id); null otherwise. */
+    public Track track() {
+        return track;
     }
 
     /**
@@ -135,18 +234,33 @@ public final class LocateResult {
         if (!ok && reason == null) {
             throw new ContractException("reason", "missing in a refused result");
         }
-        Long beaconId = Json.optLong(o, "beacon_id", "beacon_id");
-        Boolean gravityUsed = Json.optBoolean(o, "gravity_used", "gravity_used");
-        return new LocateResult(ok, position, Json.optRows(o, "rotation_wc", "rotation_wc", 3, 3),
-                Json.optDoubles(o, "yaw_pitch_roll_deg", "yaw_pitch_roll_deg", 3),
-                beaconId == null ? null : Integer.valueOf(beaconId.intValue()),
-                Json.optString(o, "beacon_id_source", "beacon_id_source"),
-                Json.optString(o, "orientation_rule", "orientation_rule"),
-                Json.optDoubles(o, "center_px", "center_px", 2),
-                Json.optDouble(o, "reprojection_error_px", "reprojection_error_px"),
-                gravityUsed != null && gravityUsed, Json.optDoubles(o, "position_sigma_m", "position_sigma_m", 3),
-                Json.optRows(o, "position_covariance_m2", "position_covariance_m2", 3, 3), reason,
-                Json.optString(o, "message", "message"),
-                Json.optStrings(o, "warnings", "warnings"));
+        return new LocateResult(o, ok, position, reason);
+    }
+
+    private static Map<String, Double> timings(JSONObject o) {
+        Map<String, Double> out = new LinkedHashMap<String, Double>();
+        if (o != null) {
+            for (Iterator<String> keys = o.keys(); keys.hasNext(); ) {
+                String stage = keys.next();
+                out.put(stage, Json.requireDouble(o, stage, "timing_ms." + stage));
+            }
+        }
+        return out;
+    }
+
+    private static double[] requireDoubles(JSONObject o, String key, String path) {
+        double[] values = Json.optDoubles(o, key, path, 3);
+        if (values == null) {
+            throw new ContractException(path, "missing");
+        }
+        return values;
+    }
+
+    private static boolean requireBoolean(JSONObject o, String key, String path) {
+        Boolean value = Json.optBoolean(o, key, path);
+        if (value == null) {
+            throw new ContractException(path, "missing");
+        }
+        return value;
     }
 }

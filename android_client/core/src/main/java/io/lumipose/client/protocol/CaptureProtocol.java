@@ -33,6 +33,9 @@ public final class CaptureProtocol {
     public static final long POSE_EXPOSURE_NS = nanos("pose_exposure_s");
     public static final long ID_EXPOSURE_NS = nanos("id_exposure_s");
     public static final long ID_MAX_EXPOSURE_NS = nanos("id_max_exposure_s");
+    /** ID-frame brightness (exposure x ISO) as a fraction of the pose frame's: the pose frame's panel clips ~4x over. */
+    public static final double ID_BRIGHTNESS_FRACTION = Json.requireDouble(FILE, "id_brightness_fraction",
+            "id_brightness_fraction");
     /** The beacon window's rule (lumipose_client/crop.py): window size per panel extent, coarse-view blocks, ... */
     public static final double WINDOW_PER_PANEL = Json.requireDouble(FILE, "window_per_panel", "window_per_panel");
     public static final int WINDOW_BLOCK_DIVISOR = Json.requireInt(FILE, "window_block_divisor", "window_block_divisor");

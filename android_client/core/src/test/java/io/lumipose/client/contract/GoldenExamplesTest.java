@@ -26,6 +26,7 @@ import io.lumipose.client.map.Beacon;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.net.ServerRejectedException;
+import io.lumipose.client.protocol.CaptureProtocol;
 import io.lumipose.client.testutil.Repo;
 
 /** The client reads and writes exactly what shared_schemas/ (the contract's source of truth) says. */
@@ -62,7 +63,8 @@ class GoldenExamplesTest {
 
     @Test
     void frameExampleRoundTripsUnchanged() throws Exception {
-        for (String name : new String[] {"frame.json", "frame_profile_nv21.json"}) {
+        // (frame_cropped.json is as the Python client sends it: without row_stride, which the app always writes)
+        for (String name : new String[] {"frame.json", "frame_profile_nv21.json", "frame_id.json"}) {
             JSONObject golden = new JSONObject(Repo.text(EXAMPLES + name));
             JSONObject written = FrameMeta.fromJson(golden).toJson();
             // The client always writes row_stride and the intrinsics' distortion; the examples do too.
@@ -83,6 +85,23 @@ class GoldenExamplesTest {
         assertNull(nv21.camera);
         assertEquals(3072L * 4032 * 3 / 2, nv21.frameBytes());
         assertEquals(12.5, nv21.headingDeg, 0);
+    }
+
+    @Test
+    void captureProtocolFrameExamplesReadAsTheContractMeans() throws Exception {
+        JSONObject idJson = new JSONObject(Repo.text(EXAMPLES + "frame_id.json"));
+        FrameMeta id = FrameMeta.fromJson(idJson);
+        assertEquals("id", id.frameKind);
+        assertEquals(idJson.getDouble("exposure_s"), id.exposureS, 0);
+        assertTrue(id.exposureS * 1e9 <= CaptureProtocol.ID_MAX_EXPOSURE_NS, "an ID frame the server reads");
+        assertEquals(idJson.getDouble("rolling_shutter_skew_s"), id.rollingShutterSkewS, 0);
+        assertTrue(id.rollingShutterSkewS > 0 && id.timestampNs != null, "ID frames need their row timing");
+        JSONObject croppedJson = new JSONObject(Repo.text(EXAMPLES + "frame_cropped.json"));
+        FrameMeta cropped = FrameMeta.fromJson(croppedJson);
+        JSONObject crop = croppedJson.getJSONObject("crop");
+        assertEquals("pose", cropped.frameKind);
+        assertTrue(cropped.width < crop.getInt("full_width") && cropped.height < crop.getInt("full_height"));
+        assertEquals(crop.toMap(), cropped.toJson().getJSONObject("crop").toMap(), "the crop block is sent on");
     }
 
     @Test
@@ -164,6 +183,53 @@ class GoldenExamplesTest {
     }
 
     @Test
+    void theVlcAndTrackResultExampleReadsEveryField() throws Exception {
+        JSONObject golden = new JSONObject(Repo.text(EXAMPLES + "result_vlc_track.json"));
+        LocateResult r = LocateResult.fromJson(golden);
+        assertTrue(r.ok);
+        assertEquals("vlc", r.beaconIdSource);
+        JSONObject vlc = golden.getJSONObject("vlc");
+        assertEquals(vlc.getInt("beacon_id"), r.vlc().beaconId.intValue());
+        assertEquals(r.beaconId, r.vlc().beaconId, "the fix's ID is the one read");
+        assertEquals(vlc.getDouble("confidence"), r.vlc().confidence, 0);
+        assertEquals(vlc.getBoolean("confident"), r.vlc().confident);
+        assertEquals(vlc.getInt("frames"), r.vlc().frames);
+        assertEquals(vlc.getDouble("chips_seen"), r.vlc().chipsSeen, 0);
+        assertEquals(vlc.getInt("candidates"), r.vlc().candidates);
+        JSONObject track = golden.getJSONObject("track");
+        assertArrayEquals(doubles(track.getJSONArray("filtered_position_m")), r.track().filteredPositionM(), 0);
+        assertArrayEquals(doubles(track.getJSONArray("velocity_mps")), r.track().velocityMps(), 0);
+        assertEquals(track.getBoolean("outlier"), r.track().outlier);
+        assertEquals(track.getBoolean("beacon_id_carried"), r.track().beaconIdCarried);
+        assertEquals(golden.getInt("beacons_in_view"), r.beaconsInView().intValue());
+        assertEquals(golden.getDouble("ambiguity_ratio"), r.ambiguityRatio, 0);
+        JSONArray corners = golden.getJSONArray("corners_px");
+        assertEquals(4, r.cornersPx().length);
+        for (int i = 0; i < 4; i++) {
+            assertArrayEquals(doubles(corners.getJSONArray(i)), r.cornersPx()[i], 0);
+        }
+        JSONObject timing = golden.getJSONObject("timing_ms");
+        assertEquals(timing.keySet(), r.timingMs().keySet());
+        assertEquals(timing.getDouble("total"), r.timingMs().get("total"), 0);
+    }
+
+    @Test
+    void theVlcAndTrackExampleCarriesEveryFieldOfTheContractsResult() throws Exception {
+        // a field added to the contract's result needs a golden example (and a reader above) too
+        JSONObject schema = new JSONObject(Repo.text("shared_schemas/json/result.schema.json"));
+        JSONObject golden = new JSONObject(Repo.text(EXAMPLES + "result_vlc_track.json"));
+        assertEquals(schema.getJSONObject("properties").keySet(), golden.keySet());
+    }
+
+    private static double[] doubles(JSONArray a) {
+        double[] out = new double[a.length()];
+        for (int i = 0; i < out.length; i++) {
+            out[i] = a.getDouble(i);
+        }
+        return out;
+    }
+
+    @Test
     void refusedResultExampleParses() throws Exception {
         LocateResult r = LocateResult.fromJson(Repo.text(EXAMPLES + "result_no_fix.json"));
         assertFalse(r.ok);
@@ -224,7 +290,8 @@ class GoldenExamplesTest {
             }
         }
         assertEquals(new java.util.TreeSet<String>(java.util.Arrays.asList("error.json", "frame.json",
-                "frame_profile_nv21.json", "map.json", "map_shapes.json", "result_no_fix.json", "result_ok.json")),
+                "frame_cropped.json", "frame_id.json", "frame_profile_nv21.json", "map.json", "map_shapes.json",
+                "result_no_fix.json", "result_ok.json", "result_vlc_track.json")),
                 names, "a new golden example needs a test here");
     }
 }

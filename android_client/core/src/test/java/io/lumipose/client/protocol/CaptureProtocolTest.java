@@ -33,6 +33,7 @@ class CaptureProtocolTest {
         assertEquals(nanos(o, "pose_exposure_s"), CaptureProtocol.POSE_EXPOSURE_NS);
         assertEquals(nanos(o, "id_exposure_s"), CaptureProtocol.ID_EXPOSURE_NS);
         assertEquals(nanos(o, "id_max_exposure_s"), CaptureProtocol.ID_MAX_EXPOSURE_NS);
+        assertEquals(o.getDouble("id_brightness_fraction"), CaptureProtocol.ID_BRIGHTNESS_FRACTION);
         assertEquals(o.getDouble("window_per_panel"), CaptureProtocol.WINDOW_PER_PANEL);
         assertEquals(o.getInt("window_block_divisor"), CaptureProtocol.WINDOW_BLOCK_DIVISOR);
         assertEquals(o.getDouble("window_min_contrast_dn"), CaptureProtocol.WINDOW_MIN_CONTRAST_DN);
@@ -44,8 +45,8 @@ class CaptureProtocolTest {
         // a key added on the Python side must reach the loader (and this test) too
         Set<String> read = new HashSet<String>(Arrays.asList("schema", "chip_rate_hz", "message_chips",
                 "golden_step", "id_burst_frames", "id_burst_step", "pose_exposure_s", "id_exposure_s",
-                "id_max_exposure_s", "window_per_panel", "window_block_divisor", "window_min_contrast_dn",
-                "window_edge_blocks"));
+                "id_max_exposure_s", "id_brightness_fraction", "window_per_panel", "window_block_divisor",
+                "window_min_contrast_dn", "window_edge_blocks"));
         assertEquals(read, file().keySet());
     }
 
