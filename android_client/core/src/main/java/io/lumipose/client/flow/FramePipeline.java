@@ -34,7 +34,8 @@ import io.lumipose.client.sensor.GravityHistory;
  *
  * <p>Whether a burst goes is decided at its pose frame: when the uploader already holds a burst
  * waiting, the whole burst is dropped before anything of it is copied. Camera calls come on the
- * camera's one thread (only it touches the matching and burst state); results on the uploader's.
+ * camera's one thread, results on the uploader's; the matching and burst state is guarded by this
+ * object's lock only so that {@link #close()} may come from any thread.
  */
 public final class FramePipeline implements FrameSink {
     /** What the pipeline tells the screen. */
@@ -79,6 +80,7 @@ public final class FramePipeline implements FrameSink {
     /** The last pose frame's panel window, for the ID frames after it. */
     private Window lastPanel;
     private boolean closed;
+    private long burstsSubmitted;
 
     // any thread
     private final Map<String, Long> drops = new TreeMap<String, Long>();
@@ -125,7 +127,7 @@ public final class FramePipeline implements FrameSink {
     }
 
     @Override
-    public void onResult(FrameResult result) {
+    public synchronized void onResult(FrameResult result) {
         if (closed) {
             return;
         }
@@ -139,7 +141,7 @@ public final class FramePipeline implements FrameSink {
     }
 
     @Override
-    public void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride, int pixelStride) {
+    public synchronized void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride, int pixelStride) {
         if (closed) {
             return;
         }
@@ -153,8 +155,11 @@ public final class FramePipeline implements FrameSink {
         evictOldest(images, DROP_NO_RESULT);
     }
 
-    /** Drops whatever waits (a burst being gathered, a burst waiting to be sent); the frame in flight completes. */
-    public void close() {
+    /**
+     * Drops whatever waits (a burst being gathered, a burst waiting to be sent) and ignores later
+     * frames; the frame in flight completes. Any thread.
+     */
+    public synchronized void close() {
         closed = true;
         if (burst != null && burst.kept) {
             drop(DROP_CLOSED, burst.frames.size());
@@ -176,6 +181,11 @@ public final class FramePipeline implements FrameSink {
     /** True while a burst is being sent or waits. */
     public boolean uploading() {
         return uploader.busy();
+    }
+
+    /** Bursts handed to the uploader so far. */
+    public synchronized long burstsSubmitted() {
+        return burstsSubmitted;
     }
 
     private void handle(FrameResult result, Pixels pixels) {
@@ -258,7 +268,9 @@ public final class FramePipeline implements FrameSink {
         if (b == null || !b.kept || b.frames.isEmpty()) {
             return;
         }
-        if (!uploader.submit(b.frames)) {
+        if (uploader.submit(b.frames)) {
+            burstsSubmitted++;
+        } else {
             drop(DROP_CLOSED, b.frames.size());
         }
     }
