@@ -232,7 +232,7 @@ public final class FramePipeline implements FrameSink {
         }
         lastPanel = panel;
         burst = new Burst(panel, idFramesPerBurst);
-        burst.frames.add(new FrameUpload(luma, cut(meta, panel)));
+        burst.frames.add(new FrameUpload(luma, cut(meta, panel, pixels)));
         if (burst.remaining == 0) {
             submitBurst();
         }
@@ -253,7 +253,7 @@ public final class FramePipeline implements FrameSink {
             if (luma == null) {
                 drop(DROP_OUT_OF_ORDER, 1);
             } else {
-                burst.frames.add(new FrameUpload(luma, cut(meta, burst.panel)));
+                burst.frames.add(new FrameUpload(luma, cut(meta, burst.panel, pixels)));
             }
         }
         if (burst.remaining == 0) {
@@ -275,8 +275,17 @@ public final class FramePipeline implements FrameSink {
         }
     }
 
-    private static FrameMeta cut(FrameMeta meta, Window w) {
-        return w == null ? meta : meta.window(w.x0, w.y0, w.width(), w.height());
+    /** The frame's JSON for the window w (null: the whole frame), with its whole plane's grey levels. */
+    private static FrameMeta cut(FrameMeta meta, Window w, Pixels pixels) {
+        return w == null ? meta : meta.window(w.x0, w.y0, w.width(), w.height(), pixels.levels());
+    }
+
+    /**
+     * The whole plane's [background, plateau] by the contract's coarse rule, sent with its window
+     * ({@code crop.levels_dn}) so the server reads the window as the whole frame.
+     */
+    static double[] levelsOf(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
+        return null; // until FrameLevels lands: the server then measures the window itself
     }
 
     /**
@@ -289,7 +298,8 @@ public final class FramePipeline implements FrameSink {
         if (predictId) {
             Window w = lastPanel;
             return new EarlyImage(number, false, null, w,
-                    w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w));
+                    w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w),
+                    w == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
         }
         lastPoseImage = number;
         Window panel = BeaconWindow.find(plane, width, height, rowStride, pixelStride);
@@ -297,7 +307,8 @@ public final class FramePipeline implements FrameSink {
         // no panel: the whole plane goes (the server says why), but only when there is room for it
         Window region = panel != null ? panel : uploader.hasRoom() ? new Window(0, 0, width, height) : null;
         return new EarlyImage(number, true, panel, region,
-                region == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, region));
+                region == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, region),
+                panel == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
     }
 
     private <V> void evictOldest(LinkedHashMap<Long, V> waiting, String reason) {
@@ -359,6 +370,9 @@ public final class FramePipeline implements FrameSink {
 
         /** The packed pixels of a window, or null when they were not kept. */
         byte[] copy(Window w);
+
+        /** The whole plane's grey levels ({@link #levelsOf}). */
+        double[] levels();
     }
 
     /** The camera's plane, during the onImage call. */
@@ -398,6 +412,11 @@ public final class FramePipeline implements FrameSink {
         public byte[] copy(Window w) {
             return LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w);
         }
+
+        @Override
+        public double[] levels() {
+            return levelsOf(plane, width, height, rowStride, pixelStride);
+        }
     }
 
     /** What was kept of an image that came before its result. */
@@ -407,13 +426,20 @@ public final class FramePipeline implements FrameSink {
         private final Window panel;
         private final Window region;
         private final byte[] pixels;
+        private final double[] levels;
 
-        EarlyImage(long number, boolean panelSearched, Window panel, Window region, byte[] pixels) {
+        EarlyImage(long number, boolean panelSearched, Window panel, Window region, byte[] pixels, double[] levels) {
             this.number = number;
             this.panelSearched = panelSearched;
             this.panel = panel;
             this.region = region;
             this.pixels = pixels;
+            this.levels = levels;
+        }
+
+        @Override
+        public double[] levels() {
+            return levels;
         }
 
         @Override
