@@ -29,8 +29,9 @@ import io.lumipose.client.sensor.GravityHistory;
  * (pose or ID, from the exposure the result reports) with the attitude at its timestamp, and a
  * burst (a pose frame and the plan's ID frames after it) goes to the {@link BurstUploader} as one
  * unit, each frame cut to the window around the panel: a pose frame to its {@link BeaconWindow}
- * (the whole plane only when none is found), an ID frame to its burst's pose window (the panel
- * moves little in milliseconds, and the decoder reads the stripes on the panel's rows).
+ * (the whole plane only when none is found), an ID frame to its burst's pose window with a margin
+ * for the panel's motion until then (the decoder reads the stripes on the panel's rows). Each
+ * window goes with its whole plane's grey levels ({@code crop.levels_dn}).
  *
  * <p>Whether a burst goes is decided at its pose frame: when the uploader already holds a burst
  * waiting, the whole burst is dropped before anything of it is copied. Camera calls come on the
@@ -61,6 +62,9 @@ public final class FramePipeline implements FrameSink {
     public static final String DROP_OUT_OF_ORDER = "image came before its result, out of the burst's order";
     public static final String DROP_CLOSED = "pipeline closed";
 
+    /** An ID window reaches this share of the pose window's size beyond it, each side. */
+    public static final double ID_WINDOW_GROWTH = 0.25;
+
     private final FrameDescriber describer;
     private final GravityHistory attitude;
     private final boolean timestampsRealtime;
@@ -77,8 +81,8 @@ public final class FramePipeline implements FrameSink {
     /** Images seen, and the number of the last pose frame's: predicts the kind of an image that comes first. */
     private long imageCount;
     private long lastPoseImage = -1;
-    /** The last pose frame's panel window, for the ID frames after it. */
-    private Window lastPanel;
+    /** The last pose frame's ID window, for the ID frames after it. */
+    private Window lastIdWindow;
     private boolean closed;
     private long burstsSubmitted;
 
@@ -213,7 +217,7 @@ public final class FramePipeline implements FrameSink {
         submitBurst();
         if (!uploader.hasRoom()) {
             burst = Burst.dropped(idFramesPerBurst);
-            lastPanel = null;
+            lastIdWindow = null;
             drop(DROP_UPLOADER_BUSY, 1);
             return;
         }
@@ -230,8 +234,8 @@ public final class FramePipeline implements FrameSink {
             drop(DROP_UPLOADER_BUSY, 1);
             return;
         }
-        lastPanel = panel;
-        burst = new Burst(panel, idFramesPerBurst);
+        lastIdWindow = idWindow(panel, meta.width, meta.height);
+        burst = new Burst(lastIdWindow, idFramesPerBurst);
         burst.frames.add(new FrameUpload(luma, cut(meta, panel, pixels)));
         if (burst.remaining == 0) {
             submitBurst();
@@ -246,14 +250,14 @@ public final class FramePipeline implements FrameSink {
         burst.remaining--;
         if (!burst.kept) {
             drop(DROP_UPLOADER_BUSY, 1);
-        } else if (burst.panel == null) {
+        } else if (burst.idWindow == null) {
             drop(DROP_NO_PANEL_FOR_ID, 1);
         } else {
-            byte[] luma = pixels.copy(burst.panel);
+            byte[] luma = pixels.copy(burst.idWindow);
             if (luma == null) {
                 drop(DROP_OUT_OF_ORDER, 1);
             } else {
-                burst.frames.add(new FrameUpload(luma, cut(meta, burst.panel, pixels)));
+                burst.frames.add(new FrameUpload(luma, cut(meta, burst.idWindow, pixels)));
             }
         }
         if (burst.remaining == 0) {
@@ -273,6 +277,15 @@ public final class FramePipeline implements FrameSink {
         } else {
             drop(DROP_CLOSED, b.frames.size());
         }
+    }
+
+    /**
+     * The window of a burst's ID frames: the pose frame's panel window grown by
+     * {@link #ID_WINDOW_GROWTH} of its size a side, since the panel moves in the ~0.15 s until the
+     * burst's last ID frame, and the decoder needs all the rows over the panel.
+     */
+    static Window idWindow(Window panel, int width, int height) {
+        return panel == null ? null : panel.grown(ID_WINDOW_GROWTH, width, height);
     }
 
     /** The frame's JSON for the window w (null: the whole frame), with its whole plane's grey levels. */
@@ -296,14 +309,14 @@ public final class FramePipeline implements FrameSink {
                                  int pixelStride) {
         boolean predictId = lastPoseImage >= 0 && number - lastPoseImage <= idFramesPerBurst;
         if (predictId) {
-            Window w = lastPanel;
+            Window w = lastIdWindow;
             return new EarlyImage(number, false, null, w,
                     w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w),
                     w == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
         }
         lastPoseImage = number;
         Window panel = BeaconWindow.find(plane, width, height, rowStride, pixelStride);
-        lastPanel = panel;
+        lastIdWindow = idWindow(panel, width, height);
         // no panel: the whole plane goes (the server says why), but only when there is room for it
         Window region = panel != null ? panel : uploader.hasRoom() ? new Window(0, 0, width, height) : null;
         return new EarlyImage(number, true, panel, region,
@@ -336,19 +349,19 @@ public final class FramePipeline implements FrameSink {
     /** A pose frame and the ID frames gathered after it. */
     private static final class Burst {
         final boolean kept;
-        /** The pose frame's panel window, null when none was found. */
-        final Window panel;
+        /** The window its ID frames are cut to; null when the pose frame showed no panel. */
+        final Window idWindow;
         final List<FrameUpload> frames = new ArrayList<FrameUpload>();
         /** ID frames still to come. */
         int remaining;
 
-        Burst(Window panel, int idFrames) {
-            this(true, panel, idFrames);
+        Burst(Window idWindow, int idFrames) {
+            this(true, idWindow, idFrames);
         }
 
-        private Burst(boolean kept, Window panel, int idFrames) {
+        private Burst(boolean kept, Window idWindow, int idFrames) {
             this.kept = kept;
-            this.panel = panel;
+            this.idWindow = idWindow;
             this.remaining = idFrames;
         }
 
