@@ -94,18 +94,26 @@ public final class BeaconWindow {
         int base = plane.position();
         int samples = cols * block;
         byte[] row = new byte[(samples - 1) * pixelStride + 1];
+        int[] columns = new int[samples]; // each pixel column's sum over the block row so far
         int[] sums = new int[rows * cols];
         for (int r = 0; r < rows * block; r++) {
             src.position(base + r * rowStride);
             src.get(row);
-            int cell = (r / block) * cols;
-            int i = 0;
-            for (int c = 0; c < cols; c++) {
-                int sum = 0;
-                for (int k = 0; k < block; k++, i += pixelStride) {
-                    sum += row[i] & 0xff;
+            if (pixelStride == 1) {
+                for (int i = 0; i < samples; i++) { // the hot loop: plain and vectorisable
+                    columns[i] += row[i] & 0xff;
                 }
-                sums[cell + c] += sum;
+            } else {
+                for (int i = 0; i < samples; i++) {
+                    columns[i] += row[i * pixelStride] & 0xff;
+                }
+            }
+            if (r % block == block - 1) {
+                int cell = (r / block) * cols;
+                for (int i = 0; i < samples; i++) {
+                    sums[cell + i / block] += columns[i];
+                }
+                Arrays.fill(columns, 0);
             }
         }
         return sums;
