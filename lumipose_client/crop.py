@@ -4,19 +4,24 @@ A 20-megapixel luma plane is 20 MB on the wire; the window around a 0.174 m pane
 the Mi 8 front camera is about 3 MB at 1 m and a few hundred kilobytes at 2-3 m, and the
 server's answer is the same (its fine stages only read that region).
 
-Which window to send is the client's own rule, kept deliberately simple and numpy-only (no
-OpenCV on a laptop): the server finds the panel again inside the window with its full
-checks, so the window only has to hold the whole panel with a margin of background.
+Which window to send is the client's own rule, kept deliberately simple: the server finds the
+panel again inside the window with its full checks, so the window only has to hold the whole
+panel with a margin of background. The Android app's `BeaconWindow` is the same rule in Java,
+with the same constants (shared_schemas/capture_protocol.json).
 
 1. A coarse view: the mean of each square block, a `BLOCK_DIVISOR`-th of the short side.
 2. A level half-way between the background (the view's median) and the bright plateau (its
    brightest block); nothing is cut when the two are less than `MIN_CONTRAST_DN` apart.
 3. The bright region holding the brightest block (blocks at or above the level, 8-connected);
-   the panel's extent is its bounding box grown by `EDGE_BLOCKS` blocks a side (the blurred
-   edge and the glow around the panel stay below the level).
+   the panel's extent is its bounding box grown by `EDGE_BLOCKS` blocks and `EDGE_PX` pixels a
+   side (the blocks: the blurred edge and glow below the level; the pixels: the margin the
+   server's region of interest keeps around the panel, `shared_schemas.windows.ROI_MARGIN_PX`).
 4. A square window `WINDOW_PER_PANEL` times the extent's longer side around its centre,
-   clipped to the frame: the background still makes up most of it, so the server's own
-   threshold (half-way between background and plateau) lands where it would on the whole frame.
+   clipped to the frame.
+5. The full frame's grey levels by the contract's coarse rule (`shared_schemas.windows`)
+   go with the window (`crop.levels_dn`): the window's own histogram is mostly panel, and the
+   server reads the window on the full frame's coarse grid with them, so its answer is the
+   whole frame's (docs/contract.md, "Windows").
 """
 
 from __future__ import annotations
@@ -24,11 +29,13 @@ from __future__ import annotations
 import numpy as np
 
 from shared_schemas import Crop, FrameFormat, FrameMeta
+from shared_schemas.windows import ROI_MARGIN_PX, frame_levels
 
-WINDOW_PER_PANEL = 2.0
+WINDOW_PER_PANEL = 1.0
 BLOCK_DIVISOR = 240  # blocks across the short side of the coarse view
 MIN_CONTRAST_DN = 20.0
 EDGE_BLOCKS = 3  # the panel's extent: its bright region's box grown by this many blocks a side
+EDGE_PX = ROI_MARGIN_PX  # and by the server's own margin around the panel, in pixels
 
 
 def _block_means(pixels: np.ndarray, block: int) -> np.ndarray:
@@ -71,7 +78,7 @@ def beacon_window(pixels: np.ndarray) -> tuple[int, int, int, int] | None:
     rows, cols = np.flatnonzero(region.any(axis=1)), np.flatnonzero(region.any(axis=0))
     # the panel's blurred edge and glow reach a few blocks below the level; a region at the view's
     # far edge may go on in the rows and columns the view left out
-    margin = EDGE_BLOCKS * block
+    margin = EDGE_BLOCKS * block + EDGE_PX
     left, top = cols[0] * block - margin, rows[0] * block - margin
     right = width if cols[-1] == coarse.shape[1] - 1 else (cols[-1] + 1) * block + margin
     bottom = height if rows[-1] == coarse.shape[0] - 1 else (rows[-1] + 1) * block + margin
@@ -90,14 +97,22 @@ def crop_frame(pixels: np.ndarray, meta: FrameMeta) -> tuple[FrameMeta, bytes]:
         return meta, np.ascontiguousarray(pixels).tobytes()
     x0, y0, x1, y1 = window
     full_width, full_height = meta.full_size
-    offset_x, offset_y = (meta.crop.x, meta.crop.y) if meta.crop else (0, 0)
+    offset_x, offset_y = meta.full_offset
+    # a window cut again keeps its frame's levels; a whole frame's are measured here
+    levels = meta.crop.levels_dn if meta.crop else list(frame_levels(pixels))
     cropped = meta.model_copy(
         update={
             "width": x1 - x0,
             "height": y1 - y0,
             "row_stride": None,
             "format": FrameFormat.y8,
-            "crop": Crop(x=offset_x + x0, y=offset_y + y0, full_width=full_width, full_height=full_height),
+            "crop": Crop(
+                x=offset_x + x0,
+                y=offset_y + y0,
+                full_width=full_width,
+                full_height=full_height,
+                levels_dn=levels,
+            ),
         }
     )
     return FrameMeta.model_validate(cropped.model_dump(by_alias=True)), np.ascontiguousarray(

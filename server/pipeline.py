@@ -30,7 +30,7 @@ from server.vision.binarize import Levels, blur, threshold
 from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
 from server.vision.outline import OutlineRules, outline_points
 from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
-from server.vision.roi import RoiRules, find_roi
+from server.vision.roi import FrameView, RoiRules, find_roi
 from server.vision.subpixel import EdgeRules, refine_edges
 from shared_schemas import Beacon, BeaconIdSource, FailureReason
 
@@ -98,7 +98,7 @@ def locate_beacon(
     look = PanelLook.of(beacon)
 
     with timer.stage("roi"):
-        roi = find_roi(frame.pixels, options.roi, options.blobs, look)
+        roi = find_roi(frame.pixels, options.roi, options.blobs, look, FrameView.of(frame.meta))
     if isinstance(roi, Refusal):
         return timer.refusal(roi)
     window = frame.pixels[roi.y0 : roi.y1, roi.x0 : roi.x1]

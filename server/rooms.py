@@ -29,6 +29,7 @@ from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal, located, refused
 from server.pipeline import PipelineOptions, locate_beacon
 from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
+from server.vision.roi import FrameView
 from server.vlc.codec import DATA_BITS, MESSAGE_CHIPS
 from server.vlc.decoder import IdEvidence, StripeRules, row_time_s
 from server.vlc.flatten import FlattenRules, flatten_stripes
@@ -82,7 +83,11 @@ def crop_frame(
             pixels[ay0:ay1, ax0:ax1] = np.uint8(round(background_dn))
     pixels.flags.writeable = False
     camera = frame.camera.model_copy(update={"cx": frame.camera.cx - x0, "cy": frame.camera.cy - y0})
-    meta = frame.meta.model_copy(update={"width": x1 - x0, "height": y1 - y0, "row_stride": None, "camera": camera})
+    update: dict[str, object] = {"width": x1 - x0, "height": y1 - y0, "row_stride": None, "camera": camera}
+    window = frame.meta.crop
+    if window is not None:  # a client's window: its crop is placed in the sensor frame, whose camera the meta keeps
+        update.update(crop=window.model_copy(update={"x": window.x + x0, "y": window.y + y0}), camera=frame.meta.camera)
+    meta = frame.meta.model_copy(update=update)
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), (x0, y0)
 
 
@@ -222,7 +227,7 @@ def read_room(
     threshold would cut a striped panel into bars.
     """
     candidates = rules.candidates.for_beacons(beacon_map.beacons)
-    found = find_beacon_blobs(frame.pixels, candidates)
+    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
     reading = read_id_frame(frame, candidates, rules.stripes, found)
     if reading.problem is not None:
         return RoomReading((), len(found.blobs), reading.problem)

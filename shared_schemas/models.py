@@ -72,6 +72,7 @@ MIN_REQUIRED_SIGMA_M: Final = 1e-4  # a map may ask for a tenth of a millimetre,
 MAX_GRAVITY_SIGMA_DEG: Final = 90.0  # a tilt error beyond 90 degrees says nothing
 
 Distortion = list[Annotated[float, Field(ge=-MAX_DISTORTION, le=MAX_DISTORTION)]]
+GreyLevel = Annotated[float, Field(ge=0, le=255)]  # DN of an 8-bit luma plane
 Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)]
 PositionM = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
 RotationEntry = Annotated[float, Field(ge=-MAX_ROTATION_ENTRY, le=MAX_ROTATION_ENTRY)]
@@ -212,6 +213,21 @@ class Crop(Strict):
     y: int = Field(ge=0, le=MAX_SIDE_PX, description="row of the window's first pixel in the full frame")
     full_width: int = Field(ge=1, le=MAX_SIDE_PX)
     full_height: int = Field(ge=1, le=MAX_SIDE_PX)
+    levels_dn: Annotated[list[GreyLevel], Field(min_length=2, max_length=2)] | None = Field(
+        default=None,
+        description="background and plateau grey levels of the FULL frame by the coarse rule (docs/contract.md, "
+        "'Windows'); a tight window's own histogram is mostly panel. Without them the server measures the window",
+    )
+
+    @field_validator("levels_dn")
+    @classmethod
+    def _levels_in_range(cls, value: list[float] | None) -> list[float] | None:
+        if value is not None:
+            _require_finite("crop.levels_dn", value)
+            background, plateau = value
+            if background > plateau:
+                raise ValueError(f"levels_dn must be [background, plateau], background <= plateau; got {value}")
+        return value
 
 
 class FrameMeta(Open):

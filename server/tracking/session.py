@@ -30,6 +30,7 @@ from server.rooms import PanelFix, RoomRules, choose_and_fuse, locate_panel
 from server.tracking.naming import NamingRules, PanelNamer
 from server.tracking.track import Track, TrackRules
 from server.vision.beacons import BeaconBlob, find_beacon_blobs
+from server.vision.roi import FrameView
 from server.vlc.decoder import StripeObservation
 from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FailureReason, LocateResult
 
@@ -128,7 +129,7 @@ class DeviceSession:
         self.captures += 1
         t_s = (pose_frame.meta.timestamp_ns or 0) * 1e-9
         claimed = self.namer.new_capture(t_s)
-        candidates = find_beacon_blobs(pose_frame.pixels, room.candidates)
+        candidates = find_beacon_blobs(pose_frame.pixels, room.candidates, FrameView.of(pose_frame.meta))
         blobs = list(candidates.blobs)
         template = template_beacon(self.beacon_map)
         stripes = attach_sightings(sightings, blobs, pose_frame, self.rules.id_frame_gate_norm)

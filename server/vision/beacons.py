@@ -20,9 +20,9 @@ import cv2
 import numpy as np
 
 from server.outcomes import Refusal
-from server.vision.binarize import Levels, estimate_levels
+from server.vision.binarize import Levels
 from server.vision.contour import Blob, BlobRules, PanelLook, find_beacon_blob
-from server.vision.roi import CoarseRules, coarse_to_frame, coarse_view
+from server.vision.roi import CoarseRules, FrameView, coarse_levels, coarse_to_frame, coarse_view
 from shared_schemas import Beacon
 
 
@@ -68,12 +68,15 @@ class Candidates:
     levels: Levels
     step: int
     rejected: tuple[str, ...]  # why other bright blobs are not beacons
+    origin: tuple[int, int] = (0, 0)  # the coarse view's first (column, row) in the frame (`roi.FrameView.grid`)
 
 
-def _centroid_px(inside: np.ndarray, x: int, y: int, step: int, shape: tuple[int, int]) -> tuple[float, float]:
+def _centroid_px(
+    inside: np.ndarray, x: int, y: int, step: int, shape: tuple[int, int], origin: tuple[int, int]
+) -> tuple[float, float]:
     """Mean frame position (x, y) of the view pixels `inside` (bool, the blob's box at view pixel x, y)."""
     rows, columns = np.nonzero(inside)
-    centre = coarse_to_frame(np.column_stack([columns + x, rows + y]), step, shape).mean(axis=0)
+    centre = coarse_to_frame(np.column_stack([columns + x, rows + y]), step, shape, origin).mean(axis=0)
     return float(centre[0]), float(centre[1])
 
 
@@ -94,15 +97,17 @@ def candidate_mask(image: np.ndarray, levels: Levels, rules: CandidateRules) -> 
     return mask
 
 
-def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules()) -> Candidates:
-    """Every beacon-shaped blob of a frame (height, width) uint8, largest first."""
+def find_beacon_blobs(
+    pixels: np.ndarray, rules: CandidateRules = CandidateRules(), view: FrameView = FrameView()
+) -> Candidates:
+    """Every beacon-shaped blob of a frame (height, width) uint8, largest first; `view` places a window."""
     if pixels.ndim != 2 or pixels.dtype != np.uint8:
         raise ValueError(f"pixels must be a 2-D uint8 luma image, got {pixels.dtype} {pixels.shape}")
-    step = rules.coarse_step(pixels.shape)
-    small = coarse_view(pixels, step)  # to the frame's last row and column: `cut_off` is tested on it
-    levels = estimate_levels(small)
+    step, origin = view.grid(pixels.shape, rules)
+    small = coarse_view(pixels, step, origin)  # to the frame's last row and column: `cut_off` is tested on it
+    levels = view.levels or coarse_levels(small)
     if levels.contrast < rules.min_contrast_dn:
-        return Candidates((), levels, step, ("nothing stands out of the background",))
+        return Candidates((), levels, step, ("nothing stands out of the background",), origin)
     mask = candidate_mask(small, levels, rules)
     shape_rules = replace(rules.blobs, min_area_px=rules.blobs.min_area_px / step**2)
     looks = rules.looks or (PanelLook(),)
@@ -126,19 +131,20 @@ def find_beacon_blobs(pixels: np.ndarray, rules: CandidateRules = CandidateRules
         else:
             contour = found.contour
         # back to frame pixels: the view's last column and row are the frame's, closer than `step`
-        x0, y0 = coarse_to_frame(np.array([x, y]), step, pixels.shape).astype(int)
-        x1, y1 = min(pixels.shape[1], (x + w) * step), min(pixels.shape[0], (y + h) * step)
+        x0, y0 = coarse_to_frame(np.array([x, y]), step, pixels.shape, origin).astype(int)
+        x1 = min(pixels.shape[1], origin[0] + (x + w) * step)
+        y1 = min(pixels.shape[0], origin[1] + (y + h) * step)
         blobs.append(
             BeaconBlob(
-                contour_px=coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape),
+                contour_px=coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape, origin),
                 bounding_box=(int(x0), int(y0), int(x1 - x0), int(y1 - y0)),
-                centroid_px=_centroid_px(labels[y : y + h, x : x + w] == label, x, y, step, pixels.shape),
+                centroid_px=_centroid_px(labels[y : y + h, x : x + w] == label, x, y, step, pixels.shape, origin),
                 area_px=float(area * step**2),
                 cut_off=bool(cut_off),
             )
         )
     blobs.sort(key=lambda b: b.area_px, reverse=True)
-    return Candidates(tuple(blobs), levels, step, tuple(rejected))
+    return Candidates(tuple(blobs), levels, step, tuple(rejected), origin)
 
 
 _PREFIX = "the brightest blob is not the beacon: "  # contour.find_beacon_blob's, said once

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from shared_schemas.windows import PLATEAU_FRACTION, histogram_levels
+
 
 @dataclass(frozen=True)
 class Levels:
@@ -32,17 +34,13 @@ class Levels:
         return self.plateau - self.background
 
 
-def estimate_levels(image: np.ndarray, plateau_fraction: float = 2e-4) -> Levels:
+def estimate_levels(image: np.ndarray, plateau_fraction: float = PLATEAU_FRACTION) -> Levels:
     """Background and plateau levels of an 8-bit image from one histogram pass.
 
     `plateau_fraction`: the share of pixels counted as "brightest"; small enough that a
     panel covering 0.02 % of the frame still sets the plateau.
     """
-    histogram = cv2.calcHist([image], [0], None, [256], [0, 256]).ravel()
-    cumulative = np.cumsum(histogram) / histogram.sum()
-    background = float(np.searchsorted(cumulative, 0.5))
-    plateau = float(np.searchsorted(cumulative, 1.0 - plateau_fraction))
-    return Levels(background=background, plateau=plateau)
+    return Levels(*histogram_levels(image, plateau_fraction))
 
 
 def blur(image: np.ndarray, kernel_px: int = 5) -> np.ndarray:

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from server.outcomes import Refusal
-from server.vision.binarize import Levels, estimate_levels, threshold
+from server.vision.binarize import Levels, threshold
 from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
-from shared_schemas import FailureReason
+from shared_schemas import FailureReason, FrameMeta
+from shared_schemas.windows import COARSE_SHORT_SIDE_PX, ROI_MARGIN_PX, coarse_step, coarse_view, view_levels
 
 
 @dataclass(frozen=True)
@@ -25,17 +26,49 @@ class CoarseRules:
     `server.vision.beacons` (every panel). `RoiRules` and `beacons.CandidateRules` extend it,
     so its defaults are written once."""
 
-    coarse_short_side_px: int = 480  # the view's short side is at least this (step = short side // it)
+    coarse_short_side_px: int = COARSE_SHORT_SIDE_PX  # the view's short side is at least this (the contract's)
     min_contrast_dn: float = 20.0  # plateau - background below this: nothing stands out, no beacon
 
     def coarse_step(self, shape: tuple[int, ...]) -> int:
         """Subsampling step for a frame of `shape` (height, width): 1 for frames smaller than the view."""
-        return max(1, min(shape[0], shape[1]) // self.coarse_short_side_px)
+        return coarse_step(shape[0], shape[1], self.coarse_short_side_px)
+
+
+@dataclass(frozen=True)
+class FrameView:
+    """Where a frame's pixels sit in the sensor frame, and that frame's levels when the client
+    measured them. A window (`crop`) is read on the full frame's coarse grid with the full
+    frame's levels, so that it finds the same blob, region and edges as the whole frame: the
+    window then gives the whole frame's answer (docs/contract.md, "Windows")."""
+
+    full_size: tuple[int, int] = (0, 0)  # (width, height); (0, 0): the pixels are the whole frame
+    offset: tuple[int, int] = (0, 0)  # (column, row) of the pixels' first pixel in the full frame
+    levels: Levels | None = None
+
+    @classmethod
+    def of(cls, meta: FrameMeta) -> FrameView:
+        crop = meta.crop
+        if crop is None:
+            return cls()
+        levels = Levels(*crop.levels_dn) if crop.levels_dn else None
+        return cls((crop.full_width, crop.full_height), (crop.x, crop.y), levels)
+
+    def grid(self, shape: tuple[int, ...], rules: CoarseRules) -> tuple[int, tuple[int, int]]:
+        """The coarse view's step and its first (column, row) in pixels of `shape` (height, width):
+        every `step`-th pixel of the full frame, wherever the window starts."""
+        width, height = self.full_size if self.full_size != (0, 0) else (shape[1], shape[0])
+        step = rules.coarse_step((height, width))
+        return step, (-self.offset[0] % step, -self.offset[1] % step)
+
+
+def coarse_levels(small: np.ndarray) -> Levels:
+    """The frame's levels from its coarse view (the contract's rule: `crop.levels_dn`)."""
+    return Levels(*view_levels(small))
 
 
 @dataclass(frozen=True)
 class RoiRules(CoarseRules):
-    margin_px: int = 12
+    margin_px: int = ROI_MARGIN_PX  # clients grow their windows by it (shared_schemas.windows)
 
 
 @dataclass(frozen=True)
@@ -50,47 +83,31 @@ class Roi:
     step: int
 
 
-def coarse_view(pixels: np.ndarray, step: int) -> np.ndarray:
-    """Every `step`-th pixel of every `step`-th row, plus the frame's last row and column.
-
-    Without the last row and column the view would end up to step - 1 pixels short of the
-    frame's far borders, and a panel just inside them would touch the view's border and be
-    refused as cut off (found on a bench frame whose panel ended 8 px from the right edge).
-    View pixel (row i, column j) is frame pixel (min(i step, height - 1), min(j step, width - 1))
-    (`coarse_to_frame`).
-    """
-    height, width = pixels.shape
-    grid = pixels[::step, ::step]
-    extra_row, extra_col = int((height - 1) % step > 0), int((width - 1) % step > 0)
-    small = np.empty((grid.shape[0] + extra_row, grid.shape[1] + extra_col), pixels.dtype)
-    small[: grid.shape[0], : grid.shape[1]] = grid
-    if extra_col:
-        small[: grid.shape[0], -1] = pixels[::step, -1]
-    if extra_row:
-        small[-1, : grid.shape[1]] = pixels[-1, ::step]
-        small[-1, -1] = pixels[-1, -1]
-    return small
-
-
-def coarse_to_frame(points: np.ndarray, step: int, shape: tuple[int, int]) -> np.ndarray:
+def coarse_to_frame(
+    points: np.ndarray, step: int, shape: tuple[int, int], origin: tuple[int, int] = (0, 0)
+) -> np.ndarray:
     """Frame pixel coordinates (..., 2) x, y of `coarse_view` pixel coordinates (..., 2) x, y.
 
-    Whole view pixels land exactly on the frame pixel they were read from: `step` times, except
-    the view's extra last column and row, which are the frame's last (closer than `step`).
+    Whole view pixels land exactly on the frame pixel they were read from: `step` times from the
+    origin, except the view's extra last column and row, which are the frame's last (closer).
     """
     height, width = shape
-    return np.minimum(np.asarray(points, dtype=float) * step, [width - 1, height - 1])
+    return np.minimum(np.asarray(points, dtype=float) * step + origin, [width - 1, height - 1])
 
 
 def find_roi(
-    pixels: np.ndarray, rules: RoiRules = RoiRules(), blob_rules: BlobRules = BlobRules(), look: PanelLook = PanelLook()
+    pixels: np.ndarray,
+    rules: RoiRules = RoiRules(),
+    blob_rules: BlobRules = BlobRules(),
+    look: PanelLook = PanelLook(),
+    view: FrameView = FrameView(),
 ) -> Roi | Refusal:
-    """The beacon's region of interest in a full frame (height, width) uint8 (the panel's blob
-    may be cut by the frame border: see `contour.find_beacon_blob`)."""
+    """The beacon's region of interest in a frame (height, width) uint8 (the panel's blob may be
+    cut by the frame border: see `contour.find_beacon_blob`); `view` places a window."""
     height, width = pixels.shape
-    step = rules.coarse_step(pixels.shape)
-    small = coarse_view(pixels, step)
-    levels = estimate_levels(small[::2])  # every other row: plenty for two percentiles, half the time
+    step, origin = view.grid(pixels.shape, rules)
+    small = coarse_view(pixels, step, origin)
+    levels = view.levels or coarse_levels(small)
     if levels.contrast < rules.min_contrast_dn:
         return Refusal(
             FailureReason.no_beacon,
@@ -103,11 +120,12 @@ def find_roi(
         return blob
     x, y, w, h = blob.bounding_box
     margin = rules.margin_px + 2 * step
+    column0, row0 = origin
     return Roi(
-        x0=max(0, x * step - margin),
-        y0=max(0, y * step - margin),
-        x1=min(width, (x + w) * step + margin),
-        y1=min(height, (y + h) * step + margin),
+        x0=max(0, column0 + x * step - margin),
+        y0=max(0, row0 + y * step - margin),
+        x1=min(width, column0 + (x + w) * step + margin),
+        y1=min(height, row0 + (y + h) * step + margin),
         levels=levels,
         step=step,
     )

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from server.ingest import LumaFrame
 from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
+from server.vision.roi import FrameView
 from server.vlc.capture import id_frame_problem
 from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
 
@@ -39,7 +40,7 @@ def read_id_frame(
     assert skew_s is not None and timestamp_ns is not None and exposure_s is not None  # id_frame_problem checked
     row_time = row_time_s(skew_s, meta.full_size[1])  # the sensor's rows, crop or not
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
-    found = find_beacon_blobs(frame.pixels, candidates) if found is None else found
+    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(meta)) if found is None else found
     panels = []
     for blob in found.blobs:
         y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)

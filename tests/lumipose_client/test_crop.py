@@ -27,8 +27,9 @@ def test_the_window_holds_the_brightest_panel_with_background_around_it():
     pixels[100:160, 500:560] = 255  # the panel
     pixels[400:430, 100:130] = 200  # a dimmer lamp, also above the half-way level
     x0, y0, x1, y1 = beacon_window(pixels)
-    assert x0 < 500 and y0 < 100 and x1 > 560 and y1 > 160
-    assert x0 > 130 and y1 < 400 and 120 < x1 - x0 < 200
+    # the server's region of interest (12 px around the panel here) and the lamp stays out
+    assert x0 <= 500 - 12 and y0 <= 100 - 12 and x1 >= 560 + 12 and y1 >= 160 + 12
+    assert x0 > 130 and y1 < 400 and x1 - x0 < 2 * 60
 
 
 def test_a_panel_in_the_rows_and_columns_the_coarse_view_leaves_out_is_kept_whole():

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from server.vision.roi import coarse_view, find_roi
+from server.vision.roi import RoiRules, coarse_view, find_roi
 from shared_schemas import FailureReason
 
 HEIGHT, WIDTH = 1296, 970  # step 2: the frame's last row and column are not on the grid
@@ -39,3 +39,21 @@ def test_panel_on_the_far_border_gives_a_region_that_reaches_the_border():
     roi = find_roi(panel_frame(400, 600, HEIGHT - 150, HEIGHT))
     assert not hasattr(roi, "reason"), roi
     assert roi.y1 == HEIGHT
+
+
+def test_a_window_is_read_on_the_full_frames_grid_and_finds_the_same_region():
+    from server.vision.binarize import Levels
+    from server.vision.roi import FrameView
+
+    pixels = panel_frame(300, 520, 611, 800)
+    whole = find_roi(pixels)
+    x, y = 271, 581  # a tight window (the panel is 62 % of it) that starts off the full frame's grid (step 2)
+    window = pixels[y : y + 250, x : x + 270]
+    view = FrameView(full_size=(WIDTH, HEIGHT), offset=(x, y), levels=whole.levels)
+    assert view.grid(window.shape, RoiRules()) == (2, (1, 1))
+    found = find_roi(window, view=view)
+    assert (found.x0 + x, found.y0 + y, found.x1 + x, found.y1 + y) == (whole.x0, whole.y0, whole.x1, whole.y1)
+    # read on its own grid and with its own levels (mostly panel: the median is not the background)
+    assert whole.levels == Levels(8.0, 255.0)
+    alone = find_roi(window)
+    assert getattr(alone, "reason", None) is FailureReason.no_beacon

@@ -6,29 +6,47 @@ import android.hardware.SensorEvent;
 import android.hardware.SensorEventListener;
 import android.hardware.SensorManager;
 
-import io.lumipose.client.sensor.GravitySource;
+import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.sensor.LowPassGravity;
 
 /**
- * Keeps the latest TYPE_GRAVITY reading (device frame, m/s^2, pointing up) and the latest
- * rotation-vector attitude (device to East-North-Up) for the frame JSON.
+ * Feeds a GravityHistory with gravity (device frame, m/s^2, pointing up) and the rotation-vector
+ * attitude (device to East-North-Up), each stamped with its event's timestamp, so every frame gets
+ * the reading at its own SENSOR_TIMESTAMP. Phones without TYPE_GRAVITY get a low-passed accelerometer.
  */
-final class GravityListener implements SensorEventListener, GravitySource {
+final class GravityListener implements SensorEventListener {
     private final SensorManager sensors;
     private final Sensor gravity;
     private final Sensor rotation;
-    private final Object lock = new Object();
-    private float[] latest;
-    private float[] latestRotation;
+    /** Null when the phone has a gravity sensor. */
+    private final LowPassGravity lowPass;
+    private final GravityHistory history = new GravityHistory();
 
     GravityListener(Context context) {
         sensors = (SensorManager) context.getSystemService(Context.SENSOR_SERVICE);
-        gravity = sensors == null ? null : sensors.getDefaultSensor(Sensor.TYPE_GRAVITY);
+        Sensor fused = sensors == null ? null : sensors.getDefaultSensor(Sensor.TYPE_GRAVITY);
+        Sensor accelerometer = sensors == null ? null : sensors.getDefaultSensor(Sensor.TYPE_ACCELEROMETER);
+        gravity = fused != null ? fused : accelerometer;
+        lowPass = fused == null && accelerometer != null ? new LowPassGravity() : null;
         rotation = sensors == null ? null : sensors.getDefaultSensor(Sensor.TYPE_ROTATION_VECTOR);
     }
 
-    /** False on a phone without a gravity sensor: frames then go without gravity_camera. */
+    /** Readings by timestamp; also the latest (a GravitySource). */
+    GravityHistory history() {
+        return history;
+    }
+
+    /** False on a phone with neither a gravity sensor nor an accelerometer: frames go without gravity_camera. */
     boolean available() {
         return gravity != null;
+    }
+
+    /** Null, or what the screen should say about the gravity source. */
+    String note() {
+        if (gravity == null) {
+            return "no gravity sensor or accelerometer: frames go without gravity";
+        }
+        return lowPass != null ? "no gravity sensor: gravity from the low-passed accelerometer" : null;
     }
 
     void start() {
@@ -36,7 +54,7 @@ final class GravityListener implements SensorEventListener, GravitySource {
             sensors.registerListener(this, gravity, SensorManager.SENSOR_DELAY_GAME);
         }
         if (rotation != null) {
-            sensors.registerListener(this, rotation, SensorManager.SENSOR_DELAY_UI);
+            sensors.registerListener(this, rotation, SensorManager.SENSOR_DELAY_GAME);
         }
     }
 
@@ -44,43 +62,31 @@ final class GravityListener implements SensorEventListener, GravitySource {
         if (sensors != null) {
             sensors.unregisterListener(this);
         }
-        synchronized (lock) {
-            latest = null;
-            latestRotation = null;
-        }
     }
 
     @Override
     public void onSensorChanged(SensorEvent event) {
-        if (event.sensor.getType() == Sensor.TYPE_ROTATION_VECTOR) {
-            float[] m = new float[9];
-            SensorManager.getRotationMatrixFromVector(m, event.values);
-            synchronized (lock) {
-                latestRotation = m;
-            }
-            return;
-        }
-        synchronized (lock) {
-            latest = new float[] {event.values[0], event.values[1], event.values[2]};
+        switch (event.sensor.getType()) {
+            case Sensor.TYPE_ROTATION_VECTOR:
+                float[] m = new float[9];
+                SensorManager.getRotationMatrixFromVector(m, event.values);
+                history.addRotation(event.timestamp, m);
+                break;
+            case Sensor.TYPE_GRAVITY:
+                history.addGravity(event.timestamp, event.values);
+                break;
+            case Sensor.TYPE_ACCELEROMETER:
+                if (lowPass != null) {
+                    history.addGravity(event.timestamp, lowPass.update(event.timestamp, event.values));
+                }
+                break;
+            default:
+                break;
         }
     }
 
     @Override
     public void onAccuracyChanged(Sensor sensor, int accuracy) {
         // The reading is used as it comes; the server weighs it by the device profile's sigma.
-    }
-
-    @Override
-    public float[] latestGravity() {
-        synchronized (lock) {
-            return latest == null ? null : latest.clone();
-        }
-    }
-
-    @Override
-    public float[] latestRotationToEnu() {
-        synchronized (lock) {
-            return latestRotation == null ? null : latestRotation.clone();
-        }
     }
 }

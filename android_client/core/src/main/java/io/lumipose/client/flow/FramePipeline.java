@@ -29,12 +29,14 @@ import io.lumipose.client.sensor.GravityHistory;
  * (pose or ID, from the exposure the result reports) with the attitude at its timestamp, and a
  * burst (a pose frame and the plan's ID frames after it) goes to the {@link BurstUploader} as one
  * unit, each frame cut to the window around the panel: a pose frame to its {@link BeaconWindow}
- * (the whole plane only when none is found), an ID frame to its burst's pose window (the panel
- * moves little in milliseconds, and the decoder reads the stripes on the panel's rows).
+ * (the whole plane only when none is found), an ID frame to its burst's pose window with a margin
+ * for the panel's motion until then (the decoder reads the stripes on the panel's rows). Each
+ * window goes with its whole plane's grey levels ({@code crop.levels_dn}).
  *
  * <p>Whether a burst goes is decided at its pose frame: when the uploader already holds a burst
  * waiting, the whole burst is dropped before anything of it is copied. Camera calls come on the
- * camera's one thread (only it touches the matching and burst state); results on the uploader's.
+ * camera's one thread, results on the uploader's; the matching and burst state is guarded by this
+ * object's lock only so that {@link #close()} may come from any thread.
  */
 public final class FramePipeline implements FrameSink {
     /** What the pipeline tells the screen. */
@@ -60,6 +62,9 @@ public final class FramePipeline implements FrameSink {
     public static final String DROP_OUT_OF_ORDER = "image came before its result, out of the burst's order";
     public static final String DROP_CLOSED = "pipeline closed";
 
+    /** An ID window reaches this share of the pose window's size beyond it, each side. */
+    public static final double ID_WINDOW_GROWTH = 0.25;
+
     private final FrameDescriber describer;
     private final GravityHistory attitude;
     private final boolean timestampsRealtime;
@@ -76,9 +81,10 @@ public final class FramePipeline implements FrameSink {
     /** Images seen, and the number of the last pose frame's: predicts the kind of an image that comes first. */
     private long imageCount;
     private long lastPoseImage = -1;
-    /** The last pose frame's panel window, for the ID frames after it. */
-    private Window lastPanel;
+    /** The last pose frame's ID window, for the ID frames after it. */
+    private Window lastIdWindow;
     private boolean closed;
+    private long burstsSubmitted;
 
     // any thread
     private final Map<String, Long> drops = new TreeMap<String, Long>();
@@ -125,7 +131,7 @@ public final class FramePipeline implements FrameSink {
     }
 
     @Override
-    public void onResult(FrameResult result) {
+    public synchronized void onResult(FrameResult result) {
         if (closed) {
             return;
         }
@@ -139,7 +145,7 @@ public final class FramePipeline implements FrameSink {
     }
 
     @Override
-    public void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride, int pixelStride) {
+    public synchronized void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride, int pixelStride) {
         if (closed) {
             return;
         }
@@ -153,8 +159,11 @@ public final class FramePipeline implements FrameSink {
         evictOldest(images, DROP_NO_RESULT);
     }
 
-    /** Drops whatever waits (a burst being gathered, a burst waiting to be sent); the frame in flight completes. */
-    public void close() {
+    /**
+     * Drops whatever waits (a burst being gathered, a burst waiting to be sent) and ignores later
+     * frames; the frame in flight completes. Any thread.
+     */
+    public synchronized void close() {
         closed = true;
         if (burst != null && burst.kept) {
             drop(DROP_CLOSED, burst.frames.size());
@@ -176,6 +185,11 @@ public final class FramePipeline implements FrameSink {
     /** True while a burst is being sent or waits. */
     public boolean uploading() {
         return uploader.busy();
+    }
+
+    /** Bursts handed to the uploader so far. */
+    public synchronized long burstsSubmitted() {
+        return burstsSubmitted;
     }
 
     private void handle(FrameResult result, Pixels pixels) {
@@ -203,7 +217,7 @@ public final class FramePipeline implements FrameSink {
         submitBurst();
         if (!uploader.hasRoom()) {
             burst = Burst.dropped(idFramesPerBurst);
-            lastPanel = null;
+            lastIdWindow = null;
             drop(DROP_UPLOADER_BUSY, 1);
             return;
         }
@@ -220,9 +234,9 @@ public final class FramePipeline implements FrameSink {
             drop(DROP_UPLOADER_BUSY, 1);
             return;
         }
-        lastPanel = panel;
-        burst = new Burst(panel, idFramesPerBurst);
-        burst.frames.add(new FrameUpload(luma, cut(meta, panel)));
+        lastIdWindow = idWindow(panel, meta.width, meta.height);
+        burst = new Burst(lastIdWindow, idFramesPerBurst);
+        burst.frames.add(new FrameUpload(luma, cut(meta, panel, pixels)));
         if (burst.remaining == 0) {
             submitBurst();
         }
@@ -236,14 +250,14 @@ public final class FramePipeline implements FrameSink {
         burst.remaining--;
         if (!burst.kept) {
             drop(DROP_UPLOADER_BUSY, 1);
-        } else if (burst.panel == null) {
+        } else if (burst.idWindow == null) {
             drop(DROP_NO_PANEL_FOR_ID, 1);
         } else {
-            byte[] luma = pixels.copy(burst.panel);
+            byte[] luma = pixels.copy(burst.idWindow);
             if (luma == null) {
                 drop(DROP_OUT_OF_ORDER, 1);
             } else {
-                burst.frames.add(new FrameUpload(luma, cut(meta, burst.panel)));
+                burst.frames.add(new FrameUpload(luma, cut(meta, burst.idWindow, pixels)));
             }
         }
         if (burst.remaining == 0) {
@@ -258,13 +272,33 @@ public final class FramePipeline implements FrameSink {
         if (b == null || !b.kept || b.frames.isEmpty()) {
             return;
         }
-        if (!uploader.submit(b.frames)) {
+        if (uploader.submit(b.frames)) {
+            burstsSubmitted++;
+        } else {
             drop(DROP_CLOSED, b.frames.size());
         }
     }
 
-    private static FrameMeta cut(FrameMeta meta, Window w) {
-        return w == null ? meta : meta.window(w.x0, w.y0, w.width(), w.height());
+    /**
+     * The window of a burst's ID frames: the pose frame's panel window grown by
+     * {@link #ID_WINDOW_GROWTH} of its size a side, since the panel moves in the ~0.15 s until the
+     * burst's last ID frame, and the decoder needs all the rows over the panel.
+     */
+    static Window idWindow(Window panel, int width, int height) {
+        return panel == null ? null : panel.grown(ID_WINDOW_GROWTH, width, height);
+    }
+
+    /** The frame's JSON for the window w (null: the whole frame), with its whole plane's grey levels. */
+    private static FrameMeta cut(FrameMeta meta, Window w, Pixels pixels) {
+        return w == null ? meta : meta.window(w.x0, w.y0, w.width(), w.height(), pixels.levels());
+    }
+
+    /**
+     * The whole plane's [background, plateau] by the contract's coarse rule, sent with its window
+     * ({@code crop.levels_dn}) so the server reads the window as the whole frame.
+     */
+    static double[] levelsOf(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
+        return null; // until FrameLevels lands: the server then measures the window itself
     }
 
     /**
@@ -275,17 +309,19 @@ public final class FramePipeline implements FrameSink {
                                  int pixelStride) {
         boolean predictId = lastPoseImage >= 0 && number - lastPoseImage <= idFramesPerBurst;
         if (predictId) {
-            Window w = lastPanel;
+            Window w = lastIdWindow;
             return new EarlyImage(number, false, null, w,
-                    w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w));
+                    w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w),
+                    w == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
         }
         lastPoseImage = number;
         Window panel = BeaconWindow.find(plane, width, height, rowStride, pixelStride);
-        lastPanel = panel;
+        lastIdWindow = idWindow(panel, width, height);
         // no panel: the whole plane goes (the server says why), but only when there is room for it
         Window region = panel != null ? panel : uploader.hasRoom() ? new Window(0, 0, width, height) : null;
         return new EarlyImage(number, true, panel, region,
-                region == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, region));
+                region == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, region),
+                panel == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
     }
 
     private <V> void evictOldest(LinkedHashMap<Long, V> waiting, String reason) {
@@ -313,19 +349,19 @@ public final class FramePipeline implements FrameSink {
     /** A pose frame and the ID frames gathered after it. */
     private static final class Burst {
         final boolean kept;
-        /** The pose frame's panel window, null when none was found. */
-        final Window panel;
+        /** The window its ID frames are cut to; null when the pose frame showed no panel. */
+        final Window idWindow;
         final List<FrameUpload> frames = new ArrayList<FrameUpload>();
         /** ID frames still to come. */
         int remaining;
 
-        Burst(Window panel, int idFrames) {
-            this(true, panel, idFrames);
+        Burst(Window idWindow, int idFrames) {
+            this(true, idWindow, idFrames);
         }
 
-        private Burst(boolean kept, Window panel, int idFrames) {
+        private Burst(boolean kept, Window idWindow, int idFrames) {
             this.kept = kept;
-            this.panel = panel;
+            this.idWindow = idWindow;
             this.remaining = idFrames;
         }
 
@@ -347,6 +383,9 @@ public final class FramePipeline implements FrameSink {
 
         /** The packed pixels of a window, or null when they were not kept. */
         byte[] copy(Window w);
+
+        /** The whole plane's grey levels ({@link #levelsOf}). */
+        double[] levels();
     }
 
     /** The camera's plane, during the onImage call. */
@@ -386,6 +425,11 @@ public final class FramePipeline implements FrameSink {
         public byte[] copy(Window w) {
             return LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w);
         }
+
+        @Override
+        public double[] levels() {
+            return levelsOf(plane, width, height, rowStride, pixelStride);
+        }
     }
 
     /** What was kept of an image that came before its result. */
@@ -395,13 +439,20 @@ public final class FramePipeline implements FrameSink {
         private final Window panel;
         private final Window region;
         private final byte[] pixels;
+        private final double[] levels;
 
-        EarlyImage(long number, boolean panelSearched, Window panel, Window region, byte[] pixels) {
+        EarlyImage(long number, boolean panelSearched, Window panel, Window region, byte[] pixels, double[] levels) {
             this.number = number;
             this.panelSearched = panelSearched;
             this.panel = panel;
             this.region = region;
             this.pixels = pixels;
+            this.levels = levels;
+        }
+
+        @Override
+        public double[] levels() {
+            return levels;
         }
 
         @Override

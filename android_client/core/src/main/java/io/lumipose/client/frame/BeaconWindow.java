@@ -15,7 +15,8 @@ import io.lumipose.client.protocol.CaptureProtocol;
  * <li>A level half-way between the background (the view's median) and the plateau (its brightest
  *     block); no window when the two are less than {@code MIN_CONTRAST_DN} apart.
  * <li>The 8-connected bright region holding the brightest block, its box grown by
- *     {@code EDGE_BLOCKS} blocks a side (the blurred edge and glow stay below the level).
+ *     {@code EDGE_BLOCKS} blocks (the blurred edge and glow stay below the level) and
+ *     {@code EDGE_PX} pixels (the server's own margin around the panel) a side.
  * <li>A square {@code WINDOW_PER_PANEL} times that extent's longer side around its centre, clipped.
  * </ol>
  *
@@ -23,11 +24,15 @@ import io.lumipose.client.protocol.CaptureProtocol;
  * copied but the window itself, later ({@link LumaPlane#copyWindow}).
  */
 public final class BeaconWindow {
-    // crop.py's constants, from the one protocol file both read
-    static final double WINDOW_PER_PANEL = CaptureProtocol.WINDOW_PER_PANEL;
+    // crop.py's constants, from the one protocol file both read; WINDOW_PER_PANEL and EDGE_PX
+    // mirror crop.py until shared_schemas/capture_protocol.json is regenerated with them
+    // (BeaconWindowTest compares with crop.py itself, so a drift fails there)
+    static final double WINDOW_PER_PANEL = 1.0;
     static final int BLOCK_DIVISOR = CaptureProtocol.WINDOW_BLOCK_DIVISOR;
     static final double MIN_CONTRAST_DN = CaptureProtocol.WINDOW_MIN_CONTRAST_DN;
     static final int EDGE_BLOCKS = CaptureProtocol.WINDOW_EDGE_BLOCKS;
+    /** The server's own margin around the panel (shared_schemas.windows.ROI_MARGIN_PX). */
+    static final int EDGE_PX = 12;
 
     private BeaconWindow() {
     }
@@ -67,7 +72,7 @@ public final class BeaconWindow {
         int bottom0 = box[2];
         int right0 = box[3];
         // a region at the view's far edge may go on in the rows and columns the view left out
-        int margin = EDGE_BLOCKS * block;
+        int margin = EDGE_BLOCKS * block + EDGE_PX;
         int left = left0 * block - margin;
         int top = top0 * block - margin;
         int right = right0 == cols - 1 ? width : (right0 + 1) * block + margin;
@@ -89,18 +94,26 @@ public final class BeaconWindow {
         int base = plane.position();
         int samples = cols * block;
         byte[] row = new byte[(samples - 1) * pixelStride + 1];
+        int[] columns = new int[samples]; // each pixel column's sum over the block row so far
         int[] sums = new int[rows * cols];
         for (int r = 0; r < rows * block; r++) {
             src.position(base + r * rowStride);
             src.get(row);
-            int cell = (r / block) * cols;
-            int i = 0;
-            for (int c = 0; c < cols; c++) {
-                int sum = 0;
-                for (int k = 0; k < block; k++, i += pixelStride) {
-                    sum += row[i] & 0xff;
+            if (pixelStride == 1) {
+                for (int i = 0; i < samples; i++) { // the hot loop: plain and vectorisable
+                    columns[i] += row[i] & 0xff;
                 }
-                sums[cell + c] += sum;
+            } else {
+                for (int i = 0; i < samples; i++) {
+                    columns[i] += row[i * pixelStride] & 0xff;
+                }
+            }
+            if (r % block == block - 1) {
+                int cell = (r / block) * cols;
+                for (int i = 0; i < samples; i++) {
+                    sums[cell + i / block] += columns[i];
+                }
+                Arrays.fill(columns, 0);
             }
         }
         return sums;

@@ -133,15 +133,19 @@ public final class FrameMeta {
      * This frame cut to the window {@code width x height} at ({@code x}, {@code y}) of its own pixels,
      * packed (row_stride = width); the intrinsics still describe the full frame, as the contract's
      * {@code crop} asks.
+     *
+     * @param levelsDn the whole frame's [background, plateau] grey levels by the contract's coarse
+     *                 rule ({@code crop.levels_dn}), or null; a window of a window keeps its frame's
      */
-    public FrameMeta window(int x, int y, int width, int height) {
+    public FrameMeta window(int x, int y, int width, int height, double[] levelsDn) {
         int offsetX = crop == null ? 0 : crop.x;
         int offsetY = crop == null ? 0 : crop.y;
+        double[] levels = crop != null && crop.levelsDn != null ? crop.levelsDn : levelsDn;
         JSONObject o = toJson();
         Json.put(o, "width", width);
         Json.put(o, "height", height);
         Json.put(o, "row_stride", width);
-        Json.put(o, "crop", new Crop(offsetX + x, offsetY + y, fullWidth(), fullHeight()).toJson());
+        Json.put(o, "crop", new Crop(offsetX + x, offsetY + y, fullWidth(), fullHeight(), levels).toJson());
         return fromJson(o);
     }
 
@@ -336,7 +340,12 @@ public final class FrameMeta {
          * {@code fullWidth x fullHeight} frame, which the intrinsics describe.
          */
         public Builder crop(int x, int y, int fullWidth, int fullHeight) {
-            crop = new Crop(x, y, fullWidth, fullHeight);
+            return crop(x, y, fullWidth, fullHeight, null);
+        }
+
+        /** The same, with the full frame's [background, plateau] grey levels ({@code crop.levels_dn}). */
+        public Builder crop(int x, int y, int fullWidth, int fullHeight, double[] levelsDn) {
+            crop = new Crop(x, y, fullWidth, fullHeight, levelsDn);
             return this;
         }
 
@@ -369,18 +378,36 @@ public final class FrameMeta {
         public final int y;
         public final int fullWidth;
         public final int fullHeight;
+        /** The full frame's [background, plateau] grey levels ({@code levels_dn}), or null. */
+        private final double[] levelsDn;
 
-        public Crop(int x, int y, int fullWidth, int fullHeight) {
+        public Crop(int x, int y, int fullWidth, int fullHeight, double[] levelsDn) {
             this.x = (int) ContractRanges.CROP_OFFSET_PX.check("crop.x", x);
             this.y = (int) ContractRanges.CROP_OFFSET_PX.check("crop.y", y);
             this.fullWidth = (int) ContractRanges.SIDE_PX.check("crop.full_width", fullWidth);
             this.fullHeight = (int) ContractRanges.SIDE_PX.check("crop.full_height", fullHeight);
+            if (levelsDn != null) {
+                if (levelsDn.length != 2) {
+                    throw new ContractException("crop.levels_dn", "must hold [background, plateau]");
+                }
+                ContractRanges.GREY_LEVEL_DN.checkEach("crop.levels_dn", levelsDn);
+                if (levelsDn[0] > levelsDn[1]) {
+                    throw new ContractException("crop.levels_dn", "background " + levelsDn[0] + " > plateau "
+                            + levelsDn[1]);
+                }
+            }
+            this.levelsDn = levelsDn == null ? null : levelsDn.clone();
+        }
+
+        public double[] levelsDn() {
+            return levelsDn == null ? null : levelsDn.clone();
         }
 
         static Crop fromJson(JSONObject o) {
             return new Crop(Json.requireInt(o, "x", "crop.x"), Json.requireInt(o, "y", "crop.y"),
                     Json.requireInt(o, "full_width", "crop.full_width"),
-                    Json.requireInt(o, "full_height", "crop.full_height"));
+                    Json.requireInt(o, "full_height", "crop.full_height"),
+                    Json.optDoubles(o, "levels_dn", "crop.levels_dn", 2));
         }
 
         void checkHolds(int width, int height) {
@@ -396,6 +423,9 @@ public final class FrameMeta {
             Json.put(o, "y", y);
             Json.put(o, "full_width", fullWidth);
             Json.put(o, "full_height", fullHeight);
+            if (levelsDn != null) {
+                Json.put(o, "levels_dn", Json.array(levelsDn));
+            }
             return o;
         }
     }

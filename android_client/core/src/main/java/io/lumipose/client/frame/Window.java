@@ -31,6 +31,14 @@ public final class Window {
         return x1 <= width && y1 <= height;
     }
 
+    /** This window grown by {@code fraction} of its width and height a side, clipped to a width x height frame. */
+    public Window grown(double fraction, int width, int height) {
+        int dx = (int) Math.ceil(fraction * width());
+        int dy = (int) Math.ceil(fraction * height());
+        return new Window(Math.max(0, x0 - dx), Math.max(0, y0 - dy), Math.min(width, x1 + dx),
+                Math.min(height, y1 + dy));
+    }
+
     /** True when {@code w} lies inside this window. */
     public boolean contains(Window w) {
         return w.x0 >= x0 && w.y0 >= y0 && w.x1 <= x1 && w.y1 <= y1;

@@ -186,10 +186,12 @@ class FramePipelineTest {
             assertEquals(f.t(), m.timestampNs.longValue(), "in capture order, pose first");
             assertEquals(f.result.request, m.frameKind);
             Frame pose = frames.get(i - i % (plan.idFramesPerBurst + 1));
-            Window w = BeaconWindow.find(pose.packed, W, H);
+            Window panel = BeaconWindow.find(pose.packed, W, H);
+            Window w = f == pose ? panel : FramePipeline.idWindow(panel, W, H);
             assertNotNull(m.crop);
             assertEquals(w, new Window(m.crop.x, m.crop.y, m.crop.x + m.width, m.crop.y + m.height),
-                    "the pose frame's beacon window, for its ID frames too");
+                    "the pose frame's beacon window, grown for its ID frames");
+            assertTrue(w.contains(panel));
             assertEquals(W, m.fullWidth());
             assertArrayEquals(LumaPlane.copyWindow(ByteBuffer.wrap(f.packed), W, H, W, 1, w), r.bodies.get(i));
         }

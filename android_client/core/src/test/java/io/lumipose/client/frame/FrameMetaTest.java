@@ -82,7 +82,7 @@ class FrameMetaTest {
         FrameMeta whole = FrameMeta.builder(640, 480).camera(K).timestampNs(5L).frameKind("id").toneCurve("linear")
                 .build();
         assertNull(whole.crop);
-        FrameMeta w = whole.window(100, 50, 200, 120);
+        FrameMeta w = whole.window(100, 50, 200, 120, new double[] {12, 240});
         assertEquals(200, w.width);
         assertEquals(120, w.height);
         assertEquals(200, w.rowStride);
@@ -98,9 +98,12 @@ class FrameMetaTest {
         FrameMeta back = FrameMeta.fromJson(w.toJson().toString());
         assertEquals(50, back.crop.y);
         assertEquals("linear", back.toJson().getString("tone_curve"));
-        FrameMeta inner = w.window(10, 20, 50, 60);
+        FrameMeta inner = w.window(10, 20, 50, 60, new double[] {99, 100});
         assertEquals(110, inner.crop.x, "a window of a window is placed in the full frame");
         assertEquals(70, inner.crop.y);
+        assertArrayEquals(new double[] {12, 240}, inner.crop.levelsDn(), 0, "a window of a window keeps its frame's levels");
+        assertArrayEquals(new double[] {12, 240}, back.crop.levelsDn(), 0);
+        assertThrows(ContractException.class, () -> whole.window(0, 0, 10, 10, new double[] {200, 100}));
         assertEquals(200L * 120, w.frameBytes());
     }
 
