@@ -22,6 +22,7 @@ from shared_schemas.models import (
     OrientationRule,
     PanelShape,
     ProfileRef,
+    ToneCurve,
     TrackState,
     VlcReading,
 )
@@ -63,6 +64,7 @@ __all__ = [
     "OrientationRule",
     "PanelShape",
     "ProfileRef",
+    "ToneCurve",
     "TrackState",
     "VlcReading",
     "device_profiles",

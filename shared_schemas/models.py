@@ -196,6 +196,13 @@ class FrameKind(StrEnum):
     id = "id"  # short exposure (<= 1/8000 s) beside a pose frame: the rolling shutter shows the code as stripes
 
 
+class ToneCurve(StrEnum):
+    """The tone curve the phone applied to the frame (Camera2 TONEMAP_MODE)."""
+
+    linear = "linear"  # the linear contrast curve the app asked for: the response the clipped-edge model assumes
+    device = "device"  # the device's own tone curve (the app's request was not applied or not possible)
+
+
 class GroundTruth(Open):
     position_m: PositionM = Field(description="camera optical centre, map frame")
     rotation_wc: Rotation = Field(description="camera-to-world rotation")
@@ -247,6 +254,11 @@ class FrameMeta(Open):
     gravity_camera: GravityVec | None = None
     ground_truth: GroundTruth | None = None
     crop: Crop | None = Field(default=None, description="present when the pixels are a window of a larger frame")
+    tone_curve: ToneCurve | None = Field(
+        default=None,
+        description="'linear' when the phone applied the linear contrast curve it asked for, 'device' when the "
+        "device's own tone curve was used; absent means unknown (recorded, not used by the server)",
+    )
     frame_kind: FrameKind = Field(
         default=FrameKind.pose,
         description="'id' marks a short-exposure VLC frame (exposure_s <= 2e-4, needs rolling_shutter_skew_s "

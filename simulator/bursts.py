@@ -42,11 +42,9 @@ def id_frame_times(
     return [t_s + pose_exposure_s + ID_GAP_S + j * interval_s for j in range(frames)]
 
 
-def burst_span_s(scene: Scene, frames: int = ID_BURST_FRAMES, interval_s: float = id_frame_interval_s()) -> float:
-    """From a capture's pose frame start to its last ID frame's end."""
-    if frames == 0:
-        return scene.sensor.exposure_s
-    return id_frame_times(0.0, scene.sensor.exposure_s, frames, interval_s)[-1] + scene.id_frames.exposure_s
+def burst_span_s(scene: Scene) -> float:
+    """From the start of a capture's pose frame to the end of its last ID frame's exposure."""
+    return id_frame_times(0.0, scene.sensor.exposure_s)[-1] + scene.id_frames.exposure_s
 
 
 def capture_starts(times_s: list[float], span_s: float) -> list[float]:

@@ -211,11 +211,11 @@ def parallel_map(function: Callable, items: list, workers: int | None, label: st
             pool.shutdown(cancel_futures=True)
 
 
-def _write_one(args: tuple[Scene, SamplePose, Path]) -> list[str]:
+def _write_one(args: tuple[Scene, SamplePose, Path]) -> str:
     scene, sample, out_dir = args
     pixels, meta = render_pose(scene, sample)
     raw, _ = write_fixture(out_dir / f"{scene.name}_{sample.index:04d}", pixels, meta)
-    return [raw.stem]
+    return raw.stem
 
 
 def _write_burst(args: tuple[Scene, SamplePose, Path, float]) -> list[str]:
@@ -250,7 +250,7 @@ def write_series(scene: Scene, out_dir: Path, workers: int | None = None, bursts
     label = f"simulate {scene.name}"
     if bursts:
         starts = capture_starts([sample.t_s for sample in samples], burst_span_s(scene))
-        jobs: list = [(scene, sample, out_dir, start) for sample, start in zip(samples, starts)]
-        return [stem for stems in parallel_map(_write_burst, jobs, workers, label) for stem in stems]
+        captures = [(scene, sample, out_dir, start) for sample, start in zip(samples, starts)]
+        return [stem for stems in parallel_map(_write_burst, captures, workers, label) for stem in stems]
     jobs = [(scene, sample, out_dir) for sample in samples]
-    return [stem for stems in parallel_map(_write_one, jobs, workers, label) for stem in stems]
+    return list(parallel_map(_write_one, jobs, workers, label))

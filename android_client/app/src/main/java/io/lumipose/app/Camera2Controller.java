@@ -24,6 +24,7 @@ import java.util.Collections;
 import java.util.List;
 
 import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.CameraLifecycle;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CaptureOptions;
 import io.lumipose.client.capture.CapturePlan;
@@ -66,9 +67,7 @@ final class Camera2Controller {
     /** UI thread: stop() was called. */
     private boolean stopRequested;
     // Camera thread only from here on.
-    private boolean closing;
-    /** openCamera was called and neither onOpened nor onError has come. */
-    private boolean opening;
+    private final CameraLifecycle lifecycle = new CameraLifecycle();
     private CameraDevice camera;
     private CameraCaptureSession session;
     private ImageReader reader;
@@ -131,22 +130,25 @@ final class Camera2Controller {
     }
 
     private void close() {
-        closing = true;
         sink = null;
         if (session != null) {
             session.close();
             session = null;
         }
-        if (camera != null) {
-            camera.close(); // onClosed quits the thread
-            camera = null;
-        } else if (!opening) {
-            quit();
-        }
-        // else: onOpened is in flight; it closes the device, whose onClosed quits.
+        // With openCamera in flight this waits: onOpened closes the device, whose onClosed quits.
+        act(lifecycle.stop(), camera);
     }
 
-    /** The reader goes last: the closed camera writes no more into its surface. Idempotent. */
+    private void act(CameraLifecycle.Action action, CameraDevice device) {
+        if (action == CameraLifecycle.Action.CLOSE_DEVICE) {
+            camera = null;
+            device.close();
+        } else if (action == CameraLifecycle.Action.QUIT) {
+            quit();
+        }
+    }
+
+    /** The reader goes last: the closed camera writes no more into its surface. */
     private void quit() {
         if (reader != null) {
             reader.close();
@@ -171,7 +173,7 @@ final class Camera2Controller {
     }
 
     private void open() {
-        if (closing) {
+        if (lifecycle.isClosing()) {
             return;
         }
         if (context.checkSelfPermission(Manifest.permission.CAMERA) != PackageManager.PERMISSION_GRANTED) {
@@ -195,7 +197,7 @@ final class Camera2Controller {
                     MAX_IMAGES);
             reader.setOnImageAvailableListener(this::deliver, handler);
             manager.openCamera(id, stateCallback(facts, plan), handler);
-            opening = true; // callbacks come on this thread, after this method returns
+            lifecycle.opening(); // callbacks come on this thread, after this method returns
         } catch (UnsupportedCameraException e) {
             listener.onUnsupported(e.getMessage());
         } catch (IllegalArgumentException e) {
@@ -211,46 +213,39 @@ final class Camera2Controller {
         return new CameraDevice.StateCallback() {
             @Override
             public void onOpened(CameraDevice device) {
-                opening = false;
-                if (closing) {
-                    device.close(); // stop() came while opening: onClosed quits
-                    return;
+                if (lifecycle.onOpened() == CameraLifecycle.Action.USE_DEVICE) {
+                    camera = device;
+                    startSession(facts, plan);
+                } else {
+                    device.close(); // stop() came while opening
                 }
-                camera = device;
-                startSession(facts, plan);
             }
 
             @Override
             public void onClosed(CameraDevice device) {
-                if (closing) {
-                    quit();
-                }
+                act(lifecycle.onClosed(), device);
             }
 
             @Override
             public void onDisconnected(CameraDevice device) {
-                opening = false;
-                camera = null;
-                device.close();
-                if (closing) {
-                    quit(); // a device that failed may never report onClosed
-                } else {
-                    listener.onError("Camera disconnected.");
-                }
+                failed(device, "Camera disconnected.");
             }
 
             @Override
             public void onError(CameraDevice device, int error) {
-                opening = false;
-                camera = null;
-                device.close();
-                if (closing) {
-                    quit();
-                } else {
-                    listener.onError("Camera error " + error + ".");
-                }
+                failed(device, "Camera error " + error + ".");
             }
         };
+    }
+
+    private void failed(CameraDevice device, String message) {
+        camera = null;
+        device.close();
+        boolean stopping = lifecycle.isClosing();
+        act(lifecycle.onFailed(), device);
+        if (!stopping) {
+            listener.onError(message);
+        }
     }
 
     private void startSession(final CameraFacts facts, final CapturePlan plan) {
@@ -259,7 +254,7 @@ final class Camera2Controller {
                     new CameraCaptureSession.StateCallback() {
                         @Override
                         public void onConfigured(CameraCaptureSession s) {
-                            if (closing || camera == null) {
+                            if (lifecycle.isClosing() || camera == null) {
                                 return;
                             }
                             session = s;
@@ -277,7 +272,7 @@ final class Camera2Controller {
 
                         @Override
                         public void onConfigureFailed(CameraCaptureSession s) {
-                            if (!closing) {
+                            if (!lifecycle.isClosing()) {
                                 listener.onError("The camera refused the YUV_420_888 stream.");
                             }
                         }

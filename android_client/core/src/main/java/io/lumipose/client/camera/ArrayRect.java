@@ -23,4 +23,24 @@ public final class ArrayRect {
     public static ArrayRect ofSize(int width, int height) {
         return new ArrayRect(0, 0, width, height);
     }
+
+    @Override
+    public boolean equals(Object o) {
+        if (!(o instanceof ArrayRect)) {
+            return false;
+        }
+        ArrayRect r = (ArrayRect) o;
+        return r.left == left && r.top == top && r.width == width && r.height == height;
+    }
+
+    @Override
+    public int hashCode() {
+        return ((left * 31 + top) * 31 + width) * 31 + height;
+    }
+
+    /** As Camera2's JSON writes it: [left, top, width, height]. */
+    @Override
+    public String toString() {
+        return "[" + left + ", " + top + ", " + width + ", " + height + "]";
+    }
 }

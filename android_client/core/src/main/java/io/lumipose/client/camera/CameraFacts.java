@@ -358,8 +358,9 @@ public final class CameraFacts {
         if ("per_frame_control".equals(v)) {
             return SYNC_PER_FRAME_CONTROL;
         }
-        if (v instanceof Integer && (Integer) v > 0) {
-            return (Integer) v;
+        if ((v instanceof Integer || v instanceof Long) && ((Number) v).longValue() > 0
+                && ((Number) v).longValue() <= Integer.MAX_VALUE) {
+            return ((Number) v).intValue();
         }
         throw new ContractException("sync_max_latency", "must be \"per_frame_control\", \"unknown\" or a frame count > 0, got " + v);
     }

@@ -4,9 +4,10 @@ import java.util.ArrayList;
 import java.util.List;
 
 /**
- * Intrinsics for an output stream, from what Camera2 advertises.
+ * Intrinsics for an output stream, from what Camera2 reports: {@link #forFrame} per frame, from its
+ * capture result; the two older building blocks below take the values directly.
  *
- * <p>An output stream is the source rectangle (the active array) scaled by
+ * <p>An output stream is the source rectangle (the crop region) scaled by
  * s = max(w / W, h / H) and centre-cropped to w x h. The mapping is applied in edge coordinates
  * (pixel centres at x + 0.5, Camera2's convention); the contract's OpenCV convention (centres at
  * integers) is then half a pixel less. Shifting before scaling would be wrong by (s - 1) / 2 px.
@@ -31,15 +32,9 @@ public final class IntrinsicsCalculator {
             throw new IllegalArgumentException("LENS_INTRINSIC_CALIBRATION must be 5 finite values with fx, fy > 0");
         }
         double scale = scale(streamSource, output);
-        double cropX = (scale * streamSource.width - output.width) / 2.0;
-        double cropY = (scale * streamSource.height - output.height) / 2.0;
-        // Calibration is relative to the pre-correction array; the stream to its source rectangle.
-        double cxSource = calibration[2] - (streamSource.left - preCorrection.left);
-        double cySource = calibration[3] - (streamSource.top - preCorrection.top);
-        double cx = scale * cxSource - cropX - 0.5;
-        double cy = scale * cySource - cropY - 0.5;
-        return new Intrinsics(scale * calibration[0], scale * calibration[1], cx, cy, distortionOpenCv,
-                null, null, device);
+        double[] principal = principalPoint(calibration[2], calibration[3], preCorrection, streamSource, output);
+        return new Intrinsics(scale * calibration[0], scale * calibration[1], principal[0], principal[1],
+                distortionOpenCv, null, null, device);
     }
 
     /** fx must lie within this fraction of focal length / pixel pitch. */
@@ -110,8 +105,8 @@ public final class IntrinsicsCalculator {
         }
         if (cropRegion.left < 0 || cropRegion.top < 0 || cropRegion.left + cropRegion.width > base.width
                 || cropRegion.top + cropRegion.height > base.height) {
-            throw new IllegalArgumentException("SCALER_CROP_REGION [" + cropRegion.left + ", " + cropRegion.top + ", "
-                    + cropRegion.width + ", " + cropRegion.height + "] exceeds its array " + base.width + "x" + base.height);
+            throw new IllegalArgumentException("SCALER_CROP_REGION " + cropRegion + " exceeds its array "
+                    + base.width + "x" + base.height);
         }
         return new ArrayRect(base.left + cropRegion.left, base.top + cropRegion.top, cropRegion.width, cropRegion.height);
     }

@@ -1,5 +1,7 @@
 package io.lumipose.client.capture;
 
+import io.lumipose.client.protocol.CaptureProtocol;
+
 /** What the user and the map ask of the capture; the camera's facts then decide what is possible. */
 public final class CaptureOptions {
     /** Exposure of the pose frames, ns. */
@@ -35,6 +37,16 @@ public final class CaptureOptions {
         this.beaconsInMap = beaconsInMap;
         this.ceilingDistanceM = ceilingDistanceM;
         this.maxPixels = maxPixels;
+    }
+
+    /**
+     * The capture protocol's exposures (shared_schemas/capture_protocol.json): the pose frame a
+     * whole number of messages long, ID frames at the server's short exposure when {@code readBeaconIds}.
+     */
+    public static CaptureOptions fromProtocol(boolean readBeaconIds, int beaconsInMap, double ceilingDistanceM,
+                                              long maxPixels) {
+        return new CaptureOptions(CaptureProtocol.POSE_EXPOSURE_NS, readBeaconIds ? CaptureProtocol.ID_EXPOSURE_NS : 0,
+                beaconsInMap, ceilingDistanceM, maxPixels);
     }
 
     /** ID frames are asked for and there is more than one beacon to tell apart. */

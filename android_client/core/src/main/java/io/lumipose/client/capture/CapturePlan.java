@@ -96,10 +96,17 @@ public final class CapturePlan {
         if (!options.wantsIdFrames()) {
             return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
         }
-        CaptureSettings idSettings = IdCapturePlan.choose(ranges, options.idExposureNs, poseSettings,
-                IdCapturePlan.DEFAULT_BRIGHTNESS_FRACTION);
+        CaptureSettings idSettings;
+        try {
+            idSettings = IdCapturePlan.choose(ranges, options.idExposureNs, poseSettings,
+                    CaptureProtocol.ID_BRIGHTNESS_FRACTION);
+        } catch (UnsupportedCameraException e) {
+            // The pose frames are still good: position without beacon IDs.
+            notes.add(e.getMessage());
+            return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
+        }
         notes.addAll(idSettings.notes);
-        int n = IdCapturePlan.BURST_FRAMES;
+        int n = CaptureProtocol.ID_BURST_FRAMES;
         long idFramesNs = n * idSettings.frameDurationNs;
         long minimumCycleNs = poseSettings.frameDurationNs + idFramesNs;
         long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, CaptureProtocol.GOLDEN_STEP);

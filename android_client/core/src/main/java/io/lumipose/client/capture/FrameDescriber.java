@@ -80,8 +80,8 @@ public final class FrameDescriber {
         }
         RequestSpec spec = plan.spec(kind);
         if (result.cropRegion != null && !near(result.cropRegion, spec.cropRegion)) {
-            return drop(kind, "SCALER_CROP_REGION " + text(result.cropRegion) + " is not the requested "
-                    + text(spec.cropRegion), warnings);
+            return drop(kind, "SCALER_CROP_REGION " + result.cropRegion + " is not the requested "
+                    + spec.cropRegion, warnings);
         }
         if (RequestSpec.ID.equals(kind) && result.rollingShutterSkewNs == null) {
             return drop(kind, "no rolling-shutter skew: beacon IDs off", warnings);
@@ -95,6 +95,17 @@ public final class FrameDescriber {
         } catch (IllegalArgumentException e) {
             return drop(kind, e.getMessage(), warnings);
         }
+        try {
+            return new Described(meta(result, kind, spec, camera, gravityDevice, deviceToEnu, warnings), kind, null,
+                    warnings);
+        } catch (IllegalArgumentException e) {
+            return drop(kind, e.getMessage(), warnings); // a value the contract refuses, named
+        }
+    }
+
+    /** The frame's JSON in the contract's units: exposure, ISO and skew as the result reports them. */
+    private FrameMeta meta(FrameResult result, String kind, RequestSpec spec, Intrinsics camera, float[] gravityDevice,
+                           float[] deviceToEnu, List<String> warnings) {
         FrameMeta.Builder b = FrameMeta.builder(plan.output.width, plan.output.height)
                 .rowStride(plan.output.width)
                 .camera(camera)
@@ -121,11 +132,7 @@ public final class FrameDescriber {
         if (deviceToEnu != null && facing != null && mapXBearingDeg != null) {
             b.headingDeg(HeadingEstimator.cameraYawDeg(deviceToEnu, facts.sensorOrientationDeg, facing, mapXBearingDeg));
         }
-        try {
-            return new Described(b.build(), kind, null, warnings);
-        } catch (IllegalArgumentException e) {
-            return drop(kind, e.getMessage(), warnings);
-        }
+        return b.build();
     }
 
     /**
@@ -162,10 +169,6 @@ public final class FrameDescriber {
         return Math.abs(a.left - b.left) <= CROP_TOLERANCE_PX && Math.abs(a.top - b.top) <= CROP_TOLERANCE_PX
                 && Math.abs(a.left + a.width - b.left - b.width) <= CROP_TOLERANCE_PX
                 && Math.abs(a.top + a.height - b.top - b.height) <= CROP_TOLERANCE_PX;
-    }
-
-    private static String text(ArrayRect r) {
-        return "[" + r.left + ", " + r.top + ", " + r.width + ", " + r.height + "]";
     }
 
     private String syncName() {

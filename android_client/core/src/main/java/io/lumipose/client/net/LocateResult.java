@@ -45,7 +45,7 @@ public final class LocateResult {
     private final Integer beaconsInView;
     private final Track track;
 
-    /** A device's motion-filtered track at this frame (the contract's {@code TrackState}); the fix stays in positionM. */
+    /** A device's motion-filtered track at this frame (the contract's {@code TrackState}); the fix is positionM. */
     public static final class Track {
         private final double[] filteredPositionM;
         private final double[] velocityMps;

@@ -22,26 +22,24 @@ public final class CaptureProtocol {
     private static final JSONObject FILE = load();
 
     /** The beacons' chip rate, Hz, and the chips of one repeating message. */
-    public static final double CHIP_RATE_HZ = Json.requireDouble(FILE, "chip_rate_hz", "chip_rate_hz");
-    public static final int MESSAGE_CHIPS = Json.requireInt(FILE, "message_chips", "message_chips");
+    public static final double CHIP_RATE_HZ = number("chip_rate_hz");
+    public static final int MESSAGE_CHIPS = integer("message_chips");
     /** (3 - sqrt 5) / 2: the message-phase step between captures that spreads their bursts most evenly. */
-    public static final double GOLDEN_STEP = Json.requireDouble(FILE, "golden_step", "golden_step");
+    public static final double GOLDEN_STEP = number("golden_step");
     /** ID frames after each pose frame, each this fraction of a message later in the message. */
-    public static final int ID_BURST_FRAMES = Json.requireInt(FILE, "id_burst_frames", "id_burst_frames");
-    public static final double ID_BURST_STEP = Json.requireDouble(FILE, "id_burst_step", "id_burst_step");
-    /** Pose frames' exposure (the paper's 10 ms), the ID frames' default, and the longest ID exposure the server reads. */
+    public static final int ID_BURST_FRAMES = integer("id_burst_frames");
+    public static final double ID_BURST_STEP = number("id_burst_step");
+    /** Pose frames' exposure (the paper's 10 ms), ID frames' default, the longest ID exposure the server reads. */
     public static final long POSE_EXPOSURE_NS = nanos("pose_exposure_s");
     public static final long ID_EXPOSURE_NS = nanos("id_exposure_s");
     public static final long ID_MAX_EXPOSURE_NS = nanos("id_max_exposure_s");
-    /** ID-frame brightness (exposure x ISO) as a fraction of the pose frame's: the pose frame's panel clips ~4x over. */
-    public static final double ID_BRIGHTNESS_FRACTION = Json.requireDouble(FILE, "id_brightness_fraction",
-            "id_brightness_fraction");
+    /** ID-frame brightness (exposure x ISO) as a share of the pose frame's: the pose frame's panel clips ~4x over. */
+    public static final double ID_BRIGHTNESS_FRACTION = number("id_brightness_fraction");
     /** The beacon window's rule (lumipose_client/crop.py): window size per panel extent, coarse-view blocks, ... */
-    public static final double WINDOW_PER_PANEL = Json.requireDouble(FILE, "window_per_panel", "window_per_panel");
-    public static final int WINDOW_BLOCK_DIVISOR = Json.requireInt(FILE, "window_block_divisor", "window_block_divisor");
-    public static final double WINDOW_MIN_CONTRAST_DN = Json.requireDouble(FILE, "window_min_contrast_dn",
-            "window_min_contrast_dn");
-    public static final int WINDOW_EDGE_BLOCKS = Json.requireInt(FILE, "window_edge_blocks", "window_edge_blocks");
+    public static final double WINDOW_PER_PANEL = number("window_per_panel");
+    public static final int WINDOW_BLOCK_DIVISOR = integer("window_block_divisor");
+    public static final double WINDOW_MIN_CONTRAST_DN = number("window_min_contrast_dn");
+    public static final int WINDOW_EDGE_BLOCKS = integer("window_edge_blocks");
 
     private CaptureProtocol() {
     }
@@ -51,8 +49,16 @@ public final class CaptureProtocol {
         return Math.round(MESSAGE_CHIPS / CHIP_RATE_HZ * 1e9);
     }
 
+    private static double number(String key) {
+        return Json.requireDouble(FILE, key, key);
+    }
+
+    private static int integer(String key) {
+        return Json.requireInt(FILE, key, key);
+    }
+
     private static long nanos(String secondsKey) {
-        return Math.round(Json.requireDouble(FILE, secondsKey, secondsKey) * 1e9);
+        return Math.round(number(secondsKey) * 1e9);
     }
 
     private static JSONObject load() {

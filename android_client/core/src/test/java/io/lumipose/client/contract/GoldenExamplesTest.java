@@ -129,14 +129,12 @@ class GoldenExamplesTest {
         assertDeclared(schema, id, "ID frame");
         JSONArray kinds = schema.getJSONObject("$defs").getJSONObject("FrameKind").getJSONArray("enum");
         assertTrue(kinds.toList().contains(id.getString("frame_kind")), "frame_kind values: " + kinds);
+        JSONArray curves = schema.getJSONObject("$defs").getJSONObject("ToneCurve").getJSONArray("enum");
+        assertTrue(curves.toList().contains(pose.getString("tone_curve")), "tone_curve values: " + curves);
     }
 
     private static void assertDeclared(JSONObject schema, JSONObject sent, String what) {
         Set<String> declared = new HashSet<>(schema.getJSONObject("properties").keySet());
-        // TODO(i12-python): drop once frame.schema.json declares tone_curve (issue 12, item 5).
-        if (what.contains("frame")) {
-            declared.add("tone_curve");
-        }
         for (Iterator<String> it = sent.keys(); it.hasNext(); ) {
             String k = it.next();
             assertTrue(declared.contains(k), what + " field '" + k + "' is not in the JSON Schema");

@@ -1,0 +1,33 @@
+package io.lumipose.client.camera;
+
+import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertNull;
+
+import java.util.Arrays;
+
+import org.junit.jupiter.api.Test;
+
+/** The values are Camera2's public constants (CameraMetadata). */
+class Camera2NamesTest {
+    @Test
+    void camera2ConstantsByName() {
+        assertEquals("back", Camera2Names.lensFacing(1)); // LENS_FACING_BACK
+        assertEquals("manual_sensor", Camera2Names.capability(1));
+        assertEquals("logical_multi_camera", Camera2Names.capability(11));
+        assertEquals("realtime", Camera2Names.timestampSource(1));
+        assertEquals("uncalibrated", Camera2Names.focusDistanceCalibration(0));
+        assertEquals("contrast_curve", Camera2Names.tonemapMode(0));
+        assertEquals("minimal", Camera2Names.noiseReductionMode(3));
+        assertEquals("none", Camera2Names.rotateAndCrop(0));
+        assertEquals(CameraFacts.SYNC_UNKNOWN, Camera2Names.syncMaxLatency(-1));
+        assertEquals(CameraFacts.SYNC_PER_FRAME_CONTROL, Camera2Names.syncMaxLatency(0));
+        assertEquals(3, Camera2Names.syncMaxLatency(3));
+    }
+
+    @Test
+    void unknownValuesKeepTheirNumber() {
+        assertEquals("42", Camera2Names.capability(42));
+        assertEquals(Arrays.asList("off", "17"), Camera2Names.names(new int[] {0, 17}, Camera2Names::edgeMode));
+        assertNull(Camera2Names.names(null, Camera2Names::edgeMode));
+    }
+}

@@ -1,0 +1,143 @@
+package io.lumipose.client.capture;
+
+import static org.junit.jupiter.api.Assertions.assertArrayEquals;
+import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertNull;
+import static org.junit.jupiter.api.Assertions.assertTrue;
+
+import org.junit.jupiter.api.Test;
+
+import io.lumipose.client.camera.ArrayRect;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.Devices;
+import io.lumipose.client.camera.FrameResult;
+import io.lumipose.client.frame.FrameMeta;
+
+class FrameDescriberTest {
+    private static final float[] SCREEN_UP = {0, 0, 9.81f};
+    private static final float[] IDENTITY = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+
+    private final CameraFacts facts = Devices.load(Devices.LOGICAL);
+    private final CapturePlan plan = plan(facts, 4);
+    private final FrameDescriber describer = new FrameDescriber(facts, plan, null);
+
+    private static CapturePlan plan(CameraFacts facts, int beacons) {
+        try {
+            return CapturePlan.plan(facts, new CaptureOptions(8_400_000L, 125_000L, beacons, 2.0, 3_200_000L));
+        } catch (UnsupportedCameraException e) {
+            throw new AssertionError(e);
+        }
+    }
+
+    /** What the device reports when it did as asked. */
+    private static FrameResult.Builder asAsked(RequestSpec spec, long timestampNs) {
+        return FrameResult.builder(timestampNs).request(spec.kind).exposureNs(spec.exposureNs)
+                .sensitivityIso(spec.sensitivityIso).frameDurationNs(spec.frameDurationNs)
+                .rollingShutterSkewNs(20_000_000L).focalLengthMm(4.8).cropRegion(spec.cropRegion)
+                .oisMode("off").tonemapMode("contrast_curve").distortionCorrectionMode("off").zoomRatio(1.0)
+                .rotateAndCrop("none");
+    }
+
+    @Test
+    void aPoseFrameInTheContractsUnits() {
+        FrameDescriber.Described d = describer.describe(asAsked(plan.pose, 55L).build(), SCREEN_UP, null);
+        assertNull(d.dropReason);
+        assertEquals("pose", d.kind);
+        FrameMeta m = d.meta;
+        assertEquals(2000, m.width);
+        assertEquals(2000, m.rowStride);
+        assertEquals(0.0084, m.exposureS, 1e-15);
+        assertEquals(50.0, m.iso);
+        assertEquals(0.02, m.rollingShutterSkewS, 1e-15);
+        assertEquals(55L, m.timestampNs);
+        assertEquals("pose", m.frameKind);
+        assertEquals(1500, m.camera.fx, 1e-9); // from the result's 4.8 mm (DeviceIntrinsicsTest)
+        assertEquals("linear", m.toJson().getString("tone_curve"));
+        // Screen up, the back camera looks at the floor: gravity points along its optical axis.
+        assertArrayEquals(new double[] {0, 0, 1}, m.gravityCamera(), 1e-12);
+        assertNull(m.headingDeg, "no map bearing, no heading");
+    }
+
+    @Test
+    void anIdFrameIsKnownByItsExposure() {
+        FrameDescriber.Described d = describer.describe(asAsked(plan.id, 56L).build(), null, null);
+        assertEquals("id", d.kind);
+        assertEquals("id", d.meta.frameKind);
+        assertEquals(0.000125, d.meta.exposureS, 1e-15);
+        // Untagged results are classified the same way.
+        assertEquals("id", describer.describe(asAsked(plan.id, 57L).request(null).build(), null, null).meta.frameKind);
+    }
+
+    /** Issue 12 item 3: settings lag without per-frame control; the result, not the tag, says what the frame is. */
+    @Test
+    void aFrameWhoseResultIsNotItsRequestIsDropped() {
+        FrameResult lagging = asAsked(plan.id, 58L).request("pose").build();
+        FrameDescriber.Described d = describer.describe(lagging, SCREEN_UP, null);
+        assertNull(d.meta);
+        assertEquals("id", d.kind);
+        assertTrue(d.dropReason.contains("requested as pose but taken as id"), d.dropReason);
+
+        FrameResult neither = asAsked(plan.pose, 59L).exposureNs(4_000_000L).build();
+        d = describer.describe(neither, SCREEN_UP, null);
+        assertNull(d.kind);
+        assertTrue(d.dropReason.contains("match neither"), d.dropReason);
+
+        FrameResult otherIso = asAsked(plan.pose, 60L).sensitivityIso(400).build();
+        assertNull(describer.describe(otherIso, SCREEN_UP, null).meta);
+        // 2 % off is within tolerance: sensors round exposure to whole rows.
+        assertEquals("pose", describer.describe(asAsked(plan.pose, 61L).exposureNs(8_568_000L).build(), null, null)
+                .meta.frameKind);
+    }
+
+    @Test
+    void aFrameWithAnotherCropOrNoSkewIsDropped() {
+        FrameResult cropped = asAsked(plan.pose, 62L).cropRegion(new ArrayRect(500, 375, 3000, 2250)).build();
+        assertTrue(describer.describe(cropped, null, null).dropReason.contains("SCALER_CROP_REGION"));
+        FrameResult noSkew = asAsked(plan.id, 63L).rollingShutterSkewNs(null).build();
+        assertEquals("no rolling-shutter skew: beacon IDs off", describer.describe(noSkew, null, null).dropReason);
+        FrameResult zoomed = asAsked(plan.pose, 64L).zoomRatio(2.0).build();
+        assertTrue(describer.describe(zoomed, null, null).dropReason.contains("CONTROL_ZOOM_RATIO"));
+    }
+
+    @Test
+    void theToneCurveIsWhatTheResultSays() {
+        FrameResult deviceCurve = asAsked(plan.pose, 65L).tonemapMode("fast").build();
+        assertEquals("device", describer.describe(deviceCurve, null, null).meta.toJson().getString("tone_curve"));
+        FrameResult unreported = asAsked(plan.pose, 66L).tonemapMode(null).build();
+        assertEquals("device", describer.describe(unreported, null, null).meta.toJson().getString("tone_curve"));
+    }
+
+    @Test
+    void warningsReachTheCaller() {
+        FrameResult ois = asAsked(plan.pose, 67L).oisMode("on").lensDistortion(new double[] {1, 2}).build();
+        FrameDescriber.Described d = describer.describe(ois, null, null);
+        assertEquals("pose", d.meta.frameKind);
+        assertEquals(2, d.warnings.size(), d.warnings.toString());
+    }
+
+    /** Front camera at 270: gravity and heading go through the camera mount; one kind of frame without ID frames. */
+    @Test
+    void frontCameraGravityAndHeading() {
+        CameraFacts front = Devices.load(Devices.FRONT_270);
+        CapturePlan poseOnly = plan(front, 1);
+        FrameDescriber d = new FrameDescriber(front, poseOnly, 90.0);
+        FrameMeta m = d.describe(FrameResult.builder(1L).exposureNs(8_400_000L).sensitivityIso(100).build(),
+                SCREEN_UP, IDENTITY).meta;
+        // Screen up, the front camera looks at the ceiling: gravity points back along its optical axis.
+        assertArrayEquals(new double[] {0, 0, -1}, m.gravityCamera(), 1e-12);
+        assertEquals(90.0, m.headingDeg, 1e-9);
+        assertEquals("device", m.toJson().getString("tone_curve"), "no contrast curve on this camera");
+        // Without an exposure in the result a pose-only plan still knows the kind; with ID frames it cannot.
+        assertEquals("pose", d.describe(FrameResult.builder(2L).build(), null, null).kind);
+        assertNull(new FrameDescriber(facts, plan, null).describe(FrameResult.builder(3L).build(), null, null).meta);
+    }
+
+    @Test
+    void anExternalCameraSendsNoGravity() {
+        CameraFacts external = facts.toBuilder().lensFacing("external").build();
+        FrameMeta m = new FrameDescriber(external, plan, 90.0).describe(asAsked(plan.pose, 68L).build(), SCREEN_UP,
+                IDENTITY).meta;
+        assertNull(m.gravityCamera(), "an external camera's attitude is unknown");
+        assertNull(m.headingDeg);
+    }
+}
