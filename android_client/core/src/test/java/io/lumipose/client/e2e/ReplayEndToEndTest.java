@@ -67,7 +67,7 @@ class ReplayEndToEndTest {
         Lumipose.simulate("walk-one-panel", walkDir, "--scale", "0.25", "--limit", "6");
         walk = Recording.open(walkDir.toFile());
         Path officeDir = dir.resolve("office");
-        Lumipose.simulate(officeAsTheAppCaptures(dir).toString(), officeDir, "--bursts", "--limit", "6");
+        Lumipose.simulate(officeAsTheAppCaptures(dir).toString(), officeDir, "--bursts");
         office = Recording.open(officeDir.toFile());
         serve = Lumipose.Serve.start();
     }
@@ -123,16 +123,31 @@ class ReplayEndToEndTest {
     }
 
     /**
-     * The office scene with its ID frames as this app takes them: the plan streams one size for
-     * both kinds (the scene's ID frames are a quarter of its pose frames'), and sets the ID
-     * frames' ISO to the protocol's fifth of the pose frame's brightness (the scene fixes 400).
+     * The office scene captured as this app does, six captures along its walk's second row
+     * (its first row, along the wall, sees every panel cut by the frame border):
+     * <ul>
+     * <li>one stream size for both kinds (the scene's ID frames are half its pose frames'), a
+     *     quarter of the Mi 8's;
+     * <li>the ID frames' ISO from the protocol's brightness fraction (the scene fixes 400), as the
+     *     plan sets it; for that to be the scene's unsaturated 400 ISO, the pose frames are taken at
+     *     ISO 30 (the panels are 8000 nits: at the pose frames' 100, a fifth of their brightness
+     *     saturates the stripes 5 times over and no ID is read).
+     * </ul>
      */
     private static Path officeAsTheAppCaptures(Path dir) throws Exception {
         JSONObject scene = new JSONObject(Repo.text("simulator/scenes/office.json"));
         scene.getJSONObject("camera").put("scale", 0.25);
+        scene.getJSONObject("sensor").put("iso", 30);
         JSONObject id = scene.getJSONObject("id_frames");
         id.remove("scale");
         id.remove("iso");
+        JSONArray poses = new JSONArray();
+        for (int i = 0; i < 6; i++) {
+            poses.put(new JSONObject().put("position_m", new JSONArray(new double[] {-1.0 + 0.4 * i, -1.2, 1.32}))
+                    .put("ypr_deg", new JSONArray(new double[] {0, 1, -1})).put("t_s", 0.5 * i)
+                    .put("velocity_mps", new JSONArray(new double[] {0.8, 0, 0})));
+        }
+        scene.put("series", new JSONObject().put("path", new JSONObject().put("kind", "poses").put("poses", poses)));
         Path file = dir.resolve("office-app.json");
         Files.write(file, scene.toString(2).getBytes(StandardCharsets.UTF_8));
         return file;
