@@ -14,6 +14,7 @@ import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.frame.BeaconWindow;
+import io.lumipose.client.frame.FrameLevels;
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.frame.LumaPlane;
 import io.lumipose.client.frame.Window;
@@ -299,7 +300,7 @@ public final class FramePipeline implements FrameSink {
      * ({@code crop.levels_dn}) so the server reads the window as the whole frame.
      */
     static double[] levelsOf(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
-        return null; // until FrameLevels lands: the server then measures the window itself
+        return FrameLevels.measure(plane, width, height, rowStride, pixelStride);
     }
 
     /**
