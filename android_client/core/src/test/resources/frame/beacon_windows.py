@@ -1,5 +1,6 @@
-"""Frames and crop.py's windows for BeaconWindowTest: writes NAME.y (packed Y8) and windows.json
-({name: {width, height, window: [x0, y0, x1, y1] or null}}) into the directory given."""
+"""Frames, crop.py's windows and windows.py's levels for BeaconWindowTest and FrameLevelsTest:
+writes NAME.y (packed Y8) and windows.json ({name: {width, height, window: [x0, y0, x1, y1] or
+null, levels: [background, plateau]}}) into the directory given."""
 
 import json
 import sys
@@ -9,6 +10,7 @@ import numpy as np
 
 from lumipose_client.crop import beacon_window
 from server.ingest import read_fixture
+from shared_schemas.windows import frame_levels
 from simulator.bench_service import service_frame
 from tests.conftest import FIXTURE
 
@@ -35,11 +37,13 @@ rng = np.random.default_rng(7)
 noisy = rng.integers(0, 40, (1000, 1500), dtype=np.uint8)
 noisy[300:420, 700:800] = 180 + rng.integers(0, 60, (120, 100), dtype=np.uint8)
 frames["noisy_panel"] = noisy
+frames["odd_sizes"] = rng.integers(0, 256, (963, 1441), dtype=np.uint8)  # the view's extra last row and column
 
 windows = {}
 for name, pixels in frames.items():
     (out / f"{name}.y").write_bytes(np.ascontiguousarray(pixels).tobytes())
     window = beacon_window(pixels)
     windows[name] = {"width": pixels.shape[1], "height": pixels.shape[0],
-                     "window": None if window is None else [int(v) for v in window]}
+                     "window": None if window is None else [int(v) for v in window],
+                     "levels": [float(v) for v in frame_levels(pixels)]}
 (out / "windows.json").write_text(json.dumps(windows))

@@ -14,6 +14,7 @@ import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.frame.BeaconWindow;
+import io.lumipose.client.frame.FrameLevels;
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.frame.LumaPlane;
 import io.lumipose.client.frame.Window;
@@ -28,7 +29,8 @@ import io.lumipose.client.sensor.GravityHistory;
  * and image are matched by SENSOR_TIMESTAMP, the {@link FrameDescriber} says what the frame is
  * (pose or ID, from the exposure the result reports) with the attitude at its timestamp, and a
  * burst (a pose frame and the plan's ID frames after it) goes to the {@link BurstUploader} as one
- * unit, each frame cut to the window around the panel: a pose frame to its {@link BeaconWindow}
+ * unit, its ID frames first (the server keeps them for the device's next pose frame, so the pose
+ * frame gets its own burst's beacon readings), each frame cut to the window around the panel: a pose frame to its {@link BeaconWindow}
  * (the whole plane only when none is found), an ID frame to its burst's pose window with a margin
  * for the panel's motion until then (the decoder reads the stripes on the panel's rows). Each
  * window goes with its whole plane's grey levels ({@code crop.levels_dn}).
@@ -166,7 +168,7 @@ public final class FramePipeline implements FrameSink {
     public synchronized void close() {
         closed = true;
         if (burst != null && burst.kept) {
-            drop(DROP_CLOSED, burst.frames.size());
+            drop(DROP_CLOSED, burst.inOrder().size());
         }
         burst = null;
         drop(DROP_CLOSED, results.size() + images.size());
@@ -236,7 +238,7 @@ public final class FramePipeline implements FrameSink {
         }
         lastIdWindow = idWindow(panel, meta.width, meta.height);
         burst = new Burst(lastIdWindow, idFramesPerBurst);
-        burst.frames.add(new FrameUpload(luma, cut(meta, panel, pixels)));
+        burst.pose = new FrameUpload(luma, cut(meta, panel, pixels));
         if (burst.remaining == 0) {
             submitBurst();
         }
@@ -257,7 +259,7 @@ public final class FramePipeline implements FrameSink {
             if (luma == null) {
                 drop(DROP_OUT_OF_ORDER, 1);
             } else {
-                burst.frames.add(new FrameUpload(luma, cut(meta, burst.idWindow, pixels)));
+                burst.ids.add(new FrameUpload(luma, cut(meta, burst.idWindow, pixels)));
             }
         }
         if (burst.remaining == 0) {
@@ -269,13 +271,13 @@ public final class FramePipeline implements FrameSink {
     private void submitBurst() {
         Burst b = burst;
         burst = null;
-        if (b == null || !b.kept || b.frames.isEmpty()) {
+        if (b == null || !b.kept) {
             return;
         }
-        if (uploader.submit(b.frames)) {
+        if (uploader.submit(b.inOrder())) {
             burstsSubmitted++;
         } else {
-            drop(DROP_CLOSED, b.frames.size());
+            drop(DROP_CLOSED, b.inOrder().size());
         }
     }
 
@@ -298,7 +300,7 @@ public final class FramePipeline implements FrameSink {
      * ({@code crop.levels_dn}) so the server reads the window as the whole frame.
      */
     static double[] levelsOf(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
-        return null; // until FrameLevels lands: the server then measures the window itself
+        return FrameLevels.measure(plane, width, height, rowStride, pixelStride);
     }
 
     /**
@@ -351,7 +353,8 @@ public final class FramePipeline implements FrameSink {
         final boolean kept;
         /** The window its ID frames are cut to; null when the pose frame showed no panel. */
         final Window idWindow;
-        final List<FrameUpload> frames = new ArrayList<FrameUpload>();
+        FrameUpload pose;
+        final List<FrameUpload> ids = new ArrayList<FrameUpload>();
         /** ID frames still to come. */
         int remaining;
 
@@ -367,6 +370,16 @@ public final class FramePipeline implements FrameSink {
 
         static Burst dropped(int idFrames) {
             return new Burst(false, null, idFrames);
+        }
+
+        /**
+         * The order the server needs: it keeps a device's ID frames for its next pose frame, so
+         * the ID frames go first and the pose frame combines its own burst's readings.
+         */
+        List<FrameUpload> inOrder() {
+            List<FrameUpload> frames = new ArrayList<FrameUpload>(ids);
+            frames.add(pose);
+            return frames;
         }
     }
 

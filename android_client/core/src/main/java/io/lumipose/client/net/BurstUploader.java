@@ -41,12 +41,12 @@ public final class BurstUploader {
     }
 
     /**
-     * Queues a burst, pose frame first, replacing a burst still waiting. Returns false once closed
+     * Queues a burst (its frames in the order to send them), replacing a burst still waiting. Returns false once closed
      * (or when the executor refuses work), true when queued.
      */
     public boolean submit(List<FrameUpload> burst) {
         if (burst.isEmpty()) {
-            throw new IllegalArgumentException("a burst holds at least its pose frame");
+            throw new IllegalArgumentException("a burst holds at least one frame");
         }
         List<FrameUpload> frames = Collections.unmodifiableList(new ArrayList<FrameUpload>(burst));
         synchronized (lock) {

@@ -178,14 +178,26 @@ class FramePipelineTest {
         }
     }
 
-    private static void assertBurstsWentWhole(CapturePlan plan, List<Frame> frames, Recorder r) {
+    /** The frames in the order the server needs them: each burst's ID frames, then its pose frame. */
+    private static List<Frame> uploadOrder(CapturePlan plan, List<Frame> frames) {
+        int n = plan.idFramesPerBurst + 1;
+        List<Frame> order = new ArrayList<>();
+        for (int b = 0; b < frames.size(); b += n) {
+            order.addAll(frames.subList(b + 1, b + n));
+            order.add(frames.get(b));
+        }
+        return order;
+    }
+
+    private static void assertBurstsWentWhole(CapturePlan plan, List<Frame> captured, Recorder r) {
+        List<Frame> frames = uploadOrder(plan, captured);
         assertEquals(frames.size(), r.sent.size(), "every frame goes: " + r.heard);
         for (int i = 0; i < frames.size(); i++) {
             Frame f = frames.get(i);
             FrameMeta m = r.sent.get(i);
-            assertEquals(f.t(), m.timestampNs.longValue(), "in capture order, pose first");
+            assertEquals(f.t(), m.timestampNs.longValue(), "each burst's ID frames in capture order, then its pose");
             assertEquals(f.result.request, m.frameKind);
-            Frame pose = frames.get(i - i % (plan.idFramesPerBurst + 1));
+            Frame pose = frames.get(i - i % (plan.idFramesPerBurst + 1) + plan.idFramesPerBurst);
             Window panel = BeaconWindow.find(pose.packed, W, H);
             Window w = f == pose ? panel : FramePipeline.idWindow(panel, W, H);
             assertNotNull(m.crop);
@@ -278,7 +290,7 @@ class FramePipelineTest {
                 Thread.sleep(2);
             }
             assertEquals(2 * n, r.sent.size());
-            assertEquals(frames.get(n).t(), r.sent.get(n).timestampNs.longValue());
+            assertEquals(frames.get(n).t(), r.sent.get(2 * n - 1).timestampNs.longValue(), "burst 2's pose frame");
         } finally {
             network.shutdownNow();
         }

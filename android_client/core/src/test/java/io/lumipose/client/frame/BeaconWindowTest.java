@@ -20,7 +20,7 @@ import io.lumipose.client.testutil.Python;
 
 class BeaconWindowTest {
     /**
-     * crop.py's beacon_window and this port on the same pixels: rendered test-bench frames at
+     * crop.py's beacon_window and windows.py's frame_levels, and their ports, on the same pixels: rendered test-bench frames at
      * 1-3 m (1080 wide and the full 20 MP), the bench fixture and the edge cases of crop.py's tests.
      */
     @Test
@@ -41,6 +41,10 @@ class BeaconWindowTest {
             // as a camera hands it over: padded rows, the plane at an offset in its buffer
             assertEquals(want, BeaconWindow.find(padded(packed, width, height, width + 64, 16), width, height,
                     width + 64, 1), name + " (padded)");
+            JSONArray levels = e.getJSONArray("levels");
+            double[] wantLevels = {levels.getDouble(0), levels.getDouble(1)};
+            assertArrayEquals(wantLevels, FrameLevels.measure(padded(packed, width, height, width + 64, 16), width,
+                    height, width + 64, 1), 0, name + ": levels as shared_schemas/windows.py measures them");
         }
     }
 
