@@ -1,9 +1,12 @@
 package io.lumipose.client.testutil;
 
+import java.io.BufferedReader;
 import java.io.ByteArrayOutputStream;
 import java.io.IOException;
 import java.io.InputStream;
+import java.io.InputStreamReader;
 import java.io.OutputStream;
+import java.io.PrintStream;
 import java.net.HttpURLConnection;
 import java.net.ServerSocket;
 import java.net.URL;
@@ -51,16 +54,40 @@ public final class Lumipose {
 
     /** {@code lumipose simulate SCENE OUT ARGS...}; throws with its output when it fails. */
     public static void simulate(String scene, Path out, String... args) throws IOException, InterruptedException {
+        simulate(null, scene, out, args);
+    }
+
+    /** As {@link #simulate(String, Path, String...)}, its progress lines copied to {@code progress} as they come. */
+    public static void simulate(final PrintStream progress, String scene, Path out, String... args)
+            throws IOException, InterruptedException {
         List<String> cmd = new ArrayList<String>(Arrays.asList("simulate", scene, out.toString()));
         cmd.addAll(Arrays.asList(args));
-        Path log = Files.createTempFile("lumipose-simulate", ".log");
-        Process p = command(cmd).redirectOutput(log.toFile()).start();
-        boolean done = p.waitFor(600, TimeUnit.SECONDS);
-        String output = new String(Files.readAllBytes(log), StandardCharsets.UTF_8);
-        Files.delete(log);
+        final Process p = command(cmd).start();
+        final StringBuilder output = new StringBuilder();
+        Thread reader = new Thread(new Runnable() {
+            @Override
+            public void run() {
+                try (BufferedReader lines = new BufferedReader(new InputStreamReader(p.getInputStream(),
+                        StandardCharsets.UTF_8))) {
+                    for (String line; (line = lines.readLine()) != null; ) {
+                        output.append(line).append('\n');
+                        if (progress != null) {
+                            progress.println(line);
+                        }
+                    }
+                } catch (IOException e) {
+                    output.append("(output lost: ").append(e.getMessage()).append(")");
+                }
+            }
+        });
+        reader.start();
+        boolean done = p.waitFor(900, TimeUnit.SECONDS);
         if (!done) {
             p.destroyForcibly();
-            throw new IOException("lumipose " + cmd + " did not finish within 600 s: " + output);
+        }
+        reader.join(5000);
+        if (!done) {
+            throw new IOException("lumipose " + cmd + " did not finish within 900 s: " + output);
         }
         if (p.exitValue() != 0) {
             throw new IOException("lumipose " + cmd + " failed (" + p.exitValue() + "): " + output);
