@@ -105,6 +105,9 @@ public final class LiveActivity extends LocatingActivity {
                 text.append(note).append('\n');
             }
         }
+        for (String warning : warnings()) {
+            text.append(warning).append('\n');
+        }
         for (Map.Entry<String, Long> d : dropCounts().entrySet()) {
             text.append("not sent: ").append(d.getValue()).append(" (").append(d.getKey()).append(")\n");
         }

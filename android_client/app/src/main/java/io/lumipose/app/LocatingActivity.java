@@ -1,5 +1,7 @@
 package io.lumipose.app;
 
+import java.util.Collections;
+import java.util.List;
 import java.util.Map;
 import java.util.concurrent.ExecutorService;
 
@@ -47,7 +49,13 @@ abstract class LocatingActivity extends CameraActivity implements FramePipeline.
     /** Frames not sent so far, by reason (empty before the camera starts). */
     protected Map<String, Long> dropCounts() {
         FramePipeline p = pipeline;
-        return p == null ? java.util.Collections.<String, Long>emptyMap() : p.dropCounts();
+        return p == null ? Collections.<String, Long>emptyMap() : p.dropCounts();
+    }
+
+    /** The frame describer's warnings so far, each once. */
+    protected List<String> warnings() {
+        FramePipeline p = pipeline;
+        return p == null ? Collections.<String>emptyList() : p.warnings();
     }
 
     @Override

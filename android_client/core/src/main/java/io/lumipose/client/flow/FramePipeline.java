@@ -4,8 +4,10 @@ import java.nio.ByteBuffer;
 import java.util.ArrayList;
 import java.util.Iterator;
 import java.util.LinkedHashMap;
+import java.util.LinkedHashSet;
 import java.util.List;
 import java.util.Map;
+import java.util.Set;
 import java.util.TreeMap;
 import java.util.concurrent.Executor;
 
@@ -66,6 +68,8 @@ public final class FramePipeline implements FrameSink {
 
     /** An ID window reaches this share of the pose window's size beyond it, each side. */
     public static final double ID_WINDOW_GROWTH = 0.25;
+    /** Distinct warnings kept: a few kinds repeat on every frame, numbers in them could make many. */
+    static final int MAX_WARNINGS = 20;
 
     private final FrameDescriber describer;
     private final GravityHistory attitude;
@@ -90,6 +94,8 @@ public final class FramePipeline implements FrameSink {
 
     // any thread
     private final Map<String, Long> drops = new TreeMap<String, Long>();
+    /** The describer's warnings, each once, in the order first seen (a few kinds: bounded). */
+    private final Set<String> warnings = new LinkedHashSet<String>();
 
     /**
      * @param timestampsRealtime whether SENSOR_TIMESTAMP shares the sensor events' clock (then the
@@ -184,6 +190,13 @@ public final class FramePipeline implements FrameSink {
         }
     }
 
+    /** What the describer warned about so far (optical stabilisation left on, ...), each once. */
+    public List<String> warnings() {
+        synchronized (warnings) {
+            return new ArrayList<String>(warnings);
+        }
+    }
+
     /** True while a burst is being sent or waits. */
     public boolean uploading() {
         return uploader.busy();
@@ -197,6 +210,7 @@ public final class FramePipeline implements FrameSink {
     private void handle(FrameResult result, Pixels pixels) {
         GravityHistory.Attitude a = attitude.forFrame(result.timestampNs, timestampsRealtime);
         FrameDescriber.Described d = describer.describe(result, a.gravity, a.rotationToEnu);
+        noteWarnings(d.warnings);
         if (d.meta == null) {
             drop(d.dropReason, 1);
             if ("id".equals(result.request) && burst != null && burst.remaining > 0) {
@@ -332,6 +346,16 @@ public final class FramePipeline implements FrameSink {
             it.next();
             it.remove();
             drop(reason, 1);
+        }
+    }
+
+    private void noteWarnings(List<String> seen) {
+        synchronized (warnings) {
+            for (String w : seen) {
+                if (warnings.size() < MAX_WARNINGS) {
+                    warnings.add(w);
+                }
+            }
         }
     }
 

@@ -331,6 +331,7 @@ class FramePipelineTest {
         Map<String, Long> drops = p.dropCounts();
         assertEquals(1, drops.size());
         assertTrue(drops.keySet().iterator().next().contains("requested as id"), drops.toString());
+
     }
 
     @Test
@@ -349,5 +350,22 @@ class FramePipelineTest {
         frames.get(0).image(p);
         p.onResult(frames.get(0).result);
         assertTrue(r.sent.isEmpty(), "nothing after close");
+    }
+
+    @Test
+    void theDescribersWarningsAreKeptOnceEach() throws Exception {
+        CapturePlan plan = plan(1);
+        assertTrue(plan.pose.oisOff, "the fixture can switch stabilisation off");
+        List<Frame> frames = new ArrayList<>();
+        for (Frame f : bursts(plan, 3)) {
+            frames.add(new Frame(f.result.toBuilder().oisMode("on").build(), f.packed));
+        }
+        Recorder r = new Recorder(null);
+        FramePipeline p = pipeline(plan, r, DIRECT);
+        feed(p, frames, 0);
+        assertEquals(3, r.sent.size());
+        List<String> warnings = p.warnings();
+        assertEquals(1, warnings.stream().filter(w -> w.contains("stabilisation")).count(), warnings.toString());
+        assertEquals(warnings.size(), new java.util.HashSet<>(warnings).size(), "each once");
     }
 }
