@@ -79,7 +79,7 @@ public final class LiveActivity extends LocatingActivity {
                 double[] ypr = r.yawPitchRollDeg();
                 pose.setText(String.format(Locale.US,
                         "x %.3f  y %.3f  z %.3f m%s%nbeacon %s (%s)%nyaw %.1f  pitch %.1f  roll %.1f deg",
-                        p[0], p[1], p[2], filtered == null ? " (raw fix, no track)" : filtered.outlier ? " (outlier)" : "",
+                        p[0], p[1], p[2], filtered == null ? " (fix, no track)" : filtered.outlier ? " (outlier)" : "",
                         r.beaconId == null ? "?" : String.valueOf(r.beaconId), r.beaconIdSource,
                         ypr == null ? Double.NaN : ypr[0], ypr == null ? Double.NaN : ypr[1],
                         ypr == null ? Double.NaN : ypr[2]));

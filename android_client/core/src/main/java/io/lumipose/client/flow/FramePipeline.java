@@ -32,10 +32,11 @@ import io.lumipose.client.sensor.GravityHistory;
  * (pose or ID, from the exposure the result reports) with the attitude at its timestamp, and a
  * burst (a pose frame and the plan's ID frames after it) goes to the {@link BurstUploader} as one
  * unit, its ID frames first (the server keeps them for the device's next pose frame, so the pose
- * frame gets its own burst's beacon readings), each frame cut to the window around the panel: a pose frame to its {@link BeaconWindow}
- * (the whole plane only when none is found), an ID frame to its burst's pose window with a margin
- * for the panel's motion until then (the decoder reads the stripes on the panel's rows). Each
- * window goes with its whole plane's grey levels ({@code crop.levels_dn}).
+ * frame gets its own burst's beacon readings). Each frame is cut to the window around the panel:
+ * a pose frame to its {@link BeaconWindow} (the whole plane only when none is found), an ID frame
+ * to its burst's pose window with a margin for the panel's motion until then (the decoder reads
+ * the stripes on the panel's rows). Each window goes with its whole plane's grey levels
+ * ({@code crop.levels_dn}), so the server reads it as the whole frame.
  *
  * <p>Whether a burst goes is decided at its pose frame: when the uploader already holds a burst
  * waiting, the whole burst is dropped before anything of it is copied. Camera calls come on the
@@ -153,7 +154,8 @@ public final class FramePipeline implements FrameSink {
     }
 
     @Override
-    public synchronized void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride, int pixelStride) {
+    public synchronized void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride,
+                                     int pixelStride) {
         if (closed) {
             return;
         }

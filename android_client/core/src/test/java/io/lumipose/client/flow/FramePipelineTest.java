@@ -40,7 +40,8 @@ class FramePipelineTest {
     private static final int H = 480;
     private static final long FRAME_NS = 33_000_000L;
     private static final java.util.concurrent.Executor DIRECT = Runnable::run;
-    private static final String OK = "{\"schema\": \"lumipose.result/1\", \"ok\": true, \"position_m\": [0.1, 0.2, 0.0]}";
+    private static final String OK =
+            "{\"schema\": \"lumipose.result/1\", \"ok\": true, \"position_m\": [0.1, 0.2, 0.0]}";
 
     private static CapturePlan plan(int beacons) throws Exception {
         CameraFacts facts = Devices.load(Devices.LOGICAL);

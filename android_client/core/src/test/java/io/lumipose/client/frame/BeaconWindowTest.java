@@ -20,8 +20,9 @@ import io.lumipose.client.testutil.Python;
 
 class BeaconWindowTest {
     /**
-     * crop.py's beacon_window and windows.py's frame_levels, and their ports, on the same pixels: rendered test-bench frames at
-     * 1-3 m (1080 wide and the full 20 MP), the bench fixture and the edge cases of crop.py's tests.
+     * crop.py's beacon_window and windows.py's frame_levels, and their ports, on the same pixels:
+     * rendered test-bench frames at 1-3 m (1080 wide and the full 20 MP), the bench fixture and
+     * the edge cases of crop.py's tests.
      */
     @Test
     void sameWindowAsThePythonClientOnTheSamePixels(@TempDir Path dir) throws Exception {

@@ -101,7 +101,8 @@ class FrameMetaTest {
         FrameMeta inner = w.window(10, 20, 50, 60, new double[] {99, 100});
         assertEquals(110, inner.crop.x, "a window of a window is placed in the full frame");
         assertEquals(70, inner.crop.y);
-        assertArrayEquals(new double[] {12, 240}, inner.crop.levelsDn(), 0, "a window of a window keeps its frame's levels");
+        assertArrayEquals(new double[] {12, 240}, inner.crop.levelsDn(), 0,
+                "a window of a window keeps its frame's levels");
         assertArrayEquals(new double[] {12, 240}, back.crop.levelsDn(), 0);
         assertThrows(ContractException.class, () -> whole.window(0, 0, 10, 10, new double[] {200, 100}));
         assertEquals(200L * 120, w.frameBytes());
