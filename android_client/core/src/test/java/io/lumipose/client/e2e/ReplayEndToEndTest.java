@@ -16,6 +16,7 @@ import org.json.JSONObject;
 import org.junit.jupiter.api.AfterAll;
 import org.junit.jupiter.api.Assumptions;
 import org.junit.jupiter.api.BeforeAll;
+import org.junit.jupiter.api.Disabled;
 import org.junit.jupiter.api.Test;
 
 import io.lumipose.client.frame.FrameMeta;
@@ -106,18 +107,24 @@ class ReplayEndToEndTest {
     @Test
     void theWindowDoesNotChangeTheAnswer() throws Exception {
         serve.putMap(walk.map());
-        ReplayRun run = ReplayRun.play(walk, serve.baseUrl, "window-phone", true);
+        assertWindowsGiveTheWholeFramesFixes(ReplayRun.play(walk, serve.baseUrl, "window-phone", true));
+    }
+
+    @Test
+    @Disabled("server: a device session on a map of several beacons (server/tracking/session.py: find_beacon_blobs, "
+            + "locate_panel) does not yet read a window as the whole frame: these office frames' fixes move by "
+            + "0.02-0.36 mm (the one-panel path agrees within 0.001 mm); enable when it does")
+    void theWindowDoesNotChangeTheAnswerInADeviceSession() throws Exception {
+        serve.putMap(office.map());
+        assertWindowsGiveTheWholeFramesFixes(ReplayRun.play(office, serve.baseUrl, "office-window-phone", true));
+    }
+
+    /** Every pose frame sent as a window gives the fix its whole frame gives, within 0.01 mm. */
+    private static void assertWindowsGiveTheWholeFramesFixes(ReplayRun run) {
         assertTrue(run.drops.isEmpty(), "dropped: " + run.drops);
-        assertEquals(walk.frames().size(), run.sent.size());
-        for (ReplayRun.Sent s : run.sent) {
-            JSONObject crop = s.window.frame.optJSONObject("crop");
-            if (crop != null && !crop.has("levels_dn")) {
-                skip("theWindowDoesNotChangeTheAnswer: the app sends windows without crop.levels_dn, so the server "
-                        + "reads them on the window's own grey levels, not the whole frame's (" + maxDifferenceMm(run)
-                        + " mm apart here); the check runs once the pipeline sends the levels");
-            }
-        }
-        for (ReplayRun.Sent s : run.sent) {
+        assertFalse(run.poses().isEmpty());
+        assertEquals(run.poses().size(), run.poseResults.size());
+        for (ReplayRun.Sent s : run.poses()) {
             assertNotNull(s.whole, s.frame.name + " was not sent whole");
             LocateResult window = s.result();
             LocateResult whole = LocateResult.fromJson(s.whole.reply);
@@ -128,24 +135,6 @@ class ReplayEndToEndTest {
             assertTrue(s.window.bodyBytes < s.whole.bodyBytes / 4, s.frame.name + ": the window is "
                     + s.window.bodyBytes + " of " + s.whole.bodyBytes + " bytes");
         }
-    }
-
-    /** Skips with the reason, printed too (Surefire does not show an aborted test's reason). */
-    private static void skip(String reason) {
-        System.err.println("SKIPPED " + reason);
-        Assumptions.abort(reason);
-    }
-
-    private static String maxDifferenceMm(ReplayRun run) {
-        double max = 0;
-        for (ReplayRun.Sent s : run.sent) {
-            LocateResult window = s.result();
-            LocateResult whole = LocateResult.fromJson(s.whole.reply);
-            if (window.ok && whole.ok) {
-                max = Math.max(max, distanceMm(window.positionM(), whole.positionM()));
-            }
-        }
-        return String.format(java.util.Locale.ROOT, "up to %.3f", max);
     }
 
     /**
@@ -182,17 +171,11 @@ class ReplayEndToEndTest {
     @Test
     void fourBeaconOfficeWithIdBursts() throws Exception {
         serve.putMap(office.map());
-        ReplayRun run = ReplayRun.play(office, serve.baseUrl, "office-phone", false);
+        ReplayRun run = ReplayRun.play(office, serve.baseUrl, "office-phone", true);
         assertEquals(4, run.plan.idFramesPerBurst, "four beacons: ID bursts");
         assertTrue(run.drops.isEmpty(), "dropped: " + run.drops);
         assertTrue(run.failures.isEmpty(), "failed: " + run.failures);
         assertEquals(office.frames().size(), run.sent.size(), "every frame of every burst sent");
-        if (!run.sent.get(0).isId()) {
-            skip("fourBeaconOfficeWithIdBursts: the app sends each burst's pose frame before its ID frames, but "
-                    + "the server combines ID frames with the device's next pose frame (docs/vlc.md; bench office "
-                    + "sends them first), so no beacon ID is read for the capture; the check runs once the burst "
-                    + "goes ID frames first");
-        }
         for (FrameMeta meta : run.idResults) {
             assertEquals("id", meta.frameKind);
         }
@@ -212,8 +195,10 @@ class ReplayEndToEndTest {
             double[] truth = s.frame.truthPositionM();
             double err = distanceMm(r.positionM(), truth);
             JSONObject track = s.window.reply.optJSONObject("track");
-            System.out.printf("replay office %s: beacon %d (%s), error %.1f mm, track %s%n", s.frame.name,
-                    r.beaconId, r.beaconIdSource, err, track);
+            LocateResult whole = LocateResult.fromJson(s.whole.reply);
+            System.out.printf("replay office %s: beacon %d (%s), error %.1f mm, window vs whole %s mm, track %s%n",
+                    s.frame.name, r.beaconId, r.beaconIdSource, err,
+                    whole.ok ? distanceMm(r.positionM(), whole.positionM()) : whole.reason, track);
             assertEquals(panelAbove(office.map(), truth), r.beaconId.intValue(), s.frame.name + ": beacon ID");
             assertTrue(err <= OFFICE_TOLERANCE_MM, s.frame.name + ": " + err + " mm from the truth");
             assertNotNull(track, s.frame.name + ": no track");
