@@ -23,10 +23,9 @@ import io.lumipose.client.sensor.GravityHistory;
  * for every recorded frame the plan asks for, its TotalCaptureResult (as a {@link FrameResult})
  * and its Y plane, on one thread, in an order Camera2 allows: results in capture order, images in
  * capture order, and between the two sometimes the image first, sometimes the result only after
- * the next frame's image. The Y plane comes in one reused
- * direct buffer whose rows are longer than the image is wide and whose last row has no padding,
- * as phones deliver it. The phone's gravity reading at each frame reaches the
- * {@link GravityHistory} before the frame.
+ * the next frame's image. The Y plane comes in one reused direct buffer whose rows are longer
+ * than the image is wide and whose last row has no padding, as phones deliver it. The phone's
+ * gravity reading at each frame reaches the {@link GravityHistory} before the frame.
  */
 public final class ReplayCamera {
     /** Called before each call to the sink: where a test waits for the uploader, or a player keeps time. */

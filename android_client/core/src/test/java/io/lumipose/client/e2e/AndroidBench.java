@@ -8,13 +8,16 @@ import java.nio.file.Path;
 import java.nio.file.Paths;
 import java.util.ArrayList;
 import java.util.Collections;
+import java.util.HashMap;
 import java.util.List;
+import java.util.Map;
 import java.util.Locale;
 
 import org.json.JSONArray;
 import org.json.JSONObject;
 
 import io.lumipose.client.frame.BeaconWindow;
+import io.lumipose.client.frame.FrameLevels;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.replay.RecordedFrame;
 import io.lumipose.client.replay.Recording;
@@ -96,6 +99,8 @@ public final class AndroidBench {
     static JSONObject run(List<Recording> recordings, Lumipose.Serve serve, PrintStream progress) throws Exception {
         JSONArray distances = new JSONArray();
         List<Double> allWindowMs = new ArrayList<Double>();
+        List<Double> allFindMs = new ArrayList<Double>();
+        List<Double> allLevelsMs = new ArrayList<Double>();
         List<Double> poseLatency = new ArrayList<Double>();
         // A device's first capture also starts its server session (the first ID decoding without a track).
         List<Double> laterPoseLatency = new ArrayList<Double>();
@@ -110,16 +115,19 @@ public final class AndroidBench {
             progress.printf("replaying %.0f m%n", distance);
             ReplayRun run = ReplayRun.play(recording, serve.baseUrl, String.format(Locale.ROOT, "bench-%.0fm", distance),
                     true);
-            List<Double> windowMs = windowCost(recording);
+            List<Double> windowMs = new ArrayList<Double>();
+            for (double[] cost : windowCost(recording)) {
+                windowMs.add(cost[0] + cost[1]);
+                allFindMs.add(cost[0]);
+                allLevelsMs.add(cost[1]);
+            }
             allWindowMs.addAll(windowMs);
             Kind pose = new Kind();
             Kind id = new Kind();
             JSONArray frames = new JSONArray();
-            int capture = -1;
+            Map<RecordedFrame, Integer> captures = captureNumbers(recording);
             for (ReplayRun.Sent s : run.sent) {
-                if (!s.isId()) {
-                    capture++;
-                }
+                int capture = captures.get(s.frame);
                 Kind kind = s.isId() ? id : pose;
                 long plane = (long) s.frame.width * s.frame.height;
                 long sent = s.window.bodyBytes + s.window.headerBytes;
@@ -168,6 +176,8 @@ public final class AndroidBench {
                 .put("max_fix_difference_mm", compared == 0 ? JSONObject.NULL : (Object) maxDifference)
                 .put("fixes_compared", compared)
                 .put("window_ms_median", round(median(allWindowMs)))
+                .put("window_ms_median_parts", new JSONObject().put("find", round(median(allFindMs)))
+                        .put("levels", round(median(allLevelsMs))))
                 .put("latency_ms_at_50mbit", round(poseLatencyMax))
                 .put("latency_ms_at_50mbit_by_kind", new JSONObject()
                         .put("pose_max", round(poseLatencyMax)).put("pose_median", round(median(poseLatency)))
@@ -180,14 +190,30 @@ public final class AndroidBench {
                 .put("meets_targets", ratio <= TARGETS[0] && compared > 0 && maxDifference <= TARGETS[1]
                         && poseLatencyMax <= TARGETS[2])
                 .put("model", "latency = (body + header bytes) * 8 / 50 Mbit/s + request-to-answer time on 127.0.0.1;"
-                        + " window_ms: BeaconWindow.find on the pose frames' padded planes, after "
+                        + " window_ms: BeaconWindow.find + FrameLevels.measure on the pose frames' padded planes, after "
                         + WARM_UP_ROUNDS + " warm-up rounds, median of " + TIMED_ROUNDS)
                 .put("machine", machine)
                 .put("distances", distances);
     }
 
-    /** Phone-side cost of finding each pose frame's window, ms, after warm-up: as the camera hands the plane over. */
-    static List<Double> windowCost(Recording recording) throws Exception {
+    /** Each frame's capture (a pose frame and the ID frames taken after it), from 0, in the recording's order. */
+    static Map<RecordedFrame, Integer> captureNumbers(Recording recording) {
+        Map<RecordedFrame, Integer> out = new HashMap<RecordedFrame, Integer>();
+        int capture = -1;
+        for (RecordedFrame f : recording.frames()) {
+            if (!f.isIdFrame()) {
+                capture++;
+            }
+            out.put(f, Math.max(capture, 0));
+        }
+        return out;
+    }
+
+    /**
+     * Phone-side cost of each pose frame's window, ms, after warm-up, on the plane as the camera
+     * hands it over: {finding the window, measuring the plane's grey levels sent with it}.
+     */
+    static List<double[]> windowCost(Recording recording) throws Exception {
         List<ByteBuffer> planes = new ArrayList<ByteBuffer>();
         List<RecordedFrame> frames = new ArrayList<RecordedFrame>();
         for (RecordedFrame f : recording.frames()) {
@@ -205,15 +231,18 @@ public final class AndroidBench {
             planes.add(plane);
             frames.add(f);
         }
-        List<Double> ms = new ArrayList<Double>();
+        List<double[]> ms = new ArrayList<double[]>();
         for (int round = 0; round < WARM_UP_ROUNDS + TIMED_ROUNDS; round++) {
             for (int i = 0; i < planes.size(); i++) {
                 RecordedFrame f = frames.get(i);
+                int stride = ReplayCamera.rowStride(f.width);
                 long start = System.nanoTime();
-                BeaconWindow.find(planes.get(i), f.width, f.height, ReplayCamera.rowStride(f.width), 1);
-                double elapsed = (System.nanoTime() - start) / 1e6;
+                BeaconWindow.find(planes.get(i), f.width, f.height, stride, 1);
+                long found = System.nanoTime();
+                FrameLevels.measure(planes.get(i), f.width, f.height, stride, 1);
+                long measured = System.nanoTime();
                 if (round >= WARM_UP_ROUNDS) {
-                    ms.add(elapsed);
+                    ms.add(new double[] {(found - start) / 1e6, (measured - found) / 1e6});
                 }
             }
         }
@@ -284,12 +313,14 @@ public final class AndroidBench {
                 if (k.getInt("frames") == 0) {
                     continue;
                 }
+                String difference = k.isNull("max_fix_difference_mm") ? "-"
+                        : String.format(Locale.ROOT, "%.4f", k.getDouble("max_fix_difference_mm"));
                 out.append(String.format(Locale.ROOT, "%7.0fm %5s %6d %12d %8.4f %10.1f %12.1f %12s%n",
                         d.getDouble("distance_m"), kind, k.getInt("frames"), k.getLong("bytes_sent_per_frame"),
                         k.getDouble("upload_bytes_ratio"), k.getDouble("server_ms_median"),
-                        k.getDouble("latency_ms_at_50mbit_max"), k.opt("max_fix_difference_mm")));
+                        k.getDouble("latency_ms_at_50mbit_max"), difference));
             }
-            out.append(String.format(Locale.ROOT, "%7.0fm window search median %.2f ms; drops %s%n",
+            out.append(String.format(Locale.ROOT, "%7.0fm window (find + levels) median %.2f ms; drops %s%n",
                     d.getDouble("distance_m"), d.getDouble("window_ms_median"), d.get("drops")));
         }
         out.append(String.format(Locale.ROOT, "upload_bytes_ratio %s (target <= %s)%n", r.get("upload_bytes_ratio"),
