@@ -2,7 +2,8 @@
 
 `shared_schemas/capture_protocol.json` holds the numbers the phone needs to take frames the
 server can read (the beacons' code, the burst, the exposures, the server's ID-exposure limit)
-and to cut the same beacon window as the Python client. They are read here from the modules
+and to cut the same beacon window as the Python client, with the full frame's levels
+(`shared_schemas.windows`). They are read here from the modules
 that use them, so the file cannot drift from the server or the client; the Android core reads
 the file (`io.lumipose.client.protocol.CaptureProtocol`). This module sits above both the
 server and the client (tests/test_layering.py). A test fails when the file is stale.
@@ -15,7 +16,7 @@ import json
 from lumipose_client import crop
 from server.vlc import capture
 from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS
-from shared_schemas import PACKAGE_DIR
+from shared_schemas import PACKAGE_DIR, windows
 
 PROTOCOL_SCHEMA = "lumipose.capture_protocol/1"
 PROTOCOL_PATH = PACKAGE_DIR / "capture_protocol.json"
@@ -38,6 +39,9 @@ def capture_protocol() -> dict[str, object]:
         "window_block_divisor": crop.BLOCK_DIVISOR,
         "window_min_contrast_dn": crop.MIN_CONTRAST_DN,
         "window_edge_blocks": crop.EDGE_BLOCKS,
+        "window_edge_px": crop.EDGE_PX,
+        "levels_coarse_short_side_px": windows.COARSE_SHORT_SIDE_PX,
+        "levels_plateau_fraction": windows.PLATEAU_FRACTION,
     }
 
 

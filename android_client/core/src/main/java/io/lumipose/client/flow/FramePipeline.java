@@ -67,8 +67,13 @@ public final class FramePipeline implements FrameSink {
     public static final String DROP_OUT_OF_ORDER = "image came before its result, out of the burst's order";
     public static final String DROP_CLOSED = "pipeline closed";
 
-    /** An ID window reaches this share of the pose window's size beyond it, each side. */
-    public static final double ID_WINDOW_GROWTH = 0.25;
+    /**
+     * An ID window reaches this share of the pose window's height beyond it, above and below: the
+     * panel moves until the burst's last ID frame, and every row over it carries chips of the code.
+     */
+    public static final double ID_WINDOW_ROW_GROWTH = 0.25;
+    /** ... and this share of its width left and right: a panel cut at a side keeps all its rows. */
+    public static final double ID_WINDOW_COLUMN_GROWTH = 0.1;
     /** Distinct warnings kept: a few kinds repeat on every frame, numbers in them could make many. */
     static final int MAX_WARNINGS = 20;
 
@@ -298,12 +303,12 @@ public final class FramePipeline implements FrameSink {
     }
 
     /**
-     * The window of a burst's ID frames: the pose frame's panel window grown by
-     * {@link #ID_WINDOW_GROWTH} of its size a side, since the panel moves in the ~0.15 s until the
-     * burst's last ID frame, and the decoder needs all the rows over the panel.
+     * The window of a burst's ID frames: the pose frame's panel window grown for the panel's
+     * motion until the burst's last ID frame (~0.15 s), more in rows than in columns, since the
+     * decoder reads the code along the rows over the panel (docs/vlc.md, "Cut panels").
      */
     static Window idWindow(Window panel, int width, int height) {
-        return panel == null ? null : panel.grown(ID_WINDOW_GROWTH, width, height);
+        return panel == null ? null : panel.grown(ID_WINDOW_COLUMN_GROWTH, ID_WINDOW_ROW_GROWTH, width, height);
     }
 
     /** The frame's JSON for the window w (null: the whole frame), with its whole plane's grey levels. */

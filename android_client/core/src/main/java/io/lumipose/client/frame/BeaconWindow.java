@@ -24,15 +24,13 @@ import io.lumipose.client.protocol.CaptureProtocol;
  * copied but the window itself, later ({@link LumaPlane#copyWindow}).
  */
 public final class BeaconWindow {
-    // crop.py's constants, from the one protocol file both read; WINDOW_PER_PANEL and EDGE_PX
-    // mirror crop.py until shared_schemas/capture_protocol.json is regenerated with them
-    // (BeaconWindowTest compares with crop.py itself, so a drift fails there)
-    static final double WINDOW_PER_PANEL = 1.0;
+    // crop.py's constants, from the one protocol file both read
+    static final double WINDOW_PER_PANEL = CaptureProtocol.WINDOW_PER_PANEL;
     static final int BLOCK_DIVISOR = CaptureProtocol.WINDOW_BLOCK_DIVISOR;
     static final double MIN_CONTRAST_DN = CaptureProtocol.WINDOW_MIN_CONTRAST_DN;
     static final int EDGE_BLOCKS = CaptureProtocol.WINDOW_EDGE_BLOCKS;
     /** The server's own margin around the panel (shared_schemas.windows.ROI_MARGIN_PX). */
-    static final int EDGE_PX = 12;
+    static final int EDGE_PX = CaptureProtocol.WINDOW_EDGE_PX;
 
     private BeaconWindow() {
     }

@@ -2,6 +2,8 @@ package io.lumipose.client.frame;
 
 import java.nio.ByteBuffer;
 
+import io.lumipose.client.protocol.CaptureProtocol;
+
 /**
  * A whole plane's background and plateau grey levels by the contract's coarse rule
  * ({@code shared_schemas/windows.py}, {@code frame_levels}), sent with a window as
@@ -15,9 +17,9 @@ import java.nio.ByteBuffer;
  * FrameLevelsTest compares it with the Python function on rendered frames.
  */
 public final class FrameLevels {
-    // shared_schemas/windows.py's constants, mirrored until capture_protocol.json carries them
-    static final int COARSE_SHORT_SIDE_PX = 480;
-    static final double PLATEAU_FRACTION = 2e-4;
+    // shared_schemas/windows.py's constants, from the protocol file
+    static final int COARSE_SHORT_SIDE_PX = CaptureProtocol.LEVELS_COARSE_SHORT_SIDE_PX;
+    static final double PLATEAU_FRACTION = CaptureProtocol.LEVELS_PLATEAU_FRACTION;
 
     private FrameLevels() {
     }

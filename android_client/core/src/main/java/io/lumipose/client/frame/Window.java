@@ -31,10 +31,13 @@ public final class Window {
         return x1 <= width && y1 <= height;
     }
 
-    /** This window grown by {@code fraction} of its width and height a side, clipped to a width x height frame. */
-    public Window grown(double fraction, int width, int height) {
-        int dx = (int) Math.ceil(fraction * width());
-        int dy = (int) Math.ceil(fraction * height());
+    /**
+     * This window grown by {@code columns} of its width left and right and {@code rows} of its
+     * height above and below, clipped to a width x height frame.
+     */
+    public Window grown(double columns, double rows, int width, int height) {
+        int dx = (int) Math.ceil(columns * width());
+        int dy = (int) Math.ceil(rows * height());
         return new Window(Math.max(0, x0 - dx), Math.max(0, y0 - dy), Math.min(width, x1 + dx),
                 Math.min(height, y1 + dy));
     }

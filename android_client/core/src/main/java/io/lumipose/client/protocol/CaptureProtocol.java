@@ -40,6 +40,11 @@ public final class CaptureProtocol {
     public static final int WINDOW_BLOCK_DIVISOR = integer("window_block_divisor");
     public static final double WINDOW_MIN_CONTRAST_DN = number("window_min_contrast_dn");
     public static final int WINDOW_EDGE_BLOCKS = integer("window_edge_blocks");
+    /** ... and the pixels the window grows by beyond those blocks: the server's own margin around the panel. */
+    public static final int WINDOW_EDGE_PX = integer("window_edge_px");
+    /** The whole frame's levels sent with a window (shared_schemas/windows.py, {@code FrameLevels}). */
+    public static final int LEVELS_COARSE_SHORT_SIDE_PX = integer("levels_coarse_short_side_px");
+    public static final double LEVELS_PLATEAU_FRACTION = number("levels_plateau_fraction");
 
     private CaptureProtocol() {
     }

@@ -38,6 +38,9 @@ class CaptureProtocolTest {
         assertEquals(o.getInt("window_block_divisor"), CaptureProtocol.WINDOW_BLOCK_DIVISOR);
         assertEquals(o.getDouble("window_min_contrast_dn"), CaptureProtocol.WINDOW_MIN_CONTRAST_DN);
         assertEquals(o.getInt("window_edge_blocks"), CaptureProtocol.WINDOW_EDGE_BLOCKS);
+        assertEquals(o.getInt("window_edge_px"), CaptureProtocol.WINDOW_EDGE_PX);
+        assertEquals(o.getInt("levels_coarse_short_side_px"), CaptureProtocol.LEVELS_COARSE_SHORT_SIDE_PX);
+        assertEquals(o.getDouble("levels_plateau_fraction"), CaptureProtocol.LEVELS_PLATEAU_FRACTION);
     }
 
     @Test
@@ -46,7 +49,8 @@ class CaptureProtocolTest {
         Set<String> read = new HashSet<String>(Arrays.asList("schema", "chip_rate_hz", "message_chips",
                 "golden_step", "id_burst_frames", "id_burst_step", "pose_exposure_s", "id_exposure_s",
                 "id_max_exposure_s", "id_brightness_fraction", "window_per_panel", "window_block_divisor",
-                "window_min_contrast_dn", "window_edge_blocks"));
+                "window_min_contrast_dn", "window_edge_blocks", "window_edge_px", "levels_coarse_short_side_px",
+                "levels_plateau_fraction"));
         assertEquals(read, file().keySet());
     }
 
