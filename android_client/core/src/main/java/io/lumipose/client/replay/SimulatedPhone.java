@@ -135,8 +135,9 @@ public final class SimulatedPhone {
         Intrinsics expected = IntrinsicsCalculator.fromLensCalibration(c, whole, whole,
                 new PixelSize(f.width, f.height), f.camera.distortion(), null);
         double tolerancePx = 1e-3;
-        if (Math.abs(expected.fx - f.camera.fx) > tolerancePx || Math.abs(expected.fy - f.camera.fy) > tolerancePx
-                || Math.abs(expected.cx - f.camera.cx) > tolerancePx || Math.abs(expected.cy - f.camera.cy) > tolerancePx) {
+        double off = Math.max(Math.max(Math.abs(expected.fx - f.camera.fx), Math.abs(expected.fy - f.camera.fy)),
+                Math.max(Math.abs(expected.cx - f.camera.cx), Math.abs(expected.cy - f.camera.cy)));
+        if (off > tolerancePx) {
             throw new IllegalArgumentException(f.name + ": its camera (fx " + f.camera.fx + ", cx " + f.camera.cx
                     + ") is not the recording's " + array + " camera scaled to " + f.width + "x" + f.height
                     + " (fx " + expected.fx + ", cx " + expected.cx + ")");

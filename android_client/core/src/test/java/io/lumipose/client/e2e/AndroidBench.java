@@ -41,6 +41,7 @@ public final class AndroidBench {
     static final int WARM_UP_ROUNDS = 5;
     static final int TIMED_ROUNDS = 15;
     static final double[] TARGETS = {0.10, 0.01, 150};
+    static final String SCENE = "android_client/core/src/test/resources/replay/android-bench.json";
 
     public static void main(String[] args) throws Exception {
         boolean json = false;
@@ -72,7 +73,7 @@ public final class AndroidBench {
     static Recording render(Path cache, double distanceM, PrintStream progress) throws Exception {
         Path folder = cache.resolve(String.format(Locale.ROOT, "%.0fm", distanceM));
         Path complete = folder.resolve(".complete");
-        JSONObject scene = new JSONObject(Repo.text("android_client/core/src/test/resources/replay/android-bench.json"));
+        JSONObject scene = new JSONObject(Repo.text(SCENE));
         double ceiling = scene.getJSONArray("beacons").getJSONObject(0).getJSONArray("center_m").getDouble(2);
         JSONObject pose = scene.getJSONObject("series").getJSONObject("path").getJSONArray("poses").getJSONObject(0);
         pose.getJSONArray("position_m").put(2, ceiling - distanceM);
@@ -113,8 +114,8 @@ public final class AndroidBench {
             Recording recording = recordings.get(i);
             double distance = DISTANCES_M[i];
             progress.printf("replaying %.0f m%n", distance);
-            ReplayRun run = ReplayRun.play(recording, serve.baseUrl, String.format(Locale.ROOT, "bench-%.0fm", distance),
-                    true);
+            String device = String.format(Locale.ROOT, "bench-%.0fm", distance);
+            ReplayRun run = ReplayRun.play(recording, serve.baseUrl, device, true);
             List<Double> windowMs = new ArrayList<Double>();
             for (double[] cost : windowCost(recording)) {
                 windowMs.add(cost[0] + cost[1]);
@@ -183,14 +184,16 @@ public final class AndroidBench {
                         .put("pose_max", round(poseLatencyMax)).put("pose_median", round(median(poseLatency)))
                         .put("pose_after_first_capture_max", laterPoseLatency.isEmpty() ? JSONObject.NULL
                                 : (Object) round(Collections.max(laterPoseLatency)))
-                        .put("id_max", idLatency.isEmpty() ? JSONObject.NULL : (Object) round(Collections.max(idLatency)))
+                        .put("id_max", idLatency.isEmpty() ? JSONObject.NULL
+                                : (Object) round(Collections.max(idLatency)))
                         .put("id_median", idLatency.isEmpty() ? JSONObject.NULL : (Object) round(median(idLatency))))
                 .put("targets", new JSONObject().put("upload_bytes_ratio", TARGETS[0])
                         .put("max_fix_difference_mm", TARGETS[1]).put("latency_ms_at_50mbit_pose", TARGETS[2]))
                 .put("meets_targets", ratio <= TARGETS[0] && compared > 0 && maxDifference <= TARGETS[1]
                         && poseLatencyMax <= TARGETS[2])
                 .put("model", "latency = (body + header bytes) * 8 / 50 Mbit/s + request-to-answer time on 127.0.0.1;"
-                        + " window_ms: BeaconWindow.find + FrameLevels.measure on the pose frames' padded planes, after "
+                        + " window_ms: BeaconWindow.find + FrameLevels.measure on the pose frames' padded planes,"
+                        + " after "
                         + WARM_UP_ROUNDS + " warm-up rounds, median of " + TIMED_ROUNDS)
                 .put("machine", machine)
                 .put("distances", distances);

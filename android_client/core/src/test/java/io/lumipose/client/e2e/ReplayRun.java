@@ -14,6 +14,7 @@ import org.json.JSONArray;
 import org.json.JSONObject;
 
 import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.capture.CaptureOptions;
 import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.capture.UnsupportedCameraException;
 import io.lumipose.client.flow.FramePipeline;
@@ -22,12 +23,12 @@ import io.lumipose.client.net.ClientConfig;
 import io.lumipose.client.net.FrameUploader;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.net.LumiposeClient;
-import io.lumipose.client.net.RetryPolicy;
 import io.lumipose.client.net.Sleeper;
 import io.lumipose.client.replay.RecordedFrame;
 import io.lumipose.client.replay.Recording;
 import io.lumipose.client.replay.ReplayCamera;
 import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.testutil.Lumipose;
 
 /**
  * One replay of a recording through the app's path (replay camera, plan, FramePipeline, burst
@@ -82,10 +83,9 @@ final class ReplayRun {
         this.failures = failures;
     }
 
-    static LumiposeClient client(String baseUrl, String device, CountingTransport transport) {
-        // The live settings: one attempt, no gzip.
-        ClientConfig config = new ClientConfig(baseUrl, io.lumipose.client.testutil.Lumipose.Serve.KEY, device,
-                false, new RetryPolicy(1, 0, 1.0, 0));
+    /** The app's live client (one attempt, no gzip, the map named), over a counting transport. */
+    static LumiposeClient client(String baseUrl, String device, String map, CountingTransport transport) {
+        ClientConfig config = ClientConfig.live(baseUrl, Lumipose.Serve.KEY, device, map);
         return new LumiposeClient(config, transport, Sleeper.REAL);
     }
 
@@ -100,7 +100,8 @@ final class ReplayRun {
         ReplayCamera camera = new ReplayCamera(recording);
         CameraFacts facts = camera.facts();
         JSONObject map = recording.map();
-        CapturePlan plan = CapturePlan.plan(facts, camera.captureOptions(beacons(map), ceilingDistanceM(recording, map)));
+        CaptureOptions options = camera.captureOptions(beacons(map), ceilingDistanceM(recording, map));
+        CapturePlan plan = CapturePlan.plan(facts, options);
 
         final Map<Long, RecordedFrame> byTimestamp = new HashMap<Long, RecordedFrame>();
         for (RecordedFrame f : recording.frames()) {
@@ -108,8 +109,10 @@ final class ReplayRun {
         }
         final CountingTransport windowTransport = new CountingTransport();
         final CountingTransport wholeTransport = new CountingTransport();
-        final LumiposeClient app = client(baseUrl, device, windowTransport);
-        final LumiposeClient whole = compareWhole ? client(baseUrl, device + "-whole", wholeTransport) : null;
+        String mapName = map.getString("name");
+        final LumiposeClient app = client(baseUrl, device, mapName, windowTransport);
+        final LumiposeClient whole = compareWhole
+                ? client(baseUrl, device + "-whole", mapName, wholeTransport) : null;
         FrameUploader uploader = new FrameUploader() {
             @Override
             public LocateResult upload(byte[] luma, FrameMeta meta) throws Exception {

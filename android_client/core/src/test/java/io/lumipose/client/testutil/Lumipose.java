@@ -144,11 +144,9 @@ public final class Lumipose {
             }
         }
 
-        /** PUT the map under its own name, and make it the active map (for requests that name none). */
+        /** PUT the map under its own name (the app names its map in every request). */
         public void putMap(JSONObject map) throws IOException {
-            String name = map.getString("name");
-            put("/v1/maps/" + name, map);
-            put("/v1/maps/active", new JSONObject().put("name", name));
+            put("/v1/maps/" + map.getString("name"), map);
         }
 
         private void put(String path, JSONObject body) throws IOException {
