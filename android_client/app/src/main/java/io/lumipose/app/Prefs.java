@@ -56,14 +56,17 @@ final class Prefs {
 
     /**
      * Distance from the camera up to the panels, m, where the camera focuses: the map's ceiling
-     * (its highest panel) minus the hand's height, at least 0.3 m (a bench under a low panel).
+     * (its highest panel) minus the hand's height. A map whose panels hang lower than that (less
+     * than 0.3 m above the hand) is a bench's, measured from the phone's own plane: the ceiling
+     * height itself, then.
      */
     double ceilingDistanceM(RoomMap map) {
         double ceiling = 0;
         for (Beacon b : map.beacons) {
             ceiling = Math.max(ceiling, b.centerM()[2]);
         }
-        return Math.max(0.3, ceiling - handHeightM());
+        double aboveHand = ceiling - handHeightM();
+        return aboveHand >= 0.3 ? aboveHand : Math.max(0.3, ceiling);
     }
 
     float maxMegapixels() {
