@@ -5,23 +5,39 @@ import android.widget.Button;
 import android.widget.LinearLayout;
 import android.widget.TextView;
 
+import java.nio.ByteBuffer;
 import java.util.Locale;
+import java.util.concurrent.ExecutorService;
 import java.util.concurrent.atomic.AtomicBoolean;
 
 import io.lumipose.client.bench.BenchCell;
 import io.lumipose.client.bench.TestBenchGrid;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.FrameResult;
+import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.flow.FramePipeline;
+import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.net.FrameUploader;
+import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.net.StoredSample;
 
 /**
  * Test-bench mode (paper Section II-B): walks the 391 cells from (-8, 11) to (8, -11); at each one
- * the user taps "Take sample", the next frame is stored on the server with the cell's label, and
- * the screen shows the fix's 2-D error against the cell before moving on.
+ * the user taps "Take sample", the next pose frame goes through the same FramePipeline as live
+ * frames (described from its result, cut to the beacon's window) and is stored on the server with
+ * the cell's label, and the screen shows the fix's 2-D error against the cell before moving on.
+ * Uploads run on the screen's executor through the pipeline, which stops using it once paused.
  */
-public final class BenchActivity extends CameraActivity {
+public final class BenchActivity extends CameraActivity implements FramePipeline.Listener {
     private final TestBenchGrid grid = TestBenchGrid.paper();
+    /** The user asked for a sample and the pipeline has not taken a frame for it yet. */
     private final AtomicBoolean wanted = new AtomicBoolean(false);
     private volatile int index;
+    /** The cell the sample in flight belongs to (the user may move on meanwhile). */
+    private volatile BenchCell sampling;
+    private volatile StoredSample stored;
+    private volatile FramePipeline pipeline;
     private TextView cellView;
     private TextView resultView;
     private Button take;
@@ -42,6 +58,7 @@ public final class BenchActivity extends CameraActivity {
             @Override
             public void onClick(View v) {
                 take.setEnabled(false);
+                sampling = grid.cell(index);
                 wanted.set(true);
             }
         });
@@ -83,43 +100,95 @@ public final class BenchActivity extends CameraActivity {
     }
 
     @Override
-    public boolean wantFrame() {
-        return wanted.get();
+    protected FrameSink frameSink(CameraFacts facts, CapturePlan plan, ExecutorService network) {
+        FrameUploader storeSample = new FrameUploader() {
+            @Override
+            public LocateResult upload(byte[] luma, FrameMeta meta) throws Exception {
+                StoredSample s = client.storeSample(sampling.label(), luma, meta);
+                stored = s;
+                return s.result;
+            }
+        };
+        final FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(),
+                storeSample, network, this);
+        pipeline = p;
+        // Frames reach the pipeline only while a sample is wanted, until it has taken one.
+        return new FrameSink() {
+            @Override
+            public void onResult(FrameResult result) {
+                if (wanted.get()) {
+                    long before = p.burstsSubmitted();
+                    p.onResult(result);
+                    closeGateIfTaken(p, before);
+                }
+            }
+
+            @Override
+            public void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride,
+                                int pixelStride) {
+                if (wanted.get()) {
+                    long before = p.burstsSubmitted();
+                    p.onImage(timestampNs, yPlane, width, height, rowStride, pixelStride);
+                    closeGateIfTaken(p, before);
+                }
+            }
+        };
+    }
+
+    private void closeGateIfTaken(FramePipeline p, long before) {
+        if (p.burstsSubmitted() > before) {
+            wanted.set(false);
+        }
     }
 
     @Override
-    protected void handleFrame(final byte[] luma, final FrameMeta meta) {
-        if (!wanted.compareAndSet(true, false)) {
-            return;
+    protected void onPause() {
+        FramePipeline p = pipeline;
+        if (p != null) {
+            p.close();
+            pipeline = null;
         }
-        final BenchCell cell = grid.cell(index);
-        network.execute(new Runnable() {
+        if (wanted.getAndSet(false)) {
+            take.setEnabled(true);
+        }
+        super.onPause();
+    }
+
+    @Override
+    public void onPoseResult(FrameMeta meta, LocateResult r) {
+        StoredSample s = stored;
+        BenchCell cell = sampling;
+        String text = r.ok
+                ? String.format(Locale.US, "Stored %s as %s: 2-D error %.1f mm", cell.label(), s.id,
+                        cell.horizontalErrorMm(r.positionM()))
+                : "Stored " + cell.label() + " as " + s.id + ": no fix (" + r.reason + ")";
+        showSampleOutcome(text, true);
+    }
+
+    @Override
+    public void onIdResult(FrameMeta meta, LocateResult result) {
+        // The bench plan takes no ID frames.
+    }
+
+    @Override
+    public void onDropped(String reason) {
+        showStatus("Frame not sent: " + reason);
+    }
+
+    @Override
+    public void onFailure(FrameMeta meta, Exception error) {
+        showSampleOutcome("Sample " + sampling.label() + " not stored: " + error.getMessage(), false);
+    }
+
+    private void showSampleOutcome(final String text, final boolean advance) {
+        runOnUiThread(new Runnable() {
             @Override
             public void run() {
-                String text;
-                boolean advance = false;
-                try {
-                    StoredSample s = client.storeSample(cell.label(), luma, meta);
-                    text = s.result.ok
-                            ? String.format(Locale.US, "Stored %s as %s: 2-D error %.1f mm", cell.label(), s.id,
-                                    cell.horizontalErrorMm(s.result.positionM()))
-                            : "Stored " + cell.label() + " as " + s.id + ": no fix (" + s.result.reason + ")";
-                    advance = true;
-                } catch (Exception e) {
-                    text = "Sample " + cell.label() + " not stored: " + e.getMessage();
+                resultView.setText(text);
+                take.setEnabled(true);
+                if (advance) {
+                    move(1);
                 }
-                final String shown = text;
-                final boolean next = advance;
-                runOnUiThread(new Runnable() {
-                    @Override
-                    public void run() {
-                        resultView.setText(shown);
-                        take.setEnabled(true);
-                        if (next) {
-                            move(1);
-                        }
-                    }
-                });
             }
         });
     }

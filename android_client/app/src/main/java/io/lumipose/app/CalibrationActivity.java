@@ -38,12 +38,7 @@ public final class CalibrationActivity extends LocatingActivity {
     }
 
     @Override
-    protected boolean ready() {
-        return map != null;
-    }
-
-    @Override
-    public void onResult(FrameMeta meta, LocateResult r) {
+    protected void onPose(FrameMeta meta, LocateResult r) {
         RoomMap m = map;
         Beacon b = m == null ? null : r.beaconId != null ? m.beacon(r.beaconId) : m.beacons.get(0);
         if (b == null) {

@@ -9,41 +9,47 @@ import android.widget.TextView;
 
 import java.util.concurrent.ExecutorService;
 import java.util.concurrent.Executors;
+import java.util.concurrent.RejectedExecutionException;
 
-import io.lumipose.client.capture.CaptureSettingsChooser;
-import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.capture.CaptureOptions;
+import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.LumiposeClient;
+import io.lumipose.client.protocol.CaptureProtocol;
 
 /**
- * What every camera screen shares: permission, the camera controller, the gravity listener, the
- * server client on a background executor, and the room map. Subclasses only lay out and react.
+ * What every camera screen shares: permission, the map, the camera controller, the gravity
+ * history and a background executor this screen owns (made in onResume, shut down in onPause,
+ * never used after). The camera starts only once the map is in: the capture plan needs its beacon
+ * count (ID bursts only with more than one beacon) and its ceiling (focus).
  */
-abstract class CameraActivity extends Activity implements Camera2Controller.Listener, Camera2Controller.FrameGate {
+abstract class CameraActivity extends Activity implements Camera2Controller.Listener {
     private static final int PERMISSION_REQUEST = 1;
 
     protected Prefs prefs;
+    /** Map fetches and stored samples: patient (retries, long timeout). */
     protected LumiposeClient client;
-    protected ExecutorService network;
     protected GravityListener gravity;
     protected TextView status;
     protected volatile RoomMap map;
+    private ExecutorService network;
     private Camera2Controller controller;
     // The permission dialog pauses and resumes the screen: ask once, and start the camera once.
     private boolean permissionAsked;
+    private boolean cameraAllowed;
 
     /** The screen's content; {@link #status} is already created. */
     protected abstract void buildViews();
 
-    /** A frame the gate let through, on the camera thread. */
-    protected abstract void handleFrame(byte[] luma, FrameMeta meta);
+    /**
+     * Where this screen's frames go, for the camera just configured (on the camera thread); the
+     * executor is the screen's network executor.
+     */
+    protected abstract FrameSink frameSink(CameraFacts facts, CapturePlan plan, ExecutorService network);
 
-    /** The exposure this screen captures at. */
-    protected long exposureNs() {
-        return CaptureSettingsChooser.POSITION_EXPOSURE_NS;
-    }
-
-    /** Short-exposure beacon-ID frames beside the pose frames: 0 for none (one-beacon screens). */
+    /** Short-exposure beacon-ID frames after each pose frame: 0 for none. */
     protected long idExposureNs() {
         return 0;
     }
@@ -72,33 +78,43 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         }
         network = Executors.newSingleThreadExecutor();
         gravity.start();
-        loadMap();
         if (checkSelfPermission(Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED) {
-            startCamera();
+            cameraAllowed = true;
         } else if (!permissionAsked) {
             permissionAsked = true;
             requestPermissions(new String[] {Manifest.permission.CAMERA}, PERMISSION_REQUEST);
         } else {
             showStatus("Lumipose needs the camera to see the ceiling panel: allow it in the app's settings.");
         }
+        loadMap();
     }
 
     @Override
     public void onRequestPermissionsResult(int requestCode, String[] permissions, int[] results) {
         if (requestCode == PERMISSION_REQUEST && results.length > 0
                 && results[0] == PackageManager.PERMISSION_GRANTED) {
-            startCamera();
+            cameraAllowed = true;
+            startCameraWhenReady();
         } else {
             showStatus("Lumipose needs the camera to see the ceiling panel.");
         }
     }
 
-    private void startCamera() {
-        if (controller != null || network == null) {
+    /** UI thread: starts the camera once both the permission and the map are there. */
+    private void startCameraWhenReady() {
+        RoomMap m = map;
+        if (controller != null || network == null || !cameraAllowed || m == null) {
             return;
         }
-        controller = new Camera2Controller(this, prefs.cameraId(), exposureNs(), idExposureNs(), prefs.focusDistanceM(),
-                prefs.mapXBearingDeg(), (long) (prefs.maxMegapixels() * 1e6), gravity, this, this);
+        CaptureOptions options;
+        try {
+            options = new CaptureOptions(CaptureProtocol.POSE_EXPOSURE_NS, idExposureNs(), m.beacons.size(),
+                    prefs.ceilingDistanceM(m), (long) (prefs.maxMegapixels() * 1e6));
+        } catch (IllegalArgumentException e) {
+            showStatus("Settings: " + e.getMessage());
+            return;
+        }
+        controller = new Camera2Controller(this, prefs.cameraId(), options, this);
         controller.start();
     }
 
@@ -118,14 +134,40 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         super.onPause();
     }
 
+    /**
+     * Runs a task on this screen's executor; false when the screen is paused (the executor shut
+     * down or gone), so nothing is ever handed to a dead executor.
+     */
+    protected boolean inBackground(Runnable task) {
+        ExecutorService e = network;
+        if (e == null) {
+            return false;
+        }
+        try {
+            e.execute(task);
+            return true;
+        } catch (RejectedExecutionException shutDown) {
+            return false;
+        }
+    }
+
     private void loadMap() {
         final String name = prefs.mapName();
-        network.execute(new Runnable() {
+        inBackground(new Runnable() {
             @Override
             public void run() {
                 try {
-                    map = client.fetchMap(name);
-                    onMapLoaded(map);
+                    final RoomMap loaded = client.fetchMap(name);
+                    map = loaded;
+                    onMapLoaded(loaded);
+                    runOnUiThread(new Runnable() {
+                        @Override
+                        public void run() {
+                            startCameraWhenReady();
+                        }
+                    });
+                } catch (InterruptedException e) {
+                    Thread.currentThread().interrupt();
                 } catch (Exception e) {
                     showStatus("Map '" + name + "' not loaded: " + e.getMessage());
                 }
@@ -133,7 +175,7 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         });
     }
 
-    /** Called on a background thread once the map is in. */
+    /** Called on a background thread once the map is in, before the camera starts. */
     protected void onMapLoaded(RoomMap loaded) {
     }
 
@@ -147,8 +189,13 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     }
 
     @Override
-    public void onStarted(String summary) {
+    public FrameSink onStarted(CameraFacts facts, CapturePlan plan, String summary) {
+        ExecutorService e = network;
+        if (e == null) {
+            return null; // paused meanwhile: the controller is being stopped
+        }
         showStatus("Capturing: " + summary + (gravity.available() ? "" : " (no gravity sensor)"));
+        return frameSink(facts, plan, e);
     }
 
     @Override
@@ -159,10 +206,5 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     @Override
     public void onError(String message) {
         showStatus(message);
-    }
-
-    @Override
-    public void onFrame(byte[] luma, FrameMeta meta) {
-        handleFrame(luma, meta);
     }
 }

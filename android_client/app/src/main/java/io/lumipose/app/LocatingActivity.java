@@ -1,46 +1,75 @@
 package io.lumipose.app;
 
-import io.lumipose.client.frame.FrameMeta;
-import io.lumipose.client.net.LatestFrameUploader;
+import java.util.Collections;
+import java.util.List;
+import java.util.Map;
+import java.util.concurrent.ExecutorService;
 
-/** A camera screen that streams frames to POST /v1/locate: one in flight, the newest waiting frame wins. */
-abstract class LocatingActivity extends CameraActivity implements LatestFrameUploader.Listener {
-    private LatestFrameUploader uploader;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.flow.FramePipeline;
+import io.lumipose.client.flow.FrameSink;
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.net.LocateResult;
+import io.lumipose.client.net.LumiposeClient;
+
+/**
+ * A camera screen that streams bursts to POST /v1/locate through the core's FramePipeline (one
+ * burst in flight, the beacon's window only, in the map this screen draws). Subclasses get pose
+ * results only: an ID frame's answer is never a position to show or track.
+ */
+abstract class LocatingActivity extends CameraActivity implements FramePipeline.Listener {
+    private volatile FramePipeline pipeline;
+    protected volatile CapturePlan plan;
+
+    /** A pose frame's answer, on the upload thread. */
+    protected abstract void onPose(FrameMeta meta, LocateResult result);
 
     @Override
-    protected void onResume() {
-        super.onResume();
-        if (client != null) {
-            uploader = new LatestFrameUploader(client, network, this);
-        }
+    protected FrameSink frameSink(CameraFacts facts, CapturePlan plan, ExecutorService network) {
+        this.plan = plan;
+        // live frames: one attempt, a short timeout, no gzip, the map this screen draws
+        LumiposeClient live = LumiposeClient.create(prefs.liveConfig());
+        FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(), live,
+                network, this);
+        pipeline = p;
+        return p;
     }
 
     @Override
     protected void onPause() {
-        if (uploader != null) {
-            uploader.close();
-            uploader = null;
+        FramePipeline p = pipeline;
+        if (p != null) {
+            p.close();
+            pipeline = null;
         }
         super.onPause();
     }
 
-    /** Whether this screen can use a frame now, besides the uploader being free. */
-    protected boolean ready() {
-        return true;
+    /** Frames not sent so far, by reason (empty before the camera starts). */
+    protected Map<String, Long> dropCounts() {
+        FramePipeline p = pipeline;
+        return p == null ? Collections.<String, Long>emptyMap() : p.dropCounts();
+    }
+
+    /** The frame describer's warnings so far, each once. */
+    protected List<String> warnings() {
+        FramePipeline p = pipeline;
+        return p == null ? Collections.<String>emptyList() : p.warnings();
     }
 
     @Override
-    public boolean wantFrame() {
-        LatestFrameUploader u = uploader;
-        return u != null && !u.busy() && ready();
+    public final void onPoseResult(FrameMeta meta, LocateResult result) {
+        onPose(meta, result);
     }
 
     @Override
-    protected void handleFrame(byte[] luma, FrameMeta meta) {
-        LatestFrameUploader u = uploader;
-        if (u != null) {
-            u.submit(luma, meta);
-        }
+    public void onIdResult(FrameMeta meta, LocateResult result) {
+        // The server keeps the stripes for the device's next pose frame; its answer here is no position.
+    }
+
+    @Override
+    public void onDropped(String reason) {
     }
 
     @Override

@@ -4,10 +4,13 @@ import android.content.Context;
 import android.content.SharedPreferences;
 import android.os.Build;
 
-import io.lumipose.client.capture.CaptureSettingsChooser;
+import java.util.UUID;
+
+import io.lumipose.client.map.Beacon;
+import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.ClientConfig;
 import io.lumipose.client.net.RetryPolicy;
-import java.util.UUID;
+import io.lumipose.client.protocol.CaptureProtocol;
 
 /** The settings screen's values, kept in SharedPreferences. */
 final class Prefs {
@@ -15,7 +18,7 @@ final class Prefs {
     static final String API_KEY = "api_key";
     static final String CAMERA_ID = "camera_id";
     static final String MAP_NAME = "map_name";
-    static final String FOCUS_DISTANCE_M = "focus_distance_m";
+    static final String HAND_HEIGHT_M = "hand_height_m";
     static final String MAX_MEGAPIXELS = "max_megapixels";
     static final String ID_EXPOSURE_US = "id_exposure_us";
     static final String BENCH_INDEX = "bench_index";
@@ -46,8 +49,24 @@ final class Prefs {
         return p.getString(MAP_NAME, "test-bench");
     }
 
-    float focusDistanceM() {
-        return p.getFloat(FOCUS_DISTANCE_M, 1.0f);
+    /** Height of the phone above the floor while in use, m (a hand at chest height by default). */
+    float handHeightM() {
+        return p.getFloat(HAND_HEIGHT_M, 1.3f);
+    }
+
+    /**
+     * Distance from the camera up to the panels, m, where the camera focuses: the map's ceiling
+     * (its highest panel) minus the hand's height. A map whose panels hang lower than that (less
+     * than 0.3 m above the hand) is a bench's, measured from the phone's own plane: the ceiling
+     * height itself, then.
+     */
+    double ceilingDistanceM(RoomMap map) {
+        double ceiling = 0;
+        for (Beacon b : map.beacons) {
+            ceiling = Math.max(ceiling, b.centerM()[2]);
+        }
+        double aboveHand = ceiling - handHeightM();
+        return aboveHand >= 0.3 ? aboveHand : Math.max(0.3, ceiling);
     }
 
     float maxMegapixels() {
@@ -55,7 +74,7 @@ final class Prefs {
     }
 
     long idExposureNs() {
-        return p.getLong(ID_EXPOSURE_US, CaptureSettingsChooser.DEFAULT_ID_EXPOSURE_NS / 1000) * 1000;
+        return p.getLong(ID_EXPOSURE_US, CaptureProtocol.ID_EXPOSURE_NS / 1000) * 1000;
     }
 
     /** Interleave beacon-ID frames in live mode (rooms with several panels). */
@@ -88,9 +107,19 @@ final class Prefs {
         return p.edit();
     }
 
-    /** @throws IllegalArgumentException with a readable message for a bad server URL */
+    /**
+     * Map fetches and stored samples: retries and a long timeout, no gzip (it costs more than it
+     * saves on a LAN), frames located in the map the app draws.
+     *
+     * @throws IllegalArgumentException with a readable message for a bad server URL
+     */
     ClientConfig clientConfig() {
-        return new ClientConfig(serverUrl(), apiKey(), deviceId(), true, RetryPolicy.defaults());
+        return new ClientConfig(serverUrl(), apiKey(), deviceId(), false, RetryPolicy.defaults()).withMap(mapName());
+    }
+
+    /** Live frames: one attempt, a short read timeout, in the map the app draws. */
+    ClientConfig liveConfig() {
+        return ClientConfig.live(serverUrl(), apiKey(), deviceId(), mapName());
     }
 
     /**

@@ -26,7 +26,7 @@ public final class SettingsActivity extends Activity {
     private EditText url;
     private EditText key;
     private EditText mapName;
-    private EditText focus;
+    private EditText handHeight;
     private EditText megapixels;
     private EditText idExposure;
     private EditText bearing;
@@ -46,7 +46,8 @@ public final class SettingsActivity extends Activity {
         key = field(form, "API key (empty if the server has none)", prefs.apiKey(),
                 TEXT | InputType.TYPE_TEXT_VARIATION_PASSWORD);
         mapName = field(form, "Map name", prefs.mapName(), TEXT);
-        focus = field(form, "Distance to the panel, m (focus)", String.valueOf(prefs.focusDistanceM()), DECIMAL);
+        handHeight = field(form, "Phone's height above the floor, m (focus: the map's ceiling minus this)",
+                String.valueOf(prefs.handHeightM()), DECIMAL);
         megapixels = field(form, "Largest frame, megapixels", String.valueOf(prefs.maxMegapixels()), DECIMAL);
         idExposure = field(form, "Beacon-ID exposure, microseconds", String.valueOf(prefs.idExposureNs() / 1000),
                 InputType.TYPE_CLASS_NUMBER);
@@ -55,7 +56,8 @@ public final class SettingsActivity extends Activity {
         bearing = field(form, "Compass bearing of the map's +X axis, deg (empty: send no heading)",
                 b == null ? "" : String.valueOf(b), DECIMAL | InputType.TYPE_NUMBER_FLAG_SIGNED);
         readIds = new CheckBox(this);
-        readIds.setText("Read beacon IDs in live mode (short-exposure frames between pose frames)");
+        readIds.setText("Read beacon IDs in live mode (short-exposure frames after each pose frame, on maps "
+                + "of several panels)");
         readIds.setChecked(prefs.readIds());
         form.addView(readIds);
 
@@ -106,19 +108,19 @@ public final class SettingsActivity extends Activity {
     }
 
     private void save() {
-        float focusM;
+        float handM;
         float mp;
         long idUs;
         try {
-            focusM = Float.parseFloat(focus.getText().toString());
+            handM = Float.parseFloat(handHeight.getText().toString());
             mp = Float.parseFloat(megapixels.getText().toString());
             idUs = Long.parseLong(idExposure.getText().toString());
         } catch (NumberFormatException e) {
-            status.setText("Distance, megapixels and exposure must be numbers.");
+            status.setText("Height, megapixels and exposure must be numbers.");
             return;
         }
-        if (!(focusM > 0) || !(mp > 0) || idUs <= 0) {
-            status.setText("Distance, megapixels and exposure must be positive.");
+        if (!(handM >= 0) || !(mp > 0) || idUs <= 0) {
+            status.setText("Height must be at least 0; megapixels and exposure positive.");
             return;
         }
         String bearingText = bearing.getText().toString().trim();
@@ -134,7 +136,7 @@ public final class SettingsActivity extends Activity {
                 .putString(Prefs.API_KEY, key.getText().toString().trim())
                 .putString(Prefs.MAP_NAME, mapName.getText().toString().trim())
                 .putString(Prefs.CAMERA_ID, cameraIds.get(camera.getSelectedItemPosition()))
-                .putFloat(Prefs.FOCUS_DISTANCE_M, focusM).putFloat(Prefs.MAX_MEGAPIXELS, mp)
+                .putFloat(Prefs.HAND_HEIGHT_M, handM).putFloat(Prefs.MAX_MEGAPIXELS, mp)
                 .putLong(Prefs.ID_EXPOSURE_US, idUs).putBoolean(Prefs.READ_IDS, readIds.isChecked())
                 .putString(Prefs.MAP_X_BEARING_DEG, bearingText).apply();
         final LumiposeClient client;

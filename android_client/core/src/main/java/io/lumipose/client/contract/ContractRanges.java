@@ -58,6 +58,8 @@ public final class ContractRanges {
     public static final Range SIDE_PX = new Range(1, 100_000);
     /** crop.x, crop.y. */
     public static final Range CROP_OFFSET_PX = new Range(0, 100_000);
+    /** An 8-bit luma level (crop.levels_dn). */
+    public static final Range GREY_LEVEL_DN = new Range(0, 255);
     /** row_stride, bytes: the widest frame with as much padding again. */
     public static final Range ROW_STRIDE = new Range(1, 200_000);
     /** camera.fx, camera.fy, pixels. */

@@ -21,7 +21,7 @@ public final class FrameMeta {
     public static final String SCHEMA = "lumipose.frame/1";
     private static final Set<String> KNOWN = new HashSet<String>(Arrays.asList("schema", "format", "width", "height",
             "row_stride", "camera", "exposure_s", "iso", "rolling_shutter_skew_s", "timestamp_ns", "heading_deg",
-            "gravity_camera", "frame_kind"));
+            "gravity_camera", "frame_kind", "crop", "tone_curve"));
     private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
             "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
 
@@ -41,6 +41,10 @@ public final class FrameMeta {
     private final double[] gravityCamera;
     /** "pose" or "id" (a short-exposure VLC frame); null = not stated, which the contract reads as pose. */
     public final String frameKind;
+    /** Where these pixels lie in the full frame the camera describes; null for a whole frame. */
+    public final Crop crop;
+    /** "linear" or "device": the tone curve the camera applied; null = not stated. */
+    public final String toneCurve;
     private final String extrasJson;
     private final String cameraExtrasJson;
 
@@ -55,9 +59,12 @@ public final class FrameMeta {
         if ((b.camera == null) == (b.cameraProfile == null)) {
             throw new ContractException("camera", "give either intrinsics or a device profile");
         }
-        int[] fullSize = fullSize(b.extras, b.width, b.height);
+        if (b.crop != null) {
+            b.crop.checkHolds(b.width, b.height);
+        }
         if (b.camera != null) {
-            checkCamera(b.camera, fullSize);
+            checkCamera(b.camera, b.crop == null ? b.width : b.crop.fullWidth,
+                    b.crop == null ? b.height : b.crop.fullHeight);
         }
         ContractRanges.EXPOSURE_S.check("exposure_s", b.exposureS);
         ContractRanges.ISO.check("iso", b.iso);
@@ -66,6 +73,9 @@ public final class FrameMeta {
         ContractRanges.ANGLE_DEG.check("heading_deg", b.headingDeg);
         if (b.frameKind != null && !"pose".equals(b.frameKind) && !"id".equals(b.frameKind)) {
             throw new ContractException("frame_kind", "must be 'pose' or 'id', got '" + b.frameKind + "'");
+        }
+        if (b.toneCurve != null && !"linear".equals(b.toneCurve) && !"device".equals(b.toneCurve)) {
+            throw new ContractException("tone_curve", "must be 'linear' or 'device', got '" + b.toneCurve + "'");
         }
         if (b.gravityCamera != null && b.gravityCamera.length != 3) {
             throw new ContractException("gravity_camera", "must hold 3 numbers");
@@ -84,15 +94,17 @@ public final class FrameMeta {
         this.headingDeg = b.headingDeg;
         this.gravityCamera = b.gravityCamera == null ? null : b.gravityCamera.clone();
         this.frameKind = b.frameKind;
+        this.crop = b.crop;
+        this.toneCurve = b.toneCurve;
         this.extrasJson = b.extras.toString();
         this.cameraExtrasJson = b.cameraExtras.toString();
     }
 
-    private static void checkCamera(Intrinsics k, int[] fullSize) {
+    private static void checkCamera(Intrinsics k, int fullWidth, int fullHeight) {
         ContractRanges.FOCAL_PX.check("camera.fx", k.fx);
         ContractRanges.FOCAL_PX.check("camera.fy", k.fy);
-        ContractRanges.checkPrincipalPoint("camera.cx", k.cx, fullSize[0]);
-        ContractRanges.checkPrincipalPoint("camera.cy", k.cy, fullSize[1]);
+        ContractRanges.checkPrincipalPoint("camera.cx", k.cx, fullWidth);
+        ContractRanges.checkPrincipalPoint("camera.cy", k.cy, fullHeight);
         double[] d = k.distortion();
         if (d.length != 0 && d.length != 4 && d.length != 5 && d.length != 8) {
             throw new ContractException("camera.distortion", "must hold 0, 4, 5 or 8 OpenCV coefficients, got "
@@ -103,30 +115,38 @@ public final class FrameMeta {
         ContractRanges.FOCAL_LENGTH_M.check("camera.focal_length_m", k.focalLengthM);
     }
 
-    /**
-     * (width, height) of the full frame the camera describes: the {@code crop} block's (kept as an
-     * extra field, checked here), or this frame's own.
-     */
-    private static int[] fullSize(JSONObject extras, int width, int height) {
-        JSONObject crop = Json.optObject(extras, "crop", "crop");
-        if (crop == null) {
-            return new int[] {width, height};
-        }
-        int x = (int) ContractRanges.CROP_OFFSET_PX.check("crop.x", Json.requireInt(crop, "x", "crop.x"));
-        int y = (int) ContractRanges.CROP_OFFSET_PX.check("crop.y", Json.requireInt(crop, "y", "crop.y"));
-        int fullWidth = (int) ContractRanges.SIDE_PX.check("crop.full_width",
-                Json.requireInt(crop, "full_width", "crop.full_width"));
-        int fullHeight = (int) ContractRanges.SIDE_PX.check("crop.full_height",
-                Json.requireInt(crop, "full_height", "crop.full_height"));
-        if ((long) x + width > fullWidth || (long) y + height > fullHeight) {
-            throw new ContractException("crop", "window " + width + "x" + height + " at (" + x + ", " + y
-                    + ") does not fit in the full frame " + fullWidth + "x" + fullHeight);
-        }
-        return new int[] {fullWidth, fullHeight};
-    }
-
     public static Builder builder(int width, int height) {
         return new Builder(width, height);
+    }
+
+    /** Width of the full frame the camera's intrinsics describe: the crop's, or this frame's. */
+    public int fullWidth() {
+        return crop == null ? width : crop.fullWidth;
+    }
+
+    /** Height of the full frame the camera's intrinsics describe: the crop's, or this frame's. */
+    public int fullHeight() {
+        return crop == null ? height : crop.fullHeight;
+    }
+
+    /**
+     * This frame cut to the window {@code width x height} at ({@code x}, {@code y}) of its own pixels,
+     * packed (row_stride = width); the intrinsics still describe the full frame, as the contract's
+     * {@code crop} asks.
+     *
+     * @param levelsDn the whole frame's [background, plateau] grey levels by the contract's coarse
+     *                 rule ({@code crop.levels_dn}), or null; a window of a window keeps its frame's
+     */
+    public FrameMeta window(int x, int y, int width, int height, double[] levelsDn) {
+        int offsetX = crop == null ? 0 : crop.x;
+        int offsetY = crop == null ? 0 : crop.y;
+        double[] levels = crop != null && crop.levelsDn != null ? crop.levelsDn : levelsDn;
+        JSONObject o = toJson();
+        Json.put(o, "width", width);
+        Json.put(o, "height", height);
+        Json.put(o, "row_stride", width);
+        Json.put(o, "crop", new Crop(offsetX + x, offsetY + y, fullWidth(), fullHeight(), levels).toJson());
+        return fromJson(o);
     }
 
     /** Gravity (pointing down) in the camera frame, or null. */
@@ -175,6 +195,10 @@ public final class FrameMeta {
             Json.put(o, "gravity_camera", Json.array(gravityCamera));
         }
         putIfSet(o, "frame_kind", frameKind);
+        if (crop != null) {
+            Json.put(o, "crop", crop.toJson());
+        }
+        putIfSet(o, "tone_curve", toneCurve);
         return o;
     }
 
@@ -227,6 +251,11 @@ public final class FrameMeta {
         b.headingDeg(Json.optDouble(o, "heading_deg", "heading_deg"));
         b.gravityCamera(Json.optDoubles(o, "gravity_camera", "gravity_camera", 3));
         b.frameKind(Json.optString(o, "frame_kind", "frame_kind"));
+        JSONObject crop = Json.optObject(o, "crop", "crop");
+        if (crop != null) {
+            b.crop = Crop.fromJson(crop);
+        }
+        b.toneCurve(Json.optString(o, "tone_curve", "tone_curve"));
         b.extras = Json.extras(o, KNOWN);
         return b.build();
     }
@@ -246,6 +275,8 @@ public final class FrameMeta {
         private Double headingDeg;
         private double[] gravityCamera;
         private String frameKind;
+        private Crop crop;
+        private String toneCurve;
         private JSONObject extras = new JSONObject();
         private JSONObject cameraExtras = new JSONObject();
 
@@ -304,8 +335,31 @@ public final class FrameMeta {
             return this;
         }
 
+        /**
+         * These pixels are the window {@code width x height} at ({@code x}, {@code y}) of a
+         * {@code fullWidth x fullHeight} frame, which the intrinsics describe.
+         */
+        public Builder crop(int x, int y, int fullWidth, int fullHeight) {
+            return crop(x, y, fullWidth, fullHeight, null);
+        }
+
+        /** The same, with the full frame's [background, plateau] grey levels ({@code crop.levels_dn}). */
+        public Builder crop(int x, int y, int fullWidth, int fullHeight, double[] levelsDn) {
+            crop = new Crop(x, y, fullWidth, fullHeight, levelsDn);
+            return this;
+        }
+
+        /** "linear" or "device": the tone curve the camera applied. */
+        public Builder toneCurve(String v) {
+            toneCurve = v;
+            return this;
+        }
+
         /** An extra top-level field (the contract allows and keeps them). */
         public Builder extra(String key, Object value) {
+            if ("tone_curve".equals(key)) { // it was an extra before it became a field
+                return toneCurve((String) value);
+            }
             if (KNOWN.contains(key)) {
                 throw new IllegalArgumentException("'" + key + "' is a contract field, set it with its own method");
             }
@@ -315,6 +369,64 @@ public final class FrameMeta {
 
         public FrameMeta build() {
             return new FrameMeta(this);
+        }
+    }
+
+    /** The contract's {@code crop} block: where a window's pixels lie in the full frame. */
+    public static final class Crop {
+        public final int x;
+        public final int y;
+        public final int fullWidth;
+        public final int fullHeight;
+        /** The full frame's [background, plateau] grey levels ({@code levels_dn}), or null. */
+        private final double[] levelsDn;
+
+        public Crop(int x, int y, int fullWidth, int fullHeight, double[] levelsDn) {
+            this.x = (int) ContractRanges.CROP_OFFSET_PX.check("crop.x", x);
+            this.y = (int) ContractRanges.CROP_OFFSET_PX.check("crop.y", y);
+            this.fullWidth = (int) ContractRanges.SIDE_PX.check("crop.full_width", fullWidth);
+            this.fullHeight = (int) ContractRanges.SIDE_PX.check("crop.full_height", fullHeight);
+            if (levelsDn != null) {
+                if (levelsDn.length != 2) {
+                    throw new ContractException("crop.levels_dn", "must hold [background, plateau]");
+                }
+                ContractRanges.GREY_LEVEL_DN.checkEach("crop.levels_dn", levelsDn);
+                if (levelsDn[0] > levelsDn[1]) {
+                    throw new ContractException("crop.levels_dn", "background " + levelsDn[0] + " > plateau "
+                            + levelsDn[1]);
+                }
+            }
+            this.levelsDn = levelsDn == null ? null : levelsDn.clone();
+        }
+
+        public double[] levelsDn() {
+            return levelsDn == null ? null : levelsDn.clone();
+        }
+
+        static Crop fromJson(JSONObject o) {
+            return new Crop(Json.requireInt(o, "x", "crop.x"), Json.requireInt(o, "y", "crop.y"),
+                    Json.requireInt(o, "full_width", "crop.full_width"),
+                    Json.requireInt(o, "full_height", "crop.full_height"),
+                    Json.optDoubles(o, "levels_dn", "crop.levels_dn", 2));
+        }
+
+        void checkHolds(int width, int height) {
+            if ((long) x + width > fullWidth || (long) y + height > fullHeight) {
+                throw new ContractException("crop", "window " + width + "x" + height + " at (" + x + ", " + y
+                        + ") does not fit in the full frame " + fullWidth + "x" + fullHeight);
+            }
+        }
+
+        JSONObject toJson() {
+            JSONObject o = new JSONObject();
+            Json.put(o, "x", x);
+            Json.put(o, "y", y);
+            Json.put(o, "full_width", fullWidth);
+            Json.put(o, "full_height", fullHeight);
+            if (levelsDn != null) {
+                Json.put(o, "levels_dn", Json.array(levelsDn));
+            }
+            return o;
         }
     }
 }

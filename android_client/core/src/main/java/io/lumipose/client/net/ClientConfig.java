@@ -2,6 +2,12 @@ package io.lumipose.client.net;
 
 /** Where the server is and how to talk to it (the app's settings screen fills this). */
 public final class ClientConfig {
+    /** A live frame is stale within a second or two: wait this long for its answer, once. */
+    public static final int LIVE_READ_TIMEOUT_MS = 3000;
+    public static final int CONNECT_TIMEOUT_MS = 3000;
+    /** Map fetches, stored samples: worth waiting for. */
+    public static final int PATIENT_READ_TIMEOUT_MS = 15000;
+
     public final String baseUrl;
     /** Sent as X-API-Key when set; null for a server without a key. */
     public final String apiKey;
@@ -9,19 +15,57 @@ public final class ClientConfig {
     public final String deviceId;
     public final boolean gzip;
     public final RetryPolicy retry;
+    /** Sent as {@code ?map=} with every frame, so the server locates in the map the app draws; null: its active map. */
+    public final String mapName;
+    public final int connectTimeoutMs;
+    public final int readTimeoutMs;
 
     public ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, RetryPolicy retry) {
+        this(baseUrl, apiKey, deviceId, gzip, retry, null, CONNECT_TIMEOUT_MS, PATIENT_READ_TIMEOUT_MS);
+    }
+
+    private ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, RetryPolicy retry,
+                         String mapName, int connectTimeoutMs, int readTimeoutMs) {
         if (baseUrl == null || !(baseUrl.startsWith("http://") || baseUrl.startsWith("https://"))) {
             throw new IllegalArgumentException("server URL must start with http:// or https://, got '" + baseUrl + "'");
+        }
+        if (connectTimeoutMs <= 0 || readTimeoutMs <= 0) {
+            throw new IllegalArgumentException("timeouts must be > 0 ms");
         }
         String trimmed = baseUrl.trim();
         while (trimmed.endsWith("/")) {
             trimmed = trimmed.substring(0, trimmed.length() - 1);
         }
         this.baseUrl = trimmed;
-        this.apiKey = apiKey == null || apiKey.trim().isEmpty() ? null : apiKey.trim();
-        this.deviceId = deviceId == null || deviceId.trim().isEmpty() ? null : deviceId.trim();
+        this.apiKey = blankToNull(apiKey);
+        this.deviceId = blankToNull(deviceId);
         this.gzip = gzip;
         this.retry = retry;
+        this.mapName = blankToNull(mapName);
+        this.connectTimeoutMs = connectTimeoutMs;
+        this.readTimeoutMs = readTimeoutMs;
+    }
+
+    /**
+     * For live frames: one attempt, a short read timeout (a newer frame replaces a lost one; three
+     * attempts of 15 s would hold the uploader for a minute), no gzip (it costs more than it saves
+     * on a LAN), and the map the app draws.
+     */
+    public static ClientConfig live(String baseUrl, String apiKey, String deviceId, String mapName) {
+        return new ClientConfig(baseUrl, apiKey, deviceId, false, new RetryPolicy(1, 0, 1.0, 0), mapName,
+                CONNECT_TIMEOUT_MS, LIVE_READ_TIMEOUT_MS);
+    }
+
+    /** The same, with frames located in the map {@code name} (null: the server's active map). */
+    public ClientConfig withMap(String name) {
+        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, retry, name, connectTimeoutMs, readTimeoutMs);
+    }
+
+    public ClientConfig withTimeouts(int connectMs, int readMs) {
+        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, retry, mapName, connectMs, readMs);
+    }
+
+    private static String blankToNull(String s) {
+        return s == null || s.trim().isEmpty() ? null : s.trim();
     }
 }

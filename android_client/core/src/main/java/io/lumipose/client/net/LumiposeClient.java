@@ -27,9 +27,10 @@ public final class LumiposeClient implements FrameUploader {
         this.sleeper = sleeper;
     }
 
-    /** A client over HttpURLConnection with real sleeps. */
+    /** A client over HttpURLConnection with the config's timeouts and real sleeps. */
     public static LumiposeClient create(ClientConfig config) {
-        return new LumiposeClient(config, new UrlConnectionTransport(3000, 15000), Sleeper.REAL);
+        return new LumiposeClient(config, new UrlConnectionTransport(config.connectTimeoutMs, config.readTimeoutMs),
+                Sleeper.REAL);
     }
 
     @Override
@@ -38,10 +39,15 @@ public final class LumiposeClient implements FrameUploader {
         return locate(luma, meta);
     }
 
-    /** POST /v1/locate. A refusal (no beacon, ...) is a result with {@code ok == false}, not an exception. */
+    /**
+     * POST /v1/locate (with {@code ?map=} when the config names one). A refusal (no beacon, ...) is a
+     * result with {@code ok == false}, not an exception.
+     */
     public LocateResult locate(byte[] luma, FrameMeta meta) throws IOException, ServerRejectedException,
             InterruptedException {
-        HttpReply reply = call(frameCall(config.baseUrl + "/v1/locate", luma, meta), 200);
+        String map = config.mapName == null ? "" : "?map=" + urlEncode(config.mapName);
+        String url = config.baseUrl + "/v1/locate" + map;
+        HttpReply reply = call(frameCall(url, luma, meta), 200);
         return LocateResult.fromJson(reply.text());
     }
 

@@ -34,6 +34,10 @@ public final class ServerRejectedException extends Exception {
         } catch (ContractException ignored) {
             // Not the contract's error body (a proxy page, say): fall through and show its start.
         }
+        if (status == 401 && body.isEmpty()) {
+            // The JDK drops a 401's body after a streamed upload (UrlConnectionTransport); the status says it all.
+            return new ServerRejectedException(status, "unauthorized", "X-API-Key", "missing or wrong API key");
+        }
         String start = body.length() > 200 ? body.substring(0, 200) + "..." : body;
         return new ServerRejectedException(status, "http_" + status, null, start.isEmpty() ? "(empty body)" : start);
     }

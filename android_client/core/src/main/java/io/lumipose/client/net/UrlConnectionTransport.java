@@ -4,11 +4,17 @@ import java.io.ByteArrayOutputStream;
 import java.io.IOException;
 import java.io.InputStream;
 import java.io.OutputStream;
+import java.net.HttpRetryException;
 import java.net.HttpURLConnection;
 import java.net.URL;
 import java.util.Map;
 
-/** {@link HttpTransport} over the platform's HttpURLConnection (JDK and Android alike: no extra library). */
+/**
+ * {@link HttpTransport} over the platform's HttpURLConnection (JDK and Android alike: no extra
+ * library). The body is streamed with its fixed length (not buffered again), and every answer is
+ * read to its end and its stream closed without {@code disconnect()}, so the next call to the same
+ * server reuses the kept-alive connection.
+ */
 public final class UrlConnectionTransport implements HttpTransport {
     private final int connectTimeoutMs;
     private final int readTimeoutMs;
@@ -29,25 +35,33 @@ public final class UrlConnectionTransport implements HttpTransport {
             for (Map.Entry<String, String> h : call.headers.entrySet()) {
                 c.setRequestProperty(h.getKey(), h.getValue());
             }
-            byte[] body = call.body();
-            if (body != null) {
+            if (call.hasBody()) {
                 c.setDoOutput(true);
-                // No fixed-length streaming: the JDK then cannot read the body of a 401 (HttpRetryException).
+                c.setFixedLengthStreamingMode(call.bodyLength());
                 OutputStream out = c.getOutputStream();
                 try {
-                    out.write(body);
+                    call.writeBody(out);
                 } finally {
                     out.close();
                 }
             }
-            int status = c.getResponseCode();
+            int status;
+            try {
+                status = c.getResponseCode();
+            } catch (HttpRetryException e) {
+                // The JDK (not Android) will not read a 401's body after a streamed request body: it
+                // throws this instead, and has closed the connection. The status is what matters.
+                return new HttpReply(e.responseCode(), new byte[0]);
+            }
             InputStream in = status >= 400 ? c.getErrorStream() : c.getInputStream();
             return new HttpReply(status, in == null ? new byte[0] : readAll(in));
-        } finally {
-            c.disconnect();
+        } catch (IOException e) {
+            c.disconnect(); // a broken connection is not worth keeping
+            throw e;
         }
     }
 
+    /** Reads to the end and closes: only then may the connection serve the next call. */
     private static byte[] readAll(InputStream in) throws IOException {
         try {
             ByteArrayOutputStream out = new ByteArrayOutputStream();

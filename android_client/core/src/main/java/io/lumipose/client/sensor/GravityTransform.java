@@ -6,6 +6,9 @@ package io.lumipose.client.sensor;
  * {@code gravity_camera} points down.
  */
 public final class GravityTransform {
+    /** m/s^2, what TYPE_GRAVITY's length is at rest. */
+    public static final double STANDARD_GRAVITY = 9.80665;
+
     private GravityTransform() {
     }
 
@@ -28,5 +31,32 @@ public final class GravityTransform {
             throw new IllegalArgumentException("gravity reading has no direction: |g| = " + norm + " m/s^2");
         }
         return CameraMount.apply(mount, new double[] {-x / norm, -y / norm, -z / norm});
+    }
+
+    /**
+     * The inverse of {@link #deviceToCamera}: what TYPE_GRAVITY reads on a phone whose camera sees
+     * gravity along {@code gravityCamera} (a simulated phone replaying a rendered frame).
+     *
+     * @param gravityCamera gravity (pointing down) in the camera frame, any length
+     * @return TYPE_GRAVITY [x, y, z], device frame, m/s^2 (pointing up, length {@link #STANDARD_GRAVITY})
+     */
+    public static float[] cameraToDevice(double[] gravityCamera, int sensorOrientationDeg, LensFacing facing) {
+        if (gravityCamera == null || gravityCamera.length != 3) {
+            throw new IllegalArgumentException("gravity needs 3 values [x, y, z]");
+        }
+        double norm = Math.sqrt(gravityCamera[0] * gravityCamera[0] + gravityCamera[1] * gravityCamera[1]
+                + gravityCamera[2] * gravityCamera[2]);
+        if (!(norm > 1e-9) || Double.isInfinite(norm)) {
+            throw new IllegalArgumentException("gravity has no direction: |g| = " + norm);
+        }
+        // The mount is a rotation: its transpose takes camera coordinates back to the device's.
+        double[][] mount = CameraMount.cameraFromDevice(sensorOrientationDeg, facing);
+        float[] device = new float[3];
+        for (int i = 0; i < 3; i++) {
+            double down = mount[0][i] * gravityCamera[0] + mount[1][i] * gravityCamera[1]
+                    + mount[2][i] * gravityCamera[2];
+            device[i] = (float) (-STANDARD_GRAVITY * down / norm);
+        }
+        return device;
     }
 }

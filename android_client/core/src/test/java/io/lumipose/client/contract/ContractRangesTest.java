@@ -59,6 +59,7 @@ class ContractRangesTest {
         MIRRORED.put("frame#Crop.y", ContractRanges.CROP_OFFSET_PX);
         MIRRORED.put("frame#Crop.full_width", ContractRanges.SIDE_PX);
         MIRRORED.put("frame#Crop.full_height", ContractRanges.SIDE_PX);
+        MIRRORED.put("frame#Crop.levels_dn", ContractRanges.GREY_LEVEL_DN);
         MIRRORED.put("map#Beacon.center_m", ContractRanges.COORDINATE_M);
         MIRRORED.put("map#Beacon.yaw_deg", ContractRanges.ANGLE_DEG);
         MIRRORED.put("map#Beacon.side_m", ContractRanges.BEACON_SIZE_M);

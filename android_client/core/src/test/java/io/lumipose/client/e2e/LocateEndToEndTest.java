@@ -177,4 +177,25 @@ class LocateEndToEndTest {
         assertFalse(r.ok);
         assertNotNull(r.reason);
     }
+
+    /**
+     * A live frame as the pipeline sends it: raw, fixed-length, once, in the map named; a wrong key on a
+     * write after a streamed body is still a 401 with its code (the JDK drops the body), an unknown map a 404.
+     */
+    @Test
+    void liveFramesGoInTheNamedMapAndAWrongKeyIsStillA401() throws Exception {
+        Fixture f = new Fixture();
+        ServerRejectedException unknown = assertThrows(ServerRejectedException.class,
+                () -> LumiposeClient.create(ClientConfig.live(baseUrl, KEY, "e2e-live", "no-such-map"))
+                        .locate(f.luma, f.meta));
+        assertEquals(404, unknown.status, unknown.getMessage());
+        ServerRejectedException wrongKey = assertThrows(ServerRejectedException.class, // a write needs the key
+                () -> LumiposeClient.create(ClientConfig.live(baseUrl, "wrong-key", "e2e-live", null))
+                        .storeSample("1,1", f.luma, f.meta));
+        assertEquals(401, wrongKey.status);
+        assertEquals("unauthorized", wrongKey.code);
+        LocateResult r = LumiposeClient.create(ClientConfig.live(baseUrl, KEY, "e2e-live", null)).locate(f.luma, f.meta);
+        assertTrue(r.ok, "no fix: " + r.reason + " " + r.message);
+        assertTrue(f.horizontalErrorMm(r.positionM()) <= TOLERANCE_MM);
+    }
 }

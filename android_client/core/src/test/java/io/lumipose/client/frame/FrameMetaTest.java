@@ -77,4 +77,44 @@ class FrameMetaTest {
                 "{\"schema\": \"lumipose.frame/2\", \"width\": 4, \"height\": 4, \"camera\": {\"profile\": \"x\"}}"))
                 .field);
     }
+    @Test
+    void cropIsAFirstClassFieldAndAWindowKeepsTheFullFramesIntrinsics() {
+        FrameMeta whole = FrameMeta.builder(640, 480).camera(K).timestampNs(5L).frameKind("id").toneCurve("linear")
+                .build();
+        assertNull(whole.crop);
+        FrameMeta w = whole.window(100, 50, 200, 120, new double[] {12, 240});
+        assertEquals(200, w.width);
+        assertEquals(120, w.height);
+        assertEquals(200, w.rowStride);
+        assertEquals(100, w.crop.x);
+        assertEquals(50, w.crop.y);
+        assertEquals(640, w.fullWidth());
+        assertEquals(480, w.fullHeight());
+        assertEquals(319.5, w.camera.cx, "intrinsics describe the full frame");
+        assertEquals("id", w.frameKind);
+        assertEquals("linear", w.toneCurve);
+        JSONObject crop = w.toJson().getJSONObject("crop");
+        assertEquals(640, crop.getInt("full_width"));
+        FrameMeta back = FrameMeta.fromJson(w.toJson().toString());
+        assertEquals(50, back.crop.y);
+        assertEquals("linear", back.toJson().getString("tone_curve"));
+        FrameMeta inner = w.window(10, 20, 50, 60, new double[] {99, 100});
+        assertEquals(110, inner.crop.x, "a window of a window is placed in the full frame");
+        assertEquals(70, inner.crop.y);
+        assertArrayEquals(new double[] {12, 240}, inner.crop.levelsDn(), 0,
+                "a window of a window keeps its frame's levels");
+        assertArrayEquals(new double[] {12, 240}, back.crop.levelsDn(), 0);
+        assertThrows(ContractException.class, () -> whole.window(0, 0, 10, 10, new double[] {200, 100}));
+        assertEquals(200L * 120, w.frameBytes());
+    }
+
+    @Test
+    void cropMustFitAndToneCurveIsNamed() {
+        ContractException e = assertThrows(ContractException.class,
+                () -> FrameMeta.builder(400, 300).camera(K).crop(500, 0, 640, 480).build());
+        assertTrue(e.getMessage().contains("does not fit"), e.getMessage());
+        assertThrows(ContractException.class, () -> FrameMeta.builder(640, 480).camera(K).toneCurve("srgb").build());
+        FrameMeta built = FrameMeta.builder(400, 300).camera(K).crop(200, 100, 640, 480).build();
+        assertEquals(640, built.fullWidth());
+    }
 }

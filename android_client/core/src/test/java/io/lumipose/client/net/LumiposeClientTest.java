@@ -173,4 +173,23 @@ class LumiposeClientTest {
         assertEquals(500, p.backoffMs(3));
         assertThrows(IllegalArgumentException.class, () -> new RetryPolicy(0, 1, 2, 3));
     }
+
+    @Test
+    void aLiveFrameGoesOnceRawAndInTheNamedMap() throws Exception {
+        ClientConfig live = ClientConfig.live("http://lumi:8000/", "k", "phone", "office 2");
+        FakeTransport t = new FakeTransport().reply(200, OK).fail("reset");
+        LumiposeClient c = new LumiposeClient(live, t, ms -> {
+            throw new AssertionError("no retry, no sleep");
+        });
+        assertTrue(c.locate(LUMA, META).ok);
+        HttpCall call = t.calls.get(0);
+        assertEquals("http://lumi:8000/v1/locate?map=office+2", call.url);
+        assertFalse(call.headers.containsKey("Content-Encoding"), "no gzip for live frames");
+        assertArrayEquals(LUMA, call.body());
+        assertThrows(IOException.class, () -> c.locate(LUMA, META));
+        assertEquals(2, t.calls.size(), "one attempt for a live frame");
+        FakeTransport activeMap = new FakeTransport().reply(200, OK);
+        new LumiposeClient(live.withMap(null), activeMap, Sleeper.REAL).locate(LUMA, META);
+        assertEquals("http://lumi:8000/v1/locate", activeMap.calls.get(0).url, "no map named: the server's active one");
+    }
 }

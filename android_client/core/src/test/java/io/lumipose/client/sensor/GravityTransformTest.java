@@ -69,4 +69,31 @@ class GravityTransformTest {
         assertThrows(IllegalArgumentException.class,
                 () -> GravityTransform.deviceToCamera(new float[] {0, 0}, 90, LensFacing.BACK));
     }
+
+    @Test
+    void cameraToDeviceUndoesDeviceToCameraForEveryMount() {
+        double[][] directions = {{0, 0, -1}, {0.3, -0.2, -0.93}, {1, 0, 0}, {-0.1, 0.99, 0.05}};
+        for (LensFacing facing : LensFacing.values()) {
+            for (int orientation : new int[] {0, 90, 180, 270}) {
+                for (double[] d : directions) {
+                    double norm = Math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                    float[] device = GravityTransform.cameraToDevice(d, orientation, facing);
+                    assertEquals(GravityTransform.STANDARD_GRAVITY,
+                            Math.sqrt(device[0] * device[0] + device[1] * device[1] + device[2] * device[2]), 1e-5);
+                    double[] back = GravityTransform.deviceToCamera(device, orientation, facing);
+                    assertArrayEquals(new double[] {d[0] / norm, d[1] / norm, d[2] / norm}, back, 1e-6,
+                            facing + " at " + orientation + " deg");
+                }
+            }
+        }
+    }
+
+    @Test
+    void frontCameraLookingStraightUpMeansScreenUp() {
+        // The front lens sees gravity along its -z when it faces the ceiling: the phone lies screen-up.
+        assertArrayEquals(new float[] {0, 0, (float) GravityTransform.STANDARD_GRAVITY},
+                GravityTransform.cameraToDevice(new double[] {0, 0, -1}, 270, LensFacing.FRONT), 1e-6f);
+        assertThrows(IllegalArgumentException.class,
+                () -> GravityTransform.cameraToDevice(new double[] {0, 0, 0}, 270, LensFacing.FRONT));
+    }
 }
