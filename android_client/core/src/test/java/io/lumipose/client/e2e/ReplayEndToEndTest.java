@@ -16,7 +16,6 @@ import org.json.JSONObject;
 import org.junit.jupiter.api.AfterAll;
 import org.junit.jupiter.api.Assumptions;
 import org.junit.jupiter.api.BeforeAll;
-import org.junit.jupiter.api.Disabled;
 import org.junit.jupiter.api.Test;
 
 import io.lumipose.client.frame.FrameMeta;
@@ -111,9 +110,6 @@ class ReplayEndToEndTest {
     }
 
     @Test
-    @Disabled("server: a device session on a map of several beacons (server/tracking/session.py: find_beacon_blobs, "
-            + "locate_panel) does not yet read a window as the whole frame: these office frames' fixes move by "
-            + "0.02-0.36 mm (the one-panel path agrees within 0.001 mm); enable when it does")
     void theWindowDoesNotChangeTheAnswerInADeviceSession() throws Exception {
         serve.putMap(office.map());
         assertWindowsGiveTheWholeFramesFixes(ReplayRun.play(office, serve.baseUrl, "office-window-phone", true));
