@@ -67,6 +67,8 @@ final class Camera2Controller {
     /** UI thread: stop() was called. */
     private boolean stopRequested;
     // Camera thread only from here on.
+    /** How long a closing device may take to report onClosed before the thread quits anyway. */
+    private static final long CLOSE_TIMEOUT_MS = 3000;
     private final CameraLifecycle lifecycle = new CameraLifecycle();
     private CameraDevice camera;
     private CameraCaptureSession session;
@@ -137,6 +139,13 @@ final class Camera2Controller {
         }
         // With openCamera in flight this waits: onOpened closes the device, whose onClosed quits.
         act(lifecycle.stop(), camera);
+        // A device closed after an error may never report onClosed: the thread goes after a while anyway.
+        handler.postDelayed(new Runnable() {
+            @Override
+            public void run() {
+                act(lifecycle.onCloseTimeout(), null);
+            }
+        }, CLOSE_TIMEOUT_MS);
     }
 
     private void act(CameraLifecycle.Action action, CameraDevice device) {
@@ -290,6 +299,9 @@ final class Camera2Controller {
         b.set(CaptureRequest.CONTROL_MODE, CameraMetadata.CONTROL_MODE_AUTO);
         b.set(CaptureRequest.CONTROL_AE_MODE, CameraMetadata.CONTROL_AE_MODE_OFF);
         b.set(CaptureRequest.CONTROL_AF_MODE, CameraMetadata.CONTROL_AF_MODE_OFF);
+        // White-balance gains that move from frame to frame would move the Y levels the server's clipped-edge
+        // model reads: whatever mode the template leaves, the gains stay where they are.
+        b.set(CaptureRequest.CONTROL_AWB_LOCK, Boolean.TRUE);
         // Digital stabilisation crops and shifts the stream: the intrinsics assume neither.
         b.set(CaptureRequest.CONTROL_VIDEO_STABILIZATION_MODE, CameraMetadata.CONTROL_VIDEO_STABILIZATION_MODE_OFF);
         b.set(CaptureRequest.SENSOR_EXPOSURE_TIME, spec.exposureNs);

@@ -34,7 +34,8 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     protected GravityListener gravity;
     protected TextView status;
     protected volatile RoomMap map;
-    private ExecutorService network;
+    // written on the UI thread, read on the camera thread (onStarted): volatile
+    private volatile ExecutorService network;
     private Camera2Controller controller;
     // The permission dialog pauses and resumes the screen: ask once, and start the camera once.
     private boolean permissionAsked;

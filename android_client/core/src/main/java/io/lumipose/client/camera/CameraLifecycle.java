@@ -4,8 +4,9 @@ package io.lumipose.client.camera;
  * When to close the camera device and when to end the camera thread, as a state machine the
  * Camera2 controller follows (all calls on the camera thread). The rules that keep a camera from
  * staying open: a stop that comes while {@code openCamera} is in flight closes the device when
- * {@code onOpened} brings it; the thread quits only after the device's {@code onClosed} (or at once
- * when no device was ever opened), so no callback reaches a dead looper.
+ * {@code onOpened} brings it; the thread quits only after the device's {@code onClosed} (at once
+ * when no device was ever opened; after a timeout when a failed device never reports it), so no
+ * callback reaches a dead looper.
  */
 public final class CameraLifecycle {
     /** What the controller must do now. */
@@ -22,6 +23,8 @@ public final class CameraLifecycle {
 
     private boolean opening;
     private boolean open;
+    /** close() was called on a device (by stop, or after a failure) and its onClosed has not come yet. */
+    private boolean deviceClosing;
     private boolean closing;
     private boolean quit;
 
@@ -33,13 +36,14 @@ public final class CameraLifecycle {
     public Action onOpened() {
         opening = false;
         if (closing) {
+            deviceClosing = true;
             return Action.CLOSE_DEVICE;
         }
         open = true;
         return Action.USE_DEVICE;
     }
 
-    /** stop(): close what is open, or wait for what is opening. */
+    /** stop(): close what is open, or wait for what is opening or closing. */
     public Action stop() {
         if (closing) {
             return Action.WAIT;
@@ -47,20 +51,34 @@ public final class CameraLifecycle {
         closing = true;
         if (open) {
             open = false;
+            deviceClosing = true;
             return Action.CLOSE_DEVICE;
         }
-        return opening ? Action.WAIT : quit();
+        return opening || deviceClosing ? Action.WAIT : quit();
     }
 
     public Action onClosed() {
         open = false;
+        deviceClosing = false;
         return closing ? quit() : Action.WAIT;
     }
 
-    /** onDisconnected or onError: the device is closed by the controller; a failed device may never report onClosed. */
+    /**
+     * onDisconnected or onError: the controller has closed the device, whose onClosed comes next;
+     * the thread waits for it like any close.
+     */
     public Action onFailed() {
         opening = false;
         open = false;
+        deviceClosing = true;
+        return Action.WAIT;
+    }
+
+    /**
+     * A close that never reported onClosed (some HALs after an error), past the controller's
+     * patience: the thread goes anyway once stopping.
+     */
+    public Action onCloseTimeout() {
         return closing ? quit() : Action.WAIT;
     }
 

@@ -151,12 +151,14 @@ public final class IntrinsicsCalculator {
                                         List<String> warnings) {
         double[] fromResult = result.lensIntrinsicCalibration();
         if (isUsable(fromResult)) {
-            if (!agrees(fromResult[0], fxFromFocal)) {
-                throw new IllegalArgumentException(String.format(java.util.Locale.ROOT,
-                        "LENS_INTRINSIC_CALIBRATION fx %.1f px is not within 10 %% of focal length / pixel pitch %.1f px",
-                        fromResult[0], fxFromFocal));
+            if (agrees(fromResult[0], fxFromFocal)) {
+                return fromResult;
             }
-            return fromResult;
+            // some HALs report it for another resolution or lens: one bad key must not blind the camera
+            warnings.add(String.format(java.util.Locale.ROOT, "the result's LENS_INTRINSIC_CALIBRATION fx %.1f px "
+                    + "is not within 10 %% of focal length / pixel pitch %.1f px: intrinsics from the focal length",
+                    fromResult[0], fxFromFocal));
+            return null;
         }
         double[] fromFacts = facts.lensIntrinsicCalibration();
         if (!isUsable(fromFacts)) {

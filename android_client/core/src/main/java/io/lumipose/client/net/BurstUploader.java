@@ -142,13 +142,21 @@ public final class BurstUploader {
         }
     }
 
-    /** Sends a burst's frames in order; false when interrupted. */
+    /**
+     * Sends a burst's frames in order; false when interrupted. After a failure the burst's other ID
+     * frames are skipped (the link is slow or refused), but its pose frame still goes: without its
+     * IDs it may still be named by the device's track, and its position is what the user waits for.
+     */
     private boolean send(List<FrameUpload> burst) {
+        boolean failed = false;
         for (FrameUpload frame : burst) {
             synchronized (lock) {
                 if (closed) {
                     return true;
                 }
+            }
+            if (failed && frame.isId()) {
+                continue;
             }
             LocateResult result;
             try {
@@ -158,7 +166,8 @@ public final class BurstUploader {
                 return false;
             } catch (Exception e) {
                 listener.onFailure(frame, e);
-                return true;
+                failed = true;
+                continue;
             }
             listener.onResult(frame, result);
         }

@@ -36,16 +36,30 @@ class CameraLifecycleTest {
     }
 
     @Test
-    void aFailedDeviceStillLetsTheThreadGo() {
+    void aFailedDeviceIsWaitedForUntilItsOnClosed() {
         CameraLifecycle l = new CameraLifecycle();
         l.opening();
         assertEquals(Action.WAIT, l.stop());
-        assertEquals(Action.QUIT, l.onFailed(), "onError instead of onOpened: no onClosed may follow");
+        assertEquals(Action.WAIT, l.onFailed(), "onError instead of onOpened: the closed device's onClosed comes next");
+        assertEquals(Action.QUIT, l.onClosed());
 
         CameraLifecycle running = new CameraLifecycle();
         running.opening();
         running.onOpened();
         assertEquals(Action.WAIT, running.onFailed(), "disconnected while running: the screen is told, the thread stays");
-        assertEquals(Action.QUIT, running.stop(), "nothing left open");
+        assertEquals(Action.WAIT, running.stop(), "its onClosed has not come yet");
+        assertEquals(Action.QUIT, running.onClosed());
+    }
+
+    @Test
+    void aCloseThatNeverReportsLetsTheThreadGoAfterTheTimeout() {
+        CameraLifecycle l = new CameraLifecycle();
+        l.opening();
+        l.onOpened();
+        assertEquals(Action.WAIT, l.onFailed());
+        assertEquals(Action.WAIT, l.onCloseTimeout(), "not stopping: the thread stays for the screen");
+        assertEquals(Action.WAIT, l.stop());
+        assertEquals(Action.QUIT, l.onCloseTimeout());
+        assertEquals(Action.WAIT, l.onClosed(), "quits once");
     }
 }

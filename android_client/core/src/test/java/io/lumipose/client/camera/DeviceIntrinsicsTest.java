@@ -146,15 +146,17 @@ class DeviceIntrinsicsTest {
     }
 
     @Test
-    void aCalibrationFarFromFocalLengthOverPitchIsRefused() {
+    void aCalibrationFarFromFocalLengthOverPitchIsSetAsideAndAPrincipalPointOutsideIsRefused() {
         CameraFacts facts = Devices.load(Devices.PRE_CORRECTION);
-        // 3400 / 3000 = 1.13: more than 10 % off.
+        // 3400 / 3000 = 1.13: more than 10 % off; the focal length's 3000 px (at scale 1/2: 1500) is used instead.
         FrameResult r = result(4.2).lensIntrinsicCalibration(new double[] {3400, 3400, 2040, 1530, 0}).build();
-        IllegalArgumentException e = assertThrows(IllegalArgumentException.class,
-                () -> IntrinsicsCalculator.forFrame(facts, r, new PixelSize(2040, 1530)));
-        assertTrue(e.getMessage().contains("10 %"), e.getMessage());
+        List<String> warnings = new ArrayList<String>();
+        Intrinsics fromFocal = IntrinsicsCalculator.forFrame(facts, r, new PixelSize(2040, 1530), warnings);
+        assertEquals(IntrinsicsCalculator.forFrame(facts, result(4.2).build(), new PixelSize(2040, 1530)).fx,
+                fromFocal.fx, EPS);
+        assertTrue(warnings.toString().contains("not within 10 %"), warnings.toString());
         FrameResult outside = result(4.2).lensIntrinsicCalibration(new double[] {3000, 3000, 5000, 1530, 0}).build();
-        e = assertThrows(IllegalArgumentException.class,
+        IllegalArgumentException e = assertThrows(IllegalArgumentException.class,
                 () -> IntrinsicsCalculator.forFrame(facts, outside, new PixelSize(2040, 1530)));
         assertTrue(e.getMessage().contains("principal point"), e.getMessage());
     }

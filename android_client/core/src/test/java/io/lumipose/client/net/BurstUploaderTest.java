@@ -108,17 +108,19 @@ class BurstUploaderTest {
     }
 
     @Test
-    void aFailureEndsItsBurstAndTheNextBurstStillGoes() throws Exception {
+    void aFailedIdFrameSkipsItsBurstsOtherIdFramesButNotItsPoseFrame() throws Exception {
         GatedUploader up = new GatedUploader();
         up.failAt = 11;
         up.gate.release(100);
         Recorder rec = new Recorder();
         BurstUploader u = new BurstUploader(up, executor, rec);
-        u.submit(burst(1, 3));
+        List<FrameUpload> idsFirst = burst(1, 3);
+        idsFirst.add(idsFirst.remove(0)); // as the app sends a burst: its ID frames, then its pose frame
+        u.submit(idsFirst);
         rec.await(2);
         u.submit(burst(2, 0));
         rec.await(1);
-        assertEquals(Arrays.asList("pose 10", "failed 11: boom", "pose 20"), rec.events);
+        assertEquals(Arrays.asList("failed 11: boom", "pose 10", "pose 20"), rec.events);
     }
 
     @Test
