@@ -83,7 +83,8 @@ public final class CapturePlan {
             notes.add("optical stabilisation cannot be switched off: the principal point may move");
         }
         if (!facts.hasPerFrameControl()) {
-            notes.add("sync latency not per-frame: frames checked by their results");
+            notes.add("SYNC_MAX_LATENCY " + syncMaxLatencyName(facts.syncMaxLatency) + ", not per-frame control: "
+                    + "settings reach frames late, so each frame is taken as its capture result shows");
         }
         RequestSpec pose = new RequestSpec(RequestSpec.POSE, poseSettings.exposureNs, poseSettings.sensitivityIso,
                 poseSettings.frameDurationNs, focus, crop, facts.oisModes.contains("off"), toneCurve,
@@ -151,6 +152,14 @@ public final class CapturePlan {
             return pose;
         }
         return RequestSpec.ID.equals(kind) ? id : null;
+    }
+
+    /** SYNC_MAX_LATENCY as the docs name it: "per_frame_control", "unknown" or "N frames". */
+    static String syncMaxLatencyName(int syncMaxLatency) {
+        if (syncMaxLatency == CameraFacts.SYNC_PER_FRAME_CONTROL) {
+            return "per_frame_control";
+        }
+        return syncMaxLatency == CameraFacts.SYNC_UNKNOWN ? "unknown" : syncMaxLatency + " frames";
     }
 
     static CameraRanges ranges(CameraFacts facts, PixelSize output) {

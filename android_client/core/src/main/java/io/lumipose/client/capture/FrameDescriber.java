@@ -16,10 +16,12 @@ import io.lumipose.client.sensor.LensFacing;
 
 /**
  * Turns one frame's capture result into its contract JSON, or says why the frame must not be sent.
- * A frame is what its result says, not what its request asked: without per-frame control
- * (SYNC_MAX_LATENCY) a "pose" request can come back with the ID exposure. So each frame is
- * classified by the exposure and sensitivity in its result, and one whose result differs from
- * the request it claims is dropped.
+ * A frame is what its result says, not what its request asked: unless SYNC_MAX_LATENCY is
+ * PER_FRAME_CONTROL, a request's settings reach the sensor some frames later, so a frame tagged
+ * "pose" can carry the ID exposure and the real pose frame a tag "id". Each frame is therefore
+ * classified by the exposure and ISO in its result against the plan's two requests; one that
+ * matches neither (settings in transition) is dropped, one whose tag disagrees is taken as its
+ * result shows, with a warning.
  */
 public final class FrameDescriber {
     /** Relative difference between asked and reported exposure or ISO still counted as "as asked". */
@@ -72,11 +74,11 @@ public final class FrameDescriber {
         String kind = classify(result);
         if (kind == null) {
             return drop(null, "exposure " + result.exposureNs + " ns, ISO " + result.sensitivityIso
-                    + " match neither the pose nor the ID request", warnings);
+                    + " match neither the pose nor the ID request (settings in transition)", warnings);
         }
         if (result.request != null && !result.request.equals(kind)) {
-            return drop(kind, "requested as " + result.request + " but taken as " + kind
-                    + " (settings lag: SYNC_MAX_LATENCY " + syncName() + ")", warnings);
+            // The pixels were taken with the result's settings: the tag is only what was asked.
+            warnings.add(settingsLagWarning());
         }
         RequestSpec spec = plan.spec(kind);
         if (result.cropRegion != null && !near(result.cropRegion, spec.cropRegion)) {
@@ -171,11 +173,13 @@ public final class FrameDescriber {
                 && Math.abs(a.top + a.height - b.top - b.height) <= CROP_TOLERANCE_PX;
     }
 
-    private String syncName() {
-        if (facts.syncMaxLatency == CameraFacts.SYNC_PER_FRAME_CONTROL) {
-            return "per_frame_control";
-        }
-        return facts.syncMaxLatency == CameraFacts.SYNC_UNKNOWN ? "unknown" : facts.syncMaxLatency + " frames";
+    /** The same text for every such frame, so the pipeline shows it once. */
+    private String settingsLagWarning() {
+        String latency = CapturePlan.syncMaxLatencyName(facts.syncMaxLatency);
+        String why = facts.hasPerFrameControl() ? ", although SYNC_MAX_LATENCY is " + latency
+                : ": settings lag (SYNC_MAX_LATENCY " + latency + ")";
+        return "frames came with another request's exposure than their own" + why
+                + "; each is sent as its capture result shows";
     }
 
     private static Described drop(String kind, String reason, List<String> warnings) {

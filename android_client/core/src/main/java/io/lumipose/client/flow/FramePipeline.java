@@ -15,6 +15,7 @@ import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.RequestSpec;
 import io.lumipose.client.frame.BeaconWindow;
 import io.lumipose.client.frame.FrameLevels;
 import io.lumipose.client.frame.FrameMeta;
@@ -90,9 +91,12 @@ public final class FramePipeline implements FrameSink {
     private final LinkedHashMap<Long, FrameResult> results = new LinkedHashMap<Long, FrameResult>();
     private final LinkedHashMap<Long, EarlyImage> images = new LinkedHashMap<Long, EarlyImage>();
     private Burst burst;
-    /** Images seen, and the number of the last pose frame's: predicts the kind of an image that comes first. */
+    /** Images seen: an image's number in arrival order, for guessing the kind of one that comes first. */
     private long imageCount;
-    private long lastPoseImage = -1;
+    /** The last image whose result showed a pose frame, or -1. */
+    private long lastPoseByResult = -1;
+    /** The last image guessed a pose frame whose result has not come yet, or -1. */
+    private long guessedPose = -1;
     /** The last pose frame's ID window, for the ID frames after it. */
     private Window lastIdWindow;
     private boolean closed;
@@ -218,22 +222,53 @@ public final class FramePipeline implements FrameSink {
         GravityHistory.Attitude a = attitude.forFrame(result.timestampNs, timestampsRealtime);
         FrameDescriber.Described d = describer.describe(result, a.gravity, a.rotationToEnu);
         noteWarnings(d.warnings);
+        // The burst goes by what each frame is (its result), never by its request's tag: without
+        // per-frame control the tags run some frames ahead of the exposures.
+        boolean pose = RequestSpec.POSE.equals(d.kind);
+        notePoseImage(pixels.number(), pose);
         if (d.meta == null) {
             drop(d.dropReason, 1);
-            if ("id".equals(result.request) && burst != null && burst.remaining > 0) {
-                // one ID frame fewer to wait for: the burst goes without it
-                if (--burst.remaining == 0) {
-                    submitBurst();
-                }
+            if (pose) {
+                submitBurst(); // its ID frames have no pose frame to go with
+            } else if (burst != null && burst.remaining > 0 && --burst.remaining == 0) {
+                submitBurst(); // one of the burst's ID frames: it goes without it
             }
             return;
         }
-        if ("id".equals(d.kind)) {
-            handleId(d.meta, pixels);
-        } else {
-            lastPoseImage = Math.max(lastPoseImage, pixels.number());
+        if (pose) {
             handlePose(d.meta, pixels);
+        } else {
+            handleId(d.meta, pixels);
         }
+    }
+
+    /**
+     * Keeps the guess of which early image is a pose frame in step with the results: once an
+     * image's result has come it speaks instead of the guess, and a guess it refutes gives the
+     * ID window back to the burst being gathered.
+     */
+    private void notePoseImage(long number, boolean pose) {
+        if (pose) {
+            lastPoseByResult = Math.max(lastPoseByResult, number);
+        }
+        if (number == guessedPose) {
+            guessedPose = -1;
+            if (!pose) {
+                lastIdWindow = burst == null ? null : burst.idWindow;
+            }
+        }
+    }
+
+    /**
+     * Whether an image that came before its result is an ID frame: the bursts repeat, so it is
+     * one unless a whole number of bursts separates it from the last pose frame a result showed
+     * (before any, the last image guessed one). The exposures keep this rhythm whatever the tags
+     * say (a settings lag moves only the tags); a frame of the settings' transition at the start
+     * can mislead a guess, which costs the burst it falls in until a result shows a pose frame.
+     */
+    private boolean guessId(long number) {
+        long lastPose = lastPoseByResult >= 0 ? lastPoseByResult : guessedPose;
+        return lastPose >= 0 && (number - lastPose) % (idFramesPerBurst + 1) != 0;
     }
 
     private void handlePose(FrameMeta meta, Pixels pixels) {
@@ -325,19 +360,18 @@ public final class FramePipeline implements FrameSink {
     }
 
     /**
-     * An image whose result has not come: its kind is predicted from the burst's order (the ID
-     * frames follow their pose frame), and only what that kind needs is copied; the result checks it.
+     * An image whose result has not come: its kind is guessed from the burst's order
+     * ({@link #guessId}), and only what that kind needs is copied; the result checks it.
      */
     private EarlyImage copyEarly(long number, ByteBuffer plane, int width, int height, int rowStride,
                                  int pixelStride) {
-        boolean predictId = lastPoseImage >= 0 && number - lastPoseImage <= idFramesPerBurst;
-        if (predictId) {
+        if (guessId(number)) {
             Window w = lastIdWindow;
             return new EarlyImage(number, false, null, w,
                     w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w),
                     w == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
         }
-        lastPoseImage = number;
+        guessedPose = number;
         Window panel = BeaconWindow.find(plane, width, height, rowStride, pixelStride);
         lastIdWindow = idWindow(panel, width, height);
         // no panel: the whole plane goes (the server says why), but only when there is room for it

@@ -5,7 +5,9 @@ import java.nio.ByteBuffer;
 import java.util.ArrayList;
 import java.util.Collections;
 import java.util.Comparator;
+import java.util.HashMap;
 import java.util.List;
+import java.util.Map;
 import java.util.Random;
 
 import io.lumipose.client.camera.CameraFacts;
@@ -45,8 +47,17 @@ public final class ReplayCamera {
 
     /** @param orderSeed draws when each result arrives relative to the images */
     public ReplayCamera(Recording recording, long orderSeed) {
+        this(recording, orderSeed, 0);
+    }
+
+    /**
+     * A phone without per-frame control: each frame carries the settings of the request
+     * {@code settingsLagFrames} frames before it (what the recording rendered) and the tag of the
+     * request submitted for it, as a device whose SYNC_MAX_LATENCY is not PER_FRAME_CONTROL does.
+     */
+    public ReplayCamera(Recording recording, long orderSeed, int settingsLagFrames) {
         this.recording = recording;
-        this.phone = new SimulatedPhone(recording.frames());
+        this.phone = new SimulatedPhone(recording.frames(), settingsLagFrames);
         this.orderSeed = orderSeed;
     }
 
@@ -92,6 +103,7 @@ public final class ReplayCamera {
             }
             taken.add(f);
         }
+        Map<RecordedFrame, RequestSpec> tags = tags(plan, taken);
         ByteBuffer plane = null;
         for (Event e : events(taken)) {
             RecordedFrame f = e.frame;
@@ -112,10 +124,25 @@ public final class ReplayCamera {
                 sink.onImage(f.timestampNs, plane, f.width, f.height, stride, 1);
                 scribble(plane);
             } else {
-                RequestSpec request = plan.spec(f.kind);
-                sink.onResult(FrameResult.fromJson(phone.result(f, request)));
+                sink.onResult(FrameResult.fromJson(phone.result(f, plan.spec(f.kind), tags.get(f))));
             }
         }
+    }
+
+    /**
+     * The request each frame was submitted for. The camera repeats the plan's burst; a frame shows
+     * the settings of the request {@code settingsLagFrames} before its own, so its tag is the
+     * request that many places after the one its pixels (its recorded kind) show.
+     */
+    private Map<RecordedFrame, RequestSpec> tags(CapturePlan plan, List<RecordedFrame> taken) {
+        List<RequestSpec> burst = plan.burst();
+        Map<RecordedFrame, RequestSpec> tags = new HashMap<RecordedFrame, RequestSpec>();
+        int placeInBurst = 0;
+        for (RecordedFrame f : taken) {
+            placeInBurst = f.isIdFrame() ? placeInBurst + 1 : 0;
+            tags.put(f, burst.get((placeInBurst + phone.settingsLagFrames) % burst.size()));
+        }
+        return tags;
     }
 
     private static void fill(ByteBuffer plane, RecordedFrame f, int stride, int size) throws IOException {

@@ -46,8 +46,22 @@ public final class SimulatedPhone {
     private final long poseExposureNs;
     /** 0 when the recording has no ID frames. */
     private final long idExposureNs;
+    /** Frames from a request to the frame its settings reach; 0: per-frame control. */
+    public final int settingsLagFrames;
 
     public SimulatedPhone(List<RecordedFrame> frames) {
+        this(frames, 0);
+    }
+
+    /**
+     * @param settingsLagFrames 0 for a phone with per-frame control; else how many frames late a
+     *                          request's settings reach the sensor (its SYNC_MAX_LATENCY is then unknown)
+     */
+    public SimulatedPhone(List<RecordedFrame> frames, int settingsLagFrames) {
+        if (settingsLagFrames < 0) {
+            throw new IllegalArgumentException("settingsLagFrames must be >= 0, got " + settingsLagFrames);
+        }
+        this.settingsLagFrames = settingsLagFrames;
         RecordedFrame largest = frames.get(0);
         for (RecordedFrame f : frames) {
             if ((long) f.width * f.height > (long) largest.width * largest.height) {
@@ -156,7 +170,8 @@ public final class SimulatedPhone {
         Json.put(o, "lens_facing", "front");
         Json.put(o, "sensor_orientation", SENSOR_ORIENTATION_DEG);
         Json.put(o, "capabilities", names("manual_sensor", "read_sensor_settings"));
-        Json.put(o, "sync_max_latency", "per_frame_control");
+        // A phone whose settings lag: Camera2 says "unknown" for most LIMITED devices.
+        Json.put(o, "sync_max_latency", settingsLagFrames == 0 ? "per_frame_control" : "unknown");
         Json.put(o, "timestamp_source", "realtime");
         Json.put(o, "active_array", wholeArray());
         Json.put(o, "pre_correction_active_array", wholeArray());
@@ -191,22 +206,31 @@ public final class SimulatedPhone {
      * was rendered with (what its pixels show), the request's other settings as applied.
      */
     public JSONObject result(RecordedFrame f, RequestSpec request) {
+        return result(f, request, request);
+    }
+
+    /**
+     * The FrameResult JSON of a frame whose settings came from {@code applied} (the frame's
+     * rendered exposure and ISO, what its pixels show) while its tag is {@code tagged}'s, the
+     * request submitted for this frame: they differ when the settings lag.
+     */
+    public JSONObject result(RecordedFrame f, RequestSpec applied, RequestSpec tagged) {
         JSONObject o = new JSONObject();
         Json.put(o, "sensor_timestamp_ns", f.timestampNs);
-        Json.put(o, "request", request.kind);
+        Json.put(o, "request", tagged.kind);
         Json.put(o, "sensor_exposure_time_ns", exposureNs(f));
         Json.put(o, "sensor_sensitivity", iso(f));
-        Json.put(o, "sensor_frame_duration_ns", request.frameDurationNs);
+        Json.put(o, "sensor_frame_duration_ns", applied.frameDurationNs);
         if (f.rollingShutterSkewS != null) {
             Json.put(o, "sensor_rolling_shutter_skew_ns", Math.round(f.rollingShutterSkewS * 1e9));
         }
         Json.put(o, "lens_focal_length_mm", (double) (float) (focalLengthM * 1e3));
         Json.put(o, "lens_intrinsic_calibration", Json.array(calibration));
         Json.put(o, "lens_distortion", Json.array(distortion));
-        ArrayRect crop = request.cropRegion;
+        ArrayRect crop = applied.cropRegion;
         Json.put(o, "scaler_crop_region", ints(crop.left, crop.top, crop.width, crop.height));
         Json.put(o, "lens_optical_stabilization_mode", "off");  // the only mode this camera has
-        Json.put(o, "tonemap_mode", request.linearToneCurve() ? "contrast_curve" : "fast");
+        Json.put(o, "tonemap_mode", applied.linearToneCurve() ? "contrast_curve" : "fast");
         Json.put(o, "lens_focus_distance_diopters", 0.0);  // fixed focus
         Json.put(o, "distortion_correction_mode", "off");
         return o;

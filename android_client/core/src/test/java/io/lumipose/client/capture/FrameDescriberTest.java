@@ -68,24 +68,46 @@ class FrameDescriberTest {
         assertEquals("id", describer.describe(asAsked(plan.id, 57L).request(null).build(), null, null).meta.frameKind);
     }
 
-    /** Issue 12 item 3: settings lag without per-frame control; the result, not the tag, says what the frame is. */
+    /**
+     * Issue 12 item 3: without per-frame control the settings reach the sensor frames after their
+     * request, so the tags run ahead of the exposures (a repeating pose + 4 ID burst with a lag of
+     * L frames never lines up). The result, not the tag, says what the frame is.
+     */
     @Test
-    void aFrameWhoseResultIsNotItsRequestIsDropped() {
-        FrameResult lagging = asAsked(plan.id, 58L).request("pose").build();
-        FrameDescriber.Described d = describer.describe(lagging, SCREEN_UP, null);
-        assertNull(d.meta);
-        assertEquals("id", d.kind);
-        assertTrue(d.dropReason.contains("requested as pose but taken as id"), d.dropReason);
+    void aFrameIsWhatItsResultShowsWhateverItsTag() {
+        CameraFacts lagging = facts.toBuilder().syncMaxLatency(CameraFacts.SYNC_UNKNOWN).build();
+        FrameDescriber late = new FrameDescriber(lagging, plan, null);
+        FrameDescriber.Described id = late.describe(asAsked(plan.id, 58L).request("pose").build(), SCREEN_UP, null);
+        assertEquals("id", id.meta.frameKind, "tagged pose, taken with the ID exposure");
+        FrameDescriber.Described pose = late.describe(asAsked(plan.pose, 59L).request("id").build(), SCREEN_UP, null);
+        assertEquals("pose", pose.meta.frameKind, "tagged id, taken with the pose exposure");
+        assertEquals(0.0084, pose.meta.exposureS, 1e-15);
+        assertEquals(1, id.warnings.size());
+        assertEquals(id.warnings, pose.warnings, "one text, so the screen says it once");
+        assertTrue(id.warnings.get(0).contains("SYNC_MAX_LATENCY unknown"), id.warnings.get(0));
+        assertTrue(late.describe(asAsked(plan.pose, 60L).build(), null, null).warnings.isEmpty(), "tag and result agree");
 
-        FrameResult neither = asAsked(plan.pose, 59L).exposureNs(4_000_000L).build();
-        d = describer.describe(neither, SCREEN_UP, null);
+        // A device that claims per-frame control and still lags: the result is the truth, with a warning.
+        FrameDescriber.Described claimed = describer.describe(asAsked(plan.id, 61L).request("pose").build(), null, null);
+        assertEquals("id", claimed.meta.frameKind);
+        assertTrue(claimed.warnings.get(0).contains("although SYNC_MAX_LATENCY is per_frame_control"),
+                claimed.warnings.toString());
+    }
+
+    /** A frame whose result matches neither request (settings in transition) is dropped, and says so. */
+    @Test
+    void aFrameMatchingNeitherRequestIsDropped() {
+        FrameResult neither = asAsked(plan.pose, 62L).exposureNs(4_000_000L).build();
+        FrameDescriber.Described d = describer.describe(neither, SCREEN_UP, null);
+        assertNull(d.meta);
         assertNull(d.kind);
         assertTrue(d.dropReason.contains("match neither"), d.dropReason);
+        assertTrue(d.dropReason.contains("settings in transition"), d.dropReason);
 
-        FrameResult otherIso = asAsked(plan.pose, 60L).sensitivityIso(400).build();
+        FrameResult otherIso = asAsked(plan.pose, 63L).sensitivityIso(400).build();
         assertNull(describer.describe(otherIso, SCREEN_UP, null).meta);
         // 2 % off is within tolerance: sensors round exposure to whole rows.
-        assertEquals("pose", describer.describe(asAsked(plan.pose, 61L).exposureNs(8_568_000L).build(), null, null)
+        assertEquals("pose", describer.describe(asAsked(plan.pose, 64L).exposureNs(8_568_000L).build(), null, null)
                 .meta.frameKind);
     }
 

@@ -66,6 +66,7 @@ final class ReplayRun {
     }
 
     final CapturePlan plan;
+    final CameraFacts facts;
     /** In the order sent. */
     final List<Sent> sent;
     final List<FrameMeta> poseResults;
@@ -73,9 +74,10 @@ final class ReplayRun {
     final Map<String, Long> drops;
     final List<String> failures;
 
-    private ReplayRun(CapturePlan plan, List<Sent> sent, List<FrameMeta> poseResults, List<FrameMeta> idResults,
+    private ReplayRun(CapturePlan plan, CameraFacts facts, List<Sent> sent, List<FrameMeta> poseResults, List<FrameMeta> idResults,
                       Map<String, Long> drops, List<String> failures) {
         this.plan = plan;
+        this.facts = facts;
         this.sent = sent;
         this.poseResults = poseResults;
         this.idResults = idResults;
@@ -97,7 +99,13 @@ final class ReplayRun {
 
     static ReplayRun play(Recording recording, String baseUrl, String device, boolean compareWhole)
             throws IOException, InterruptedException, UnsupportedCameraException {
-        ReplayCamera camera = new ReplayCamera(recording);
+        return play(recording, baseUrl, device, compareWhole, 0);
+    }
+
+    /** @param settingsLagFrames frames a request's settings lag behind it (0: per-frame control) */
+    static ReplayRun play(Recording recording, String baseUrl, String device, boolean compareWhole,
+                          int settingsLagFrames) throws IOException, InterruptedException, UnsupportedCameraException {
+        ReplayCamera camera = new ReplayCamera(recording, 12, settingsLagFrames);
         CameraFacts facts = camera.facts();
         JSONObject map = recording.map();
         CaptureOptions options = camera.captureOptions(beacons(map), ceilingDistanceM(recording, map));
@@ -171,7 +179,7 @@ final class ReplayRun {
             }
             sent.add(new Sent(byTimestamp.get(e.timestampNs()), e, w));
         }
-        return new ReplayRun(plan, sent, poseResults, idResults, pipeline.dropCounts(), failures);
+        return new ReplayRun(plan, facts, sent, poseResults, idResults, pipeline.dropCounts(), failures);
     }
 
     private static void waitIdle(FramePipeline pipeline) throws InterruptedException {

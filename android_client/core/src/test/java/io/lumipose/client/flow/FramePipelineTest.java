@@ -154,7 +154,43 @@ class FramePipelineTest {
     }
 
     private static FramePipeline pipeline(CapturePlan plan, Recorder r, java.util.concurrent.Executor e) {
-        return FramePipeline.forCamera(Devices.load(Devices.LOGICAL), plan, null, new GravityHistory(), r, e, r);
+        return pipeline(Devices.load(Devices.LOGICAL), plan, r, e);
+    }
+
+    private static FramePipeline pipeline(CameraFacts facts, CapturePlan plan, Recorder r,
+                                          java.util.concurrent.Executor e) {
+        return FramePipeline.forCamera(facts, plan, null, new GravityHistory(), r, e, r);
+    }
+
+    /** The fixture's camera as a LIMITED device without per-frame control. */
+    private static CameraFacts lagging() {
+        return Devices.load(Devices.LOGICAL).toBuilder().syncMaxLatency(CameraFacts.SYNC_UNKNOWN).build();
+    }
+
+    /** An exposure neither request asked for: the sensor between the camera's old settings and the burst's. */
+    private static final long TRANSITION_EXPOSURE_NS = 4_000_000L;
+
+    /**
+     * What a device whose settings lag {@code lag} frames delivers for {@code exposed} (the bursts
+     * as their exposures run): each frame tagged with the request submitted for it, the repeating
+     * burst {@code lag} places ahead of its exposure, after {@code lag} frames still taken with the
+     * camera's earlier settings.
+     */
+    private static List<Frame> withSettingsLag(CapturePlan plan, List<Frame> exposed, int lag) {
+        int n = plan.idFramesPerBurst + 1;
+        List<Frame> out = new ArrayList<>();
+        for (int i = 0; i < lag; i++) {
+            String tag = i % n == 0 ? "pose" : "id";
+            long t = exposed.get(0).t() - (lag - i) * FRAME_NS;
+            out.add(new Frame(result(plan, tag, t).toBuilder().exposureNs(TRANSITION_EXPOSURE_NS).build(),
+                    panelAt(200, 150, 160)));
+        }
+        for (int i = 0; i < exposed.size(); i++) {
+            String tag = (i + lag) % n == 0 ? "pose" : "id";
+            Frame f = exposed.get(i);
+            out.add(new Frame(f.result.toBuilder().request(tag).build(), f.packed));
+        }
+        return out;
     }
 
     /** Feeds the frames with each image {@code lag} frames after its result (negative: before). */
@@ -197,8 +233,8 @@ class FramePipelineTest {
             Frame f = frames.get(i);
             FrameMeta m = r.sent.get(i);
             assertEquals(f.t(), m.timestampNs.longValue(), "each burst's ID frames in capture order, then its pose");
-            assertEquals(f.result.request, m.frameKind);
             Frame pose = frames.get(i - i % (plan.idFramesPerBurst + 1) + plan.idFramesPerBurst);
+            assertEquals(f == pose ? "pose" : "id", m.frameKind, "the kind its exposure shows");
             Window panel = BeaconWindow.find(pose.packed, W, H);
             Window w = f == pose ? panel : FramePipeline.idWindow(panel, W, H);
             assertNotNull(m.crop);
@@ -323,16 +359,101 @@ class FramePipelineTest {
         CapturePlan plan = plan(4);
         List<Frame> frames = bursts(plan, 1);
         Frame bad = frames.get(2);
-        frames.set(2, new Frame(bad.result.toBuilder().exposureNs(plan.pose.exposureNs)
-                .sensitivityIso(plan.pose.sensitivityIso).build(), bad.packed));
+        frames.set(2, new Frame(bad.result.toBuilder().exposureNs(TRANSITION_EXPOSURE_NS).build(), bad.packed));
         Recorder r = new Recorder(null);
         FramePipeline p = pipeline(plan, r, DIRECT);
         feed(p, frames, 0);
         assertEquals(frames.size() - 1, r.sent.size(), "sent as soon as its last ID frame came: " + r.heard);
         Map<String, Long> drops = p.dropCounts();
         assertEquals(1, drops.size());
-        assertTrue(drops.keySet().iterator().next().contains("requested as id"), drops.toString());
+        assertTrue(drops.keySet().iterator().next().contains("match neither"), drops.toString());
+    }
 
+    /**
+     * The reviewer's case (issue 12 item 3): a phone without per-frame control, its settings L
+     * frames behind its requests. Every frame tagged pose has the ID exposure and the real pose
+     * frame is tagged id; by their tags no pose frame would ever go. By their results the bursts
+     * go whole when each result comes no later than its image; only the frames still taken with
+     * the camera's earlier settings stay home.
+     */
+    @Test
+    void withSettingsLagTheBurstsGoByWhatTheResultsShow() throws Exception {
+        CapturePlan plan = plan(4);
+        for (int lag : new int[] {1, 2}) {
+            for (int order : new int[] {0, 1, 3}) {
+                List<Frame> exposed = bursts(plan, 3);
+                List<Frame> delivered = withSettingsLag(plan, exposed, lag);
+                assertEquals("id", delivered.get(lag).result.request, "the pose frame is tagged id");
+                Recorder r = new Recorder(null);
+                FramePipeline p = pipeline(lagging(), plan, r, DIRECT);
+                feed(p, delivered, order);
+                String where = "lag " + lag + ", order " + order;
+                assertBurstsWentWhole(plan, exposed, r);
+                assertEquals(3, r.heard.stream().filter(h -> h.startsWith("pose")).count(), where);
+                Map<String, Long> drops = p.dropCounts();
+                assertEquals(lag, drops.values().stream().mapToLong(Long::longValue).sum(), where + ": " + drops);
+                assertTrue(drops.keySet().stream().allMatch(d -> d.contains("settings in transition")), where);
+                List<String> lagWarnings = p.warnings().stream().filter(w -> w.contains("SYNC_MAX_LATENCY unknown"))
+                        .collect(java.util.stream.Collectors.toList());
+                assertEquals(1, lagWarnings.size(), where + ": said once: " + p.warnings());
+            }
+        }
+    }
+
+    /**
+     * When images come before their results, the pipeline guesses an image's kind from its place
+     * after the last pose frame. A lag moves the tags, not the exposures, so the guess holds; a
+     * frame of the settings' transition at the start may cost the first burst, never a later one.
+     */
+    @Test
+    void withSettingsLagImagesBeforeTheirResultsStillFormBursts() throws Exception {
+        CapturePlan plan = plan(4);
+        int n = plan.idFramesPerBurst + 1;
+        Random rng = new Random(7);
+        for (int lag : new int[] {1, 2}) {
+            List<List<Frame>> exposedRuns = new ArrayList<>();
+            List<Recorder> recorders = new ArrayList<>();
+            for (int order : new int[] {-1, -2, -3}) {
+                List<Frame> exposed = bursts(plan, 4);
+                Recorder r = new Recorder(null);
+                feed(pipeline(lagging(), plan, r, DIRECT), withSettingsLag(plan, exposed, lag), order);
+                exposedRuns.add(exposed);
+                recorders.add(r);
+            }
+            for (int trial = 0; trial < 10; trial++) {
+                List<Frame> exposed = bursts(plan, 4);
+                List<Frame> delivered = withSettingsLag(plan, exposed, lag);
+                Recorder r = new Recorder(null);
+                FramePipeline p = pipeline(lagging(), plan, r, DIRECT);
+                int results = 0;
+                int images = 0;
+                while (results < delivered.size() || images < delivered.size()) {
+                    boolean result = images == delivered.size() || (results < delivered.size()
+                            && results - images < 3 && (images - results >= 3 || rng.nextBoolean()));
+                    if (result) {
+                        p.onResult(delivered.get(results++).result);
+                    } else {
+                        delivered.get(images++).image(p);
+                    }
+                }
+                exposedRuns.add(exposed);
+                recorders.add(r);
+            }
+            for (int run = 0; run < recorders.size(); run++) {
+                List<Frame> exposed = exposedRuns.get(run);
+                Recorder r = recorders.get(run);
+                assertTrue(r.sent.size() >= 3 * n, "lag " + lag + ", run " + run + ": " + r.heard);
+                assertBurstsWentWhole(plan, exposed.subList(n, exposed.size()), tail(r, 3 * n));
+            }
+        }
+    }
+
+    /** The last {@code frames} uploads, as a recorder of their own. */
+    private static Recorder tail(Recorder r, int frames) {
+        Recorder out = new Recorder(null);
+        out.sent.addAll(r.sent.subList(r.sent.size() - frames, r.sent.size()));
+        out.bodies.addAll(r.bodies.subList(r.bodies.size() - frames, r.bodies.size()));
+        return out;
     }
 
     @Test

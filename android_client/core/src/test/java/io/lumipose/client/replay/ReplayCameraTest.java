@@ -17,17 +17,23 @@ import java.util.ArrayList;
 import java.util.HashMap;
 import java.util.List;
 import java.util.Map;
+import java.util.concurrent.Executor;
 
 import org.json.JSONArray;
 import org.json.JSONObject;
 import org.junit.jupiter.api.Test;
 import org.junit.jupiter.api.io.TempDir;
 
+import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.camera.PixelSize;
 import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.flow.FramePipeline;
 import io.lumipose.client.flow.FrameSink;
+import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.frame.LumaPlane;
+import io.lumipose.client.net.FrameUploader;
+import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.sensor.GravityHistory;
 import io.lumipose.client.sensor.GravityTransform;
 import io.lumipose.client.sensor.LensFacing;
@@ -223,6 +229,82 @@ class ReplayCameraTest {
                 });
         assertEquals(3, poseOnly.images.size());
     }
+
+    /**
+     * A phone without per-frame control: each result reports the settings its pixels were taken
+     * with (the request {@code lag} frames earlier) and the tag of the request submitted for it.
+     * Classified by their results, the pose frames still go, each starting its burst.
+     */
+    @Test
+    void aLaggingPhoneTagsEachFrameWithTheRequestSubmittedForIt() throws Exception {
+        Recording r = recording(15);
+        for (int lag : new int[] {1, 2}) {
+            ReplayCamera camera = new ReplayCamera(r, 12, lag);
+            assertEquals(CameraFacts.SYNC_UNKNOWN, camera.facts().syncMaxLatency);
+            CapturePlan plan = CapturePlan.plan(camera.facts(), camera.captureOptions(2, 2.0));
+            Capture sink = new Capture();
+            camera.play(plan, sink, new GravityHistory(), NO_PACE);
+            for (FrameResult result : sink.results) {
+                long index = (result.timestampNs - 1000000000L) / 33333333L;
+                assertEquals(index % 5 == 0 ? 1000000L : 125000L, result.exposureNs.longValue(), "what its pixels show");
+                assertEquals((index + lag) % 5 == 0 ? "pose" : "id", result.request, "the request submitted for it");
+            }
+
+            final List<FrameMeta> sent = new ArrayList<FrameMeta>();
+            FramePipeline pipeline = FramePipeline.forCamera(camera.facts(), plan, null, new GravityHistory(),
+                    new FrameUploader() {
+                        @Override
+                        public LocateResult upload(byte[] luma, FrameMeta meta) {
+                            sent.add(meta);
+                            return LocateResult.fromJson("{\"schema\": \"lumipose.result/1\", \"ok\": false, "
+                                    + "\"reason\": \"no_beacon\"}");
+                        }
+                    }, DIRECT, IGNORE);
+            camera.play(plan, pipeline, new GravityHistory(), NO_PACE);
+            List<Long> poses = new ArrayList<Long>();
+            for (FrameMeta m : sent) {
+                if ("pose".equals(m.frameKind)) {
+                    poses.add((m.timestampNs - 1000000000L) / 33333333L);
+                }
+            }
+            assertEquals(java.util.Arrays.asList(0L, 5L, 10L), poses, "lag " + lag + ": " + pipeline.dropCounts());
+            assertEquals(3, pipeline.burstsSubmitted());
+            for (String reason : pipeline.dropCounts().keySet()) {
+                assertEquals(FramePipeline.DROP_NO_PANEL_FOR_ID, reason, "the fixtures show no panel, nothing else");
+            }
+        }
+    }
+
+    private static final ReplayCamera.Pace NO_PACE = new ReplayCamera.Pace() {
+        @Override
+        public void beforeDelivery(RecordedFrame frame) {
+        }
+    };
+
+    private static final Executor DIRECT = new Executor() {
+        @Override
+        public void execute(Runnable command) {
+            command.run();
+        }
+    };
+
+    private static final FramePipeline.Listener IGNORE = new FramePipeline.Listener() {
+        @Override
+        public void onPoseResult(FrameMeta meta, LocateResult result) {
+        }
+
+        @Override
+        public void onIdResult(FrameMeta meta, LocateResult result) {
+        }
+
+        @Override
+        public void onDropped(String reason) {
+        }
+
+        @Override
+        public void onFailure(FrameMeta meta, Exception error) {
+        }
+    };
 
     @Test
     void deliveryOrderMixesImageFirstAndLateResultsAsCamera2Allows() throws IOException {
