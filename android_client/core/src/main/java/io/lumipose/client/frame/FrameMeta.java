@@ -120,6 +120,11 @@ public final class FrameMeta {
     }
 
     /** Width of the full frame the camera's intrinsics describe: the crop's, or this frame's. */
+    /** True when the pixels are a window of a larger frame (the contract's {@code crop}). */
+    public boolean isWindow() {
+        return crop != null;
+    }
+
     public int fullWidth() {
         return crop == null ? width : crop.fullWidth;
     }

@@ -13,7 +13,14 @@ public final class ClientConfig {
     public final String apiKey;
     /** Sent as X-Lumipose-Device when set. */
     public final String deviceId;
+    /** Every frame body gzip-compressed. */
     public final boolean gzip;
+    /**
+     * Pose frames' windows gzip-compressed at the fastest level: a quarter or more of such a window
+     * is the panel's clipped plateau, so deflate shrinks it 5-7 times for a few milliseconds (ID
+     * frames' stripes and whole planes do not pay; docs/android.md, "Benchmark").
+     */
+    public final boolean gzipPoseWindows;
     public final RetryPolicy retry;
     /** Sent as {@code ?map=} with every frame, so the server locates in the map the app draws; null: its active map. */
     public final String mapName;
@@ -21,11 +28,11 @@ public final class ClientConfig {
     public final int readTimeoutMs;
 
     public ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, RetryPolicy retry) {
-        this(baseUrl, apiKey, deviceId, gzip, retry, null, CONNECT_TIMEOUT_MS, PATIENT_READ_TIMEOUT_MS);
+        this(baseUrl, apiKey, deviceId, gzip, false, retry, null, CONNECT_TIMEOUT_MS, PATIENT_READ_TIMEOUT_MS);
     }
 
-    private ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, RetryPolicy retry,
-                         String mapName, int connectTimeoutMs, int readTimeoutMs) {
+    private ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, boolean gzipPoseWindows,
+                         RetryPolicy retry, String mapName, int connectTimeoutMs, int readTimeoutMs) {
         if (baseUrl == null || !(baseUrl.startsWith("http://") || baseUrl.startsWith("https://"))) {
             throw new IllegalArgumentException("server URL must start with http:// or https://, got '" + baseUrl + "'");
         }
@@ -40,6 +47,7 @@ public final class ClientConfig {
         this.apiKey = blankToNull(apiKey);
         this.deviceId = blankToNull(deviceId);
         this.gzip = gzip;
+        this.gzipPoseWindows = gzipPoseWindows;
         this.retry = retry;
         this.mapName = blankToNull(mapName);
         this.connectTimeoutMs = connectTimeoutMs;
@@ -48,21 +56,22 @@ public final class ClientConfig {
 
     /**
      * For live frames: one attempt, a short read timeout (a newer frame replaces a lost one; three
-     * attempts of 15 s would hold the uploader for a minute), no gzip (it costs more than it saves
-     * on a LAN), and the map the app draws.
+     * attempts of 15 s would hold the uploader for a minute), pose windows gzip-compressed, nothing
+     * else (whole planes and ID frames cost more to deflate than they save), and the map the app draws.
      */
     public static ClientConfig live(String baseUrl, String apiKey, String deviceId, String mapName) {
-        return new ClientConfig(baseUrl, apiKey, deviceId, false, new RetryPolicy(1, 0, 1.0, 0), mapName,
+        return new ClientConfig(baseUrl, apiKey, deviceId, false, true, new RetryPolicy(1, 0, 1.0, 0), mapName,
                 CONNECT_TIMEOUT_MS, LIVE_READ_TIMEOUT_MS);
     }
 
     /** The same, with frames located in the map {@code name} (null: the server's active map). */
     public ClientConfig withMap(String name) {
-        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, retry, name, connectTimeoutMs, readTimeoutMs);
+        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, gzipPoseWindows, retry, name, connectTimeoutMs,
+                readTimeoutMs);
     }
 
     public ClientConfig withTimeouts(int connectMs, int readMs) {
-        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, retry, mapName, connectMs, readMs);
+        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, gzipPoseWindows, retry, mapName, connectMs, readMs);
     }
 
     private static String blankToNull(String s) {

@@ -25,8 +25,12 @@ final class CountingTransport implements HttpTransport {
         final double ms;
         final int status;
         final JSONObject reply;
+        /** The body went gzip-compressed (Content-Encoding). */
+        final boolean gzipped;
 
-        Exchange(JSONObject frame, int bodyBytes, int headerBytes, double ms, int status, JSONObject reply) {
+        Exchange(JSONObject frame, int bodyBytes, int headerBytes, double ms, int status, JSONObject reply,
+                 boolean gzipped) {
+            this.gzipped = gzipped;
             this.frame = frame;
             this.bodyBytes = bodyBytes;
             this.headerBytes = headerBytes;
@@ -62,7 +66,8 @@ final class CountingTransport implements HttpTransport {
             String text = reply.text();
             synchronized (exchanges) {
                 exchanges.add(new Exchange(new JSONObject(frame), body == null ? 0 : body.length, headerBytes, ms,
-                        reply.status, text.startsWith("{") ? new JSONObject(text) : new JSONObject()));
+                        reply.status, text.startsWith("{") ? new JSONObject(text) : new JSONObject(),
+                        "gzip".equals(call.headers.get("Content-Encoding"))));
             }
         }
         return reply;

@@ -192,4 +192,23 @@ class LumiposeClientTest {
         new LumiposeClient(live.withMap(null), activeMap, Sleeper.REAL).locate(LUMA, META);
         assertEquals("http://lumi:8000/v1/locate", activeMap.calls.get(0).url, "no map named: the server's active one");
     }
+
+    @Test
+    void aLivePoseWindowGoesGzippedAndAnIdWindowRaw() throws Exception {
+        ClientConfig live = ClientConfig.live("http://lumi:8000/", "k", "phone", "office");
+        FakeTransport t = new FakeTransport().reply(200, OK).reply(200, OK);
+        LumiposeClient c = new LumiposeClient(live, t, Sleeper.REAL);
+        FrameMeta window = META.window(0, 0, 4, 3, new double[] {20, 255});
+        byte[] plateau = new byte[12];
+        java.util.Arrays.fill(plateau, (byte) 255);
+        c.locate(plateau, window);
+        HttpCall pose = t.calls.get(0);
+        assertEquals("gzip", pose.headers.get("Content-Encoding"), "a pose window: mostly clipped plateau");
+        assertArrayEquals(plateau, gunzip(pose.body()));
+        FrameMeta idWindow = FrameMeta.fromJson(window.toJson().put("frame_kind", "id").put("exposure_s", 1.25e-4)
+                .put("rolling_shutter_skew_s", 0.03).put("timestamp_ns", 5));
+        c.locate(plateau, idWindow);
+        assertFalse(t.calls.get(1).headers.containsKey("Content-Encoding"), "ID frames' stripes do not pay");
+        assertArrayEquals(plateau, t.calls.get(1).body());
+    }
 }
