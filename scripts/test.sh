@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Set up (idempotent), check the code (ruff lint and format, mypy), then run the whole test suite.
+# Set up (idempotent; with Blender as a module), check the code (ruff lint and format, mypy), then run the whole test suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh test,blender  # Blender's tests run, not skip (issue 13)
 .venv/bin/ruff check
 .venv/bin/ruff format --check
 .venv/bin/mypy
