@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from server.camera import intrinsics_from_profile
 from server.fov import fov_grid
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
@@ -31,7 +32,6 @@ from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
-from server.camera import intrinsics_from_profile
 from shared_schemas import Beacon, BeaconMap, device_profiles
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
@@ -52,6 +52,10 @@ class AccuracyConfig:
     overexposure: tuple[float, float] = (2.0, 6.0)  # plateau / saturation
     gravity_sigma_deg: float = 0.1
     seed: int = 1
+    renderer: str = "ours"  # or "blender": Cycles' radiance through the same sensor (simulator.blender)
+
+
+RENDERERS = ("ours", "blender")
 
 
 def bench_beacon(distance_m: float) -> Beacon:
@@ -94,7 +98,14 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         psf_sigma_px=rng.uniform(*config.psf_sigma_px),
         plateau_dn=255.0 * rng.uniform(*config.overexposure),
     )
-    pixels = render_frame(beacon, camera, pose, width, height, sensor, rng)
+    if config.renderer == "blender":
+        from simulator.blender import render_blender_frame  # bpy is an optional extra
+
+        pixels = render_blender_frame(beacon, camera, pose, width, height, sensor, rng)
+    elif config.renderer == "ours":
+        pixels = render_frame(beacon, camera, pose, width, height, sensor, rng)
+    else:
+        raise ValueError(f"renderer must be one of {RENDERERS}, got {config.renderer!r}")
     meta = fixture_meta(camera, width, height, pose,
                         gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng))
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
@@ -178,7 +189,7 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
     """Render and locate `config.frames` frames; summaries per gravity mode."""
     workers = workers or os.cpu_count() or 1
     samples = []
-    label = f"accuracy at {config.distance_m:.1f} m"
+    label = f"accuracy at {config.distance_m:.1f} m ({config.renderer})"
     with ProcessPoolExecutor(max_workers=workers) as pool:
         for sample in pool.map(_accuracy_sample, [(config, i) for i in range(config.frames)], chunksize=2):
             samples.append(sample)
@@ -196,7 +207,19 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
             summary[mode]["p95_tilt_error_deg"] = float(np.percentile(tilts, 95))
         summary[mode].update(calibration([(e[3], e[4]) for e in located]))
     return {"distance_m": config.distance_m, "frames": config.frames, "scale": config.scale,
-            "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
+            "renderer": config.renderer, "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
+
+
+def renderer_ratios(reports: list[dict], mode: str = "auto") -> list[dict]:
+    """Blender's mean error over ours at each distance, from reports of both renderers on the same frames."""
+    means = {(r["distance_m"], r["renderer"]): r["modes"][mode].get("mean_mm") for r in reports}
+    ratios = []
+    for distance in sorted({d for d, _ in means}):
+        ours, blender = means.get((distance, "ours")), means.get((distance, "blender"))
+        if ours and blender is not None:
+            ratios.append({"distance_m": distance, "mode": mode, "ours_mean_mm": ours, "blender_mean_mm": blender,
+                           "ratio": blender / ours})
+    return ratios
 
 
 def run_speed_over_frames(frames: int = 10, distances_m: tuple[float, ...] = (1.0, 2.0, 3.0), rounds: int = 5,

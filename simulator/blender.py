@@ -5,7 +5,9 @@ It renders the same rounded panel as `simulator.render` from the same pose, as a
 mesh seen by a Blender camera with the same sensor and focal length, and returns the linear
 radiance (1.0 = the panel's full level) of the pixels around the panel only (a render border:
 the rest of the frame is black and would cost most of the time). Used by
-`lumipose bench fidelity --blender` (the paper's Fig. 10 between two renderers).
+`lumipose bench fidelity --blender` (the paper's Fig. 10 between two renderers) and, through
+`render_blender_frame` (the same sensor as `simulator.render.render_frame`), by
+`lumipose bench accuracy --renderer blender`.
 
 Conventions: Blender cameras look along their local -Z with +Y up in the image; an OpenCV
 camera looks along +Z with y down, so R_blender = R_wc diag(1, -1, -1). Blender puts the
@@ -23,11 +25,12 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from server.geometry import beacon_outline_m, beacon_to_world
 from shared_schemas import Beacon, CameraIntrinsics
-from simulator.render import CameraPose, beacon_outline_px
+from simulator.render import CameraPose, SensorModel, _noisy_u8, beacon_outline_px, vignetting_map
 
 
 @dataclass(frozen=True)
@@ -146,6 +149,25 @@ def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, w
     if radiance.shape != (y1 - y0, x1 - x0):
         raise RuntimeError(f"Blender returned a {radiance.shape} crop, expected {(y1 - y0, x1 - x0)}")
     return BlenderCrop(radiance, (x0, y0))
+
+
+def render_blender_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                         sensor: SensorModel, rng: np.random.Generator,
+                         settings: BlenderSettings = BlenderSettings()) -> np.ndarray:
+    """An 8-bit luma frame (height, width) from Cycles' radiance through the sensor of
+    `simulator.render.render_frame`: the radiance (each pixel already integrated by Cycles' pixel
+    filter) blurred by the lens PSF, at the panel's level over the background, vignetting, then
+    shot and read noise, rounding and clipping (the same noise model, `render._noisy_u8`)."""
+    crop = render_blender(beacon, camera, pose, width, height, settings)
+    light = crop.radiance.astype(np.float32)
+    if sensor.psf_sigma_px > 0:  # the crop's margin is dark: replicating its border adds no light
+        light = cv2.GaussianBlur(light, (0, 0), sensor.psf_sigma_px, borderType=cv2.BORDER_REPLICATE)
+    x0, y0 = crop.origin_px
+    signal = np.full((height, width), sensor.background_dn, np.float32)
+    signal[y0 : y0 + light.shape[0], x0 : x0 + light.shape[1]] += sensor.plateau_dn * light
+    if sensor.vignetting:
+        signal *= vignetting_map(width, height, sensor.vignetting)
+    return _noisy_u8(signal, sensor, rng)
 
 
 class _redirect_stdout:

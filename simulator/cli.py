@@ -53,6 +53,9 @@ def add_commands(commands) -> None:
     accuracy.add_argument("--seed", type=int, default=1)
     accuracy.add_argument("--workers", type=int, default=None)
     accuracy.add_argument("--json", action="store_true")
+    accuracy.add_argument("--renderer", choices=["ours", "blender", "both"], default="ours",
+                          help="blender: Cycles' radiance through the same sensor (needs bpy); both: the same frames "
+                               "from each, and the ratio of their mean errors")
     accuracy.add_argument("--shape", action="store_true",
                           help="instead of the distance table, the panel-shape table (issue 11: 600 x 600 mm, "
                                "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)")
@@ -232,25 +235,33 @@ def _run_accuracy(args) -> int:
         from simulator.bench_shapes import run_shapes_command
 
         return run_shapes_command(args)
-    from simulator.benchmarks import AccuracyConfig, run_accuracy
+    from simulator.benchmarks import AccuracyConfig, renderer_ratios, run_accuracy
 
     reports = []
     frames = 200 if args.frames is None else args.frames
+    renderers = ["ours", "blender"] if args.renderer == "both" else [args.renderer]
     for distance in args.distances:
-        config = AccuracyConfig(distance_m=distance, frames=frames, scale=args.scale,
-                                max_tilt_deg=args.max_tilt, gravity_sigma_deg=args.gravity_sigma, seed=args.seed)
-        reports.append(run_accuracy(config, args.workers))
+        for renderer in renderers:
+            config = AccuracyConfig(distance_m=distance, frames=frames, scale=args.scale, max_tilt_deg=args.max_tilt,
+                                    gravity_sigma_deg=args.gravity_sigma, seed=args.seed, renderer=renderer)
+            reports.append(run_accuracy(config, args.workers))
+    ratios = renderer_ratios(reports) if args.renderer == "both" else []
     if args.json:
-        print(json.dumps({"accuracy": reports}, indent=2))
+        print(json.dumps({"accuracy": reports, "renderer_ratios": ratios} if ratios else {"accuracy": reports},
+                         indent=2))
         return 0
-    print(f"{'distance':>8} {'mode':>8} {'mean':>7} {'std':>7} {'min':>7} {'max':>7} {'p95':>7} {'cover':>6}  (2D, mm)")
+    print(f"{'distance':>8} {'renderer':>8} {'mode':>8} {'mean':>7} {'std':>7} {'min':>7} {'max':>7} {'p95':>7} "
+          f"{'cover':>6}  (2D, mm)")
     for report in reports:
+        head = f"{report['distance_m']:>7.1f}m {report['renderer']:>8}"
         for mode, s in report["modes"].items():
             if "mean_mm" not in s:
-                print(f"{report['distance_m']:>7.1f}m {mode:>8}  no fix in any frame {s['refusals']}")
+                print(f"{head} {mode:>8}  no fix in any frame {s['refusals']}")
                 continue
-            print(f"{report['distance_m']:>7.1f}m {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
+            print(f"{head} {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
                   f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%")
+    for ratio in ratios:
+        print(f"{ratio['distance_m']:>7.1f}m  Blender's mean error / ours ({ratio['mode']}): {ratio['ratio']:.2f}")
     return 0
 
 
