@@ -44,11 +44,16 @@ class OpticsSpec(Strict):
 
     f_number: Positive = Field(default=2.0, description="Mi 8 front camera: f/2.0")
     focus_distance_m: float | None = Field(
-        default=None, gt=0,
-        description="none: every panel in focus (the app asks Camera2 to focus at the ceiling distance)")
+        default=None,
+        gt=0,
+        description="none: every panel in focus (the app asks Camera2 to focus at the ceiling distance)",
+    )
     glare_fraction: float = Field(
-        default=0.01, ge=0, lt=1,
-        description="share of the frame's light scattered evenly over it (veiling glare index, ISO 9358)")
+        default=0.01,
+        ge=0,
+        lt=1,
+        description="share of the frame's light scattered evenly over it (veiling glare index, ISO 9358)",
+    )
     halo_fraction: float = Field(default=0.02, ge=0, lt=1, description="share of each source's light in a wide tail")
     halo_sigma_deg: Positive = Field(default=1.0, description="the tail's Gaussian width, degrees of field")
 
@@ -59,7 +64,8 @@ class PixelSpec(Strict):
     bayer: bool = Field(default=True, description="an RGGB colour filter array (a Quad Bayer one when binning)")
     full_well_e: Positive = Field(
         default=4080.0,
-        description="electrons: 255 DN x 16 e-/DN, the base ISO's range (4000-6000 e- is usual for 0.8-1.0 um pixels)")
+        description="electrons: 255 DN x 16 e-/DN, the base ISO's range (4000-6000 e- is usual for 0.8-1.0 um pixels)",
+    )
     raw_bits: int = Field(default=10, ge=8, le=16, description="the ADC (the S5K3T1 reads out 10 bits)")
     binning: Literal[1, 2] = Field(default=1, description="2: the frame is the 2x2 average of a sensor twice its size")
 
@@ -95,8 +101,9 @@ class ChainSpec(Strict):
 # 1. optics
 
 
-def circle_of_confusion_px(distance_m: float, focus_m: float | None, f_number: float, focal_length_m: float,
-                           pixel_pitch_m: float) -> float:
+def circle_of_confusion_px(
+    distance_m: float, focus_m: float | None, f_number: float, focal_length_m: float, pixel_pitch_m: float
+) -> float:
     """Diameter in pixels of the thin lens's blur disc for a point at `distance_m` when focused at `focus_m`.
 
     c = (f / N) * f * |s - s_f| / (s * (s_f - f)): the aperture f / N, the image of s_f at
@@ -127,7 +134,7 @@ def pillbox_kernel(diameter_px: float, supersample: int = 8) -> np.ndarray:
 def defocus(image: np.ndarray, diameter_px: float) -> np.ndarray:
     """`image` blurred by the disc of `diameter_px` (light beyond the border as at the border)."""
     if diameter_px <= 1e-3:
-        return image
+        return image  # the same array: no copy, no change
     return cv2.filter2D(image.astype(np.float32), -1, pillbox_kernel(diameter_px), borderType=cv2.BORDER_REPLICATE)
 
 
@@ -141,17 +148,21 @@ def veiling_glare(image: np.ndarray, fraction: float) -> np.ndarray:
 def halo(image: np.ndarray, fraction: float, sigma_px: float) -> np.ndarray:
     """A `fraction` of each pixel's light spread as a wide Gaussian of `sigma_px` (the PSF's tail).
 
-    Blurred on a grid about sigma / 4 times coarser and resized back (the tail is smooth), so a
+    Blurred on a grid about sigma / 8 times coarser and resized back (the tail is smooth), so a
     wide tail costs little on a full frame.
     """
     if fraction <= 0:
         return image
     image = image.astype(np.float32)
     height, width = image.shape[:2]
-    step = max(1, int(sigma_px // 4))
-    small = cv2.resize(image, (max(1, width // step), max(1, height // step)), interpolation=cv2.INTER_AREA)
+    step = max(1, int(sigma_px // 8))
+    rows, cols = -(-height // step), -(-width // step)  # whole blocks: the coarse grid lines up with the fine one
+    padded = cv2.copyMakeBorder(image, 0, rows * step - height, 0, cols * step - width, cv2.BORDER_REPLICATE)
+    small = cv2.resize(padded, (cols, rows), interpolation=cv2.INTER_AREA)
     small = cv2.GaussianBlur(small, (0, 0), sigma_px / step, borderType=cv2.BORDER_REPLICATE)
-    tail = cv2.resize(small, (width, height), interpolation=cv2.INTER_LINEAR) if step > 1 else small
+    if step > 1:
+        small = cv2.resize(small, (cols * step, rows * step), interpolation=cv2.INTER_LINEAR)
+    tail = small[:height, :width]
     return ((1 - fraction) * image + fraction * tail).astype(np.float32)
 
 
@@ -189,8 +200,14 @@ def full_well(electrons: np.ndarray, capacity_e: float) -> np.ndarray:
     return np.minimum(electrons, capacity_e)
 
 
-def read_out(electrons: np.ndarray, electrons_per_dn: float, read_noise_dn: float, black_level_dn: float,
-             saturation_dn: float, rng: np.random.Generator) -> np.ndarray:
+def read_out(
+    electrons: np.ndarray,
+    electrons_per_dn: float,
+    read_noise_dn: float,
+    black_level_dn: float,
+    saturation_dn: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
     """The charge as DN at the chosen ISO (gain sets `electrons_per_dn` and `read_noise_dn`), with
     read noise, the black level and the ADC's range [0, saturation]."""
     dn = electrons / electrons_per_dn + black_level_dn
@@ -300,9 +317,17 @@ def jpeg_roundtrip(luma: np.ndarray, quality: int) -> np.ndarray:
 # the chain
 
 
-def develop(signal_dn: np.ndarray, chain: ChainSpec, *, electrons_per_dn: float, read_noise_dn: float,
-            black_level_dn: float, halo_sigma_px: float, rng: np.random.Generator,
-            saturation_dn: float = 255.0) -> np.ndarray:
+def develop(
+    signal_dn: np.ndarray,
+    chain: ChainSpec,
+    *,
+    electrons_per_dn: float,
+    read_noise_dn: float,
+    black_level_dn: float,
+    halo_sigma_px: float,
+    rng: np.random.Generator,
+    saturation_dn: float = 255.0,
+) -> np.ndarray:
     """The luma (uint8) a phone makes of the noiseless light `signal_dn` (H, W) or (H, W, 3).
 
     `signal_dn` is the renderer's, on the sensor's own pixels (twice the frame's size when the

@@ -226,21 +226,25 @@ def _check_row_gain(row_gain: np.ndarray | None, height: int) -> np.ndarray | No
     return row_gain
 
 
-def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px: float, factor: int) -> np.ndarray:
+def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px: float, factor: int,
+                      defocus_px: float = 0.0) -> np.ndarray:
     """Pixel-area coverage of the polygon after a Gaussian PSF of `sigma_px`.
 
     The optical image is the polygon convolved with the PSF, and each pixel integrates it over
     its area. On a grid `factor` times finer the sampled Gaussian is close to the continuous
-    one; summing factor x factor sub-pixels then integrates over the pixel.
+    one; summing factor x factor sub-pixels then integrates over the pixel. A defocus disc of
+    `defocus_px` follows the PSF on the same grid (its kernel's own sub-pixel area adds a variance
+    of 1 / (12 factor^2) px^2).
     """
     if sigma_px <= 0:
-        return coverage_map(outline_px, width, height)
+        return defocus(coverage_map(outline_px, width, height), defocus_px)
     if factor == 1:
-        return cv2.GaussianBlur(coverage_map(outline_px, width, height), (0, 0), sigma_px,
-                                borderType=cv2.BORDER_REPLICATE)
+        return defocus(cv2.GaussianBlur(coverage_map(outline_px, width, height), (0, 0), sigma_px,
+                                        borderType=cv2.BORDER_REPLICATE), defocus_px)
     fine = coverage_map((outline_px + 0.5) * factor - 0.5, width * factor, height * factor,
                         subrows=max(4, 16 // factor))
     fine = cv2.GaussianBlur(fine, (0, 0), sigma_px * factor, borderType=cv2.BORDER_REPLICATE)
+    fine = defocus(fine, defocus_px * factor)
     return fine.reshape(height, factor, width, factor).mean(axis=(1, 3))
 
 
@@ -271,7 +275,7 @@ def _background_u8(shape: tuple[int, int], sensor: SensorModel, rng: np.random.G
 def _emitter_boxes(emitters: list[Emitter], width: int, height: int,
                    sensor: SensorModel) -> list[tuple[int, int, int, int, np.ndarray]]:
     """Each emitter's light (y0, y1, x0, x1, light) on its bounding box: coverage blurred by the
-    PSF (and its own extra blur), then its defocus disc, then scaled per row by its `row_gain`."""
+    PSF (and its own extra blur) and its defocus disc, then scaled per row by its `row_gain`."""
     boxes = []
     for emitter in emitters:
         row_gain = _check_row_gain(emitter.row_gain, height)
@@ -286,9 +290,7 @@ def _emitter_boxes(emitters: list[Emitter], width: int, height: int,
             continue
         # the box is cut at the frame's border: blurring replicates the border, as light beyond it would
         light = emitter.level_dn * _blurred_coverage(outline - [x0, y0], x1 - x0, y1 - y0, sigma,
-                                                     sensor.supersample_for(sigma))
-        if emitter.defocus_px > 0:
-            light = defocus(light, emitter.defocus_px)
+                                                     sensor.supersample_for(sigma), emitter.defocus_px)
         if row_gain is not None:
             light *= row_gain[y0:y1, None]
         boxes.append((y0, y1, x0, x1, light))
