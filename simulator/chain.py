@@ -39,8 +39,9 @@ BT601 = (0.299, 0.587, 0.114)
 
 
 class OpticsSpec(Strict):
-    """The lens. Defaults: the Mi 8 front camera (f/2.0, Xiaomi's specification of its 20 MP
-    front camera; focal length 3.52 mm from the device profile)."""
+    """The lens. Defaults: the Mi 8 front camera (20 MP, f/2.0, 1.8 um binned pixels as its published
+    specifications list it, e.g. Wikipedia's "Xiaomi Mi 8"; focal length 3.52 mm and 0.9 um native
+    pixels from the device profile)."""
 
     f_number: Positive = Field(default=2.0, description="Mi 8 front camera: f/2.0")
     focus_distance_m: float | None = Field(
@@ -66,7 +67,7 @@ class PixelSpec(Strict):
         default=4080.0,
         description="electrons: 255 DN x 16 e-/DN, the base ISO's range (4000-6000 e- is usual for 0.8-1.0 um pixels)",
     )
-    raw_bits: int = Field(default=10, ge=8, le=16, description="the ADC (the S5K3T1 reads out 10 bits)")
+    raw_bits: int = Field(default=10, ge=8, le=16, description="the ADC: RAW10, usual for phone sensors")
     binning: Literal[1, 2] = Field(default=1, description="2: the frame is the 2x2 average of a sensor twice its size")
 
 
