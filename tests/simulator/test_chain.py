@@ -282,6 +282,21 @@ def test_without_a_chain_the_scene_file_and_frames_are_as_before():
     assert with_chain.chain.pixels.full_well_e == 4080.0 and with_chain.chain.jpeg_quality is None
 
 
+@pytest.mark.parametrize(
+    "chain, field",
+    [
+        ({"pixels": {"binning": 3}}, "binning"),
+        ({"optics": {"glare_fraction": 1.5}}, "glare_fraction"),
+        ({"isp": {"tone_curve": "log"}}, "tone_curve"),
+        ({"jpeg_quality": 0}, "jpeg_quality"),
+        ({"colour": True}, "colour"),
+    ],
+)
+def test_a_bad_chain_names_the_knob(chain, field):
+    with pytest.raises(ValueError, match=field):
+        scene(chain=chain)
+
+
 def test_an_ideal_chain_gives_the_renderers_light():
     """Glare, halo, Bayer off, a quiet sensor, a 16-bit ADC: the chain is the renderer's light, rounded."""
     ideal = scene(chain=IDEAL)
