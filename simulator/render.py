@@ -29,6 +29,7 @@ from server.geometry import (
     world_to_camera,
 )
 from shared_schemas import Beacon, CameraIntrinsics
+from simulator.chain import defocus
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,7 @@ class Emitter:
     level_dn: float  # unclipped level where the polygon covers a whole pixel
     row_gain: np.ndarray | None = None  # (height,) multiplier per sensor row, rolling shutter
     extra_blur_px: float = 0.0  # on top of the PSF: a reflection or a diffuser is soft
+    defocus_px: float = 0.0  # diameter of the defocus disc (`simulator.chain.pillbox_kernel`), after the PSF
 
 
 @dataclass(frozen=True)
@@ -224,21 +226,25 @@ def _check_row_gain(row_gain: np.ndarray | None, height: int) -> np.ndarray | No
     return row_gain
 
 
-def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px: float, factor: int) -> np.ndarray:
+def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px: float, factor: int,
+                      defocus_px: float = 0.0) -> np.ndarray:
     """Pixel-area coverage of the polygon after a Gaussian PSF of `sigma_px`.
 
     The optical image is the polygon convolved with the PSF, and each pixel integrates it over
     its area. On a grid `factor` times finer the sampled Gaussian is close to the continuous
-    one; summing factor x factor sub-pixels then integrates over the pixel.
+    one; summing factor x factor sub-pixels then integrates over the pixel. A defocus disc of
+    `defocus_px` follows the PSF on the same grid (its kernel's own sub-pixel area adds a variance
+    of 1 / (12 factor^2) px^2).
     """
     if sigma_px <= 0:
-        return coverage_map(outline_px, width, height)
+        return defocus(coverage_map(outline_px, width, height), defocus_px)
     if factor == 1:
-        return cv2.GaussianBlur(coverage_map(outline_px, width, height), (0, 0), sigma_px,
-                                borderType=cv2.BORDER_REPLICATE)
+        return defocus(cv2.GaussianBlur(coverage_map(outline_px, width, height), (0, 0), sigma_px,
+                                        borderType=cv2.BORDER_REPLICATE), defocus_px)
     fine = coverage_map((outline_px + 0.5) * factor - 0.5, width * factor, height * factor,
                         subrows=max(4, 16 // factor))
     fine = cv2.GaussianBlur(fine, (0, 0), sigma_px * factor, borderType=cv2.BORDER_REPLICATE)
+    fine = defocus(fine, defocus_px * factor)
     return fine.reshape(height, factor, width, factor).mean(axis=(1, 3))
 
 
@@ -266,6 +272,44 @@ def _background_u8(shape: tuple[int, int], sensor: SensorModel, rng: np.random.G
     return table[rng.integers(0, 65536, shape, dtype=np.uint16)]
 
 
+def _emitter_boxes(emitters: list[Emitter], width: int, height: int,
+                   sensor: SensorModel) -> list[tuple[int, int, int, int, np.ndarray]]:
+    """Each emitter's light (y0, y1, x0, x1, light) on its bounding box: coverage blurred by the
+    PSF (and its own extra blur) and its defocus disc, then scaled per row by its `row_gain`."""
+    boxes = []
+    for emitter in emitters:
+        row_gain = _check_row_gain(emitter.row_gain, height)
+        outline = emitter.outline_px
+        sigma = float(np.hypot(sensor.psf_sigma_px, emitter.extra_blur_px))
+        margin = int(np.ceil(5 * sigma)) + 2 + int(np.ceil(emitter.defocus_px / 2))
+        x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
+        y0 = max(0, int(np.floor(outline[:, 1].min())) - margin)
+        x1 = min(width, int(np.ceil(outline[:, 0].max())) + margin + 1)
+        y1 = min(height, int(np.ceil(outline[:, 1].max())) + margin + 1)
+        if x1 <= x0 or y1 <= y0:
+            continue
+        # the box is cut at the frame's border: blurring replicates the border, as light beyond it would
+        light = emitter.level_dn * _blurred_coverage(outline - [x0, y0], x1 - x0, y1 - y0, sigma,
+                                                     sensor.supersample_for(sigma), emitter.defocus_px)
+        if row_gain is not None:
+            light *= row_gain[y0:y1, None]
+        boxes.append((y0, y1, x0, x1, light))
+    return boxes
+
+
+def render_signal(emitters: list[Emitter], width: int, height: int, sensor: SensorModel) -> np.ndarray:
+    """The noiseless light (height, width) float32 DN, unclipped: background, every emitter, vignetting.
+
+    What `render_emitters` adds its noise to; the phone chain (`simulator.chain.develop`) starts here.
+    """
+    signal = np.full((height, width), sensor.background_dn, np.float32)
+    for y0, y1, x0, x1, light in _emitter_boxes(emitters, width, height, sensor):
+        signal[y0:y1, x0:x1] += light
+    if sensor.vignetting:
+        signal *= vignetting_map(width, height, sensor.vignetting)
+    return signal
+
+
 def render_emitters(emitters: list[Emitter], width: int, height: int, sensor: SensorModel,
                     rng: np.random.Generator) -> np.ndarray:
     """An 8-bit luma frame (height, width): background plus every emitter, PSF, vignetting, noise.
@@ -276,30 +320,9 @@ def render_emitters(emitters: list[Emitter], width: int, height: int, sensor: Se
     Without vignetting the flat background outside the emitters' boxes takes a faster path
     with the same noise statistics.
     """
-    boxes = []
-    for emitter in emitters:
-        row_gain = _check_row_gain(emitter.row_gain, height)
-        outline = emitter.outline_px
-        sigma = float(np.hypot(sensor.psf_sigma_px, emitter.extra_blur_px))
-        margin = int(np.ceil(5 * sigma)) + 2
-        x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
-        y0 = max(0, int(np.floor(outline[:, 1].min())) - margin)
-        x1 = min(width, int(np.ceil(outline[:, 0].max())) + margin + 1)
-        y1 = min(height, int(np.ceil(outline[:, 1].max())) + margin + 1)
-        if x1 <= x0 or y1 <= y0:
-            continue
-        # the box is cut at the frame's border: blurring replicates the border, as light beyond it would
-        light = emitter.level_dn * _blurred_coverage(outline - [x0, y0], x1 - x0, y1 - y0, sigma,
-                                                     sensor.supersample_for(sigma))
-        if row_gain is not None:
-            light *= row_gain[y0:y1, None]
-        boxes.append((y0, y1, x0, x1, light))
     if sensor.vignetting:
-        signal = np.full((height, width), sensor.background_dn, np.float32)
-        for y0, y1, x0, x1, light in boxes:
-            signal[y0:y1, x0:x1] += light
-        signal *= vignetting_map(width, height, sensor.vignetting)
-        return _noisy_u8(signal, sensor, rng)
+        return _noisy_u8(render_signal(emitters, width, height, sensor), sensor, rng)
+    boxes = _emitter_boxes(emitters, width, height, sensor)
     frame = _background_u8((height, width), sensor, rng)
     if boxes:
         # the union of the boxes gets the exact treatment (boxes may overlap)

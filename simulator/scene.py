@@ -14,6 +14,7 @@ electrons per DN) and read noise.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Annotated, Literal
@@ -22,11 +23,20 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from server.camera import intrinsics_from_profile
-from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr
+from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr, world_to_camera
 from server.vlc.capture import ID_EXPOSURE_S
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, PanelShape, device_profiles
 from shared_schemas.models import Facing, Strict, Vec3
-from simulator.render import CameraPose, Emitter, ReadoutMotion, SensorModel, render_emitters, world_polygon_px
+from simulator.chain import ChainSpec, circle_of_confusion_px, develop
+from simulator.render import (
+    CameraPose,
+    Emitter,
+    ReadoutMotion,
+    SensorModel,
+    render_emitters,
+    render_signal,
+    world_polygon_px,
+)
 
 SCENE_SCHEMA = "lumipose.scene/1"
 SCENES_DIR = Path(__file__).parent / "scenes"
@@ -307,6 +317,8 @@ class Scene(Strict):
     gravity_sigma_deg: float | None = Field(default=0.1, ge=0, description="gravity sensor error; none = no gravity")
     series: SeriesSpec | None = None
     seed: int = Field(default=0, ge=0)
+    chain: ChainSpec | None = Field(
+        default=None, description="a phone's image chain (simulator.chain); none = the renderer's 8-bit noise model")
 
     model_config = {"extra": "forbid", "populate_by_name": True}
 
@@ -329,7 +341,8 @@ class Scene(Strict):
         return BeaconMap(name=self.name, beacons=[b.beacon() for b in self.beacons])
 
     def to_json(self) -> str:
-        return self.model_dump_json(by_alias=True, indent=2) + "\n"
+        # without a chain the file is what it was before the chain existed
+        return self.model_dump_json(by_alias=True, indent=2, exclude={"chain"} if self.chain is None else None) + "\n"
 
 
 def load_scene(path: Path | str) -> Scene:
@@ -376,11 +389,23 @@ def readout_motion(scene: Scene, velocity_mps=(0.0, 0.0, 0.0),
                          scene.sensor.rolling_shutter_skew_s / max(height - 1, 1), scene.sensor.exposure_s)
 
 
-def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0,
-                   motion: ReadoutMotion | None = None) -> list[Emitter]:
-    """Every beacon and light source that the camera at `pose` can see, in the frame's pixels."""
-    camera = scene.camera.intrinsics()
-    width, height = scene.camera.frame_size()
+def _defocus_px(scene: Scene, camera: CameraIntrinsics, pose: CameraPose, points_m) -> float:
+    """The chain's defocus disc (pixels of `camera`) for something at the mean of `points_m`."""
+    if scene.chain is None or scene.chain.optics.focus_distance_m is None or not camera.focal_length_m:
+        return 0.0
+    centre = np.mean(np.asarray(points_m, dtype=float).reshape(-1, 3), axis=0)
+    depth_m = float(world_to_camera(centre[None, :], pose.position_m, pose.rotation_wc)[0, 2])
+    optics = scene.chain.optics
+    return circle_of_confusion_px(depth_m, optics.focus_distance_m, optics.f_number, camera.focal_length_m,
+                                  camera.focal_length_m / camera.fx)
+
+
+def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0, motion: ReadoutMotion | None = None,
+                   camera: CameraIntrinsics | None = None, size: tuple[int, int] | None = None) -> list[Emitter]:
+    """Every beacon and light source that the camera at `pose` can see, in the frame's pixels
+    (or in those of `camera` at `size`, the sensor's own when the chain bins)."""
+    camera = camera or scene.camera.intrinsics()
+    width, height = size or scene.camera.frame_size()
     per_nit = scene.sensor.dn_per_nit()
     emitters = []
     for spec in scene.beacons:
@@ -388,11 +413,13 @@ def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0,
         outline = world_polygon_px(_beacon_outline_m(spec, camera, distance_m), camera, pose, width, height, 0.5,
                                    motion)
         if outline is not None:
-            emitters.append(Emitter(outline, spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s)))
+            emitters.append(Emitter(outline, spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s),
+                                    defocus_px=_defocus_px(scene, camera, pose, spec.center_m)))
     for light in scene.light_sources:
         outline = world_polygon_px(light.outline_m(), camera, pose, width, height, motion=motion)
         if outline is not None:
-            emitters.append(Emitter(outline, light.luminance_nits * per_nit, None, light.blur_px))
+            emitters.append(Emitter(outline, light.luminance_nits * per_nit, None, light.blur_px,
+                                    _defocus_px(scene, camera, pose, light.outline_m())))
     return emitters
 
 
@@ -413,7 +440,10 @@ def render_sample(scene: Scene, pose: CameraPose, rng: np.random.Generator, t_s:
     """
     camera = scene.camera.intrinsics()
     width, height = scene.camera.frame_size()
-    pixels = render_emitters(scene_emitters(scene, pose, t_s, motion), width, height, scene.sensor.model(), rng)
+    if scene.chain is None:
+        pixels = render_emitters(scene_emitters(scene, pose, t_s, motion), width, height, scene.sensor.model(), rng)
+    else:
+        pixels = render_through_chain(scene, pose, rng, t_s, motion)
     gravity = (None if scene.gravity_sigma_deg is None
                else gravity_in_camera(pose.rotation_wc, scene.gravity_sigma_deg, rng))
     meta = FrameMeta(
@@ -426,3 +456,30 @@ def render_sample(scene: Scene, pose: CameraPose, rng: np.random.Generator, t_s:
         **extra,
     )
     return pixels, meta
+
+
+def render_through_chain(scene: Scene, pose: CameraPose, rng: np.random.Generator, t_s: float = 0.0,
+                         motion: ReadoutMotion | None = None) -> np.ndarray:
+    """The frame (height, width) uint8 as `scene.chain`'s phone makes it (`simulator.chain.develop`).
+
+    With 2x2 binning the light is drawn on the sensor's own pixels, twice the frame's size (the
+    frame's pixel (i, j) is the mean of sensor pixels 2i, 2i + 1 and 2j, 2j + 1; the PSF's
+    `psf_sigma_px` stays in the frame's pixels), and the rolling shutter reads twice the rows.
+    """
+    chain = scene.chain
+    camera = scene.camera.intrinsics()
+    width, height = scene.camera.frame_size()
+    model = scene.sensor.model()
+    if chain.pixels.binning == 2:
+        camera = camera.model_copy(update={
+            "fx": 2 * camera.fx, "fy": 2 * camera.fy, "cx": 2 * camera.cx + 0.5, "cy": 2 * camera.cy + 0.5,
+            "pixel_size_m": camera.pixel_size_m / 2 if camera.pixel_size_m else None})
+        width, height = 2 * width, 2 * height
+        model = dataclasses.replace(model, psf_sigma_px=2 * model.psf_sigma_px)
+        if motion is not None:
+            motion = dataclasses.replace(motion, row_time_s=scene.sensor.rolling_shutter_skew_s / max(height - 1, 1))
+    signal = render_signal(scene_emitters(scene, pose, t_s, motion, camera, (width, height)), width, height, model)
+    halo_sigma_px = camera.fx * math.tan(math.radians(chain.optics.halo_sigma_deg))
+    return develop(signal, chain, electrons_per_dn=model.electrons_per_dn, read_noise_dn=model.read_noise_dn,
+                   black_level_dn=scene.sensor.black_level_dn, halo_sigma_px=halo_sigma_px, rng=rng,
+                   saturation_dn=model.saturation_dn)
