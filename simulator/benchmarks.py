@@ -33,8 +33,10 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, device_profiles
+from simulator.chain import ChainSpec, circle_of_confusion_px
 from simulator.fixtures import fixture_meta
-from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
+from simulator.scene import develop_emitters
+from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_frame
 
 PROFILE_ID = "xiaomi-mi8-front"
 MODES = {"vision": GravityMode.never, "gravity": GravityMode.always, "auto": GravityMode.auto}
@@ -53,6 +55,9 @@ class AccuracyConfig:
     gravity_sigma_deg: float = 0.1
     seed: int = 1
     renderer: str = "ours"  # or "blender": Cycles' radiance through the same sensor (simulator.blender)
+    # a phone's image chain (simulator.chain) instead of the renderer's 8-bit noise; ours only
+    chain: ChainSpec | None = None
+    black_level_dn: float = 4.0  # the chain's black level (SensorSpec's default; the background stays 8 DN)
 
 
 RENDERERS = ("ours", "blender")
@@ -98,7 +103,14 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         psf_sigma_px=rng.uniform(*config.psf_sigma_px),
         plateau_dn=255.0 * rng.uniform(*config.overexposure),
     )
-    if config.renderer == "blender":
+    if config.chain is not None:
+        if config.renderer != "ours":
+            raise ValueError("a chain goes with renderer 'ours' only")
+        # the chain's noise from its own generator: every chain sees the same pose, PSF, level and gravity draws
+        chain_rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 13])
+        pixels = chain_frame(config.chain, beacon, camera, pose, width, height, sensor, config.black_level_dn,
+                             chain_rng)
+    elif config.renderer == "blender":
         from simulator.blender import render_blender_frame  # bpy is an optional extra
 
         pixels = render_blender_frame(beacon, camera, pose, width, height, sensor, rng)
@@ -109,6 +121,21 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
     meta = fixture_meta(camera, width, height, pose,
                         gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng))
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
+
+
+def chain_frame(chain: ChainSpec, beacon: Beacon, camera, pose: CameraPose, width: int, height: int,
+                sensor: SensorModel, black_level_dn: float, rng: np.random.Generator) -> np.ndarray:
+    """The panel's frame as `chain`'s phone makes it (`simulator.scene.develop_emitters`), the panel
+    defocused by the thin lens's disc for its depth when the chain sets a focus distance."""
+    def emitters_for(cam, size) -> list[Emitter]:
+        defocus_px = 0.0
+        if chain.optics.focus_distance_m is not None and cam.focal_length_m:
+            depth_m = float((pose.rotation_wc.T @ (np.asarray(beacon.center_m) - pose.position_m))[2])
+            defocus_px = circle_of_confusion_px(depth_m, chain.optics.focus_distance_m, chain.optics.f_number,
+                                                cam.focal_length_m, cam.focal_length_m / cam.fx)
+        return [Emitter(beacon_outline_px(beacon, cam, pose), sensor.plateau_dn, defocus_px=defocus_px)]
+
+    return develop_emitters(chain, emitters_for, camera, width, height, sensor, black_level_dn, rng)
 
 
 def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:

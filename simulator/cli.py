@@ -9,6 +9,9 @@ from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH, device_profiles
 
+# simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
+ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg")
+
 
 def add_commands(commands) -> None:
     render = commands.add_parser("render", help="render a fixture (NAME.y + NAME.json) for a given pose")
@@ -71,6 +74,18 @@ def add_commands(commands) -> None:
                          help="also write partial.json and partial.png (error against visible share) here")
     partial.add_argument("--json", action="store_true")
     partial.set_defaults(run=_run_partial)
+    robustness = benches.add_parser("robustness", help="what each stage of a phone's image chain costs (issue 13)")
+    robustness.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0])
+    robustness.add_argument("--scales", type=float, nargs="+", default=[0.25, 1.0],
+                            help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
+    robustness.add_argument("--frames", type=int, default=40, help="per cell (effect x distance x scale)")
+    robustness.add_argument("--effects", nargs="+", default=list(ROBUSTNESS_GROUPS), metavar="GROUP",
+                            help="effect groups: " + ", ".join(ROBUSTNESS_GROUPS[1:]) + " (the references no chain, "
+                                 "ISP off and ISP on always run)")
+    robustness.add_argument("--seed", type=int, default=1)
+    robustness.add_argument("--workers", type=int, default=None)
+    robustness.add_argument("--json", action="store_true")
+    robustness.set_defaults(run=_run_robustness)
     speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
     speed.add_argument("--repeats", type=int, default=50)
     speed.add_argument("--distance", type=float, default=1.0)
@@ -389,4 +404,19 @@ def _run_speed(args) -> int:
     print(f"cv2.threshold median {report['threshold_median_ms']:.2f} ms, ratio {report['ratio_to_threshold']:.2f}")
     for stage, ms in report["stage_median_ms"].items():
         print(f"  {stage:>10} {ms:7.3f} ms")
+    return 0
+
+
+def _run_robustness(args) -> int:
+    from simulator.bench_robustness import GROUPS, RobustnessConfig, format_robustness, run_robustness
+
+    unknown = sorted(set(args.effects) - set(GROUPS))
+    if unknown or args.frames < 1 or min(args.scales) <= 0:
+        print(f"error: --frames must be at least 1, every --scales positive and --effects among {', '.join(GROUPS)}"
+              f"{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}", file=sys.stderr)
+        return 2
+    config = RobustnessConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
+                              effects=tuple(args.effects), seed=args.seed)
+    report = run_robustness(config, args.workers)
+    print(json.dumps(report, indent=2) if args.json else format_robustness(report))
     return 0

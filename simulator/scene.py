@@ -466,20 +466,34 @@ def render_through_chain(scene: Scene, pose: CameraPose, rng: np.random.Generato
     frame's pixel (i, j) is the mean of sensor pixels 2i, 2i + 1 and 2j, 2j + 1; the PSF's
     `psf_sigma_px` stays in the frame's pixels), and the rolling shutter reads twice the rows.
     """
-    chain = scene.chain
-    camera = scene.camera.intrinsics()
     width, height = scene.camera.frame_size()
-    model = scene.sensor.model()
+
+    def emitters_for(camera: CameraIntrinsics, size: tuple[int, int]) -> list[Emitter]:
+        moved = motion
+        if motion is not None and size[1] != height:
+            moved = dataclasses.replace(motion, row_time_s=scene.sensor.rolling_shutter_skew_s / max(size[1] - 1, 1))
+        return scene_emitters(scene, pose, t_s, moved, camera, size)
+
+    return develop_emitters(scene.chain, emitters_for, scene.camera.intrinsics(), width, height,
+                            scene.sensor.model(), scene.sensor.black_level_dn, rng)
+
+
+def develop_emitters(chain: ChainSpec, emitters_for, camera: CameraIntrinsics, width: int, height: int,
+                     model: SensorModel, black_level_dn: float, rng: np.random.Generator) -> np.ndarray:
+    """The frame (height, width) uint8 that `chain` makes of the light of `emitters_for(camera, size)`.
+
+    `emitters_for` gives the emitters in the pixels of the camera and frame size it is handed:
+    the frame's, or with 2x2 binning the sensor's own, twice the frame's size (fx, fy x 2,
+    c -> 2c + 0.5, the PSF's sigma doubled so that it stays the same in the frame's pixels).
+    """
     if chain.pixels.binning == 2:
         camera = camera.model_copy(update={
             "fx": 2 * camera.fx, "fy": 2 * camera.fy, "cx": 2 * camera.cx + 0.5, "cy": 2 * camera.cy + 0.5,
             "pixel_size_m": camera.pixel_size_m / 2 if camera.pixel_size_m else None})
         width, height = 2 * width, 2 * height
         model = dataclasses.replace(model, psf_sigma_px=2 * model.psf_sigma_px)
-        if motion is not None:
-            motion = dataclasses.replace(motion, row_time_s=scene.sensor.rolling_shutter_skew_s / max(height - 1, 1))
-    signal = render_signal(scene_emitters(scene, pose, t_s, motion, camera, (width, height)), width, height, model)
+    signal = render_signal(emitters_for(camera, (width, height)), width, height, model)
     halo_sigma_px = camera.fx * math.tan(math.radians(chain.optics.halo_sigma_deg))
     return develop(signal, chain, electrons_per_dn=model.electrons_per_dn, read_noise_dn=model.read_noise_dn,
-                   black_level_dn=scene.sensor.black_level_dn, halo_sigma_px=halo_sigma_px, rng=rng,
+                   black_level_dn=black_level_dn, halo_sigma_px=halo_sigma_px, rng=rng,
                    saturation_dn=model.saturation_dn)
