@@ -33,9 +33,9 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, device_profiles
-from simulator.chain import ChainSpec, circle_of_confusion_px
+from simulator.chain import ChainSpec
 from simulator.fixtures import fixture_meta
-from simulator.scene import develop_emitters
+from simulator.scene import defocus_px, develop_emitters
 from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_frame
 
 PROFILE_ID = "xiaomi-mi8-front"
@@ -128,12 +128,8 @@ def chain_frame(chain: ChainSpec, beacon: Beacon, camera, pose: CameraPose, widt
     """The panel's frame as `chain`'s phone makes it (`simulator.scene.develop_emitters`), the panel
     defocused by the thin lens's disc for its depth when the chain sets a focus distance."""
     def emitters_for(cam, size) -> list[Emitter]:
-        defocus_px = 0.0
-        if chain.optics.focus_distance_m is not None and cam.focal_length_m:
-            depth_m = float((pose.rotation_wc.T @ (np.asarray(beacon.center_m) - pose.position_m))[2])
-            defocus_px = circle_of_confusion_px(depth_m, chain.optics.focus_distance_m, chain.optics.f_number,
-                                                cam.focal_length_m, cam.focal_length_m / cam.fx)
-        return [Emitter(beacon_outline_px(beacon, cam, pose), sensor.plateau_dn, defocus_px=defocus_px)]
+        return [Emitter(beacon_outline_px(beacon, cam, pose), sensor.plateau_dn,
+                        defocus_px=defocus_px(chain, cam, pose, beacon.center_m))]
 
     return develop_emitters(chain, emitters_for, camera, width, height, sensor, black_level_dn, rng)
 

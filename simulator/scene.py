@@ -389,13 +389,13 @@ def readout_motion(scene: Scene, velocity_mps=(0.0, 0.0, 0.0),
                          scene.sensor.rolling_shutter_skew_s / max(height - 1, 1), scene.sensor.exposure_s)
 
 
-def _defocus_px(scene: Scene, camera: CameraIntrinsics, pose: CameraPose, points_m) -> float:
-    """The chain's defocus disc (pixels of `camera`) for something at the mean of `points_m`."""
-    if scene.chain is None or scene.chain.optics.focus_distance_m is None or not camera.focal_length_m:
+def defocus_px(chain: ChainSpec | None, camera: CameraIntrinsics, pose: CameraPose, points_m) -> float:
+    """`chain`'s defocus disc (pixels of `camera`) for something at the mean of `points_m`."""
+    if chain is None or chain.optics.focus_distance_m is None or not camera.focal_length_m:
         return 0.0
     centre = np.mean(np.asarray(points_m, dtype=float).reshape(-1, 3), axis=0)
     depth_m = float(world_to_camera(centre[None, :], pose.position_m, pose.rotation_wc)[0, 2])
-    optics = scene.chain.optics
+    optics = chain.optics
     return circle_of_confusion_px(depth_m, optics.focus_distance_m, optics.f_number, camera.focal_length_m,
                                   camera.focal_length_m / camera.fx)
 
@@ -414,12 +414,12 @@ def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0, motion: Rea
                                    motion)
         if outline is not None:
             emitters.append(Emitter(outline, spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s),
-                                    defocus_px=_defocus_px(scene, camera, pose, spec.center_m)))
+                                    defocus_px=defocus_px(scene.chain, camera, pose, spec.center_m)))
     for light in scene.light_sources:
         outline = world_polygon_px(light.outline_m(), camera, pose, width, height, motion=motion)
         if outline is not None:
             emitters.append(Emitter(outline, light.luminance_nits * per_nit, None, light.blur_px,
-                                    _defocus_px(scene, camera, pose, light.outline_m())))
+                                    defocus_px(scene.chain, camera, pose, light.outline_m())))
     return emitters
 
 
