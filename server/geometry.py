@@ -126,3 +126,8 @@ def dense_beacon_outline_m(beacon: Beacon, span_px: float, max_step_px: float = 
 def world_to_camera(points_w: np.ndarray, position_m: np.ndarray, rotation_wc: np.ndarray) -> np.ndarray:
     """Map-frame points (N, 3) into the camera frame: X_c = R_wc^T (X_w - C)."""
     return (np.asarray(points_w) - np.asarray(position_m)) @ np.asarray(rotation_wc)
+
+
+def worst_sigma_2d_m(covariance_m2: np.ndarray) -> float:
+    """The horizontal position's 1-sigma along its worst direction, from a (3, 3) covariance."""
+    return float(math.sqrt(max(np.linalg.eigvalsh(np.asarray(covariance_m2)[:2, :2]).max(), 0.0)))

@@ -2,15 +2,18 @@
 
 coarse ROI -> blur -> threshold -> beacon contour -> hull / RDP / sides -> sub-pixel sides
 -> centre from the diagonals -> corner order -> pose, for one known map beacon: the paper's
-corner path, for a square panel wholly in view. A panel cut by the frame border, and any
-panel that is not square (a rectangle, a circle), takes the outline path instead: beacon
-contour -> sub-pixel outline points -> outline fit (`server.pose.outline`). Every refusal
+corner path, for a square panel wholly in view. A panel cut by the frame border, any panel
+that is not square (a rectangle, a circle), and a square whose outline gives no four sides or
+whose corners fix the position only to worse than the map's `required_sigma_m`, takes the
+outline path instead: beacon contour -> sub-pixel outline points -> outline fit
+(`server.pose.outline`), which refuses what it cannot pin down (`pose_uncertain`). Every refusal
 is a `Refusal` with a reason; only unreadable input raises (in `server.ingest`). Which beacon
 is in view, and rooms of several panels, are decided above (`server.locator`).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -20,19 +23,29 @@ from enum import StrEnum
 import cv2
 import numpy as np
 
-from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, distortion_vector, world_to_camera
+from server.geometry import (
+    beacon_corners_m,
+    beacon_to_world,
+    camera_matrix,
+    distortion_vector,
+    world_to_camera,
+    worst_sigma_2d_m,
+)
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.pose.ordering import order_corners
 from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
-from server.pose.solve import GravityMode, PoseRules, solve_pose
+from server.pose.solve import GravityMode, PoseRules, side_errors, solve_pose
 from server.vision.binarize import Levels, blur, threshold
 from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
 from server.vision.outline import OutlineRules, outline_points
 from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
 from server.vision.roi import FrameView, RoiRules, find_roi
 from server.vision.subpixel import EdgeRules, refine_edges
-from shared_schemas import Beacon, BeaconIdSource, FailureReason
+from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
+
+# The app asks for a linear tone curve (docs/android.md); the edge model assumes one.
+DEVICE_TONE_CURVE = "the device's tone curve was applied (tone_curve 'device'), not the linear one asked for"
 
 
 class CornerMethod(StrEnum):
@@ -114,9 +127,9 @@ def locate_beacon(
         blob = find_beacon_blob(mask, options.blobs, look)
     if isinstance(blob, Refusal):
         return timer.refusal(blob)
+    x, y, w, h = blob.bounding_box
+    box = (roi.x0 + x * step, roi.y0 + y * step, w * step, h * step)
     if blob.cut or not _corner_path_fits(beacon):
-        x, y, w, h = blob.bounding_box
-        box = (roi.x0 + x * step, roi.y0 + y * step, w * step, h * step)
         return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=blob.cut)
     with timer.stage("polygon"):
         quad = (
@@ -124,8 +137,16 @@ def locate_beacon(
             if options.corner_method is CornerMethod.rounded
             else square_corners(blob.contour)
         )
+    # The paper's own paths (no sub-pixel stage, or square corners) stay as the paper has them.
+    # Under the device's tone curve only the corner path's uncertainty knows of the curve.
+    beyond_paper = options.subpixel and options.corner_method is CornerMethod.rounded
+    outline_fallback = beyond_paper and frame.meta.tone_curve is not ToneCurve.device
     if isinstance(quad, Refusal):
-        return timer.refusal(quad)
+        if not outline_fallback:
+            return timer.refusal(quad)
+        # RDP found no four straight sides (a small panel, its rounded corners a large share of
+        # its outline, or a soft edge): the outline fit needs no sides, only the outline.
+        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
     quad = Quad(corners=quad.corners * step)  # pixel i of the mask is pixel step * i of the window
 
     warnings: list[str] = []
@@ -142,8 +163,6 @@ def locate_beacon(
     if options.subpixel and edges is None:
         # The polygon's corners were too far off for the sides' search windows (a large panel
         # whose small corner arcs RDP takes for sharp corners): its visible outline measures it.
-        x, y, w, h = blob.bounding_box
-        box = (roi.x0 + x * step, roi.y0 + y * step, w * step, h * step)
         return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
     corners = edges.corners if edges is not None else _undistorted(quad.corners + origin, matrix, distortion)
     with timer.stage("center"):
@@ -153,6 +172,17 @@ def locate_beacon(
     ordered = order_corners(corners, beacon.yaw_deg, frame.meta.heading_deg)
     gravity = None if frame.meta.gravity_camera is None else np.asarray(frame.meta.gravity_camera)
     corner_sigma = edges.line_sigma_px if edges is not None else 1.0
+    growth_sigma = None
+    if edges is not None and frame.meta.tone_curve is ToneCurve.device:
+        # The device's own tone curve: the mid level lies far down the edge's tail in light, where
+        # the corners' level set is no longer the outline grown by one distance. The growth's
+        # error is of the size of the blur's rounding of the corners (sRGB at 2 m, quarter
+        # resolution: 0.25-0.35 px against a 0.6-0.9 px term), which is added as a 1-sigma.
+        predicted = side_errors(ordered.corners, beacon, corner_sigma, rules=options.pose).growth_sigma
+        growth_sigma = math.hypot(predicted, edges.curvature_px)
+        warnings.append(
+            f"{DEVICE_TONE_CURVE}: the clipped-edge growth is uncertain by {edges.curvature_px:.2f} px more"
+        )
     with timer.stage("pose"):
         pose = solve_pose(
             ordered.corners,
@@ -164,6 +194,7 @@ def locate_beacon(
             options.gravity_mode,
             corner_sigma,
             options.pose,
+            growth_sigma,
         )
     if isinstance(pose, Refusal):
         return timer.refusal(pose, warnings)
@@ -176,7 +207,7 @@ def locate_beacon(
             Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers"),
             warnings,
         )
-    return Fix(
+    fix = Fix(
         position_m=pose.position_m,
         rotation_wc=pose.rotation_wc,
         beacon_id=beacon.id,
@@ -191,6 +222,30 @@ def locate_beacon(
         growth_px=-edges.edge_shift_px if edges is not None and edges.edge_shift_px else None,
         warnings=tuple(warnings),
         timing_ms=timer.total(),
+    )
+    if not beyond_paper or fix.covariance_m2 is None:
+        return fix
+    corner_sigma_mm = worst_sigma_2d_m(fix.covariance_m2) * 1000
+    if corner_sigma_mm <= options.outline_fit.max_sigma_m * 1000:
+        return fix
+    if not outline_fallback:
+        return timer.refusal(
+            Refusal(
+                FailureReason.pose_uncertain,
+                f"the panel's corners fix the position only to {corner_sigma_mm:.0f} mm (1 sigma); the map's "
+                f"required_sigma_m is {options.outline_fit.max_sigma_m * 1000:.3g} mm",
+            ),
+            warnings,
+        )
+    # The corners fix the position only loosely (a small panel whose few-pixel corner arcs
+    # measure the clipped-edge growth badly): the outline fit, which fits the growth with the
+    # pose from every outline point, decides; what it cannot pin down is refused.
+    by_outline = _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
+    note = f"the corners fixed the position only to {corner_sigma_mm:.0f} mm (1 sigma): outline fit"
+    return (
+        by_outline.warned(note)
+        if isinstance(by_outline, Fix)
+        else replace(by_outline, warnings=(*by_outline.warnings, note))
     )
 
 
@@ -311,7 +366,9 @@ def _outline_fix(
         orientation_rule=fit.orientation_rule,
         covariance_m2=fit.covariance_m2,
         growth_px=fit.growth_px,
-        warnings=(note,),
+        warnings=(note, f"{DEVICE_TONE_CURVE}: the outline fit's uncertainty does not include it")
+        if frame.meta.tone_curve is ToneCurve.device
+        else (note,),
         timing_ms=timer.total(),
     )
 

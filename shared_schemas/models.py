@@ -443,6 +443,7 @@ class FailureReason(StrEnum):
     not_four_sides = "not_four_sides"
     pose_failed = "pose_failed"
     pose_ambiguous = "pose_ambiguous"
+    pose_uncertain = "pose_uncertain"  # the frame fixes the position only to worse than the map's required_sigma_m
     unknown_beacon = "unknown_beacon"
     id_frame = "id_frame"  # an ID frame kept for the device's next capture: no fix of its own (docs/vlc.md)
     numerical_failure = "numerical_failure"  # the arithmetic failed on the frame's or map's numbers (logged)

@@ -119,7 +119,8 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
     else:
         raise ValueError(f"renderer must be one of {RENDERERS}, got {config.renderer!r}")
     meta = fixture_meta(camera, width, height, pose,
-                        gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng))
+                        gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng),
+                        tone_curve=config.chain.reported_tone_curve() if config.chain is not None else None)
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
 
 

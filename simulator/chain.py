@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 from pydantic import Field
 
-from shared_schemas.models import Strict
+from shared_schemas.models import Strict, ToneCurve
 
 Positive = Annotated[float, Field(gt=0)]
 BT601 = (0.299, 0.587, 0.114)
@@ -96,6 +96,10 @@ class ChainSpec(Strict):
     pixels: PixelSpec = PixelSpec()
     isp: IspSpec = IspSpec()
     jpeg_quality: int | None = Field(default=None, ge=1, le=100, description="none: the planes, no JPEG")
+
+    def reported_tone_curve(self) -> ToneCurve:
+        """What the app reports in the frame's `tone_curve`: `linear` when its request held, else the device's."""
+        return ToneCurve.linear if self.isp.tone_curve == "linear" else ToneCurve.device
 
 
 # ---------------------------------------------------------------------------------------------

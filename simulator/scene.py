@@ -453,7 +453,7 @@ def render_sample(scene: Scene, pose: CameraPose, rng: np.random.Generator, t_s:
         gravity_camera=gravity,
         ground_truth=GroundTruth(position_m=[float(v) for v in pose.position_m],
                                  rotation_wc=np.asarray(pose.rotation_wc, dtype=float).tolist()),
-        **extra,
+        **{"tone_curve": scene.chain.reported_tone_curve() if scene.chain is not None else None, **extra},
     )
     return pixels, meta
 

@@ -41,7 +41,7 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.optimize import least_squares
 
-from server.geometry import beacon_rotation, rotation_from_ypr
+from server.geometry import beacon_rotation, rotation_from_ypr, worst_sigma_2d_m
 from server.outcomes import Refusal
 from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
@@ -91,7 +91,7 @@ class OutlineFit:
     @property
     def sigma_2d_m(self) -> float:
         """The 2-D position's 1-sigma along its worst direction."""
-        return float(math.sqrt(max(np.linalg.eigvalsh(self.covariance_m2[:2, :2]).max(), 0.0)))
+        return worst_sigma_2d_m(self.covariance_m2)
 
 
 @dataclass(frozen=True)
@@ -645,9 +645,9 @@ def _finish(
     )
     if fit.sigma_2d_m > rules.max_sigma_m:
         return Refusal(
-            FailureReason.beacon_cut_off,
+            FailureReason.pose_uncertain,
             f"the visible part of the panel ({len(distances)} outline points) fixes the position only to "
             f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); the map's required_sigma_m is "
-            f"{rules.max_sigma_m * 1000:.0f} mm",
+            f"{rules.max_sigma_m * 1000:.3g} mm",
         )
     return fit

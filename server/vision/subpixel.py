@@ -76,6 +76,9 @@ class EdgeFit:
     points_per_side: tuple[int, ...]
     arc_points: int
     warnings: tuple[str, ...] = ()
+    # the part of the growth that the blur's rounding of the corners took off (px, >= 0): the
+    # one term that assumes a linear response (the blur is read off two levels of the edge)
+    curvature_px: float = 0.0
 
 
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -393,7 +396,7 @@ def refine_edges(
     )
 
     warnings: list[str] = []
-    shift = 0.0
+    shift, curvature_px = 0.0, 0.0
     if use_arcs:
         first = 4 * n_along
         arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
@@ -404,7 +407,8 @@ def refine_edges(
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
             arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
-            growth = contour_growth(square, arc_points, radius_fraction)
+            before, growth = growth, contour_growth(square, arc_points, radius_fraction)
+            curvature_px = abs(before - growth) if growth is not None else 0.0
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")
         else:
@@ -421,4 +425,5 @@ def refine_edges(
         points_per_side=tuple(int(c) for c in counts),
         arc_points=int(valid[4 * n_along :].sum()),
         warnings=tuple(warnings),
+        curvature_px=curvature_px,
     )

@@ -109,7 +109,7 @@ def test_a_panel_half_cut_by_the_border_is_fixed_from_its_visible_outline(positi
 def test_a_cut_panel_whose_visible_part_fits_two_poses_is_refused_not_guessed():
     result = locate(frame_at([0.5, 0.03, 0.0], (25, 4, -3), seed=2), MAP)
     # two minima 56 mm apart: either two answers, or one so uncertain that it is no fix
-    assert result.reason in (FailureReason.pose_ambiguous, FailureReason.beacon_cut_off), result
+    assert result.reason in (FailureReason.pose_ambiguous, FailureReason.pose_uncertain), result
     assert "two poses" in result.message or "fixes the position only to" in result.message
 
 

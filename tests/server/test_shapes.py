@@ -161,7 +161,7 @@ def test_a_circle_away_from_under_the_downlight_is_refused_where_the_map_needs_a
     position, yaw = np.array([0.3, 0.25, 0.0]), 10.0
     frame = frame_of(CIRCLE, position, (yaw, 2, -3), seed=1, heading=yaw)
     result = locate(frame, BeaconMap(name="c", beacons=[CIRCLE]))
-    assert result.reason is FailureReason.beacon_cut_off and "required_sigma_m is 10 mm" in result.message
+    assert result.reason is FailureReason.pose_uncertain and "required_sigma_m is 10 mm" in result.message
 
 
 def test_a_circle_without_heading_is_refused():
