@@ -146,3 +146,22 @@ def test_the_bench_and_the_scene_draw_the_same_way():
     np.testing.assert_array_equal(motion.velocity_mps, again.velocity_mps)
     assert motion.row_time_s == pytest.approx(0.03 / 517) and motion.exposure_s == 0.01
     assert np.linalg.norm(motion.velocity_mps[:2]) == pytest.approx(1.2, abs=0.4)
+
+
+def test_the_scene_path_draws_the_chains_motion_on_the_sensors_own_rows():
+    """`render_through_chain` draws `chain.motion` once per frame; a binning sensor (twice the rows
+    in the same skew) sees the same motion, so the same panel."""
+    from simulator.sampling import render_pose, series_poses
+    from simulator.scene import find_scene
+    from simulator.chain import PixelSpec
+
+    scene = find_scene("paper-bench")
+    scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"scale": 0.1})})
+    sample = series_poses(scene)[100]
+    frames = [render_pose(scene.model_copy(update={"chain": chain}), sample)[0] > 128 for chain in (
+        ChainSpec(), ChainSpec(motion=MotionSpec.walking()),
+        ChainSpec(pixels=PixelSpec(binning=2), motion=MotionSpec.walking()))]
+    still, walking, binned = (frame.sum() for frame in frames)
+    assert not np.array_equal(frames[0], frames[1])
+    assert walking > still  # the blur stretches the clipped panel along the walk
+    assert binned == pytest.approx(walking, rel=0.03)
