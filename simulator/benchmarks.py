@@ -26,7 +26,7 @@ import numpy as np
 
 from server.camera import intrinsics_from_profile
 from server.fov import fov_grid
-from server.geometry import rotation_from_ypr
+from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr, world_to_camera
 from server.ingest import LumaFrame
 from server.locator import locate
 from server.options import LocateOptions
@@ -35,8 +35,10 @@ from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, device_profiles
 from simulator.chain import ChainSpec
 from simulator.fixtures import fixture_meta
-from simulator.scene import defocus_px, develop_emitters
-from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_frame
+from simulator.scene import SensorSpec, defocus_px, develop_emitters, hand_motion, readout_on_rows
+from simulator.render import (
+    CameraPose, Emitter, ReadoutMotion, SensorModel, beacon_outline_px, exposure_polygons_px, render_frame,
+)
 
 PROFILE_ID = "xiaomi-mi8-front"
 MODES = {"vision": GravityMode.never, "gravity": GravityMode.always, "auto": GravityMode.auto}
@@ -61,6 +63,7 @@ class AccuracyConfig:
 
 
 RENDERERS = ("ours", "blender")
+BENCH_SENSOR = SensorSpec()  # its 10 ms exposure (as `fixture_meta` records) and 30 ms rolling-shutter skew
 
 
 def bench_beacon(distance_m: float) -> Beacon:
@@ -109,7 +112,7 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         # the chain's noise from its own generator: every chain sees the same pose, PSF, level and gravity draws
         chain_rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 13])
         pixels = chain_frame(config.chain, beacon, camera, pose, width, height, sensor, config.black_level_dn,
-                             chain_rng)
+                             chain_rng, bench_motion(config, index, height))
     elif config.renderer == "blender":
         from simulator.blender import render_blender_frame  # bpy is an optional extra
 
@@ -124,13 +127,42 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
 
 
+def bench_motion(config: AccuracyConfig, index: int, rows: int) -> ReadoutMotion | None:
+    """The camera's motion during frame `index` (`config.chain.motion`, `simulator.motion`), drawn from the
+    frame's own generator, so that every cell sees the same poses and noise; none when it stands still."""
+    if config.chain is None or config.chain.motion.still:
+        return None
+    rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 14])
+    return hand_motion(config.chain.motion, rng, BENCH_SENSOR, rows)
+
+
+def position_seen_m(pose: CameraPose, motion: ReadoutMotion | None, camera, point_m) -> np.ndarray:
+    """Where the camera is when the rolling shutter sees `point_m` (the middle of its row's exposure)."""
+    if motion is None:
+        return np.asarray(pose.position_m, dtype=float)
+    in_camera = world_to_camera(np.asarray(point_m, dtype=float)[None, :], pose.position_m, pose.rotation_wc)[0]
+    row = camera.fy * in_camera[1] / in_camera[2] + camera.cy
+    return np.asarray(pose.position_m, dtype=float) + motion.time_of_row(row) * np.asarray(motion.velocity_mps)
+
+
 def chain_frame(chain: ChainSpec, beacon: Beacon, camera, pose: CameraPose, width: int, height: int,
-                sensor: SensorModel, black_level_dn: float, rng: np.random.Generator) -> np.ndarray:
+                sensor: SensorModel, black_level_dn: float, rng: np.random.Generator,
+                motion: ReadoutMotion | None = None) -> np.ndarray:
     """The panel's frame as `chain`'s phone makes it (`simulator.scene.develop_emitters`), the panel
-    defocused by the thin lens's disc for its depth when the chain sets a focus distance."""
+    defocused by the thin lens's disc for its depth when the chain sets a focus distance, and with
+    `motion` (read out over `height` rows) skewed and blurred as `simulator.scene.scene_emitters` draws it."""
     def emitters_for(cam, size) -> list[Emitter]:
-        return [Emitter(beacon_outline_px(beacon, cam, pose), sensor.plateau_dn,
-                        defocus_px=defocus_px(chain, cam, pose, beacon.center_m))]
+        defocus = defocus_px(chain, cam, pose, beacon.center_m)
+        if motion is None:
+            return [Emitter(beacon_outline_px(beacon, cam, pose), sensor.plateau_dn, defocus_px=defocus)]
+        distance_m = float(np.linalg.norm(np.subtract(beacon.center_m, pose.position_m)))
+        span_px = cam.fx * beacon.size_m / max(distance_m, 1e-3)
+        outline_m = beacon_to_world(beacon, dense_beacon_outline_m(beacon, span_px, 0.5))
+        skew_s = motion.row_time_s * max(height - 1, 1)
+        seen = exposure_polygons_px(outline_m, cam, pose, size[0], size[1], 0.5,
+                                    readout_on_rows(motion, skew_s, size[1]))
+        return [] if seen is None else [Emitter(seen[0], sensor.plateau_dn, defocus_px=defocus,
+                                                exposure_outlines_px=seen[1])]
 
     return develop_emitters(chain, emitters_for, camera, width, height, sensor, black_level_dn, rng)
 

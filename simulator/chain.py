@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import Field
 
 from shared_schemas.models import Strict, ToneCurve
+from simulator.motion import MotionSpec
 
 Positive = Annotated[float, Field(gt=0)]
 BT601 = (0.299, 0.587, 0.114)
@@ -96,6 +97,7 @@ class ChainSpec(Strict):
     pixels: PixelSpec = PixelSpec()
     isp: IspSpec = IspSpec()
     jpeg_quality: int | None = Field(default=None, ge=1, le=100, description="none: the planes, no JPEG")
+    motion: MotionSpec = Field(default=MotionSpec(), description="the phone moving during the frame (simulator.motion)")
 
     def reported_tone_curve(self) -> ToneCurve:
         """What the app reports in the frame's `tone_curve`: `linear` when its request held, else the device's."""

@@ -14,7 +14,8 @@ projection of the densified outlines (`world_polygon_px`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -60,6 +61,8 @@ class Emitter:
     row_gain: np.ndarray | None = None  # (height,) multiplier per sensor row, rolling shutter
     extra_blur_px: float = 0.0  # on top of the PSF: a reflection or a diffuser is soft
     defocus_px: float = 0.0  # diameter of the defocus disc (`simulator.chain.pillbox_kernel`), after the PSF
+    # a moving camera: the outline at instants spread over each row's exposure; the light is their mean (motion blur)
+    exposure_outlines_px: tuple[np.ndarray, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -91,19 +94,25 @@ class ReadoutMotion:
     """The camera moving while a rolling shutter reads the frame out.
 
     Row r integrates light over [r * row_time_s, r * row_time_s + exposure_s] after the frame's
-    timestamp (the first row's exposure start); it is drawn from the pose at the middle of that
-    window, the pose at the timestamp moved by `velocity_mps` and turned by
-    `angular_velocity_dps` (both in the map frame). Blur within one row's exposure is not drawn.
+    timestamp (the first row's exposure start); it is seen from the pose at `instant` of that
+    window (0.5: its middle), the pose at the timestamp moved by `velocity_mps` and turned by
+    `angular_velocity_dps` (both in the map frame). The blur within the window is the mean over
+    instants (`exposure_polygons_px`).
     """
 
     velocity_mps: np.ndarray  # (3,)
     angular_velocity_dps: np.ndarray  # (3,)
     row_time_s: float
     exposure_s: float
+    instant: float = 0.5  # share of each row's exposure window
+
+    def time_of_row(self, rows):
+        """Seconds after the timestamp at which row(s) `rows` are seen."""
+        return rows * self.row_time_s + self.exposure_s * self.instant
 
     def to_camera(self, points_m: np.ndarray, pose: CameraPose, rows: np.ndarray) -> np.ndarray:
         """Map-frame points (N, 3) in the camera frame of the rows (N,) they are seen on."""
-        tau = (rows * self.row_time_s + self.exposure_s / 2)[:, None]
+        tau = self.time_of_row(rows)[:, None]
         relative = points_m - np.asarray(pose.position_m) - tau * np.asarray(self.velocity_mps)
         omega = np.radians(np.asarray(self.angular_velocity_dps, dtype=float))
         rate = float(np.linalg.norm(omega))
@@ -164,17 +173,48 @@ def world_polygon_px(points_m: np.ndarray, camera: CameraIntrinsics, pose: Camer
     return pixels
 
 
-def coverage_map(outline_px: np.ndarray, width: int, height: int, subrows: int = 16) -> np.ndarray:
-    """Share (height, width) float32 of each pixel's area inside the closed polygon.
+BLUR_STEP_PX = 0.25  # the most the image moves between two instants of a row's exposure
+MAX_INSTANTS = 256  # a bound on the cost of a fast turn; the step is then coarser
+
+
+def exposure_polygons_px(points_m: np.ndarray, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                         max_step_px: float = 1.0, motion: ReadoutMotion | None = None,
+                         step_px: float = BLUR_STEP_PX) -> tuple[np.ndarray, tuple[np.ndarray, ...]] | None:
+    """(the polygon as `world_polygon_px` sees it, the polygon at n instants spread over each row's
+    exposure) or None if unseen; `Emitter` draws the mean light of the instants (motion blur).
+
+    The instants are (k + 0.5) / n of the window, n such that the image moves <= `step_px` from one
+    to the next; none (an empty tuple) when the camera stands still or moves less than `step_px`
+    during the exposure, so that such frames are drawn exactly as without blur.
+    """
+    seen = world_polygon_px(points_m, camera, pose, width, height, max_step_px, motion)
+    if seen is None or motion is None:
+        return None if seen is None else (seen, ())
+
+    def at(instant: float) -> np.ndarray:
+        return world_polygon_px(points_m, camera, pose, width, height, max_step_px, replace(motion, instant=instant))
+
+    travel_px = float(np.max(np.linalg.norm(at(1.0) - at(0.0), axis=1)))  # the same points: the same densifying
+    instants = min(MAX_INSTANTS, int(np.ceil(travel_px / step_px)))
+    if instants <= 1:
+        return seen, ()
+    return seen, tuple(at((k + 0.5) / instants) for k in range(instants))
+
+
+def coverage_map(outline_px: np.ndarray | Sequence[np.ndarray], width: int, height: int,
+                 subrows: int = 16) -> np.ndarray:
+    """Share (height, width) float32 of each pixel's area inside the closed polygon (or the mean over
+    several closed polygons of the same orientation, e.g. one moving during the exposure).
 
     Pixel (j, i) covers [j - 0.5, j + 0.5) x [i - 0.5, i + 0.5). Each edge crossing a
     scanline at x adds sign * G(x, j), G = clip(j + 0.5 - x, 0, 1) the coverage of pixel j by
     [x, inf); summed with a difference array and a cumulative sum along the row.
     """
-    start = outline_px
-    end = np.roll(outline_px, -1, axis=0)
-    y_min = max(-0.5, float(outline_px[:, 1].min()))
-    y_max = min(height - 0.5, float(outline_px[:, 1].max()))
+    outlines = [outline_px] if isinstance(outline_px, np.ndarray) else list(outline_px)
+    start = np.concatenate(outlines)
+    end = np.concatenate([np.roll(outline, -1, axis=0) for outline in outlines])
+    y_min = max(-0.5, float(start[:, 1].min()))
+    y_max = min(height - 0.5, float(start[:, 1].max()))
     coverage = np.zeros((height, width), np.float32)
     if y_max <= y_min:
         return coverage
@@ -200,6 +240,8 @@ def coverage_map(outline_px: np.ndarray, width: int, height: int, subrows: int =
     cols = width + 1
     flat = np.concatenate([pixel_row * cols + k, pixel_row * cols + k + 1])
     weights = np.concatenate([sign * inside, sign * (1.0 - inside)]) / subrows
+    if len(outlines) > 1:
+        weights /= len(outlines)
     difference = np.bincount(flat, weights=weights, minlength=height * cols).reshape(height, cols)
     accumulated = np.cumsum(difference[:, :width], axis=1)
     return np.abs(accumulated).astype(np.float32)
@@ -226,9 +268,9 @@ def _check_row_gain(row_gain: np.ndarray | None, height: int) -> np.ndarray | No
     return row_gain
 
 
-def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px: float, factor: int,
+def _blurred_coverage(outline_px: list[np.ndarray], width: int, height: int, sigma_px: float, factor: int,
                       defocus_px: float = 0.0) -> np.ndarray:
-    """Pixel-area coverage of the polygon after a Gaussian PSF of `sigma_px`.
+    """Pixel-area coverage of the polygon (the mean over the polygons) after a Gaussian PSF of `sigma_px`.
 
     The optical image is the polygon convolved with the PSF, and each pixel integrates it over
     its area. On a grid `factor` times finer the sampled Gaussian is close to the continuous
@@ -241,7 +283,7 @@ def _blurred_coverage(outline_px: np.ndarray, width: int, height: int, sigma_px:
     if factor == 1:
         return defocus(cv2.GaussianBlur(coverage_map(outline_px, width, height), (0, 0), sigma_px,
                                         borderType=cv2.BORDER_REPLICATE), defocus_px)
-    fine = coverage_map((outline_px + 0.5) * factor - 0.5, width * factor, height * factor,
+    fine = coverage_map([(outline + 0.5) * factor - 0.5 for outline in outline_px], width * factor, height * factor,
                         subrows=max(4, 16 // factor))
     fine = cv2.GaussianBlur(fine, (0, 0), sigma_px * factor, borderType=cv2.BORDER_REPLICATE)
     fine = defocus(fine, defocus_px * factor)
@@ -279,7 +321,8 @@ def _emitter_boxes(emitters: list[Emitter], width: int, height: int,
     boxes = []
     for emitter in emitters:
         row_gain = _check_row_gain(emitter.row_gain, height)
-        outline = emitter.outline_px
+        outlines = list(emitter.exposure_outlines_px) or [emitter.outline_px]
+        outline = np.concatenate(outlines)
         sigma = float(np.hypot(sensor.psf_sigma_px, emitter.extra_blur_px))
         margin = int(np.ceil(5 * sigma)) + 2 + int(np.ceil(emitter.defocus_px / 2))
         x0 = max(0, int(np.floor(outline[:, 0].min())) - margin)
@@ -289,7 +332,7 @@ def _emitter_boxes(emitters: list[Emitter], width: int, height: int,
         if x1 <= x0 or y1 <= y0:
             continue
         # the box is cut at the frame's border: blurring replicates the border, as light beyond it would
-        light = emitter.level_dn * _blurred_coverage(outline - [x0, y0], x1 - x0, y1 - y0, sigma,
+        light = emitter.level_dn * _blurred_coverage([o - [x0, y0] for o in outlines], x1 - x0, y1 - y0, sigma,
                                                      sensor.supersample_for(sigma), emitter.defocus_px)
         if row_gain is not None:
             light *= row_gain[y0:y1, None]

@@ -22,7 +22,7 @@ from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from shared_schemas import CameraIntrinsics
-from simulator.benchmarks import calibration, ellipse_test, summarize
+from simulator.benchmarks import calibration, ellipse_test, position_seen_m, summarize
 from simulator.sampling import SamplePose, parallel_map, render_pose
 from simulator.scene import Scene, readout_motion
 
@@ -122,10 +122,8 @@ def _at_panel_rows(scene: Scene, sample: SamplePose, camera: CameraIntrinsics) -
     ahead = in_camera[:, 2] > 0
     if not ahead.any():
         return None
-    nearest = in_camera[ahead][np.argmin(np.hypot(in_camera[ahead, 0], in_camera[ahead, 1]) / in_camera[ahead, 2])]
-    row = camera.fy * nearest[1] / nearest[2] + camera.cy
-    tau = row * motion.row_time_s + motion.exposure_s / 2
-    return tuple(float(v) for v in np.asarray(sample.position_m) + tau * motion.velocity_mps)
+    nearest = centres[ahead][np.argmin(np.hypot(in_camera[ahead, 0], in_camera[ahead, 1]) / in_camera[ahead, 2])]
+    return tuple(float(v) for v in position_seen_m(pose, motion, camera, nearest))
 
 
 def locate_series(jobs: list[LocateJob], workers: int | None, label: str) -> list[Outcome]:

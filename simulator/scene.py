@@ -28,14 +28,15 @@ from server.vlc.capture import ID_EXPOSURE_S
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, PanelShape, device_profiles
 from shared_schemas.models import Facing, Strict, Vec3
 from simulator.chain import ChainSpec, circle_of_confusion_px, develop
+from simulator.motion import MotionSpec, draw_velocities
 from simulator.render import (
     CameraPose,
     Emitter,
     ReadoutMotion,
     SensorModel,
+    exposure_polygons_px,
     render_emitters,
     render_signal,
-    world_polygon_px,
 )
 
 SCENE_SCHEMA = "lumipose.scene/1"
@@ -389,6 +390,25 @@ def readout_motion(scene: Scene, velocity_mps=(0.0, 0.0, 0.0),
                          scene.sensor.rolling_shutter_skew_s / max(height - 1, 1), scene.sensor.exposure_s)
 
 
+def hand_motion(spec: MotionSpec, rng: np.random.Generator, sensor: SensorSpec, rows: int,
+                motion: ReadoutMotion | None = None) -> ReadoutMotion | None:
+    """`motion` (a walk's, or none) plus velocities drawn from `spec` (`simulator.motion`), read out
+    over `rows` rows in the sensor's skew; none when the camera stands still. A still spec draws nothing."""
+    velocity, angular = draw_velocities(spec, rng)
+    if motion is not None:
+        velocity, angular = velocity + motion.velocity_mps, angular + motion.angular_velocity_dps
+    if not (np.any(velocity) or np.any(angular)):
+        return motion
+    return ReadoutMotion(velocity, angular, sensor.rolling_shutter_skew_s / max(rows - 1, 1), sensor.exposure_s)
+
+
+def readout_on_rows(motion: ReadoutMotion | None, skew_s: float, rows: int) -> ReadoutMotion | None:
+    """`motion` read out over `rows` rows in the same skew (a binning sensor has twice the frame's rows)."""
+    if motion is None:
+        return None
+    return dataclasses.replace(motion, row_time_s=skew_s / max(rows - 1, 1))
+
+
 def defocus_px(chain: ChainSpec | None, camera: CameraIntrinsics, pose: CameraPose, points_m) -> float:
     """`chain`'s defocus disc (pixels of `camera`) for something at the mean of `points_m`."""
     if chain is None or chain.optics.focus_distance_m is None or not camera.focal_length_m:
@@ -410,16 +430,17 @@ def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0, motion: Rea
     emitters = []
     for spec in scene.beacons:
         distance_m = float(np.linalg.norm(np.subtract(spec.center_m, pose.position_m)))
-        outline = world_polygon_px(_beacon_outline_m(spec, camera, distance_m), camera, pose, width, height, 0.5,
-                                   motion)
-        if outline is not None:
-            emitters.append(Emitter(outline, spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s),
-                                    defocus_px=defocus_px(scene.chain, camera, pose, spec.center_m)))
+        seen = exposure_polygons_px(_beacon_outline_m(spec, camera, distance_m), camera, pose, width, height, 0.5,
+                                    motion)
+        if seen is not None:
+            emitters.append(Emitter(seen[0], spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s),
+                                    defocus_px=defocus_px(scene.chain, camera, pose, spec.center_m),
+                                    exposure_outlines_px=seen[1]))
     for light in scene.light_sources:
-        outline = world_polygon_px(light.outline_m(), camera, pose, width, height, motion=motion)
-        if outline is not None:
-            emitters.append(Emitter(outline, light.luminance_nits * per_nit, None, light.blur_px,
-                                    defocus_px(scene.chain, camera, pose, light.outline_m())))
+        seen = exposure_polygons_px(light.outline_m(), camera, pose, width, height, motion=motion)
+        if seen is not None:
+            emitters.append(Emitter(seen[0], light.luminance_nits * per_nit, None, light.blur_px,
+                                    defocus_px(scene.chain, camera, pose, light.outline_m()), seen[1]))
     return emitters
 
 
@@ -465,13 +486,14 @@ def render_through_chain(scene: Scene, pose: CameraPose, rng: np.random.Generato
     With 2x2 binning the light is drawn on the sensor's own pixels, twice the frame's size (the
     frame's pixel (i, j) is the mean of sensor pixels 2i, 2i + 1 and 2j, 2j + 1; the PSF's
     `psf_sigma_px` stays in the frame's pixels), and the rolling shutter reads twice the rows.
+    The chain's `motion` adds velocities drawn from `rng` to `motion` (not written into the frame's
+    metadata).
     """
     width, height = scene.camera.frame_size()
+    motion = hand_motion(scene.chain.motion, rng, scene.sensor, height, motion)
 
     def emitters_for(camera: CameraIntrinsics, size: tuple[int, int]) -> list[Emitter]:
-        moved = motion
-        if motion is not None and size[1] != height:
-            moved = dataclasses.replace(motion, row_time_s=scene.sensor.rolling_shutter_skew_s / max(size[1] - 1, 1))
+        moved = motion if size[1] == height else readout_on_rows(motion, scene.sensor.rolling_shutter_skew_s, size[1])
         return scene_emitters(scene, pose, t_s, moved, camera, size)
 
     return develop_emitters(scene.chain, emitters_for, scene.camera.intrinsics(), width, height,
