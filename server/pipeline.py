@@ -48,6 +48,11 @@ from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
 DEVICE_TONE_CURVE = "the device's tone curve was applied (tone_curve 'device'), not the linear one asked for"
 
 
+# An outline fit that overrules the gravity sensor by this many of its sigmas has met a frame its
+# model does not hold for (the still frames of the robustness bench stay within 3)
+OUTLINE_GRAVITY_SIGMAS = 10.0
+
+
 class CornerMethod(StrEnum):
     rounded = "rounded"  # the paper's rounded-corner path (hull, RDP, sides)
     square = "square"  # the paper's square-corner path (RDP at 1 %, four vertices)
@@ -172,17 +177,25 @@ def locate_beacon(
     ordered = order_corners(corners, beacon.yaw_deg, frame.meta.heading_deg)
     gravity = None if frame.meta.gravity_camera is None else np.asarray(frame.meta.gravity_camera)
     corner_sigma = edges.line_sigma_px if edges is not None else 1.0
+    # What the edge model cannot know, added to the growth's error as a 1-sigma of its own size:
+    # - the device's own tone curve: the mid level lies far down the edge's tail in light, where the
+    #   corners' level set is no longer the outline grown by one distance; the growth's error is of
+    #   the size of the blur's rounding of the corners (sRGB at 2 m, quarter resolution: 0.25-0.35
+    #   px against a 0.6-0.9 px term);
+    # - sides blurred unevenly (motion): each side's growth is scaled from the common one by its
+    #   blur, a Gaussian edge's rule, which a motion-blurred edge follows only roughly.
+    device_curve = edges is not None and frame.meta.tone_curve is ToneCurve.device
+    unknown = [edges.curvature_px if device_curve else 0.0, edges.uneven_px] if edges is not None else []
     growth_sigma = None
-    if edges is not None and frame.meta.tone_curve is ToneCurve.device:
-        # The device's own tone curve: the mid level lies far down the edge's tail in light, where
-        # the corners' level set is no longer the outline grown by one distance. The growth's
-        # error is of the size of the blur's rounding of the corners (sRGB at 2 m, quarter
-        # resolution: 0.25-0.35 px against a 0.6-0.9 px term), which is added as a 1-sigma.
+    if any(unknown):
         predicted = side_errors(ordered.corners, beacon, corner_sigma, rules=options.pose).growth_sigma
-        growth_sigma = math.hypot(predicted, edges.curvature_px)
-        warnings.append(
-            f"{DEVICE_TONE_CURVE}: the clipped-edge growth is uncertain by {edges.curvature_px:.2f} px more"
-        )
+        growth_sigma = math.hypot(predicted, *unknown)
+    # Motion skews and smears the square (rolling shutter, blur), which the corners read as tilt;
+    # the gravity sensor does not see it: in auto mode it then sets the tilt.
+    moved = edges is not None and edges.uneven_px > 0 and options.gravity_mode is GravityMode.auto
+    gravity_mode = GravityMode.always if moved else options.gravity_mode
+    if device_curve:
+        warnings.append(f"{DEVICE_TONE_CURVE}: the clipped-edge growth is uncertain by {unknown[0]:.2f} px more")
     with timer.stage("pose"):
         pose = solve_pose(
             ordered.corners,
@@ -191,7 +204,7 @@ def locate_beacon(
             matrix,
             gravity,
             options.gravity_sigma_deg,
-            options.gravity_mode,
+            gravity_mode,
             corner_sigma,
             options.pose,
             growth_sigma,
@@ -228,7 +241,7 @@ def locate_beacon(
     corner_sigma_mm = worst_sigma_2d_m(fix.covariance_m2) * 1000
     if corner_sigma_mm <= options.outline_fit.max_sigma_m * 1000:
         return fix
-    if not outline_fallback:
+    if not outline_fallback or (edges is not None and edges.uneven_px):  # one growth would not do either
         return timer.refusal(
             Refusal(
                 FailureReason.pose_uncertain,
@@ -240,13 +253,38 @@ def locate_beacon(
     # The corners fix the position only loosely (a small panel whose few-pixel corner arcs
     # measure the clipped-edge growth badly): the outline fit, which fits the growth with the
     # pose from every outline point, decides; what it cannot pin down is refused.
+    # The two must agree within their uncertainties: where they do not, the frame breaks a
+    # model both share (the panel moved or smeared across the frame), and neither is trusted.
     by_outline = _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
     note = f"the corners fixed the position only to {corner_sigma_mm:.0f} mm (1 sigma): outline fit"
-    return (
-        by_outline.warned(note)
-        if isinstance(by_outline, Fix)
-        else replace(by_outline, warnings=(*by_outline.warnings, note))
-    )
+    if not isinstance(by_outline, Fix):
+        return replace(by_outline, warnings=(*by_outline.warnings, note))
+    apart_m = np.subtract(by_outline.position_m, fix.position_m)[:2]
+    if by_outline.covariance_m2 is not None:
+        joint = np.asarray(fix.covariance_m2)[:2, :2] + np.asarray(by_outline.covariance_m2)[:2, :2]
+        if float(apart_m @ np.linalg.solve(joint, apart_m)) > options.pose.consistency_chi_square:
+            return timer.refusal(
+                Refusal(
+                    FailureReason.pose_uncertain,
+                    f"the corners and the outline of the panel place the camera {np.hypot(*apart_m) * 1000:.0f} mm "
+                    f"apart, more than their uncertainties allow",
+                ),
+                [*warnings, note],
+            )
+    gravity = _gravity(frame, options)
+    if gravity is not None:
+        down = by_outline.rotation_wc.T @ np.array([0.0, 0.0, -1.0])  # the fit's gravity, camera frame
+        off_deg = math.degrees(math.acos(np.clip(down @ gravity / np.linalg.norm(gravity), -1.0, 1.0)))
+        if off_deg > OUTLINE_GRAVITY_SIGMAS * options.gravity_sigma_deg:
+            return timer.refusal(
+                Refusal(
+                    FailureReason.pose_uncertain,
+                    f"the outline of the panel tilts the camera {off_deg:.1f} deg from the gravity sensor's "
+                    f"reading (its error is {options.gravity_sigma_deg:g} deg)",
+                ),
+                [*warnings, note],
+            )
+    return by_outline.warned(note)
 
 
 def _corner_path_fits(beacon: Beacon) -> bool:

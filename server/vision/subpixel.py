@@ -46,6 +46,9 @@ NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or sid
 # axis (a tenth of L's period, several times the crossings' 0.01-0.04 px noise): below it
 # the crossings' phases are set by their noise, not by the geometry.
 MIN_PHASE_SPAN_PX = 0.1
+# A gap between two level crossings along a pixel row or column is off by their pixel-locking
+# errors (~0.06 px rms each, `PoseRules.pixel_locking_sigma_px`), which do not average out there.
+LOCKING_GAP_PX = 0.085
 
 
 @dataclass(frozen=True)
@@ -57,6 +60,11 @@ class EdgeRules:
     corner_margin: float = 0.03  # of the side, kept clear beyond the corner arcs
     arc_span_deg: float = 60.0  # middle part of each 90 degree corner arc that is measured
     min_corner_radius_px: float = 5.0  # below this the corners cannot measure the growth
+    # sides whose blur (mid- to quarter-level gap) differs by more than this many standard errors
+    # of their medians, and by more than this share of it, are blurred unevenly (motion,
+    # astigmatism): not by noise, nor by the pixel's square aperture seen along different sides
+    uneven_blur_sigmas: float = 4.0
+    uneven_blur_fraction: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -79,6 +87,9 @@ class EdgeFit:
     # the part of the growth that the blur's rounding of the corners took off (px, >= 0): the
     # one term that assumes a linear response (the blur is read off two levels of the edge)
     curvature_px: float = 0.0
+    # how far the sides' own growths lie from the common one when their blur differs (px, >= 0;
+    # 0 when it does not): motion during the exposure blurs the sides across it more
+    uneven_px: float = 0.0
 
 
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -312,6 +323,38 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
     return float(np.interp(0.5, ratio, sigmas))
 
 
+def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float, fraction: float) -> np.ndarray | None:
+    """Each side's median gap between its mid- and quarter-level crossings (4,), when they differ
+    from their mean by more than `sigmas` standard errors (the spread of each side's own gaps,
+    and `locking_px` (4,), each side's pixel-locking offset) and by more than `fraction` of it;
+    else None.
+
+    side_gaps_px (4, n): the gaps of each side's profiles (NaN where a crossing is missing).
+    """
+    counts = np.sum(np.isfinite(side_gaps_px), axis=1)
+    if counts.min() < 6:
+        return None
+    medians = np.nanmedian(side_gaps_px, axis=1)
+    spread = 1.4826 * np.nanmedian(np.abs(side_gaps_px - medians[:, None]), axis=1)  # robust sigma
+    standard_errors = np.hypot(1.2533 * np.maximum(spread, 1e-3) / np.sqrt(counts), locking_px)
+    mean = float(np.mean(medians))
+    off = np.abs(medians - mean)
+    if np.all((off <= sigmas * np.hypot(standard_errors, standard_errors.mean() / 2)) | (off <= fraction * mean)):
+        return None
+    return medians
+
+
+def side_growths(growth_px: float, level_gap_px: float, side_gaps_px: np.ndarray) -> np.ndarray:
+    """Each side's own growth (4,) when their blurs differ: the corners' `growth_px` belongs to the
+    common blur (read off `level_gap_px`), and at one overexposure a Gaussian edge's growth is
+    proportional to its blur, so each side's is `growth_px` times its blur over the common one."""
+    common = blur_sigma_px(growth_px, level_gap_px)
+    if not common:
+        return np.full(4, growth_px)
+    own = np.array([blur_sigma_px(growth_px, gap) or common for gap in side_gaps_px])
+    return growth_px * own / common
+
+
 def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float) -> float | None:
     """How far (px, >= 0 outward) the measured contour lies outside the panel's outline.
 
@@ -376,9 +419,16 @@ def refine_edges(
     ]
     valid = np.isfinite(crossings) & inside[0] & inside[1]
     quarter_level = (levels.threshold + levels.background) / 2
-    every = slice(0, 4 * n_along, 3)  # only the median gap is wanted: a third of the sides will do
-    level_gap = level_crossings(profiles[every], offsets, quarter_level) - crossings[every]
-    level_gap_px = float(np.nanmedian(level_gap)) if np.isfinite(level_gap).any() else float("nan")
+    level_gap = level_crossings(profiles[: 4 * n_along], offsets, quarter_level) - crossings[: 4 * n_along]
+    every_third = level_gap[::3]  # the common gap from a third of the profiles, as it always was
+    level_gap_px = float(np.nanmedian(every_third)) if np.isfinite(every_third).any() else float("nan")
+    # A side along the pixel grid keeps its crossings' pixel-locking error as an offset of its gap
+    # (two crossings, ~0.06 px each); across the grid by a pixel or more it averages out.
+    phase_span_px = straight_fraction * lengths * np.min(np.abs(directions), axis=1)
+    locking_px = LOCKING_GAP_PX * np.clip(1.0 - phase_span_px, 0.0, 1.0)
+    side_gaps_px = uneven_blur(
+        level_gap.reshape(4, n_along), locking_px, rules.uneven_blur_sigmas, rules.uneven_blur_fraction
+    )
 
     points = bases + crossings[:, None] * across + np.asarray(roi_origin, dtype=float)
     sensor_points = points[: 4 * n_along].reshape(4, n_along, 2)
@@ -396,7 +446,8 @@ def refine_edges(
     )
 
     warnings: list[str] = []
-    shift, curvature_px = 0.0, 0.0
+    shift, curvature_px, uneven_px = 0.0, 0.0, 0.0
+    side_shifts = np.zeros(4)
     if use_arcs:
         first = 4 * n_along
         arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
@@ -413,9 +464,18 @@ def refine_edges(
             warnings.append("too few corner points: sides taken at the mid level")
         else:
             shift = -growth
+            side_shifts[:] = shift
+            if side_gaps_px is not None and blur_px is not None:
+                side_shifts = -side_growths(growth, level_gap_px, side_gaps_px)
+                uneven_px = float(np.max(np.abs(side_shifts - shift)))
+                blurs = [blur_sigma_px(growth, gap) or float("nan") for gap in side_gaps_px]
+                warnings.append(
+                    f"the sides are blurred unevenly ({min(blurs):.2f}-{max(blurs):.2f} px; the camera moved "
+                    f"during the exposure?): each side moved in by its own growth, {uneven_px:.2f} px apart"
+                )
     else:
         warnings.append("corner radius too small in the image to measure the clipped-edge growth")
-    lines_array[:, 2] -= shift  # move each line outward by `shift` along its normal
+    lines_array[:, 2] -= side_shifts  # move each line outward by its shift along its normal
     return EdgeFit(
         corners=_intersections(lines_array),
         lines=lines_array,
@@ -426,4 +486,5 @@ def refine_edges(
         arc_points=int(valid[4 * n_along :].sum()),
         warnings=tuple(warnings),
         curvature_px=curvature_px,
+        uneven_px=uneven_px,
     )

@@ -4,7 +4,8 @@
 The frames are the robustness bench's at 2 m and quarter resolution (an 85 px panel, corner
 radius 10 px) through a phone's chain with the ISP off (`simulator.chain.ChainSpec()`); their
 indices are ones the corner path handled badly before the fallback: frame 20 gave three
-straight sides, frame 0 a fix 62 mm off whose own 1-sigma was 46 mm.
+straight sides, frame 64 a fix 5.7 mm off from corners whose own 1-sigma was 14 mm, frame 0 a
+fix 62 mm off whose own 1-sigma was 46 mm (its sides are blurred unevenly: `test_motion_blur.py`).
 """
 
 from dataclasses import replace
@@ -36,13 +37,20 @@ def test_three_sides_from_the_polygon_stage_are_located_by_the_outline_instead()
     assert any("visible outline of the panel" in w for w in result.warnings)
 
 
-def test_corners_that_fix_the_position_loosely_give_way_to_the_outline_fit():
+def test_the_worst_frame_is_no_longer_a_wrong_fix():
     frame, beacon_map, pose = _frame(0)
     result = locate(frame, beacon_map)
     assert result.ok, result.message
-    assert _error_mm(result, pose) < 20.0  # the corners alone: 62 mm
+    assert _error_mm(result, pose) < 20.0  # before: 62 mm
+
+
+def test_corners_that_fix_the_position_loosely_give_way_to_the_outline_fit():
+    frame, beacon_map, pose = _frame(64)
+    result = locate(frame, beacon_map)
+    assert result.ok, result.message
+    assert _error_mm(result, pose) < 3.0  # the corners alone: 5.7 mm
     assert any("the corners fixed the position only to" in w for w in result.warnings), result.warnings
-    # and with the bar above the corners' 46 mm the corner fix stands
+    # and with the bar above the corners' 14 mm the corner fix stands
     loose = locate(frame, beacon_map.model_copy(update={"required_sigma_m": 0.1}))
     assert loose.ok and not any("the corners fixed" in w for w in loose.warnings)
 
@@ -54,4 +62,4 @@ def test_a_map_asking_more_than_the_frame_gives_is_refused_not_answered(index):
     result = locate(frame, strict)
     assert not result.ok and result.reason is FailureReason.pose_uncertain, result
     assert "required_sigma_m is 0.2 mm" in result.message
-    assert "fixes the position only to" in result.message
+    assert "the position only to" in result.message
