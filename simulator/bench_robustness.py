@@ -6,7 +6,9 @@ overexposure and gravity draws for every cell) rendered through a phone's chain
 the app asks for: bilinear demosaicing, no noise reduction or sharpening, a linear tone curve,
 1 % veiling glare and a 2 % halo), then "ISP on" (`IspSpec.phone()`), at each distance and
 scale. The chain's noise comes from its own generator, so every chain cell of a frame draws
-the same noise where the frames have the same size. "no chain" is the renderer's own 8-bit
+the same noise where the frames have the same size. The "panel" group draws a real panel
+(`simulator.panels`: a bezel, edge fall-off, a glossy ceiling) or puts a second lamp or a window
+near it, through "ISP off" (`panel_effects`). "no chain" is the renderer's own 8-bit
 noise model, as `lumipose bench accuracy` has it (its gravity draw differs: it follows the noise).
 
 Each cell: coverage, mean, p95 and max 2-D error (mm), wrong fixes (> 50 mm) and the
@@ -30,6 +32,8 @@ from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from simulator.benchmarks import AccuracyConfig, accuracy_frame, summarize
 from simulator.chain import ChainSpec, IspSpec, OpticsSpec, PixelSpec
+from simulator.panels import PanelSpec
+from simulator.scene import LightSourceSpec
 
 WRONG_FIX_M = 0.05
 ISP_OFF = ChainSpec()
@@ -60,11 +64,34 @@ def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
         "tone S-curve": ("tone", _isp(tone_curve="s_curve")),
         "JPEG 90": ("jpeg", ChainSpec(jpeg_quality=90)),
         "JPEG 75": ("jpeg", ChainSpec(jpeg_quality=75)),
+        **{name: ("panel", ISP_OFF) for name in panel_effects(distance_m)},
         "ISP on": ("reference", ChainSpec(isp=IspSpec.phone())),
     }
 
 
-GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg")
+GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "panel")
+
+
+def panel_effects(distance_m: float) -> dict[str, dict]:
+    """The "panel" group's cells: name -> the `AccuracyConfig` fields that draw a real panel (simulator.panels)
+    or another light near it. The bench's panel is centred at (0, 0, distance_m), the camera below it."""
+    ceiling = distance_m
+    return {
+        "bezel white": {"panel": PanelSpec.typical("white").only("bezel")},
+        "bezel metal": {"panel": PanelSpec.typical("metal").only("bezel")},
+        "edge fall-off": {"panel": PanelSpec.typical().only("falloff")},
+        "glossy ceiling": {"panel": PanelSpec.typical(glossy_ceiling=True).only("sheen")},
+        # a round ceiling lamp (0.2 m across) as bright as the panel, 0.3 m from its centre: in view in 90-100 %
+        # of the frames at 1-2 m, cut by the frame's border in 5-20 %
+        "second lamp": {"light_sources": (LightSourceSpec(kind="disc", center_m=[0.3, 0.0, ceiling], radius_m=0.1,
+                                                          luminance_nits=1000.0, label="second lamp"),)},
+        # a window (1.2 x 1.2 m, an overcast sky of 3000 cd/m2 as in the office scene) in a wall 0.5 m from the
+        # panel's centre, its top 0.2 m below the ceiling: in 65-80 % of the frames, always cut by the border
+        "window": {"light_sources": (LightSourceSpec(
+            kind="polygon", luminance_nits=3000.0, label="window",
+            points_m=[[-0.6, 0.5, ceiling - 0.2], [0.6, 0.5, ceiling - 0.2], [0.6, 0.5, ceiling - 1.4],
+                      [-0.6, 0.5, ceiling - 1.4]]),)},
+    }
 
 
 @dataclass(frozen=True)
@@ -86,6 +113,14 @@ def _sample(args: tuple[AccuracyConfig, int]) -> tuple[float, str | None]:
     return float(np.hypot(*np.subtract(result.position_m, pose.position_m)[:2])), None
 
 
+def _panel_fields(fields: dict) -> dict:
+    """A panel cell's `AccuracyConfig` fields as JSON for its report row."""
+    row = {"panel": fields["panel"].model_dump(mode="json")} if "panel" in fields else {}
+    if "light_sources" in fields:
+        row["light_sources"] = [light.model_dump(mode="json") for light in fields["light_sources"]]
+    return row
+
+
 def cell_summary(errors_m: list[float], refusals: list[str]) -> dict:
     summary = summarize(errors_m)
     summary["wrong_fixes"] = sum(1 for e in errors_m if math.isfinite(e) and e > WRONG_FIX_M)
@@ -105,8 +140,8 @@ def run_robustness(config: RobustnessConfig, workers: int | None = None) -> dict
     total = len(cells) * config.frames
     start = time.perf_counter()
     tasks = [(replace(AccuracyConfig(distance_m=distance, frames=config.frames, scale=scale, seed=config.seed),
-                      chain=chain), i)
-             for scale, distance, _, _, chain in cells for i in range(config.frames)]
+                      chain=chain, **panel_effects(distance).get(name, {})), i)
+             for scale, distance, name, _, chain in cells for i in range(config.frames)]
     rows, results = [], []
     with ProcessPoolExecutor(max_workers=workers) as pool:
         for result in pool.map(_sample, tasks, chunksize=1):
@@ -117,6 +152,7 @@ def run_robustness(config: RobustnessConfig, workers: int | None = None) -> dict
             errors = [e for e, _ in results]
             row = {"scale": scale, "distance_m": distance, "effect": name, "group": group,
                    "chain": None if chain is None else chain.model_dump(mode="json"), "frames": config.frames,
+                   **_panel_fields(panel_effects(distance).get(name, {})),
                    **cell_summary(errors, [r for _, r in results if r is not None])}
             rows.append(row)
             results = []

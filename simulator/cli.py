@@ -10,7 +10,8 @@ from pathlib import Path
 from shared_schemas import DEMO_MAP_PATH, device_profiles
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
-ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg")
+ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
+                     "panel")
 
 
 def add_commands(commands) -> None:
