@@ -26,11 +26,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from server.fov import fov_grid
 from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
-from server.fov import fov_grid
 from shared_schemas import device_profiles
 from simulator.benchmarks import PROFILE_ID, AccuracyConfig, accuracy_frame, bench_beacon, summarize
 from simulator.chain import ChainSpec, IspSpec, OpticsSpec, PixelSpec
@@ -66,7 +66,7 @@ def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
         "tone S-curve": ("tone", _isp(tone_curve="s_curve")),
         "JPEG 90": ("jpeg", ChainSpec(jpeg_quality=90)),
         "JPEG 75": ("jpeg", ChainSpec(jpeg_quality=75)),
-        **{name: ("panel", ISP_OFF) for name in panel_effects(distance_m)},
+        **dict.fromkeys(panel_effects(distance_m), ("panel", ISP_OFF)),
         "ISP on": ("reference", ChainSpec(isp=IspSpec.phone())),
     }
 

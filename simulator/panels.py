@@ -51,7 +51,7 @@ class PanelSpec(Strict):
     edge_ratio: float = Field(default=1.0, gt=0, le=1,
                               description="the luminous area's luminance at its edge / at its centre; 1 = flat")
     falloff_width_m: float = Field(default=TYPICAL_FALLOFF_WIDTH_M, gt=0,
-                                   description="the depth from the edge over which the luminance climbs to the centre's")
+                                   description="depth from the edge over which the luminance climbs to the centre's")
     sheen_fraction: float = Field(default=0.0, ge=0, le=1,
                                   description="glossy ceiling: its luminance at the panel's outer edge / the panel's")
     sheen_length_m: float = Field(default=GLOSSY_SHEEN_LENGTH_M, gt=0, description="the sheen's e-folding distance")
@@ -61,7 +61,8 @@ class PanelSpec(Strict):
         """A commercial edge-lit panel: a 10 mm frame, 80 % at the edge; a matte ceiling unless `glossy_ceiling`."""
         return cls(bezel_width_m=TYPICAL_BEZEL_WIDTH_M, bezel_fraction=BEZEL_FRACTIONS[bezel],
                    edge_ratio=TYPICAL_EDGE_RATIO, falloff_width_m=TYPICAL_FALLOFF_WIDTH_M,
-                   sheen_fraction=GLOSSY_SHEEN_FRACTION if glossy_ceiling else 0.0, sheen_length_m=GLOSSY_SHEEN_LENGTH_M)
+                   sheen_fraction=GLOSSY_SHEEN_FRACTION if glossy_ceiling else 0.0,
+                   sheen_length_m=GLOSSY_SHEEN_LENGTH_M)
 
     def only(self, effect: Literal["bezel", "falloff", "sheen"]) -> PanelSpec:
         """This spec with every other effect off (one effect at a time, as the robustness bench runs them)."""
@@ -113,7 +114,7 @@ def offset_beacon(beacon: Beacon, offset_m: float) -> Beacon:
     if offset_m == 0:
         return beacon
     if beacon.shape is PanelShape.circle:
-        return beacon.model_copy(update={"diameter_m": beacon.diameter_m + 2 * offset_m})
+        return beacon.model_copy(update={"diameter_m": beacon.extent_m[0] + 2 * offset_m})
     sizes = {name: getattr(beacon, name) + 2 * offset_m for name in ("side_m", "width_m", "height_m")
              if getattr(beacon, name) is not None}
     return beacon.model_copy(update={**sizes, "corner_radius_m": max(beacon.corner_radius_m + offset_m, 0.0)})
@@ -137,7 +138,7 @@ def panel_emitters(beacon: Beacon, panel: PanelSpec | None, outline_px: Callable
     bands = panel_bands(panel or PanelSpec(), min(beacon.extent_m) / 2)
     outlines = [outline_px(offset_beacon(beacon, offset)) for offset, _ in bands] + [None]
     emitters = []
-    for (_, share), outer, inner in zip(bands, outlines[:-1], outlines[1:]):
+    for (_, share), outer, inner in zip(bands, outlines[:-1], outlines[1:], strict=True):
         if outer is None or share == 0:
             continue
         emitters.append(Emitter(outer if inner is None else ring(outer, inner), share * level_dn, row_gain,

@@ -84,8 +84,8 @@ class BeaconSpec(Strict):
     vlc_code: int | None = Field(default=None, ge=0, le=255,
                                  description="the code the panel blinks (normally its id); none = steady light")
     vlc_phase_s: float = Field(default=0.0, description="the message start on the LED's clock")
-    panel: PanelSpec | None = Field(default=None, description="bezel, edge fall-off, glossy ceiling (simulator.panels); "
-                                                              "none = the bare luminous area")
+    panel: PanelSpec | None = Field(
+        default=None, description="bezel, edge fall-off, glossy ceiling (simulator.panels); none: the bare panel")
 
     def beacon(self) -> Beacon:
         sizes = {name: getattr(self, name) for name in ("side_m", "width_m", "height_m", "diameter_m")}

@@ -11,10 +11,11 @@ import hashlib
 import numpy as np
 import pytest
 
+from shared_schemas import Beacon
 from simulator.bench_robustness import panel_effects
 from simulator.benchmarks import AccuracyConfig, accuracy_frame
 from simulator.chain import ChainSpec
-from simulator.panels import PanelSpec, edge_profile, panel_bands, ring, sheen_profile
+from simulator.panels import PanelSpec, edge_profile, offset_beacon, panel_bands, ring, sheen_profile
 from simulator.render import CameraPose, coverage_map, render_signal
 from simulator.scene import Scene, scene_emitters
 
@@ -53,13 +54,24 @@ def test_defaults_draw_the_bare_panel_as_before():
     assert '"panel"' not in bare.to_json() and '"panel"' in scene(PanelSpec.typical()).to_json()
     assert Scene.model_validate_json(off.to_json()) == off
     # the accuracy bench's frames as before panels existed (hashes at 56f724a), with and without a chain
-    digests = [hashlib.sha256(accuracy_frame(AccuracyConfig(scale=0.1, chain=chain, panel=panel), 0)[0].pixels.tobytes())
-               .hexdigest()[:16] for chain in (None, ChainSpec()) for panel in (None, PanelSpec())]
+    frames = [accuracy_frame(AccuracyConfig(scale=0.1, chain=chain, panel=panel), 0)[0].pixels
+              for chain in (None, ChainSpec()) for panel in (None, PanelSpec())]
+    digests = [hashlib.sha256(frame.tobytes()).hexdigest()[:16] for frame in frames]
     assert digests == [BEFORE_PLAIN] * 2 + [BEFORE_CHAIN] * 2
 
 
 BEFORE_PLAIN = "39e1a761eb061034"
 BEFORE_CHAIN = "3ad76bca5de8e7d0"
+
+
+def test_offsets_are_the_exact_offsets_of_the_map_shapes():
+    square = Beacon(id=0, center_m=[0.0, 0.0, 1.0], side_m=0.174, corner_radius_m=0.02)
+    grown, shrunk = offset_beacon(square, 0.01), offset_beacon(square, -0.03)
+    assert (grown.side_m, grown.corner_radius_m) == pytest.approx((0.194, 0.03))
+    assert (shrunk.side_m, shrunk.corner_radius_m) == pytest.approx((0.114, 0.0))  # the corner's arc is used up
+    disc = Beacon(id=0, center_m=[0.0, 0.0, 1.0], shape="circle", diameter_m=0.2)
+    assert offset_beacon(disc, -0.01).diameter_m == pytest.approx(0.18)
+    assert offset_beacon(square, 0.0) is square
 
 
 def test_a_ring_covers_the_outer_outline_less_the_inner_exactly():
@@ -103,7 +115,7 @@ def test_glossy_ceiling_sheen_falls_off_with_distance():
     distances_px = [7.5, 22.5, 52.5, 97.5]  # band middles, 15 px bands: beyond the PSF's reach of their edges
     measured = [row[round(edge_px + d)] for d in distances_px]
     assert measured == sorted(measured, reverse=True)
-    for d, value in zip(distances_px, measured):
+    for d, value in zip(distances_px, measured, strict=True):
         assert value == pytest.approx(sheen_profile(sheen, d / 1000) * LEVEL_DN, rel=1e-2)  # the panel's PSF tail
     assert measured[0] / LEVEL_DN == pytest.approx(0.02 * np.exp(-0.25), rel=1e-2)
     assert row[round(edge_px + 125)] == pytest.approx(0.0, abs=1e-3)  # beyond 4 lengths: the bare ceiling
