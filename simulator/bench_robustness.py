@@ -6,7 +6,9 @@ overexposure and gravity draws for every cell) rendered through a phone's chain
 the app asks for: bilinear demosaicing, no noise reduction or sharpening, a linear tone curve,
 1 % veiling glare and a 2 % halo), then "ISP on" (`IspSpec.phone()`), at each distance and
 scale. The chain's noise comes from its own generator, so every chain cell of a frame draws
-the same noise where the frames have the same size. "no chain" is the renderer's own 8-bit
+the same noise where the frames have the same size. The "panel" group draws a real panel
+(`simulator.panels`: a bezel, edge fall-off, a glossy ceiling) or puts a second lamp or a window
+near it, through "ISP off" (`panel_effects`). "no chain" is the renderer's own 8-bit
 noise model, as `lumipose bench accuracy` has it (its gravity draw differs: it follows the noise).
 
 Each cell: coverage, mean, p95 and max 2-D error (mm), wrong fixes (> 50 mm) and the
@@ -28,13 +30,19 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from server.fov import fov_grid
 from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
-from simulator.benchmarks import AccuracyConfig, accuracy_frame, bench_motion, position_seen_m, summarize
+from shared_schemas import device_profiles
+from simulator.benchmarks import (
+    PROFILE_ID, AccuracyConfig, accuracy_frame, bench_beacon, bench_motion, position_seen_m, summarize,
+)
 from simulator.chain import ChainSpec, IspSpec, OpticsSpec, PixelSpec
 from simulator.motion import MotionSpec
+from simulator.panels import PanelSpec
+from simulator.scene import LightSourceSpec
 
 WRONG_FIX_M = 0.05
 ISP_OFF = ChainSpec()
@@ -67,11 +75,37 @@ def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
         "JPEG 75": ("jpeg", ChainSpec(jpeg_quality=75)),
         "tremor": ("motion", ChainSpec(motion=MotionSpec.tremor())),
         "walking": ("motion", ChainSpec(motion=MotionSpec.walking())),
+        **dict.fromkeys(panel_effects(distance_m), ("panel", ISP_OFF)),
         "ISP on": ("reference", ChainSpec(isp=IspSpec.phone())),
     }
 
 
-GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "motion")
+GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "motion", "panel")
+
+
+def panel_effects(distance_m: float) -> dict[str, dict]:
+    """The "panel" group's cells: name -> the `AccuracyConfig` fields that draw a real panel (simulator.panels)
+    or another light near it. The bench's panel is centred at (0, 0, distance_m), the camera below it."""
+    ceiling = distance_m
+    beacon = bench_beacon(distance_m)
+    wall = fov_grid(device_profiles()[PROFILE_ID], distance_m, 0.05, beacon.size_m).beacon_adjusted_m[1] / 2 + 0.05
+    return {
+        "bezel white": {"panel": PanelSpec.typical("white").only("bezel")},
+        "bezel metal": {"panel": PanelSpec.typical("metal").only("bezel")},
+        "edge fall-off": {"panel": PanelSpec.typical().only("falloff")},
+        "glossy ceiling": {"panel": PanelSpec.typical(glossy_ceiling=True).only("sheen")},
+        # a round ceiling lamp (0.2 m across) as bright as the panel, 0.3 m from its centre: in view in 90-100 %
+        # of the 40 first frames at 1 and 2 m, some of them cut by the frame's border
+        "second lamp": {"light_sources": (LightSourceSpec(kind="disc", center_m=[0.3, 0.0, ceiling], radius_m=0.1,
+                                                          luminance_nits=1000.0, label="second lamp"),)},
+        # a window (1.2 x 1.2 m, an overcast sky of 3000 cd/m2 as in the office scene), its top 0.2 m below the
+        # ceiling, in the wall just beyond the farthest camera the bench draws (never between camera and panel):
+        # in view in 50-58 % of the 40 first frames at 1 and 2 m, always cut by the border, ~9 % of the frame
+        "window": {"light_sources": (LightSourceSpec(
+            kind="polygon", luminance_nits=3000.0, label="window",
+            points_m=[[-0.6, wall, ceiling - 0.2], [0.6, wall, ceiling - 0.2], [0.6, wall, ceiling - 1.4],
+                      [-0.6, wall, ceiling - 1.4]]),)},
+    }
 
 
 @dataclass(frozen=True)
@@ -97,6 +131,14 @@ def _sample(args: tuple[AccuracyConfig, int]) -> tuple[float, str | None, float]
             float(np.hypot(*np.subtract(result.position_m, pose.position_m)[:2])))
 
 
+def _panel_fields(fields: dict) -> dict:
+    """A panel cell's `AccuracyConfig` fields as JSON for its report row."""
+    row = {"panel": fields["panel"].model_dump(mode="json")} if "panel" in fields else {}
+    if "light_sources" in fields:
+        row["light_sources"] = [light.model_dump(mode="json") for light in fields["light_sources"]]
+    return row
+
+
 def cell_summary(errors_m: list[float], refusals: list[str]) -> dict:
     summary = summarize(errors_m)
     summary["wrong_fixes"] = sum(1 for e in errors_m if math.isfinite(e) and e > WRONG_FIX_M)
@@ -116,8 +158,8 @@ def run_robustness(config: RobustnessConfig, workers: int | None = None) -> dict
     total = len(cells) * config.frames
     start = time.perf_counter()
     tasks = [(replace(AccuracyConfig(distance_m=distance, frames=config.frames, scale=scale, seed=config.seed),
-                      chain=chain), i)
-             for scale, distance, _, _, chain in cells for i in range(config.frames)]
+                      chain=chain, **panel_effects(distance).get(name, {})), i)
+             for scale, distance, name, _, chain in cells for i in range(config.frames)]
     rows, results = [], []
     with ProcessPoolExecutor(max_workers=workers) as pool:
         for result in pool.map(_sample, tasks, chunksize=1):
@@ -128,6 +170,7 @@ def run_robustness(config: RobustnessConfig, workers: int | None = None) -> dict
             errors = [e for e, _, _ in results]
             row = {"scale": scale, "distance_m": distance, "effect": name, "group": group,
                    "chain": None if chain is None else chain.model_dump(mode="json"), "frames": config.frames,
+                   **_panel_fields(panel_effects(distance).get(name, {})),
                    **cell_summary(errors, [r for _, r, _ in results if r is not None])}
             if group == "motion":
                 row["mean_vs_timestamp_mm"] = summarize([e for _, _, e in results]).get("mean_mm")

@@ -35,14 +35,19 @@ from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, device_profiles
 from simulator.chain import ChainSpec
 from simulator.fixtures import fixture_meta
-from simulator.scene import SensorSpec, defocus_px, develop_emitters, hand_motion, readout_on_rows
+from simulator.panels import PanelSpec, panel_emitters
+from simulator.scene import (
+    LightSourceSpec, SensorSpec, defocus_px, develop_emitters, hand_motion, light_emitters, readout_on_rows,
+)
 from simulator.render import (
-    CameraPose, Emitter, ReadoutMotion, SensorModel, beacon_outline_px, exposure_polygons_px, render_frame,
+    CameraPose, Emitter, ReadoutMotion, SensorModel, beacon_outline_px, exposure_polygons_px, render_emitters,
+    render_frame,
 )
 
 PROFILE_ID = "xiaomi-mi8-front"
 MODES = {"vision": GravityMode.never, "gravity": GravityMode.always, "auto": GravityMode.auto}
 CHI2_2DOF_95 = 5.991  # a 2D Gaussian error lies inside d^T C^-1 d <= 5.991 with probability 95 %
+BENCH_PANEL_NITS = 1000.0  # the bench's panel is the scene default's 1000 cd/m2: light sources scale its level
 
 
 @dataclass(frozen=True)
@@ -60,6 +65,8 @@ class AccuracyConfig:
     # a phone's image chain (simulator.chain) instead of the renderer's 8-bit noise; ours only
     chain: ChainSpec | None = None
     black_level_dn: float = 4.0  # the chain's black level (SensorSpec's default; the background stays 8 DN)
+    panel: PanelSpec | None = None  # bezel, edge fall-off, glossy ceiling (simulator.panels); ours only
+    light_sources: tuple[LightSourceSpec, ...] = ()  # a second lamp, a window (map frame: the panel at z = distance)
 
 
 RENDERERS = ("ours", "blender")
@@ -112,13 +119,16 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         # the chain's noise from its own generator: every chain sees the same pose, PSF, level and gravity draws
         chain_rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 13])
         pixels = chain_frame(config.chain, beacon, camera, pose, width, height, sensor, config.black_level_dn,
-                             chain_rng, bench_motion(config, index, height))
+                             chain_rng, bench_motion(config, index, height), config.panel, config.light_sources)
     elif config.renderer == "blender":
+        if config.panel is not None or config.light_sources:
+            raise ValueError("a panel spec or light sources go with renderer 'ours' only")
         from simulator.blender import render_blender_frame  # bpy is an optional extra
 
         pixels = render_blender_frame(beacon, camera, pose, width, height, sensor, rng)
     elif config.renderer == "ours":
-        pixels = render_frame(beacon, camera, pose, width, height, sensor, rng)
+        pixels = render_emitters(bench_emitters(beacon, camera, pose, (width, height), sensor, None, config.panel,
+                                                config.light_sources), width, height, sensor, rng)
     else:
         raise ValueError(f"renderer must be one of {RENDERERS}, got {config.renderer!r}")
     meta = fixture_meta(camera, width, height, pose,
@@ -147,24 +157,38 @@ def position_seen_m(pose: CameraPose, motion: ReadoutMotion | None, camera, poin
 
 def chain_frame(chain: ChainSpec, beacon: Beacon, camera, pose: CameraPose, width: int, height: int,
                 sensor: SensorModel, black_level_dn: float, rng: np.random.Generator,
-                motion: ReadoutMotion | None = None) -> np.ndarray:
+                motion: ReadoutMotion | None = None, panel: PanelSpec | None = None,
+                light_sources: tuple[LightSourceSpec, ...] = ()) -> np.ndarray:
     """The panel's frame as `chain`'s phone makes it (`simulator.scene.develop_emitters`), the panel
     defocused by the thin lens's disc for its depth when the chain sets a focus distance, and with
     `motion` (read out over `height` rows) skewed and blurred as `simulator.scene.scene_emitters` draws it."""
     def emitters_for(cam, size) -> list[Emitter]:
-        defocus = defocus_px(chain, cam, pose, beacon.center_m)
-        if motion is None:
-            return [Emitter(beacon_outline_px(beacon, cam, pose), sensor.plateau_dn, defocus_px=defocus)]
-        distance_m = float(np.linalg.norm(np.subtract(beacon.center_m, pose.position_m)))
-        span_px = cam.fx * beacon.size_m / max(distance_m, 1e-3)
-        outline_m = beacon_to_world(beacon, dense_beacon_outline_m(beacon, span_px, 0.5))
-        skew_s = motion.row_time_s * max(height - 1, 1)
-        seen = exposure_polygons_px(outline_m, cam, pose, size[0], size[1], 0.5,
-                                    readout_on_rows(motion, skew_s, size[1]))
-        return [] if seen is None else [Emitter(seen[0], sensor.plateau_dn, defocus_px=defocus,
-                                                exposure_outlines_px=seen[1])]
+        return bench_emitters(beacon, cam, pose, size, sensor, chain, panel, light_sources, motion, height)
 
     return develop_emitters(chain, emitters_for, camera, width, height, sensor, black_level_dn, rng)
+
+
+def bench_emitters(beacon: Beacon, camera, pose: CameraPose, size: tuple[int, int], sensor: SensorModel,
+                   chain: ChainSpec | None = None, panel: PanelSpec | None = None,
+                   light_sources: tuple[LightSourceSpec, ...] = (), motion: ReadoutMotion | None = None,
+                   frame_rows: int | None = None) -> list[Emitter]:
+    """The bench's panel at `sensor.plateau_dn` as `panel` draws it, then `light_sources` (a light of L cd/m2
+    at L / BENCH_PANEL_NITS of the panel's level), in the pixels of `camera` at `size`; with `motion` (read
+    out over the frame's `frame_rows`) skewed and blurred as `simulator.scene.scene_emitters` draws it."""
+    on_rows = None if motion is None else readout_on_rows(motion, motion.row_time_s * max((frame_rows or 1) - 1, 1),
+                                                          size[1])
+
+    def outline_px(b: Beacon):
+        if on_rows is None:
+            return beacon_outline_px(b, camera, pose), ()
+        distance_m = float(np.linalg.norm(np.subtract(b.center_m, pose.position_m)))
+        outline_m = beacon_to_world(b, dense_beacon_outline_m(b, camera.fx * b.size_m / max(distance_m, 1e-3), 0.5))
+        return exposure_polygons_px(outline_m, camera, pose, size[0], size[1], 0.5, on_rows)
+
+    emitters = panel_emitters(beacon, panel, outline_px, sensor.plateau_dn,
+                              defocus_px=defocus_px(chain, camera, pose, beacon.center_m))
+    return emitters + light_emitters(light_sources, camera, pose, *size, sensor.plateau_dn / BENCH_PANEL_NITS, chain,
+                                     on_rows)
 
 
 def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:

@@ -11,7 +11,7 @@ from shared_schemas import DEMO_MAP_PATH, device_profiles
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
-                     "motion")
+                     "motion", "panel")
 
 
 def add_commands(commands) -> None:

@@ -29,6 +29,7 @@ from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, Groun
 from shared_schemas.models import Facing, Strict, Vec3
 from simulator.chain import ChainSpec, circle_of_confusion_px, develop
 from simulator.motion import MotionSpec, draw_velocities
+from simulator.panels import PanelSpec, panel_emitters
 from simulator.render import (
     CameraPose,
     Emitter,
@@ -84,6 +85,8 @@ class BeaconSpec(Strict):
     vlc_code: int | None = Field(default=None, ge=0, le=255,
                                  description="the code the panel blinks (normally its id); none = steady light")
     vlc_phase_s: float = Field(default=0.0, description="the message start on the LED's clock")
+    panel: PanelSpec | None = Field(
+        default=None, description="bezel, edge fall-off, glossy ceiling (simulator.panels); none: the bare panel")
 
     def beacon(self) -> Beacon:
         sizes = {name: getattr(self, name) for name in ("side_m", "width_m", "height_m", "diameter_m")}
@@ -342,8 +345,11 @@ class Scene(Strict):
         return BeaconMap(name=self.name, beacons=[b.beacon() for b in self.beacons])
 
     def to_json(self) -> str:
-        # without a chain the file is what it was before the chain existed
-        return self.model_dump_json(by_alias=True, indent=2, exclude={"chain"} if self.chain is None else None) + "\n"
+        # without a chain or panels the file is what it was before they existed
+        exclude = {"chain": True} if self.chain is None else {}
+        if all(b.panel is None for b in self.beacons):
+            exclude["beacons"] = {"__all__": {"panel"}}
+        return self.model_dump_json(by_alias=True, indent=2, exclude=exclude or None) + "\n"
 
 
 def load_scene(path: Path | str) -> Scene:
@@ -362,9 +368,8 @@ def find_scene(name_or_path: str) -> Scene:
     return load_scene(path)
 
 
-def _beacon_outline_m(spec: BeaconSpec, camera: CameraIntrinsics, distance_m: float) -> np.ndarray:
+def _beacon_outline_m(beacon: Beacon, camera: CameraIntrinsics, distance_m: float) -> np.ndarray:
     """The panel's outline in map coordinates, arcs fine enough for its size in the frame."""
-    beacon = spec.beacon()
     span_px = camera.fx * beacon.size_m / max(distance_m, 1e-3)
     return beacon_to_world(beacon, dense_beacon_outline_m(beacon, span_px, 0.5))
 
@@ -430,17 +435,27 @@ def scene_emitters(scene: Scene, pose: CameraPose, t_s: float = 0.0, motion: Rea
     emitters = []
     for spec in scene.beacons:
         distance_m = float(np.linalg.norm(np.subtract(spec.center_m, pose.position_m)))
-        seen = exposure_polygons_px(_beacon_outline_m(spec, camera, distance_m), camera, pose, width, height, 0.5,
-                                    motion)
-        if seen is not None:
-            emitters.append(Emitter(seen[0], spec.luminance_nits * per_nit, _row_gain(spec, scene.sensor, height, t_s),
-                                    defocus_px=defocus_px(scene.chain, camera, pose, spec.center_m),
-                                    exposure_outlines_px=seen[1]))
-    for light in scene.light_sources:
+
+        def outline_px(beacon: Beacon, distance_m: float = distance_m):
+            return exposure_polygons_px(_beacon_outline_m(beacon, camera, distance_m), camera, pose, width, height,
+                                        0.5, motion)
+
+        emitters += panel_emitters(spec.beacon(), spec.panel, outline_px, spec.luminance_nits * per_nit,
+                                   _row_gain(spec, scene.sensor, height, t_s),
+                                   defocus_px(scene.chain, camera, pose, spec.center_m))
+    return emitters + light_emitters(scene.light_sources, camera, pose, width, height, per_nit, scene.chain, motion)
+
+
+def light_emitters(lights: list[LightSourceSpec] | tuple[LightSourceSpec, ...], camera: CameraIntrinsics,
+                   pose: CameraPose, width: int, height: int, dn_per_nit: float, chain: ChainSpec | None = None,
+                   motion: ReadoutMotion | None = None) -> list[Emitter]:
+    """The light sources (a window, a lamp, a reflection) that the camera at `pose` can see, in its pixels."""
+    emitters = []
+    for light in lights:
         seen = exposure_polygons_px(light.outline_m(), camera, pose, width, height, motion=motion)
         if seen is not None:
-            emitters.append(Emitter(seen[0], light.luminance_nits * per_nit, None, light.blur_px,
-                                    defocus_px(scene.chain, camera, pose, light.outline_m()), seen[1]))
+            emitters.append(Emitter(seen[0], light.luminance_nits * dn_per_nit, None, light.blur_px,
+                                    defocus_px(chain, camera, pose, light.outline_m()), seen[1]))
     return emitters
 
 
