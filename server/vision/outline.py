@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from server.vision.binarize import Levels
-from server.vision.subpixel import level_crossings, profile_offsets, sample_profiles
+from server.vision.subpixel import level_crossings, pedestal_levels, profile_offsets, sample_profiles
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,10 @@ def outline_points(
     offsets = profile_offsets(rules.half_window_px, rules.step_px, np.float64)
     profiles = sample_profiles(window, contour, normal, offsets)
     shift = level_crossings(profiles, offsets, level)
+    edge_levels = pedestal_levels(profiles, offsets, shift, levels)
+    if edge_levels != levels:
+        level, background = edge_levels.threshold, edge_levels.background
+        shift = level_crossings(profiles, offsets, level)
     gap = level_crossings(profiles, offsets, (level + background) / 2) - shift
     found = np.isfinite(shift)
     return OutlinePoints(contour[found] + shift[found, None] * normal[found] + [x0, y0], _median(gap))

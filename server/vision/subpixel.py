@@ -323,6 +323,32 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
     return float(np.interp(0.5, ratio, sigmas))
 
 
+# Where a bare panel's blurred edge has fallen to the background: this band beyond its mid-level
+# crossing (px; a PSF of 1-1.5 px leaves ~0.5 % of the contrast there), and how far above the
+# background (share of the contrast) the light there must be to be a pedestal of its own.
+SURROUND_BAND_PX = (3.0, 5.0)
+SURROUND_RISE = 0.02
+
+
+def pedestal_levels(profiles: np.ndarray, offsets: np.ndarray, crossings: np.ndarray, levels: Levels) -> Levels:
+    """The levels an edge is to be read at: `levels`, or with the light just outside the panel as
+    the background when it stands out of the frame's. Light there (a lit bezel, a glossy
+    ceiling's sheen, the lens's halo) lies under the blurred edge as a pedestal, so the edge is a
+    step from it: its mid level, not the frame's, is where the edge crosses at the outline grown by
+    one distance, as the corners measure it.
+
+    profiles (n, m) across the edge at `offsets`, outward, with their mid-level `crossings` (n,).
+    """
+    beyond = offsets[None, :] - crossings[:, None]
+    band = (beyond >= SURROUND_BAND_PX[0]) & (beyond <= SURROUND_BAND_PX[1])
+    if not band.any():
+        return levels
+    surround = float(np.median(profiles[band]))
+    if surround - levels.background <= SURROUND_RISE * levels.contrast:
+        return levels
+    return Levels(background=surround, plateau=levels.plateau)
+
+
 def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float, fraction: float) -> np.ndarray | None:
     """Each side's median gap between its mid- and quarter-level crossings (4,), when they differ
     from their mean by more than `sigmas` standard errors (the spread of each side's own gaps,
@@ -412,6 +438,11 @@ def refine_edges(
     # straight from the 8-bit pixels (see `sample_profiles`)
     profiles = sample_profiles(roi, bases32, across32, offsets)
     crossings = level_crossings(profiles, offsets, levels.threshold)
+    warnings: list[str] = []
+    side_levels = pedestal_levels(profiles[: 4 * n_along], offsets, crossings[: 4 * n_along], levels)
+    if side_levels != levels:
+        levels = side_levels
+        crossings = level_crossings(profiles, offsets, levels.threshold)
     height, width = roi.shape
     ends = (bases32 + offsets[0] * across32, bases32 + offsets[-1] * across32)  # each profile's first, last sample
     inside = [
@@ -445,7 +476,6 @@ def refine_edges(
         side_points, side_valid.astype(float), normals, np.where(side_valid[..., None], sensor_points, 0.0)
     )
 
-    warnings: list[str] = []
     shift, curvature_px, uneven_px = 0.0, 0.0, 0.0
     side_shifts = np.zeros(4)
     if use_arcs:
