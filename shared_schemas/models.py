@@ -80,6 +80,8 @@ RotationRow = Annotated[list[RotationEntry], Field(min_length=3, max_length=3)]
 Rotation = Annotated[list[RotationRow], Field(min_length=3, max_length=3)]
 GravityComponent = Annotated[float, Field(ge=-MAX_GRAVITY, le=MAX_GRAVITY)]
 GravityVec = Annotated[list[GravityComponent], Field(min_length=3, max_length=3)]
+MAX_ANGULAR_RATE_DPS: Final = 4000.0  # phone gyroscopes read up to 2000 deg/s
+AngularRate = Annotated[float, Field(ge=-MAX_ANGULAR_RATE_DPS, le=MAX_ANGULAR_RATE_DPS)]
 
 
 def _require_finite(name: str, values: list[float]) -> None:
@@ -252,6 +254,11 @@ class FrameMeta(Open):
     timestamp_ns: int | None = Field(default=None, ge=0, lt=MAX_TIMESTAMP_NS)
     heading_deg: float | None = Field(default=None, ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)
     gravity_camera: GravityVec | None = None
+    angular_velocity_camera_dps: Annotated[list[AngularRate], Field(min_length=3, max_length=3)] | None = Field(
+        default=None,
+        description="the gyroscope's rotation rate in the camera frame, deg/s, over the frame's readout: "
+        "the server undoes the rolling shutter's skew of pose frames with it",
+    )
     ground_truth: GroundTruth | None = None
     crop: Crop | None = Field(default=None, description="present when the pixels are a window of a larger frame")
     tone_curve: ToneCurve | None = Field(
