@@ -40,6 +40,7 @@ from server.vision.binarize import Levels, blur, threshold
 from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
 from server.vision.outline import OutlineRules, outline_points
 from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
+from server.vision.readout import undo_readout_turn
 from server.vision.roi import FrameView, RoiRules, find_roi
 from server.vision.subpixel import EdgeRules, refine_edges
 from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
@@ -170,6 +171,7 @@ def locate_beacon(
         # whose small corner arcs RDP takes for sharp corners): its visible outline measures it.
         return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
     corners = edges.corners if edges is not None else _undistorted(quad.corners + origin, matrix, distortion)
+    corners = undo_readout_turn(corners, matrix, frame.meta)
     with timer.stage("center"):
         center = intersect_lines(corners[0], corners[2], corners[1], corners[3])
     if center is None:
@@ -307,7 +309,7 @@ def _locate_by_outline(
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
     with timer.stage("outline"):
         found = outline_points(frame.pixels, box, levels, options.outline_points)
-        points = _undistorted(found.points_px, matrix, distortion)
+        points = undo_readout_turn(_undistorted(found.points_px, matrix, distortion), matrix, frame.meta)
     gravity = _gravity(frame, options)
     with timer.stage("pose"):
         fit = fit_outline(
@@ -342,11 +344,10 @@ def locate_by_outlines(
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
     with timer.stage("outline"):
         found = [outline_points(frame.pixels, box, levels, options.outline_points) for _, box in panels]
-        points = [
-            (beacon, _undistorted(f.points_px, matrix, distortion))
-            for (beacon, _), f in zip(panels, found, strict=True)
-            if len(f.points_px)
-        ]
+        seen = [_undistorted(f.points_px, matrix, distortion) for f in found]
+        turned = undo_readout_turn(np.vstack(seen), matrix, frame.meta)  # one instant for all panels
+        split = np.split(turned, np.cumsum([len(p) for p in seen])[:-1])
+        points = [(beacon, p) for (beacon, _), p in zip(panels, split, strict=True) if len(p)]
     if not points:
         return timer.refusal(Refusal(FailureReason.beacon_cut_off, "no outline points of the cut panels in view"))
     gravity = _gravity(frame, options)

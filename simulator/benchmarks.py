@@ -113,13 +113,14 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         psf_sigma_px=rng.uniform(*config.psf_sigma_px),
         plateau_dn=255.0 * rng.uniform(*config.overexposure),
     )
+    motion = bench_motion(config, index, height)
     if config.chain is not None:
         if config.renderer != "ours":
             raise ValueError("a chain goes with renderer 'ours' only")
         # the chain's noise from its own generator: every chain sees the same pose, PSF, level and gravity draws
         chain_rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 13])
         pixels = chain_frame(config.chain, beacon, camera, pose, width, height, sensor, config.black_level_dn,
-                             chain_rng, bench_motion(config, index, height), config.panel, config.light_sources)
+                             chain_rng, motion, config.panel, config.light_sources)
     elif config.renderer == "blender":
         if config.panel is not None or config.light_sources:
             raise ValueError("a panel spec or light sources go with renderer 'ours' only")
@@ -133,7 +134,8 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         raise ValueError(f"renderer must be one of {RENDERERS}, got {config.renderer!r}")
     meta = fixture_meta(camera, width, height, pose,
                         gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng),
-                        tone_curve=config.chain.reported_tone_curve() if config.chain is not None else None)
+                        tone_curve=config.chain.reported_tone_curve() if config.chain is not None else None,
+                        **({} if motion is None else gyroscope_meta(motion, pose, config, index)))
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
 
 
@@ -144,6 +146,17 @@ def bench_motion(config: AccuracyConfig, index: int, rows: int) -> ReadoutMotion
         return None
     rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 14])
     return hand_motion(config.chain.motion, rng, BENCH_SENSOR, rows)
+
+
+GYRO_BIAS_DPS = 0.1  # a phone gyroscope's residual bias after Android's calibration, per axis (an assumption)
+
+
+def gyroscope_meta(motion: ReadoutMotion, pose: CameraPose, config: AccuracyConfig, index: int) -> dict:
+    """What the app reports of a moving frame: the readout's skew and the gyroscope's rate in the camera
+    frame (the drawn turn, R^T omega, with a bias of GYRO_BIAS_DPS per axis from the frame's own generator)."""
+    rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 15])
+    rate = pose.rotation_wc.T @ np.asarray(motion.angular_velocity_dps) + rng.normal(0.0, GYRO_BIAS_DPS, 3)
+    return {"rolling_shutter_skew_s": BENCH_SENSOR.rolling_shutter_skew_s, "angular_velocity_camera_dps": rate.tolist()}
 
 
 def position_seen_m(pose: CameraPose, motion: ReadoutMotion | None, camera, point_m) -> np.ndarray:
