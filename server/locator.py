@@ -9,7 +9,7 @@
 
 The API, the command line and the benchmarks call `locate`; nothing below imports this module.
 A known tone curve (`tone_curve: srgb`) is undone here, once, before any path reads the pixels
-(`server.ingest.linearized`).
+(`server.tone.linearized`).
 
 A numerical failure anywhere below (OpenCV, numpy, float overflow: numbers within the contract's
 ranges that still break the arithmetic) is a refusal with reason `numerical_failure`, logged with
@@ -26,11 +26,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from server.ingest import LumaFrame, linearized
+from server.ingest import LumaFrame
 from server.options import LocateOptions
 from server.outcomes import Refusal, located, refused
 from server.pipeline import locate_beacon
 from server.rooms import locate_in_room
+from server.tone import linearized
 from server.tracking.devices import Devices
 from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResult
 

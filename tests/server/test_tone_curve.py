@@ -15,12 +15,16 @@ import pytest
 
 from lumipose_client.crop import crop_frame
 from server.geometry import worst_sigma_2d_m
-from server.ingest import SRGB_TO_LINEAR_DN, LumaFrame, decode_frame, linearized
+from server.ingest import LumaFrame, decode_frame
 from server.locator import locate
+from server.tone import SRGB_TO_LINEAR_DN, linearized
+from server.tracking.devices import Devices
 from shared_schemas import Crop, FailureReason, ToneCurve
 from shared_schemas.windows import frame_levels
 from simulator.benchmarks import AccuracyConfig, accuracy_frame
 from simulator.chain import ChainSpec, IspSpec, srgb
+from tests.helpers import TWO_PANELS, two_panel_frame
+from tests.server.test_rooms import big_panels, room_id_frame
 
 SRGB = ChainSpec(isp=IspSpec(tone_curve="srgb"))
 
@@ -69,7 +73,10 @@ def test_linearized_maps_the_pixels_and_the_window_levels_and_says_linear():
     crop = Crop(x=0, y=0, full_width=frame.meta.width, full_height=frame.meta.height, levels_dn=[20.0, 187.5])
     windowed = LumaFrame(frame.pixels, frame.meta.model_copy(update={"crop": crop}), frame.camera)
     linear = linearized(windowed)
-    np.testing.assert_array_equal(linear.pixels, SRGB_TO_LINEAR_DN[frame.pixels])
+    whole = SRGB_TO_LINEAR_DN[frame.pixels]
+    lit = whole > 40  # the panel and its edges: mapped; what is not mapped is left zero
+    np.testing.assert_array_equal(linear.pixels[lit], whole[lit])
+    assert np.all(linear.pixels[linear.pixels != whole] == 0)
     assert not linear.pixels.flags.writeable
     assert linear.meta.tone_curve is ToneCurve.linear
     assert linear.meta.crop is not None and linear.meta.crop.levels_dn is not None
@@ -134,3 +141,48 @@ def test_a_frame_the_curve_leaves_too_uncertain_is_refused():
     before = locate(_unknown_curve(frame), beacon_map)  # the curve untold: 7.5 mm off, claiming 4.2 mm
     error = float(np.hypot(*np.subtract(before.position_m, pose.position_m)[:2]))
     assert before.ok and error > 1.5 * worst_sigma_2d_m(np.asarray(before.position_covariance_m2))
+
+
+def _encoded(frame: LumaFrame) -> LumaFrame:
+    """A linear render as the sRGB preset encodes it, reported `srgb`."""
+    pixels = np.rint(255.0 * srgb(frame.pixels / 255.0)).astype(np.uint8)
+    return LumaFrame(pixels, frame.meta.model_copy(update={"tone_curve": ToneCurve.srgb}), frame.camera)
+
+
+def _mapped_whole(frame: LumaFrame) -> LumaFrame:
+    """Every pixel through the table: what mapping only the region read must answer like."""
+    pixels = SRGB_TO_LINEAR_DN[frame.pixels]
+    return LumaFrame(pixels, frame.meta.model_copy(update={"tone_curve": ToneCurve.linear}), frame.camera)
+
+
+def _same_answer(a, b) -> None:
+    assert a.model_dump(exclude={"timing_ms"}) == b.model_dump(exclude={"timing_ms"})
+
+
+@pytest.mark.parametrize("distance_m, scale", [(1.0, 0.25), (2.0, 0.25), (2.0, 1.0)])
+def test_only_the_region_read_is_mapped_and_the_answer_is_the_whole_mapped_frames(distance_m, scale):
+    config = replace(AccuracyConfig(distance_m=distance_m, frames=80, scale=scale, seed=1), chain=SRGB)
+    frame, beacon_map, _ = accuracy_frame(config, 3)
+    linear = linearized(frame)
+    assert (linear.pixels == 0).mean() > 0.5  # most of the frame is neither the grid nor the region
+    result = locate(frame, beacon_map)
+    assert result.ok
+    _same_answer(result, locate(_mapped_whole(frame), beacon_map))
+
+
+def test_the_room_and_device_paths_read_the_mapped_region_too():
+    # a room's ID frame whose panels are named by their own stripes (server.rooms, server.vlc) ...
+    beacon_map = big_panels((0.7, 0.0))
+    room_frame = _encoded(room_id_frame(beacon_map))
+    room = locate(room_frame, beacon_map)
+    assert room.ok and room.vlc is not None and room.vlc.confident, room
+    _same_answer(room, locate(_mapped_whole(room_frame), beacon_map))
+    # ... and a device's session, which keeps a burst's ID frames for its pose frame (server.tracking)
+    burst = [two_panel_frame(level_dn=200.0, exposure_s=1 / 8000, seed=k, t_s=0.0189 * k) for k in range(4)]
+    frames = [_encoded(frame) for frame in (*burst, two_panel_frame(t_s=0.1))]
+    answers = []
+    for sent in (frames, [_mapped_whole(frame) for frame in frames]):
+        devices = Devices()
+        answers.append([locate(frame, TWO_PANELS, device_id="phone", devices=devices) for frame in sent][-1])
+    assert answers[0].ok and answers[0].vlc is not None and answers[0].vlc.confident, answers[0]
+    _same_answer(*answers)
