@@ -113,8 +113,8 @@ def test_a_window_of_an_srgb_frame_gives_the_whole_frames_fix():
     meta, data = crop_frame(np.asarray(frame.pixels), frame.meta)
     assert meta.crop is not None and meta.crop.levels_dn is not None and meta.tone_curve is ToneCurve.srgb
     window = decode_frame(data, meta)
-    levels = linearized(window).meta.crop.levels_dn  # type: ignore[union-attr]
-    assert levels == list(frame_levels(linearized(frame).pixels))  # [50, 255] encoded: [8, 255] in light
+    crop = linearized(window).meta.crop
+    assert crop is not None and crop.levels_dn == list(frame_levels(SRGB_TO_LINEAR_DN[frame.pixels]))  # 50 -> 8
     whole, cut = locate(frame, beacon_map), locate(window, beacon_map)
     assert whole.ok and cut.ok and cut.warnings == whole.warnings
     # as a linear frame's window: 1-3 um apart (the same arithmetic in the window's coordinates)
