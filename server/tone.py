@@ -61,7 +61,12 @@ def linearized(frame: LumaFrame) -> LumaFrame:
 
 
 def _mapped_where_read(pixels: np.ndarray, meta: FrameMeta) -> np.ndarray:
-    """`pixels` through the table on the coarse grid and in the region the stages read; zero elsewhere."""
+    """`pixels` through the table on the coarse grid and in the region the stages read; zero elsewhere.
+
+    The grid is the contract's (`CoarseRules()`: the short side's 480 px, as clients measure windows'
+    levels on it), which the one-panel and room stages read by default; rules with another grid
+    would read zeros (tests/server/test_tone_curve.py compares every path with the whole plane mapped).
+    """
     view = FrameView.of(meta)
     step, origin = view.grid(pixels.shape, CoarseRules())
     height, width = pixels.shape
