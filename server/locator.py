@@ -8,6 +8,8 @@
   its track (`server.tracking.devices`).
 
 The API, the command line and the benchmarks call `locate`; nothing below imports this module.
+A known tone curve (`tone_curve: srgb`) is undone here, once, before any path reads the pixels
+(`server.tone.linearized`).
 
 A numerical failure anywhere below (OpenCV, numpy, float overflow: numbers within the contract's
 ranges that still break the arithmetic) is a refusal with reason `numerical_failure`, logged with
@@ -29,6 +31,7 @@ from server.options import LocateOptions
 from server.outcomes import Refusal, located, refused
 from server.pipeline import locate_beacon
 from server.rooms import locate_in_room
+from server.tone import linearized
 from server.tracking.devices import Devices
 from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResult
 
@@ -97,6 +100,10 @@ def _dispatch(
     devices: Devices | None,
 ) -> LocateResult:
     options = options.for_map(beacon_map)
+    # Every path below (one panel, rooms, device sessions with their ID frames) reads light: the
+    # stripe decoder's model (a row's mean = gain x the code's box average + offset) and the
+    # flattening (a row divided by its gain) are linear in light, as the clipped-edge model is.
+    frame = linearized(frame)
     if beacon_id is not None:
         beacon = beacon_map.beacon(beacon_id)
         if beacon is None:

@@ -202,6 +202,7 @@ class ToneCurve(StrEnum):
     """The tone curve the phone applied to the frame (Camera2 TONEMAP_MODE)."""
 
     linear = "linear"  # the linear contrast curve the app asked for: the response the clipped-edge model assumes
+    srgb = "srgb"  # the sRGB preset curve (TONEMAP_MODE_PRESET_CURVE / TONEMAP_PRESET_CURVE_SRGB): the server undoes it
     device = "device"  # the device's own tone curve (the app's request was not applied or not possible)
 
 
@@ -263,8 +264,9 @@ class FrameMeta(Open):
     crop: Crop | None = Field(default=None, description="present when the pixels are a window of a larger frame")
     tone_curve: ToneCurve | None = Field(
         default=None,
-        description="'linear' when the phone applied the linear contrast curve it asked for, 'device' when the "
-        "device's own tone curve was used; absent means unknown (recorded, not used by the server)",
+        description="'linear' when the phone applied the linear contrast curve it asked for, 'srgb' when it applied "
+        "the sRGB preset curve (the server undoes it before measuring), 'device' when the device's own tone curve was "
+        "used (named in the warnings, widens the uncertainty); absent means unknown",
     )
     frame_kind: FrameKind = Field(
         default=FrameKind.pose,

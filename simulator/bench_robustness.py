@@ -69,7 +69,9 @@ def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
         "NR bilateral": ("noise", _isp(noise_reduction="bilateral")),
         "sharpen 0.5": ("sharpen", _isp(sharpen_amount=0.5)),
         "sharpen 1.0": ("sharpen", _isp(sharpen_amount=1.0)),
-        "tone sRGB": ("tone", _isp(tone_curve="srgb")),
+        # the preset the app can ask for, reported `srgb` and undone by the server; the S-curve, like
+        # "ISP on", is a device's own curve, reported `device`: the cell of a curve nobody can undo
+        "tone sRGB (preset)": ("tone", _isp(tone_curve="srgb")),
         "tone S-curve": ("tone", _isp(tone_curve="s_curve")),
         "JPEG 90": ("jpeg", ChainSpec(jpeg_quality=90)),
         "JPEG 75": ("jpeg", ChainSpec(jpeg_quality=75)),

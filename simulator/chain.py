@@ -100,8 +100,9 @@ class ChainSpec(Strict):
     motion: MotionSpec = Field(default=MotionSpec(), description="the phone moving during the frame (simulator.motion)")
 
     def reported_tone_curve(self) -> ToneCurve:
-        """What the app reports in the frame's `tone_curve`: `linear` when its request held, else the device's."""
-        return ToneCurve.linear if self.isp.tone_curve == "linear" else ToneCurve.device
+        """What the app reports in the frame's `tone_curve`: `linear` when its contrast curve held, `srgb` for
+        the sRGB preset (its fallback, which the server undoes), `device` for the S-curve (a device's own)."""
+        return {"linear": ToneCurve.linear, "srgb": ToneCurve.srgb}.get(self.isp.tone_curve, ToneCurve.device)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ def test_the_bench_reports_every_field_and_an_effect_differs_from_the_baseline()
     config = RobustnessConfig(distances_m=(1.0,), scales=(0.1,), frames=2, effects=("tone",))
     report = run_robustness(config, workers=1)
     names = [c["effect"] for c in report["cells"]]
-    assert names == ["no chain", "ISP off", "tone sRGB", "tone S-curve", "ISP on"]
+    assert names == ["no chain", "ISP off", "tone sRGB (preset)", "tone S-curve", "ISP on"]
     for cell in report["cells"]:
         assert {"coverage_pct", "wrong_fixes", "refusals", "scale", "distance_m", "frames"} <= set(cell)
         if cell["coverage_pct"] > 0:
@@ -34,6 +34,7 @@ def test_the_bench_reports_every_field_and_an_effect_differs_from_the_baseline()
     cells = {c["effect"]: c for c in report["cells"]}
     assert cells["ISP off"]["mean_over_isp_off"] == 1.0
     assert cells["tone S-curve"].get("mean_mm") != cells["ISP off"].get("mean_mm")
-    assert [t["met"] is None for t in report["targets"]] == [True, True, True, False, False, False]  # no quarter resolution
+    # no quarter resolution
+    assert [t["met"] is None for t in report["targets"]] == [True, True, True, False, False, False]
     text = format_robustness(report)
     assert "tone S-curve" in text and "targets" in text

@@ -321,6 +321,10 @@ final class Camera2Controller {
         if (curve != null) {
             b.set(CaptureRequest.TONEMAP_MODE, CameraMetadata.TONEMAP_MODE_CONTRAST_CURVE);
             b.set(CaptureRequest.TONEMAP_CURVE, new TonemapCurve(curve, curve, curve));
+        } else if (spec.srgbPreset) {
+            // A known curve where no contrast curve is offered: the frames say "srgb" and the server undoes it.
+            b.set(CaptureRequest.TONEMAP_MODE, CameraMetadata.TONEMAP_MODE_PRESET_CURVE);
+            b.set(CaptureRequest.TONEMAP_PRESET_CURVE, CameraMetadata.TONEMAP_PRESET_CURVE_SRGB);
         }
         if (spec.edgeOff) {
             b.set(CaptureRequest.EDGE_MODE, CameraMetadata.EDGE_MODE_OFF);

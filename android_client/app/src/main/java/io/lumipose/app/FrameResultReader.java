@@ -34,6 +34,8 @@ final class FrameResultReader {
         b.oisMode(ois == null ? null : Camera2Names.oisMode(ois));
         Integer tonemap = r.get(CaptureResult.TONEMAP_MODE);
         b.tonemapMode(tonemap == null ? null : Camera2Names.tonemapMode(tonemap));
+        Integer preset = r.get(CaptureResult.TONEMAP_PRESET_CURVE);
+        b.tonemapPresetCurve(preset == null ? null : Camera2Names.tonemapPresetCurve(preset));
         Integer correction = r.get(CaptureResult.DISTORTION_CORRECTION_MODE);
         b.distortionCorrectionMode(correction == null ? null : Camera2Names.distortionCorrectionMode(correction));
         if (Camera2Keys.available()) {

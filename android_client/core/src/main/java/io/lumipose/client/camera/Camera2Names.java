@@ -18,6 +18,7 @@ public final class Camera2Names {
     private static final String[] FOCUS_CALIBRATION = {"uncalibrated", "approximate", "calibrated"};
     private static final String[] OIS = {"off", "on"};
     private static final String[] TONEMAP = {"contrast_curve", "fast", "high_quality", "gamma_value", "preset_curve"};
+    private static final String[] TONEMAP_PRESET = {"srgb", "rec709"};
     private static final String[] EDGE = {"off", "fast", "high_quality", "zero_shutter_lag"};
     private static final String[] NOISE_REDUCTION = {"off", "fast", "high_quality", "minimal", "zero_shutter_lag"};
     private static final String[] DISTORTION_CORRECTION = {"off", "fast", "high_quality"};
@@ -48,6 +49,11 @@ public final class Camera2Names {
 
     public static String tonemapMode(int v) {
         return name(TONEMAP, v);
+    }
+
+    /** {@code TONEMAP_PRESET_CURVE}: "srgb", "rec709". */
+    public static String tonemapPresetCurve(int v) {
+        return name(TONEMAP_PRESET, v);
     }
 
     public static String edgeMode(int v) {

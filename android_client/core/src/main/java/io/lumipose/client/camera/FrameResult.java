@@ -27,8 +27,10 @@ public final class FrameResult {
     public final Double zoomRatio;
     /** "off" / "on". */
     public final String oisMode;
-    /** "contrast_curve", "fast", ... */
+    /** "contrast_curve", "fast", "preset_curve", ... */
     public final String tonemapMode;
+    /** {@code TONEMAP_PRESET_CURVE}, "srgb" or "rec709"; meaningful when {@link #tonemapMode} is "preset_curve". */
+    public final String tonemapPresetCurve;
     public final Double focusDistanceDiopters;
     /** "none", "90", ... or null (before API 30). */
     public final String rotateAndCrop;
@@ -53,6 +55,7 @@ public final class FrameResult {
         zoomRatio = b.zoomRatio;
         oisMode = b.oisMode;
         tonemapMode = b.tonemapMode;
+        tonemapPresetCurve = b.tonemapPresetCurve;
         focusDistanceDiopters = b.focusDistanceDiopters;
         rotateAndCrop = b.rotateAndCrop;
         distortionCorrectionMode = b.distortionCorrectionMode;
@@ -95,6 +98,7 @@ public final class FrameResult {
         Json.put(o, "control_zoom_ratio", zoomRatio);
         Json.put(o, "lens_optical_stabilization_mode", oisMode);
         Json.put(o, "tonemap_mode", tonemapMode);
+        Json.put(o, "tonemap_preset_curve", tonemapPresetCurve);
         Json.put(o, "lens_focus_distance_diopters", focusDistanceDiopters);
         Json.put(o, "scaler_rotate_and_crop", rotateAndCrop);
         Json.put(o, "distortion_correction_mode", distortionCorrectionMode);
@@ -125,6 +129,7 @@ public final class FrameResult {
                 .zoomRatio(Json.optDouble(o, "control_zoom_ratio", "control_zoom_ratio"))
                 .oisMode(Json.optString(o, "lens_optical_stabilization_mode", "lens_optical_stabilization_mode"))
                 .tonemapMode(Json.optString(o, "tonemap_mode", "tonemap_mode"))
+                .tonemapPresetCurve(Json.optString(o, "tonemap_preset_curve", "tonemap_preset_curve"))
                 .focusDistanceDiopters(Json.optDouble(o, "lens_focus_distance_diopters", "lens_focus_distance_diopters"))
                 .rotateAndCrop(Json.optString(o, "scaler_rotate_and_crop", "scaler_rotate_and_crop"))
                 .distortionCorrectionMode(Json.optString(o, "distortion_correction_mode", "distortion_correction_mode"));
@@ -146,6 +151,7 @@ public final class FrameResult {
         private Double zoomRatio;
         private String oisMode;
         private String tonemapMode;
+        private String tonemapPresetCurve;
         private Double focusDistanceDiopters;
         private String rotateAndCrop;
         private String distortionCorrectionMode;
@@ -216,6 +222,11 @@ public final class FrameResult {
 
         public Builder tonemapMode(String v) {
             tonemapMode = v;
+            return this;
+        }
+
+        public Builder tonemapPresetCurve(String v) {
+            tonemapPresetCurve = v;
             return this;
         }
 

@@ -76,7 +76,11 @@ public final class CapturePlan {
             notes.add("focus distance uncalibrated: the ceiling may be out of focus");
         }
         float[] toneCurve = facts.tonemapModes.contains("contrast_curve") ? new float[] {0f, 0f, 1f, 1f} : null;
-        if (toneCurve == null) {
+        // Without a contrast curve, a known curve is the next best: the server undoes the sRGB preset exactly.
+        boolean srgbPreset = toneCurve == null && facts.tonemapModes.contains("preset_curve");
+        if (srgbPreset) {
+            notes.add("no linear tone curve: the sRGB preset curve instead, which the server undoes");
+        } else if (toneCurve == null) {
             notes.add("no linear tone curve: the server assumes one");
         }
         if (!facts.oisModes.isEmpty() && !facts.oisModes.contains("off")) {
@@ -87,7 +91,7 @@ public final class CapturePlan {
                     + "settings reach frames late, so each frame is taken as its capture result shows");
         }
         RequestSpec pose = new RequestSpec(RequestSpec.POSE, poseSettings.exposureNs, poseSettings.sensitivityIso,
-                poseSettings.frameDurationNs, focus, crop, facts.oisModes.contains("off"), toneCurve,
+                poseSettings.frameDurationNs, focus, crop, facts.oisModes.contains("off"), toneCurve, srgbPreset,
                 facts.rotateAndCropModes != null && facts.rotateAndCropModes.contains("none"),
                 facts.edgeModes.contains("off"), facts.noiseReductionModes.contains("off"), correctionOff);
 

@@ -162,9 +162,16 @@ public final class FrameDescriber {
         return Math.abs(reported - asked) <= TOLERANCE * asked;
     }
 
-    /** "linear" only when the device reports the contrast curve the plan asked for. */
-    private static String toneCurve(FrameResult result, RequestSpec spec) {
-        return spec.linearToneCurve() && "contrast_curve".equals(result.tonemapMode) ? "linear" : "device";
+    /**
+     * "linear" only when the device reports the contrast curve the plan asked for; "srgb" when it reports the sRGB
+     * preset (a known curve, whoever asked for it); else "device".
+     */
+    static String toneCurve(FrameResult result, RequestSpec spec) {
+        if (spec.linearToneCurve() && "contrast_curve".equals(result.tonemapMode)) {
+            return "linear";
+        }
+        boolean srgb = "preset_curve".equals(result.tonemapMode) && "srgb".equals(result.tonemapPresetCurve);
+        return srgb ? "srgb" : "device";
     }
 
     private static boolean near(ArrayRect a, ArrayRect b) {

@@ -26,14 +26,20 @@ public final class RequestSpec {
     public final boolean oisOff;
     /** Linear {@code TONEMAP_CURVE} points [in, out, in, out, ...]; null without CONTRAST_CURVE mode. */
     private final float[] toneCurve;
+    /**
+     * {@code TONEMAP_MODE_PRESET_CURVE} with {@code TONEMAP_PRESET_CURVE_SRGB}, the fallback where there is no
+     * contrast curve: a known curve, which the server undoes. Never together with {@link #toneCurve()}.
+     */
+    public final boolean srgbPreset;
     public final boolean rotateAndCropNone;
     public final boolean edgeOff;
     public final boolean noiseReductionOff;
     public final boolean distortionCorrectionOff;
 
     public RequestSpec(String kind, long exposureNs, Integer sensitivityIso, long frameDurationNs, Float focusDiopters,
-                       ArrayRect cropRegion, boolean oisOff, float[] toneCurve, boolean rotateAndCropNone,
-                       boolean edgeOff, boolean noiseReductionOff, boolean distortionCorrectionOff) {
+                       ArrayRect cropRegion, boolean oisOff, float[] toneCurve, boolean srgbPreset,
+                       boolean rotateAndCropNone, boolean edgeOff, boolean noiseReductionOff,
+                       boolean distortionCorrectionOff) {
         if (!POSE.equals(kind) && !ID.equals(kind)) {
             throw new IllegalArgumentException("kind must be \"pose\" or \"id\", got " + kind);
         }
@@ -47,6 +53,9 @@ public final class RequestSpec {
         if (toneCurve != null && (toneCurve.length < 4 || toneCurve.length % 2 != 0)) {
             throw new IllegalArgumentException("a tone curve needs at least two (in, out) points");
         }
+        if (toneCurve != null && srgbPreset) {
+            throw new IllegalArgumentException("one tone map mode: a contrast curve or the sRGB preset, not both");
+        }
         this.kind = kind;
         this.exposureNs = exposureNs;
         this.sensitivityIso = sensitivityIso;
@@ -55,6 +64,7 @@ public final class RequestSpec {
         this.cropRegion = cropRegion;
         this.oisOff = oisOff;
         this.toneCurve = toneCurve == null ? null : toneCurve.clone();
+        this.srgbPreset = srgbPreset;
         this.rotateAndCropNone = rotateAndCropNone;
         this.edgeOff = edgeOff;
         this.noiseReductionOff = noiseReductionOff;
@@ -72,6 +82,6 @@ public final class RequestSpec {
     /** The same request with another kind, exposure, ISO and frame duration (the ID frames share the rest). */
     public RequestSpec withExposure(String kind, long exposureNs, Integer sensitivityIso, long frameDurationNs) {
         return new RequestSpec(kind, exposureNs, sensitivityIso, frameDurationNs, focusDiopters, cropRegion, oisOff,
-                toneCurve, rotateAndCropNone, edgeOff, noiseReductionOff, distortionCorrectionOff);
+                toneCurve, srgbPreset, rotateAndCropNone, edgeOff, noiseReductionOff, distortionCorrectionOff);
     }
 }

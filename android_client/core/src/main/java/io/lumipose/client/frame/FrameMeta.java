@@ -24,6 +24,7 @@ public final class FrameMeta {
             "gravity_camera", "frame_kind", "crop", "tone_curve"));
     private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
             "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
+    private static final Set<String> TONE_CURVES = new HashSet<String>(Arrays.asList("linear", "srgb", "device"));
 
     public final String format;
     public final int width;
@@ -43,7 +44,7 @@ public final class FrameMeta {
     public final String frameKind;
     /** Where these pixels lie in the full frame the camera describes; null for a whole frame. */
     public final Crop crop;
-    /** "linear" or "device": the tone curve the camera applied; null = not stated. */
+    /** "linear", "srgb" (the preset, which the server undoes) or "device": the curve applied; null = not stated. */
     public final String toneCurve;
     private final String extrasJson;
     private final String cameraExtrasJson;
@@ -74,8 +75,9 @@ public final class FrameMeta {
         if (b.frameKind != null && !"pose".equals(b.frameKind) && !"id".equals(b.frameKind)) {
             throw new ContractException("frame_kind", "must be 'pose' or 'id', got '" + b.frameKind + "'");
         }
-        if (b.toneCurve != null && !"linear".equals(b.toneCurve) && !"device".equals(b.toneCurve)) {
-            throw new ContractException("tone_curve", "must be 'linear' or 'device', got '" + b.toneCurve + "'");
+        if (b.toneCurve != null && !TONE_CURVES.contains(b.toneCurve)) {
+            throw new ContractException("tone_curve",
+                    "must be 'linear', 'srgb' or 'device', got '" + b.toneCurve + "'");
         }
         if (b.gravityCamera != null && b.gravityCamera.length != 3) {
             throw new ContractException("gravity_camera", "must hold 3 numbers");
@@ -354,7 +356,7 @@ public final class FrameMeta {
             return this;
         }
 
-        /** "linear" or "device": the tone curve the camera applied. */
+        /** "linear", "srgb" or "device": the tone curve the camera applied. */
         public Builder toneCurve(String v) {
             toneCurve = v;
             return this;

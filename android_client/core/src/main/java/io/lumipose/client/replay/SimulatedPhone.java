@@ -230,7 +230,11 @@ public final class SimulatedPhone {
         ArrayRect crop = applied.cropRegion;
         Json.put(o, "scaler_crop_region", ints(crop.left, crop.top, crop.width, crop.height));
         Json.put(o, "lens_optical_stabilization_mode", "off");  // the only mode this camera has
-        Json.put(o, "tonemap_mode", applied.linearToneCurve() ? "contrast_curve" : "fast");
+        Json.put(o, "tonemap_mode", applied.linearToneCurve() ? "contrast_curve" : applied.srgbPreset ? "preset_curve"
+                : "fast");
+        if (applied.srgbPreset) {
+            Json.put(o, "tonemap_preset_curve", "srgb");
+        }
         Json.put(o, "lens_focus_distance_diopters", 0.0);  // fixed focus
         Json.put(o, "distortion_correction_mode", "off");
         return o;

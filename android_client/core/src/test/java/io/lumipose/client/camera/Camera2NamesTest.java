@@ -17,6 +17,9 @@ class Camera2NamesTest {
         assertEquals("realtime", Camera2Names.timestampSource(1));
         assertEquals("uncalibrated", Camera2Names.focusDistanceCalibration(0));
         assertEquals("contrast_curve", Camera2Names.tonemapMode(0));
+        assertEquals("preset_curve", Camera2Names.tonemapMode(4));
+        assertEquals("srgb", Camera2Names.tonemapPresetCurve(0)); // TONEMAP_PRESET_CURVE_SRGB
+        assertEquals("rec709", Camera2Names.tonemapPresetCurve(1));
         assertEquals("minimal", Camera2Names.noiseReductionMode(3));
         assertEquals("none", Camera2Names.rotateAndCrop(0));
         assertEquals(CameraFacts.SYNC_UNKNOWN, Camera2Names.syncMaxLatency(-1));

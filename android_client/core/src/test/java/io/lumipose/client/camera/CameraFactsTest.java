@@ -18,7 +18,8 @@ import io.lumipose.client.sensor.LensFacing;
 class CameraFactsTest {
     @Test
     void everyFixtureSurvivesARoundTrip() {
-        for (String name : Arrays.asList(Devices.LOGICAL, Devices.PRE_CORRECTION, Devices.FRONT_270)) {
+        for (String name : Arrays.asList(Devices.LOGICAL, Devices.PRE_CORRECTION, Devices.FRONT_270,
+                Devices.PRESET_CURVE_ONLY)) {
             CameraFacts facts = Devices.load(name);
             JSONObject once = facts.toJson();
             assertEquals(once.toString(), CameraFacts.fromJson(once).toJson().toString(), name);

@@ -16,6 +16,8 @@ public final class Devices {
     public static final String PRE_CORRECTION = "pre_correction_larger";
     /** Front camera at sensor orientation 270 (Mi 8 front sized), no timestamps or sync guarantees. */
     public static final String FRONT_270 = "front_270";
+    /** The logical camera without a contrast curve: the sRGB preset (and gamma) only. */
+    public static final String PRESET_CURVE_ONLY = "preset_curve_only";
 
     private Devices() {
     }

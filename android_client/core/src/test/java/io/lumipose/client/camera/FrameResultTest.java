@@ -17,12 +17,14 @@ class FrameResultTest {
                 .frameDurationNs(18_900_000L).rollingShutterSkewNs(30_000_000L).focalLengthMm(4.8)
                 .lensIntrinsicCalibration(new double[] {3000, 3000, 2000, 1500, 0})
                 .lensDistortion(new double[] {0.1, 0, 0, 0, 0}).lensRadialDistortion(new double[] {1, 0, 0, 0, 0, 0})
-                .cropRegion(new ArrayRect(0, 0, 4000, 3000)).zoomRatio(1.0).oisMode("off").tonemapMode("contrast_curve")
-                .focusDistanceDiopters(0.5).rotateAndCrop("none").distortionCorrectionMode("off").build();
+                .cropRegion(new ArrayRect(0, 0, 4000, 3000)).zoomRatio(1.0).oisMode("off").tonemapMode("preset_curve")
+                .tonemapPresetCurve("srgb").focusDistanceDiopters(0.5).rotateAndCrop("none")
+                .distortionCorrectionMode("off").build();
         JSONObject o = r.toJson();
         assertEquals(123_456_789_012L, o.getLong("sensor_timestamp_ns"));
         assertEquals(800, o.getInt("sensor_sensitivity"));
         assertEquals("[0,0,4000,3000]", o.getJSONArray("scaler_crop_region").toString());
+        assertEquals("srgb", o.getString("tonemap_preset_curve"));
         FrameResult back = FrameResult.fromJson(o);
         assertEquals(o.toString(), back.toJson().toString());
         assertArrayEquals(new double[] {3000, 3000, 2000, 1500, 0}, back.lensIntrinsicCalibration(), 0);

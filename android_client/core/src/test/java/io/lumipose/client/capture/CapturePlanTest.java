@@ -68,6 +68,7 @@ class CapturePlanTest {
         assertEquals(new ArrayRect(0, 0, 4000, 3000), pose.cropRegion);
         assertTrue(pose.oisOff);
         assertArrayEquals(new float[] {0, 0, 1, 1}, pose.toneCurve(), 0f);
+        assertFalse(pose.srgbPreset, "the contrast curve where there is one");
         assertTrue(pose.rotateAndCropNone);
         assertTrue(pose.edgeOff);
         assertTrue(pose.noiseReductionOff);
@@ -93,12 +94,31 @@ class CapturePlanTest {
         CapturePlan plan = CapturePlan.plan(Devices.load(Devices.FRONT_270),
                 new CaptureOptions(8_400_000L, 125_000L, 4, 2.0, 1_300_000L));
         assertNull(plan.pose.toneCurve());
+        assertFalse(plan.pose.srgbPreset, "no preset curve on this camera either");
         assertNull(plan.pose.focusDiopters, "fixed focus");
         assertFalse(plan.pose.edgeOff);
         assertEquals(new ArrayRect(0, 0, 5184, 3880), plan.pose.cropRegion);
         assertTrue(plan.notes.contains("no linear tone curve: the server assumes one"), plan.notes.toString());
         assertTrue(plan.notes.stream().anyMatch(n -> n.startsWith("SYNC_MAX_LATENCY unknown, not per-frame control")),
                 plan.notes.toString());
+    }
+
+    /** Without a contrast curve the sRGB preset: a known curve, which the server undoes (tone_curve "srgb"). */
+    @Test
+    void withoutAContrastCurveTheSrgbPresetCurve() throws Exception {
+        CapturePlan plan = CapturePlan.plan(Devices.load(Devices.PRESET_CURVE_ONLY), options(4));
+        for (RequestSpec spec : plan.burst()) {
+            assertNull(spec.toneCurve(), spec.kind);
+            assertTrue(spec.srgbPreset, spec.kind);
+        }
+        assertTrue(plan.notes.contains("no linear tone curve: the sRGB preset curve instead, which the server undoes"),
+                plan.notes.toString());
+        assertFalse(plan.notes.contains("no linear tone curve: the server assumes one"), plan.notes.toString());
+        RequestSpec pose = plan.pose;
+        assertThrows(IllegalArgumentException.class, () -> new RequestSpec(pose.kind, pose.exposureNs,
+                pose.sensitivityIso, pose.frameDurationNs, pose.focusDiopters, pose.cropRegion, pose.oisOff,
+                new float[] {0, 0, 1, 1}, true, pose.rotateAndCropNone, pose.edgeOff, pose.noiseReductionOff,
+                pose.distortionCorrectionOff));
     }
 
     /** Issue 12 item 9: without rolling-shutter skew the stripes have no row times: ID capture off, said. */

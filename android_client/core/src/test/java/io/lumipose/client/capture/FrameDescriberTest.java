@@ -127,6 +127,27 @@ class FrameDescriberTest {
         assertEquals("device", describer.describe(deviceCurve, null, null).meta.toJson().getString("tone_curve"));
         FrameResult unreported = asAsked(plan.pose, 66L).tonemapMode(null).build();
         assertEquals("device", describer.describe(unreported, null, null).meta.toJson().getString("tone_curve"));
+        // the preset's curve is known whoever asked for it; another preset is the device's to the server
+        FrameResult srgb = asAsked(plan.pose, 69L).tonemapMode("preset_curve").tonemapPresetCurve("srgb").build();
+        assertEquals("srgb", describer.describe(srgb, null, null).meta.toJson().getString("tone_curve"));
+        FrameResult rec709 = asAsked(plan.pose, 70L).tonemapMode("preset_curve").tonemapPresetCurve("rec709").build();
+        assertEquals("device", describer.describe(rec709, null, null).meta.toJson().getString("tone_curve"));
+    }
+
+    /** A device with the preset curve only: the plan asks for sRGB and the frames that got it say "srgb". */
+    @Test
+    void aPresetCurveDeviceSaysSrgbWhenTheResultShowsIt() {
+        CameraFacts presetOnly = Devices.load(Devices.PRESET_CURVE_ONLY);
+        CapturePlan presetPlan = plan(presetOnly, 4);
+        FrameDescriber d = new FrameDescriber(presetOnly, presetPlan, null);
+        for (RequestSpec spec : presetPlan.burst()) {
+            FrameResult applied = asAsked(spec, 71L).tonemapMode("preset_curve").tonemapPresetCurve("srgb").build();
+            FrameDescriber.Described described = d.describe(applied, null, null);
+            assertEquals(spec.kind, described.kind);
+            assertEquals("srgb", described.meta.toJson().getString("tone_curve"), spec.kind);
+            FrameResult ignored = asAsked(spec, 72L).tonemapMode("fast").build(); // the request not honoured
+            assertEquals("device", d.describe(ignored, null, null).meta.toJson().getString("tone_curve"), spec.kind);
+        }
     }
 
     @Test

@@ -113,7 +113,8 @@ class FrameMetaTest {
         ContractException e = assertThrows(ContractException.class,
                 () -> FrameMeta.builder(400, 300).camera(K).crop(500, 0, 640, 480).build());
         assertTrue(e.getMessage().contains("does not fit"), e.getMessage());
-        assertThrows(ContractException.class, () -> FrameMeta.builder(640, 480).camera(K).toneCurve("srgb").build());
+        assertThrows(ContractException.class, () -> FrameMeta.builder(640, 480).camera(K).toneCurve("rec709").build());
+        assertEquals("srgb", FrameMeta.builder(640, 480).camera(K).toneCurve("srgb").build().toneCurve);
         FrameMeta built = FrameMeta.builder(400, 300).camera(K).crop(200, 100, 640, 480).build();
         assertEquals(640, built.fullWidth());
     }
