@@ -138,9 +138,8 @@ def test_a_frame_the_curve_leaves_too_uncertain_is_refused():
     result = locate(frame, beacon_map)
     assert not result.ok and result.reason is FailureReason.pose_uncertain, result
     assert any("tone curve" in w for w in result.warnings)
-    before = locate(_unknown_curve(frame), beacon_map)  # the curve untold: 7.5 mm off, claiming 4.2 mm
-    error = float(np.hypot(*np.subtract(before.position_m, pose.position_m)[:2]))
-    assert before.ok and error > 1.5 * worst_sigma_2d_m(np.asarray(before.position_covariance_m2))
+    untold = locate(_unknown_curve(frame), beacon_map)  # the same pixels, the curve untold: a fix
+    assert untold.ok and not any("tone curve" in w for w in untold.warnings)
 
 
 def _encoded(frame: LumaFrame) -> LumaFrame:
@@ -149,40 +148,15 @@ def _encoded(frame: LumaFrame) -> LumaFrame:
     return LumaFrame(pixels, frame.meta.model_copy(update={"tone_curve": ToneCurve.srgb}), frame.camera)
 
 
-def _mapped_whole(frame: LumaFrame) -> LumaFrame:
-    """Every pixel through the table: what mapping only the region read must answer like."""
-    pixels = SRGB_TO_LINEAR_DN[frame.pixels]
-    return LumaFrame(pixels, frame.meta.model_copy(update={"tone_curve": ToneCurve.linear}), frame.camera)
-
-
-def _same_answer(a, b) -> None:
-    assert a.model_dump(exclude={"timing_ms"}) == b.model_dump(exclude={"timing_ms"})
-
-
-@pytest.mark.parametrize("distance_m, scale", [(1.0, 0.25), (2.0, 0.25), (2.0, 1.0)])
-def test_only_the_region_read_is_mapped_and_the_answer_is_the_whole_mapped_frames(distance_m, scale):
-    config = replace(AccuracyConfig(distance_m=distance_m, frames=80, scale=scale, seed=1), chain=SRGB)
-    frame, beacon_map, _ = accuracy_frame(config, 3)
-    linear = linearized(frame)
-    assert (linear.pixels == 0).mean() > 0.5  # most of the frame is neither the grid nor the region
-    result = locate(frame, beacon_map)
-    assert result.ok
-    _same_answer(result, locate(_mapped_whole(frame), beacon_map))
-
-
-def test_the_room_and_device_paths_read_the_mapped_region_too():
+def test_the_room_and_device_paths_read_an_srgb_frame_as_light():
     # a room's ID frame whose panels are named by their own stripes (server.rooms, server.vlc) ...
     beacon_map = big_panels((0.7, 0.0))
     room_frame = _encoded(room_id_frame(beacon_map))
     room = locate(room_frame, beacon_map)
     assert room.ok and room.vlc is not None and room.vlc.confident, room
-    _same_answer(room, locate(_mapped_whole(room_frame), beacon_map))
     # ... and a device's session, which keeps a burst's ID frames for its pose frame (server.tracking)
     burst = [two_panel_frame(level_dn=200.0, exposure_s=1 / 8000, seed=k, t_s=0.0189 * k) for k in range(4)]
     frames = [_encoded(frame) for frame in (*burst, two_panel_frame(t_s=0.1))]
-    answers = []
-    for sent in (frames, [_mapped_whole(frame) for frame in frames]):
-        devices = Devices()
-        answers.append([locate(frame, TWO_PANELS, device_id="phone", devices=devices) for frame in sent][-1])
-    assert answers[0].ok and answers[0].vlc is not None and answers[0].vlc.confident, answers[0]
-    _same_answer(*answers)
+    devices = Devices()
+    answer = [locate(frame, TWO_PANELS, device_id="phone", devices=devices) for frame in frames][-1]
+    assert answer.ok and answer.vlc is not None and answer.vlc.confident, answer
