@@ -350,10 +350,14 @@ def pedestal_levels(profiles: np.ndarray, offsets: np.ndarray, crossings: np.nda
 
 
 def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float, fraction: float) -> np.ndarray | None:
-    """Each side's median gap between its mid- and quarter-level crossings (4,), when they differ
-    from their mean by more than `sigmas` standard errors (the spread of each side's own gaps,
-    and `locking_px` (4,), each side's pixel-locking offset) and by more than `fraction` of it;
-    else None.
+    """Each side's gap between its mid- and quarter-level crossings (4,) as motion blurs them, or None.
+
+    Motion during the exposure smears the two sides across it alike and the two along it alike:
+    the opposite sides' gaps agree and the two pairs differ. Seen only when the pairs' means differ
+    by more than `sigmas` standard errors (the spread of each side's own gaps, and `locking_px`
+    (4,), each side's pixel-locking offset), by more than `fraction` of the mean gap, and by more
+    than twice the difference within either pair (a tilted panel's near and far sides differ, not
+    its pairs). The gaps returned are the pairs' means.
 
     side_gaps_px (4, n): the gaps of each side's profiles (NaN where a crossing is missing).
     """
@@ -363,11 +367,13 @@ def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float,
     medians = np.nanmedian(side_gaps_px, axis=1)
     spread = 1.4826 * np.nanmedian(np.abs(side_gaps_px - medians[:, None]), axis=1)  # robust sigma
     standard_errors = np.hypot(1.2533 * np.maximum(spread, 1e-3) / np.sqrt(counts), locking_px)
-    mean = float(np.mean(medians))
-    off = np.abs(medians - mean)
-    if np.all((off <= sigmas * np.hypot(standard_errors, standard_errors.mean() / 2)) | (off <= fraction * mean)):
+    pairs = (medians[[0, 1]] + medians[[2, 3]]) / 2
+    between = abs(float(pairs[0] - pairs[1]))
+    within = float(np.max(np.abs(medians[[0, 1]] - medians[[2, 3]])))
+    noise = 0.5 * float(np.sqrt(np.sum(standard_errors**2)))  # of the difference of two pairs' means
+    if between <= max(sigmas * noise, fraction * float(np.mean(medians)), 2 * within):
         return None
-    return medians
+    return pairs[[0, 1, 0, 1]]
 
 
 def side_growths(growth_px: float, level_gap_px: float, side_gaps_px: np.ndarray) -> np.ndarray:

@@ -34,10 +34,13 @@ def test_even_blur_with_noise_is_not_called_uneven():
     rng = np.random.default_rng(3)
     gaps = 0.7 + 0.05 * rng.standard_normal((4, 60))
     assert uneven_blur(gaps, np.zeros(4), 4.0, 0.1) is None
+    near = gaps.copy()
+    near[0] += 0.2  # one side blurred more: a tilted panel's near side, not motion
+    assert uneven_blur(near, np.zeros(4), 4.0, 0.1) is None
     gaps[1] += 0.2  # one pair of sides blurred more, as motion across them does
     gaps[3] += 0.2
     medians = uneven_blur(gaps, np.zeros(4), 4.0, 0.1)
-    assert medians is not None and medians[1] - medians[0] > 0.15
+    assert medians is not None and medians[1] - medians[0] > 0.15 and medians[1] == medians[3]
 
 
 def test_each_side_grows_with_its_own_blur():
