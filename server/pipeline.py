@@ -255,38 +255,40 @@ def locate_beacon(
     # The corners fix the position only loosely (a small panel whose few-pixel corner arcs
     # measure the clipped-edge growth badly): the outline fit, which fits the growth with the
     # pose from every outline point, decides; what it cannot pin down is refused.
-    # The two must agree within their uncertainties: where they do not, the frame breaks a
-    # model both share (the panel moved or smeared across the frame), and neither is trusted.
     by_outline = _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
     note = f"the corners fixed the position only to {corner_sigma_mm:.0f} mm (1 sigma): outline fit"
     if not isinstance(by_outline, Fix):
         return replace(by_outline, warnings=(*by_outline.warnings, note))
-    apart_m = np.subtract(by_outline.position_m, fix.position_m)[:2]
-    if by_outline.covariance_m2 is not None:
-        joint = np.asarray(fix.covariance_m2)[:2, :2] + np.asarray(by_outline.covariance_m2)[:2, :2]
+    doubt = _outline_doubt(by_outline, fix, frame, options)
+    if doubt is not None:
+        return timer.refusal(Refusal(FailureReason.pose_uncertain, doubt), [*warnings, note])
+    return by_outline.warned(note)
+
+
+def _outline_doubt(by_outline: Fix, by_corners: Fix, frame: LumaFrame, options: PipelineOptions) -> str | None:
+    """Why the outline fit standing in for loose corners is not to be trusted, or None.
+
+    The two must agree within their uncertainties, and the outline must not overrule the gravity
+    sensor by far: where they do not, the frame breaks a model both share (the panel moved or
+    smeared across the frame)."""
+    apart_m = np.subtract(by_outline.position_m, by_corners.position_m)[:2]
+    if by_outline.covariance_m2 is not None and by_corners.covariance_m2 is not None:
+        joint = np.asarray(by_corners.covariance_m2)[:2, :2] + np.asarray(by_outline.covariance_m2)[:2, :2]
         if float(apart_m @ np.linalg.solve(joint, apart_m)) > options.pose.consistency_chi_square:
-            return timer.refusal(
-                Refusal(
-                    FailureReason.pose_uncertain,
-                    f"the corners and the outline of the panel place the camera {np.hypot(*apart_m) * 1000:.0f} mm "
-                    f"apart, more than their uncertainties allow",
-                ),
-                [*warnings, note],
+            return (
+                f"the corners and the outline of the panel place the camera {np.hypot(*apart_m) * 1000:.0f} mm "
+                f"apart, more than their uncertainties allow"
             )
     gravity = _gravity(frame, options)
     if gravity is not None:
         down = by_outline.rotation_wc.T @ np.array([0.0, 0.0, -1.0])  # the fit's gravity, camera frame
         off_deg = math.degrees(math.acos(np.clip(down @ gravity / np.linalg.norm(gravity), -1.0, 1.0)))
         if off_deg > OUTLINE_GRAVITY_SIGMAS * options.gravity_sigma_deg:
-            return timer.refusal(
-                Refusal(
-                    FailureReason.pose_uncertain,
-                    f"the outline of the panel tilts the camera {off_deg:.1f} deg from the gravity sensor's "
-                    f"reading (its error is {options.gravity_sigma_deg:g} deg)",
-                ),
-                [*warnings, note],
+            return (
+                f"the outline of the panel tilts the camera {off_deg:.1f} deg from the gravity sensor's "
+                f"reading (its error is {options.gravity_sigma_deg:g} deg)"
             )
-    return by_outline.warned(note)
+    return None
 
 
 def _corner_path_fits(beacon: Beacon) -> bool:
