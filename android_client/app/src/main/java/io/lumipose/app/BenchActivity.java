@@ -110,7 +110,7 @@ public final class BenchActivity extends CameraActivity implements FramePipeline
             }
         };
         final FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(),
-                storeSample, network, this);
+                gravity.rates(), storeSample, network, this);
         pipeline = p;
         // Frames reach the pipeline only while a sample is wanted, until it has taken one.
         return new FrameSink() {

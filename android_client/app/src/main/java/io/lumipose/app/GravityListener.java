@@ -7,20 +7,31 @@ import android.hardware.SensorEventListener;
 import android.hardware.SensorManager;
 
 import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.sensor.GyroHistory;
 import io.lumipose.client.sensor.LowPassGravity;
 
 /**
  * Feeds a GravityHistory with gravity (device frame, m/s^2, pointing up) and the rotation-vector
  * attitude (device to East-North-Up), each stamped with its event's timestamp, so every frame gets
  * the reading at its own SENSOR_TIMESTAMP. Phones without TYPE_GRAVITY get a low-passed accelerometer.
+ * The gyroscope feeds a GyroHistory the same way: each frame gets the mean rate over its readout.
  */
 final class GravityListener implements SensorEventListener {
+    /**
+     * 200 Hz: a readout lasts 10-40 ms, which GAME's 50 Hz could leave without a reading of its own.
+     * It is the most an app gets without HIGH_SAMPLING_RATE_SENSORS; FASTEST (0 us) would throw a
+     * SecurityException in a debuggable build on Android 12 and later.
+     */
+    private static final int GYROSCOPE_PERIOD_US = 5_000;
     private final SensorManager sensors;
     private final Sensor gravity;
     private final Sensor rotation;
+    /** Null on a phone without one: frames go without angular_velocity_camera_dps. */
+    private final Sensor gyroscope;
     /** Null when the phone has a gravity sensor. */
     private final LowPassGravity lowPass;
     private final GravityHistory history = new GravityHistory();
+    private final GyroHistory rates = new GyroHistory();
 
     GravityListener(Context context) {
         sensors = (SensorManager) context.getSystemService(Context.SENSOR_SERVICE);
@@ -29,11 +40,17 @@ final class GravityListener implements SensorEventListener {
         gravity = fused != null ? fused : accelerometer;
         lowPass = fused == null && accelerometer != null ? new LowPassGravity() : null;
         rotation = sensors == null ? null : sensors.getDefaultSensor(Sensor.TYPE_ROTATION_VECTOR);
+        gyroscope = sensors == null ? null : sensors.getDefaultSensor(Sensor.TYPE_GYROSCOPE);
     }
 
     /** Readings by timestamp; also the latest (a GravitySource). */
     GravityHistory history() {
         return history;
+    }
+
+    /** Gyroscope readings by timestamp (empty on a phone without one). */
+    GyroHistory rates() {
+        return rates;
     }
 
     /** False on a phone with neither a gravity sensor nor an accelerometer: frames go without gravity_camera. */
@@ -56,6 +73,9 @@ final class GravityListener implements SensorEventListener {
         if (rotation != null) {
             sensors.registerListener(this, rotation, SensorManager.SENSOR_DELAY_GAME);
         }
+        if (gyroscope != null) {
+            sensors.registerListener(this, gyroscope, GYROSCOPE_PERIOD_US);
+        }
     }
 
     void stop() {
@@ -74,6 +94,9 @@ final class GravityListener implements SensorEventListener {
                 break;
             case Sensor.TYPE_GRAVITY:
                 history.addGravity(event.timestamp, event.values);
+                break;
+            case Sensor.TYPE_GYROSCOPE:
+                rates.add(event.timestamp, event.values);
                 break;
             case Sensor.TYPE_ACCELEROMETER:
                 if (lowPass != null) {

@@ -30,8 +30,8 @@ abstract class LocatingActivity extends CameraActivity implements FramePipeline.
         this.plan = plan;
         // live frames: one attempt, a short timeout, no gzip, the map this screen draws
         LumiposeClient live = LumiposeClient.create(prefs.liveConfig());
-        FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(), live,
-                network, this);
+        FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(),
+                gravity.rates(), live, network, this);
         pipeline = p;
         return p;
     }

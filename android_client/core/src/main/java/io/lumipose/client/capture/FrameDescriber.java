@@ -9,8 +9,10 @@ import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.camera.Intrinsics;
 import io.lumipose.client.camera.IntrinsicsCalculator;
+import io.lumipose.client.contract.ContractRanges;
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.sensor.GravityTransform;
+import io.lumipose.client.sensor.GyroTransform;
 import io.lumipose.client.sensor.HeadingEstimator;
 import io.lumipose.client.sensor.LensFacing;
 
@@ -65,11 +67,18 @@ public final class FrameDescriber {
         this.mapXBearingDeg = mapXBearingDeg;
     }
 
+    /** {@link #describe(FrameResult, float[], float[], float[])} without a gyroscope reading. */
+    public Described describe(FrameResult result, float[] gravityDevice, float[] deviceToEnu) {
+        return describe(result, gravityDevice, deviceToEnu, null);
+    }
+
     /**
      * @param gravityDevice TYPE_GRAVITY [x, y, z] at the frame's timestamp (see GravityHistory), or null
      * @param deviceToEnu   device-to-ENU rotation (row-major 3x3) at the frame's timestamp, or null
+     * @param rateDevice    TYPE_GYROSCOPE [x, y, z], rad/s, the mean over the frame's readout (see
+     *                      GyroHistory), or null
      */
-    public Described describe(FrameResult result, float[] gravityDevice, float[] deviceToEnu) {
+    public Described describe(FrameResult result, float[] gravityDevice, float[] deviceToEnu, float[] rateDevice) {
         List<String> warnings = new ArrayList<String>();
         String kind = classify(result);
         if (kind == null) {
@@ -98,8 +107,8 @@ public final class FrameDescriber {
             return drop(kind, e.getMessage(), warnings);
         }
         try {
-            return new Described(meta(result, kind, spec, camera, gravityDevice, deviceToEnu, warnings), kind, null,
-                    warnings);
+            return new Described(meta(result, kind, spec, camera, gravityDevice, deviceToEnu, rateDevice, warnings),
+                    kind, null, warnings);
         } catch (IllegalArgumentException e) {
             return drop(kind, e.getMessage(), warnings); // a value the contract refuses, named
         }
@@ -107,7 +116,7 @@ public final class FrameDescriber {
 
     /** The frame's JSON in the contract's units: exposure, ISO and skew as the result reports them. */
     private FrameMeta meta(FrameResult result, String kind, RequestSpec spec, Intrinsics camera, float[] gravityDevice,
-                           float[] deviceToEnu, List<String> warnings) {
+                           float[] deviceToEnu, float[] rateDevice, List<String> warnings) {
         FrameMeta.Builder b = FrameMeta.builder(plan.output.width, plan.output.height)
                 .rowStride(plan.output.width)
                 .camera(camera)
@@ -129,6 +138,15 @@ public final class FrameDescriber {
                 b.gravityCamera(GravityTransform.deviceToCamera(gravityDevice, facts.sensorOrientationDeg, facing));
             } catch (IllegalArgumentException e) {
                 warnings.add("gravity not sent: " + e.getMessage());
+            }
+        }
+        if (rateDevice != null && facing != null) {
+            double[] rate = GyroTransform.deviceToCameraDps(rateDevice, facts.sensorOrientationDeg, facing);
+            try {
+                // A wild reading costs the frame its rate, not the frame itself.
+                b.angularVelocityCameraDps(ContractRanges.ANGULAR_RATE_DPS.checkEach("angular_velocity_camera_dps", rate));
+            } catch (IllegalArgumentException e) {
+                warnings.add("rotation rates beyond the contract's 4000 deg/s not sent"); // the same text: said once
             }
         }
         if (deviceToEnu != null && facing != null && mapXBearingDeg != null) {

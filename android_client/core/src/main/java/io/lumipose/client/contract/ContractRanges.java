@@ -82,6 +82,8 @@ public final class ContractRanges {
     public static final Range GRAVITY = new Range(-100, 100);
     /** gravity_camera must have a direction: its length at least this. */
     public static final double MIN_GRAVITY_NORM = 1e-6;
+    /** Each component of angular_velocity_camera_dps, deg/s: phone gyroscopes read up to 2000. */
+    public static final Range ANGULAR_RATE_DPS = new Range(-4000, 4000);
     /** timestamp_ns is within [0, 2^63): any non-negative Java long. */
     public static final long MIN_TIMESTAMP_NS = 0;
     /** Each coordinate of a beacon's center_m, metres (room for projected coordinates). */

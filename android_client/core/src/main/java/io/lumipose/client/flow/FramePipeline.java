@@ -26,6 +26,7 @@ import io.lumipose.client.net.FrameUpload;
 import io.lumipose.client.net.FrameUploader;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.sensor.GyroHistory;
 
 /**
  * What happens to a frame after the camera hands it over (docs/android.md): its capture result
@@ -67,6 +68,9 @@ public final class FramePipeline implements FrameSink {
     public static final String DROP_NO_RESULT = "image without its capture result";
     public static final String DROP_OUT_OF_ORDER = "image came before its result, out of the burst's order";
     public static final String DROP_CLOSED = "pipeline closed";
+    /** Said once when SENSOR_TIMESTAMP is not on the sensors' clock. */
+    public static final String NO_RATE_UNKNOWN_TIMESTAMPS = "camera timestamps not REALTIME: frames go without "
+            + "the gyroscope's rate (the rolling shutter's skew stays uncorrected)";
 
     /**
      * An ID window reaches this share of the pose window's height beyond it, above and below: the
@@ -80,6 +84,7 @@ public final class FramePipeline implements FrameSink {
 
     private final FrameDescriber describer;
     private final GravityHistory attitude;
+    private final GyroHistory rates;
     private final boolean timestampsRealtime;
     private final int idFramesPerBurst;
     private final BurstUploader uploader;
@@ -108,18 +113,24 @@ public final class FramePipeline implements FrameSink {
     private final Set<String> warnings = new LinkedHashSet<String>();
 
     /**
+     * @param rates              the gyroscope's readings: each frame gets the mean rate over its readout
      * @param timestampsRealtime whether SENSOR_TIMESTAMP shares the sensor events' clock (then the
-     *                           attitude is taken at the frame's timestamp, else the latest)
+     *                           attitude is taken at the frame's timestamp, else the latest, and no rate)
      * @param idFramesPerBurst   the plan's ID frames after each pose frame (0: every burst is a pose frame)
      */
-    public FramePipeline(FrameDescriber describer, GravityHistory attitude, boolean timestampsRealtime,
-                         int idFramesPerBurst, FrameUploader uploader, Executor uploadExecutor, Listener listener) {
+    public FramePipeline(FrameDescriber describer, GravityHistory attitude, GyroHistory rates,
+                         boolean timestampsRealtime, int idFramesPerBurst, FrameUploader uploader,
+                         Executor uploadExecutor, Listener listener) {
         if (idFramesPerBurst < 0) {
             throw new IllegalArgumentException("idFramesPerBurst must be >= 0, got " + idFramesPerBurst);
         }
         this.describer = describer;
         this.attitude = attitude;
+        this.rates = rates;
         this.timestampsRealtime = timestampsRealtime;
+        if (!timestampsRealtime) {
+            warnings.add(NO_RATE_UNKNOWN_TIMESTAMPS);
+        }
         this.idFramesPerBurst = idFramesPerBurst;
         this.listener = listener;
         this.maxUnmatched = idFramesPerBurst + 3;
@@ -142,9 +153,9 @@ public final class FramePipeline implements FrameSink {
 
     /** The pipeline for one opened camera and its plan, as the app builds it. */
     public static FramePipeline forCamera(CameraFacts facts, CapturePlan plan, Double mapXBearingDeg,
-                                          GravityHistory attitude, FrameUploader uploader, Executor uploadExecutor,
-                                          Listener listener) {
-        return new FramePipeline(new FrameDescriber(facts, plan, mapXBearingDeg), attitude,
+                                          GravityHistory attitude, GyroHistory rates, FrameUploader uploader,
+                                          Executor uploadExecutor, Listener listener) {
+        return new FramePipeline(new FrameDescriber(facts, plan, mapXBearingDeg), attitude, rates,
                 facts.timestampsAreRealtime(), plan.idFramesPerBurst, uploader, uploadExecutor, listener);
     }
 
@@ -220,7 +231,8 @@ public final class FramePipeline implements FrameSink {
 
     private void handle(FrameResult result, Pixels pixels) {
         GravityHistory.Attitude a = attitude.forFrame(result.timestampNs, timestampsRealtime);
-        FrameDescriber.Described d = describer.describe(result, a.gravity, a.rotationToEnu);
+        float[] rate = rates.forFrame(result.timestampNs, readoutEndNs(result), timestampsRealtime);
+        FrameDescriber.Described d = describer.describe(result, a.gravity, a.rotationToEnu, rate);
         noteWarnings(d.warnings);
         // The burst goes by what each frame is (its result), never by its request's tag: without
         // per-frame control the tags run some frames ahead of the exposures.
@@ -240,6 +252,16 @@ public final class FramePipeline implements FrameSink {
         } else {
             handleId(d.meta, pixels);
         }
+    }
+
+    /**
+     * When the last row's exposure ends: SENSOR_TIMESTAMP is the first row's start, the last row
+     * starts a skew later (a missing skew or exposure counts as none).
+     */
+    private static long readoutEndNs(FrameResult result) {
+        long skew = result.rollingShutterSkewNs == null ? 0 : result.rollingShutterSkewNs;
+        long exposure = result.exposureNs == null ? 0 : result.exposureNs;
+        return result.timestampNs + skew + exposure;
     }
 
     /**

@@ -21,7 +21,7 @@ public final class FrameMeta {
     public static final String SCHEMA = "lumipose.frame/1";
     private static final Set<String> KNOWN = new HashSet<String>(Arrays.asList("schema", "format", "width", "height",
             "row_stride", "camera", "exposure_s", "iso", "rolling_shutter_skew_s", "timestamp_ns", "heading_deg",
-            "gravity_camera", "frame_kind", "crop", "tone_curve"));
+            "gravity_camera", "angular_velocity_camera_dps", "frame_kind", "crop", "tone_curve"));
     private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
             "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
     private static final Set<String> TONE_CURVES = new HashSet<String>(Arrays.asList("linear", "srgb", "device"));
@@ -40,6 +40,7 @@ public final class FrameMeta {
     public final Long timestampNs;
     public final Double headingDeg;
     private final double[] gravityCamera;
+    private final double[] angularVelocityCameraDps;
     /** "pose" or "id" (a short-exposure VLC frame); null = not stated, which the contract reads as pose. */
     public final String frameKind;
     /** Where these pixels lie in the full frame the camera describes; null for a whole frame. */
@@ -83,6 +84,10 @@ public final class FrameMeta {
             throw new ContractException("gravity_camera", "must hold 3 numbers");
         }
         ContractRanges.checkGravity("gravity_camera", b.gravityCamera);
+        if (b.angularVelocityCameraDps != null && b.angularVelocityCameraDps.length != 3) {
+            throw new ContractException("angular_velocity_camera_dps", "must hold 3 numbers");
+        }
+        ContractRanges.ANGULAR_RATE_DPS.checkEach("angular_velocity_camera_dps", b.angularVelocityCameraDps);
         this.format = b.format;
         this.width = b.width;
         this.height = b.height;
@@ -95,6 +100,8 @@ public final class FrameMeta {
         this.timestampNs = b.timestampNs;
         this.headingDeg = b.headingDeg;
         this.gravityCamera = b.gravityCamera == null ? null : b.gravityCamera.clone();
+        this.angularVelocityCameraDps = b.angularVelocityCameraDps == null ? null
+                : b.angularVelocityCameraDps.clone();
         this.frameKind = b.frameKind;
         this.crop = b.crop;
         this.toneCurve = b.toneCurve;
@@ -161,6 +168,11 @@ public final class FrameMeta {
         return gravityCamera == null ? null : gravityCamera.clone();
     }
 
+    /** The phone's rotation rate over the readout in the camera frame, deg/s, or null. */
+    public double[] angularVelocityCameraDps() {
+        return angularVelocityCameraDps == null ? null : angularVelocityCameraDps.clone();
+    }
+
     /** Bytes the frame file or upload body must hold. */
     public long frameBytes() {
         if ("Y8".equals(format)) {
@@ -200,6 +212,9 @@ public final class FrameMeta {
         putIfSet(o, "heading_deg", headingDeg);
         if (gravityCamera != null) {
             Json.put(o, "gravity_camera", Json.array(gravityCamera));
+        }
+        if (angularVelocityCameraDps != null) {
+            Json.put(o, "angular_velocity_camera_dps", Json.array(angularVelocityCameraDps));
         }
         putIfSet(o, "frame_kind", frameKind);
         if (crop != null) {
@@ -257,6 +272,7 @@ public final class FrameMeta {
         b.timestampNs(Json.optLong(o, "timestamp_ns", "timestamp_ns"));
         b.headingDeg(Json.optDouble(o, "heading_deg", "heading_deg"));
         b.gravityCamera(Json.optDoubles(o, "gravity_camera", "gravity_camera", 3));
+        b.angularVelocityCameraDps(Json.optDoubles(o, "angular_velocity_camera_dps", "angular_velocity_camera_dps", 3));
         b.frameKind(Json.optString(o, "frame_kind", "frame_kind"));
         JSONObject crop = Json.optObject(o, "crop", "crop");
         if (crop != null) {
@@ -281,6 +297,7 @@ public final class FrameMeta {
         private Long timestampNs;
         private Double headingDeg;
         private double[] gravityCamera;
+        private double[] angularVelocityCameraDps;
         private String frameKind;
         private Crop crop;
         private String toneCurve;
@@ -334,6 +351,12 @@ public final class FrameMeta {
 
         public Builder gravityCamera(double[] v) {
             gravityCamera = v == null ? null : v.clone();
+            return this;
+        }
+
+        /** The gyroscope's rate over the readout, camera frame, deg/s; null for none. */
+        public Builder angularVelocityCameraDps(double[] v) {
+            angularVelocityCameraDps = v == null ? null : v.clone();
             return this;
         }
 

@@ -31,6 +31,7 @@ public final class RecordedFrame {
     /** The camera the frame was rendered with (the contract's convention, pixel centres at integers). */
     public final Intrinsics camera;
     private final double[] gravityCamera;
+    private final double[] angularVelocityCameraDps;
     private final double[] truthPositionM;
     private final File pixels;
     private final int fileRowStride;
@@ -57,6 +58,7 @@ public final class RecordedFrame {
         this.rollingShutterSkewS = meta.rollingShutterSkewS;
         this.camera = meta.camera;
         this.gravityCamera = meta.gravityCamera();
+        this.angularVelocityCameraDps = meta.angularVelocityCameraDps();
         this.truthPositionM = truthPosition(json);
         this.pixels = pixels;
         this.fileRowStride = meta.rowStride;
@@ -79,6 +81,14 @@ public final class RecordedFrame {
     /** Gravity (pointing down) in the camera frame as the renderer drew it, or null. */
     public double[] gravityCamera() {
         return gravityCamera == null ? null : gravityCamera.clone();
+    }
+
+    /**
+     * The camera's rotation rate over the readout (camera frame, deg/s) when the fixture states
+     * one ({@code lumipose simulate} writes none yet), else null.
+     */
+    public double[] angularVelocityCameraDps() {
+        return angularVelocityCameraDps == null ? null : angularVelocityCameraDps.clone();
     }
 
     /** The camera's true position (map frame, m), or null when the fixture has no ground truth. */

@@ -17,6 +17,7 @@ import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.capture.RequestSpec;
 import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.sensor.GyroHistory;
 
 /**
  * Plays a recording as the phone's camera would, into the same {@link FrameSink} the app's Camera2
@@ -27,7 +28,8 @@ import io.lumipose.client.sensor.GravityHistory;
  * capture order, and between the two sometimes the image first, sometimes the result only after
  * the next frame's image. The Y plane comes in one reused direct buffer whose rows are longer
  * than the image is wide and whose last row has no padding, as phones deliver it. The phone's
- * gravity reading at each frame reaches the {@link GravityHistory} before the frame.
+ * gravity reading at each frame reaches the {@link GravityHistory} before the frame, and its
+ * rotation rate (when the recording states one) the {@link GyroHistory}, stamped mid-readout.
  */
 public final class ReplayCamera {
     /** Called before each call to the sink: where a test waits for the uploader, or a player keeps time. */
@@ -86,11 +88,12 @@ public final class ReplayCamera {
 
     /**
      * Hands every recorded frame the plan asks for to {@code sink} on this thread (an ID frame is
-     * left out when the plan takes none), each frame's gravity to {@code gravity} first.
+     * left out when the plan takes none), each frame's gravity to {@code gravity} and rotation rate
+     * to {@code rates} first.
      *
      * @throws IllegalStateException when the plan streams another size than the recording's
      */
-    public void play(CapturePlan plan, FrameSink sink, GravityHistory gravity, Pace pace)
+    public void play(CapturePlan plan, FrameSink sink, GravityHistory gravity, GyroHistory rates, Pace pace)
             throws IOException, InterruptedException {
         List<RecordedFrame> taken = new ArrayList<RecordedFrame>();
         for (RecordedFrame f : recording.frames()) {
@@ -113,6 +116,10 @@ public final class ReplayCamera {
                 if (g != null) {
                     gravity.addGravity(f.timestampNs, g);
                 }
+                float[] w = phone.rotationRate(f);
+                if (w != null) {
+                    rates.add(midReadoutNs(f), w);
+                }
             }
             if (e.image) {
                 int stride = rowStride(f.width);
@@ -127,6 +134,15 @@ public final class ReplayCamera {
                 sink.onResult(FrameResult.fromJson(phone.result(f, plan.spec(f.kind), tags.get(f))));
             }
         }
+    }
+
+    /**
+     * One reading in the middle of the frame's readout: inside its window, and outside the next
+     * frame's (whose readout starts a frame later), so each frame's mean is its own rate.
+     */
+    private static long midReadoutNs(RecordedFrame f) {
+        double skewS = f.rollingShutterSkewS == null ? 0 : f.rollingShutterSkewS;
+        return f.timestampNs + Math.round((skewS + f.exposureS) * 1e9 / 2);
     }
 
     /**

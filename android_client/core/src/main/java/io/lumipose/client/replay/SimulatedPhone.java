@@ -16,6 +16,7 @@ import io.lumipose.client.capture.CaptureOptions;
 import io.lumipose.client.capture.RequestSpec;
 import io.lumipose.client.json.Json;
 import io.lumipose.client.sensor.GravityTransform;
+import io.lumipose.client.sensor.GyroTransform;
 import io.lumipose.client.sensor.LensFacing;
 
 /**
@@ -244,6 +245,12 @@ public final class SimulatedPhone {
     public float[] gravity(RecordedFrame f) {
         double[] g = f.gravityCamera();
         return g == null ? null : GravityTransform.cameraToDevice(g, SENSOR_ORIENTATION_DEG, FACING);
+    }
+
+    /** TYPE_GYROSCOPE [x, y, z] (rad/s, device frame) of the phone while it read {@code f} out, or null. */
+    public float[] rotationRate(RecordedFrame f) {
+        double[] w = f.angularVelocityCameraDps();
+        return w == null ? null : GyroTransform.cameraDpsToDevice(w, SENSOR_ORIENTATION_DEG, FACING);
     }
 
     /** The Camera2 characteristics as the app reads them. */

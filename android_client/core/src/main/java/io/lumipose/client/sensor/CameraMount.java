@@ -41,7 +41,22 @@ public final class CameraMount {
         return m;
     }
 
-    static double[] apply(double[][] m, double[] v) {
+    /** A vector of the device frame (gravity, a rotation rate) in the camera frame. */
+    public static double[] deviceToCamera(double[] vDevice, int sensorOrientationDeg, LensFacing facing) {
+        return apply(cameraFromDevice(sensorOrientationDeg, facing), vDevice);
+    }
+
+    /** The inverse of {@link #deviceToCamera}: the mount is a rotation, its transpose turns back. */
+    public static double[] cameraToDevice(double[] vCamera, int sensorOrientationDeg, LensFacing facing) {
+        double[][] m = cameraFromDevice(sensorOrientationDeg, facing);
+        double[] out = new double[3];
+        for (int i = 0; i < 3; i++) {
+            out[i] = m[0][i] * vCamera[0] + m[1][i] * vCamera[1] + m[2][i] * vCamera[2];
+        }
+        return out;
+    }
+
+    private static double[] apply(double[][] m, double[] v) {
         return new double[] {
             m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
             m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],

@@ -44,8 +44,8 @@ public final class GravityHistory implements GravitySource {
         }
     }
 
-    private final Ring gravity;
-    private final Ring rotation;
+    private final SampleRing gravity;
+    private final SampleRing rotation;
     private final long maxGapNs;
 
     public GravityHistory() {
@@ -53,23 +53,17 @@ public final class GravityHistory implements GravitySource {
     }
 
     public GravityHistory(int capacity, long maxGapNs) {
-        if (capacity < 2) {
-            throw new IllegalArgumentException("capacity must be >= 2, got " + capacity);
-        }
-        if (maxGapNs <= 0) {
-            throw new IllegalArgumentException("maxGapNs must be > 0, got " + maxGapNs);
-        }
-        gravity = new Ring(capacity);
-        rotation = new Ring(capacity);
-        this.maxGapNs = maxGapNs;
+        gravity = new SampleRing(capacity);
+        rotation = new SampleRing(capacity);
+        this.maxGapNs = SampleRing.requireMaxGap(maxGapNs);
     }
 
     public synchronized void addGravity(long timestampNs, float[] values) {
-        gravity.add(timestampNs, requireLength(values, 3, "gravity"));
+        gravity.add(timestampNs, SampleRing.requireLength(values, 3, "gravity"));
     }
 
     public synchronized void addRotation(long timestampNs, float[] rotationToEnu) {
-        rotation.add(timestampNs, requireLength(rotationToEnu, 9, "rotation"));
+        rotation.add(timestampNs, SampleRing.requireLength(rotationToEnu, 9, "rotation"));
     }
 
     /** Gravity at {@code timestampNs}, interpolated between the readings around it; null when none is near. */
@@ -103,68 +97,5 @@ public final class GravityHistory implements GravitySource {
     @Override
     public synchronized float[] latestRotationToEnu() {
         return rotation.latest();
-    }
-
-    private static float[] requireLength(float[] v, int length, String what) {
-        if (v == null || v.length < length) {
-            throw new IllegalArgumentException(what + " needs " + length + " values");
-        }
-        return v;
-    }
-
-    /** Timestamped readings in arrival order; overwrites the oldest. Not thread-safe itself. */
-    private static final class Ring {
-        private final long[] times;
-        private final float[][] values;
-        private int next;
-        private int size;
-
-        Ring(int capacity) {
-            times = new long[capacity];
-            values = new float[capacity][];
-        }
-
-        void add(long timestampNs, float[] v) {
-            times[next] = timestampNs;
-            values[next] = v.clone();
-            next = (next + 1) % times.length;
-            size = Math.min(size + 1, times.length);
-        }
-
-        float[] latest() {
-            return size == 0 ? null : values[(next - 1 + times.length) % times.length].clone();
-        }
-
-        /** Interpolated (or nearest) reading at {@code t}; null when the nearest is farther than maxGapNs. */
-        float[] at(long t, long maxGapNs, boolean interpolate) {
-            int before = -1;
-            int after = -1;
-            for (int i = 0; i < size; i++) {
-                long ti = times[i];
-                if (ti <= t && (before < 0 || ti > times[before])) {
-                    before = i;
-                }
-                if (ti >= t && (after < 0 || ti < times[after])) {
-                    after = i;
-                }
-            }
-            long gapBefore = before < 0 ? Long.MAX_VALUE : t - times[before];
-            long gapAfter = after < 0 ? Long.MAX_VALUE : times[after] - t;
-            if (Math.min(gapBefore, gapAfter) > maxGapNs) {
-                return null;
-            }
-            if (!interpolate || gapBefore == 0 || gapAfter == 0 || gapBefore > maxGapNs
-                    || gapAfter > maxGapNs) {
-                return values[gapBefore <= gapAfter ? before : after].clone();
-            }
-            double w = (double) gapBefore / (gapBefore + gapAfter);
-            float[] a = values[before];
-            float[] b = values[after];
-            float[] out = new float[a.length];
-            for (int i = 0; i < a.length; i++) {
-                out[i] = (float) (a[i] + w * (b[i] - a[i]));
-            }
-            return out;
-        }
     }
 }

@@ -22,7 +22,6 @@ public final class GravityTransform {
         if (gravityDevice == null || gravityDevice.length < 3) {
             throw new IllegalArgumentException("gravity needs 3 values [x, y, z]");
         }
-        double[][] mount = CameraMount.cameraFromDevice(sensorOrientationDeg, facing);
         double x = gravityDevice[0];
         double y = gravityDevice[1];
         double z = gravityDevice[2];
@@ -30,7 +29,7 @@ public final class GravityTransform {
         if (!(norm > 1e-3) || Double.isInfinite(norm)) {
             throw new IllegalArgumentException("gravity reading has no direction: |g| = " + norm + " m/s^2");
         }
-        return CameraMount.apply(mount, new double[] {-x / norm, -y / norm, -z / norm});
+        return CameraMount.deviceToCamera(new double[] {-x / norm, -y / norm, -z / norm}, sensorOrientationDeg, facing);
     }
 
     /**
@@ -49,13 +48,10 @@ public final class GravityTransform {
         if (!(norm > 1e-9) || Double.isInfinite(norm)) {
             throw new IllegalArgumentException("gravity has no direction: |g| = " + norm);
         }
-        // The mount is a rotation: its transpose takes camera coordinates back to the device's.
-        double[][] mount = CameraMount.cameraFromDevice(sensorOrientationDeg, facing);
+        double[] down = CameraMount.cameraToDevice(gravityCamera, sensorOrientationDeg, facing);
         float[] device = new float[3];
         for (int i = 0; i < 3; i++) {
-            double down = mount[0][i] * gravityCamera[0] + mount[1][i] * gravityCamera[1]
-                    + mount[2][i] * gravityCamera[2];
-            device[i] = (float) (-STANDARD_GRAVITY * down / norm);
+            device[i] = (float) (-STANDARD_GRAVITY * down[i] / norm);
         }
         return device;
     }

@@ -48,6 +48,7 @@ class ContractRangesTest {
         MIRRORED.put("frame#FrameMeta.rolling_shutter_skew_s", ContractRanges.ROLLING_SHUTTER_SKEW_S);
         MIRRORED.put("frame#FrameMeta.heading_deg", ContractRanges.ANGLE_DEG);
         MIRRORED.put("frame#FrameMeta.gravity_camera", ContractRanges.GRAVITY);
+        MIRRORED.put("frame#FrameMeta.angular_velocity_camera_dps", ContractRanges.ANGULAR_RATE_DPS);
         MIRRORED.put("frame#CameraIntrinsics.fx", ContractRanges.FOCAL_PX);
         MIRRORED.put("frame#CameraIntrinsics.fy", ContractRanges.FOCAL_PX);
         MIRRORED.put("frame#CameraIntrinsics.cx", ContractRanges.PRINCIPAL_PX);
@@ -185,6 +186,8 @@ class ContractRangesTest {
             {"camera", "focal_length_m", 1e-300, "camera.focal_length_m"},
             {null, "gravity_camera", new JSONArray(new double[] {1e200, 1e200, 1e200}), "gravity_camera[0]"},
             {null, "gravity_camera", new JSONArray(new double[] {1e-300, 0, 0}), "gravity_camera"},
+            {null, "angular_velocity_camera_dps", new JSONArray(new double[] {0, 1e300, 0}),
+                "angular_velocity_camera_dps[1]"},
             {null, "timestamp_ns", new BigInteger("1" + new String(new char[400]).replace('\0', '0')),
                 "timestamp_ns"},
             {null, "timestamp_ns", -1L, "timestamp_ns"},
@@ -212,7 +215,8 @@ class ContractRangesTest {
         frame.getJSONObject("camera").put("fx", 1.0).put("fy", 1e6).put("cx", -970.0).put("cy", 2592.0)
                 .put("distortion", new JSONArray(new double[] {1000, -1000, 1000, -1000, 1000, -1000, 1000, -1000}));
         frame.put("gravity_camera", new JSONArray(new double[] {100, -100, 100})).put("timestamp_ns", Long.MAX_VALUE)
-                .put("heading_deg", -360.0).put("exposure_s", 1e-9).put("rolling_shutter_skew_s", 0.0);
+                .put("heading_deg", -360.0).put("exposure_s", 1e-9).put("rolling_shutter_skew_s", 0.0)
+                .put("angular_velocity_camera_dps", new JSONArray(new double[] {4000, -4000, 0}));
         FrameMeta meta = FrameMeta.fromJson(frame.toString());
         assertEquals(Long.MAX_VALUE, (long) meta.timestampNs);
         JSONObject cropped = goldenFrame().put("width", 100).put("height", 100).put("row_stride", 100)

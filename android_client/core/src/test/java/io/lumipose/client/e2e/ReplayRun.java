@@ -28,6 +28,7 @@ import io.lumipose.client.replay.RecordedFrame;
 import io.lumipose.client.replay.Recording;
 import io.lumipose.client.replay.ReplayCamera;
 import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.sensor.GyroHistory;
 import io.lumipose.client.testutil.Lumipose;
 
 /**
@@ -135,9 +136,10 @@ final class ReplayRun {
         final List<FrameMeta> idResults = Collections.synchronizedList(new ArrayList<FrameMeta>());
         final List<String> failures = Collections.synchronizedList(new ArrayList<String>());
         GravityHistory gravity = new GravityHistory();
+        GyroHistory rates = new GyroHistory();
         ExecutorService network = Executors.newSingleThreadExecutor();
-        final FramePipeline pipeline = FramePipeline.forCamera(facts, plan, null, gravity, uploader,
-                network, new FramePipeline.Listener() {
+        final FramePipeline pipeline = FramePipeline.forCamera(facts, plan, null, gravity, rates,
+                uploader, network, new FramePipeline.Listener() {
                     @Override
                     public void onPoseResult(FrameMeta meta, LocateResult result) {
                         poseResults.add(meta);
@@ -157,7 +159,7 @@ final class ReplayRun {
                         failures.add(meta.timestampNs + ": " + error);
                     }
                 });
-        camera.play(plan, pipeline, gravity, new ReplayCamera.Pace() {
+        camera.play(plan, pipeline, gravity, rates, new ReplayCamera.Pace() {
             @Override
             public void beforeDelivery(RecordedFrame frame) throws InterruptedException {
                 waitIdle(pipeline);

@@ -2,6 +2,7 @@ package io.lumipose.client.flow;
 
 import static org.junit.jupiter.api.Assertions.assertArrayEquals;
 import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertFalse;
 import static org.junit.jupiter.api.Assertions.assertNotNull;
 import static org.junit.jupiter.api.Assertions.assertNull;
 import static org.junit.jupiter.api.Assertions.assertTrue;
@@ -19,6 +20,7 @@ import java.util.concurrent.Executors;
 import java.util.concurrent.Semaphore;
 import java.util.concurrent.TimeUnit;
 
+import org.json.JSONArray;
 import org.junit.jupiter.api.Test;
 
 import io.lumipose.client.camera.CameraFacts;
@@ -34,6 +36,7 @@ import io.lumipose.client.net.FrameUploader;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.protocol.CaptureProtocol;
 import io.lumipose.client.sensor.GravityHistory;
+import io.lumipose.client.sensor.GyroHistory;
 
 class FramePipelineTest {
     private static final int W = 640;
@@ -159,7 +162,7 @@ class FramePipelineTest {
 
     private static FramePipeline pipeline(CameraFacts facts, CapturePlan plan, Recorder r,
                                           java.util.concurrent.Executor e) {
-        return FramePipeline.forCamera(facts, plan, null, new GravityHistory(), r, e, r);
+        return FramePipeline.forCamera(facts, plan, null, new GravityHistory(), new GyroHistory(), r, e, r);
     }
 
     /** The fixture's camera as a LIMITED device without per-frame control. */
@@ -454,6 +457,53 @@ class FramePipelineTest {
         out.sent.addAll(r.sent.subList(r.sent.size() - frames, r.sent.size()));
         out.bodies.addAll(r.bodies.subList(r.bodies.size() - frames, r.bodies.size()));
         return out;
+    }
+
+    /**
+     * Each frame goes with the gyroscope's mean rate over its own readout (SENSOR_TIMESTAMP to the
+     * last row's exposure end), turned into the camera frame; not with the readings between frames.
+     */
+    @Test
+    void eachFrameGoesWithTheMeanRateOverItsReadout() throws Exception {
+        CapturePlan plan = plan(1);
+        List<Frame> frames = bursts(plan, 3);
+        Recorder r = new Recorder(null);
+        GyroHistory rates = new GyroHistory();
+        for (int k = 0; k < frames.size(); k++) {
+            FrameResult result = frames.get(k).result;
+            long t = result.timestampNs;
+            long end = t + result.rollingShutterSkewNs + result.exposureNs;
+            assertTrue(end + 1_000_000L < t + FRAME_NS, "the fixture leaves a gap between readouts");
+            // About the device's z axis: 0.1 (k + 1) and 0.3 (k + 1) rad/s, a mean of 0.2 (k + 1).
+            rates.add(t, new float[] {0, 0, 0.1f * (k + 1)});
+            rates.add(end, new float[] {0, 0, 0.3f * (k + 1)});
+            rates.add(end + 1_000_000L, new float[] {5, 5, 5}); // between readouts: nobody's
+        }
+        FramePipeline p = FramePipeline.forCamera(Devices.load(Devices.LOGICAL), plan, null, new GravityHistory(),
+                rates, r, DIRECT, r);
+        feed(p, frames, 0);
+        assertEquals(3, r.sent.size());
+        for (FrameMeta m : r.sent) {
+            int k = (int) ((m.timestampNs - frames.get(0).t()) / FRAME_NS);
+            JSONArray rate = m.toJson().getJSONArray("angular_velocity_camera_dps");
+            // The back camera at 90 deg looks along the device's -z: the same turn about its own z reads negative.
+            assertEquals(0, rate.getDouble(0), 1e-9);
+            assertEquals(0, rate.getDouble(1), 1e-9);
+            assertEquals(-Math.toDegrees(0.2 * (k + 1)), rate.getDouble(2), 1e-4, "frame " + k);
+        }
+        assertFalse(p.warnings().contains(FramePipeline.NO_RATE_UNKNOWN_TIMESTAMPS));
+
+        // Timestamps on the camera's own clock: no rate at all rather than a wrong one, said once.
+        Recorder unknown = new Recorder(null);
+        CameraFacts ownClock = Devices.load(Devices.LOGICAL).toBuilder().timestampSource("unknown").build();
+        FramePipeline q = FramePipeline.forCamera(ownClock, plan, null, new GravityHistory(), rates, unknown, DIRECT,
+                unknown);
+        feed(q, frames, 0);
+        assertEquals(3, unknown.sent.size());
+        for (FrameMeta m : unknown.sent) {
+            assertNull(m.angularVelocityCameraDps());
+        }
+        assertEquals(1, q.warnings().stream().filter(FramePipeline.NO_RATE_UNKNOWN_TIMESTAMPS::equals).count());
     }
 
     @Test

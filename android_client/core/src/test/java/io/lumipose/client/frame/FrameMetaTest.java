@@ -77,6 +77,26 @@ class FrameMetaTest {
                 "{\"schema\": \"lumipose.frame/2\", \"width\": 4, \"height\": 4, \"camera\": {\"profile\": \"x\"}}"))
                 .field);
     }
+
+    /** The gyroscope's rate (docs/contract.md, "Rotation rate") is written, read back and kept by a window. */
+    @Test
+    void angularVelocityIsWrittenReadAndKeptByAWindow() {
+        FrameMeta m = FrameMeta.builder(640, 480).camera(K).timestampNs(7L)
+                .angularVelocityCameraDps(new double[] {1.5, -0.25, 30}).build();
+        JSONObject o = m.toJson();
+        assertEquals(-0.25, o.getJSONArray("angular_velocity_camera_dps").getDouble(1));
+        assertEquals(3, o.getJSONArray("angular_velocity_camera_dps").length());
+        assertArrayEquals(new double[] {1.5, -0.25, 30},
+                FrameMeta.fromJson(o.toString()).angularVelocityCameraDps(), 0);
+        assertArrayEquals(new double[] {1.5, -0.25, 30},
+                m.window(10, 10, 100, 100, null).angularVelocityCameraDps(), 0);
+        assertFalse(FrameMeta.builder(640, 480).camera(K).build().toJson().has("angular_velocity_camera_dps"));
+        assertEquals("angular_velocity_camera_dps[2]", assertThrows(ContractException.class, () -> FrameMeta
+                .builder(640, 480).camera(K).angularVelocityCameraDps(new double[] {0, 0, 4000.5}).build()).field);
+        assertEquals("angular_velocity_camera_dps", assertThrows(ContractException.class, () -> FrameMeta
+                .builder(640, 480).camera(K).angularVelocityCameraDps(new double[] {0, 0}).build()).field);
+    }
+
     @Test
     void cropIsAFirstClassFieldAndAWindowKeepsTheFullFramesIntrinsics() {
         FrameMeta whole = FrameMeta.builder(640, 480).camera(K).timestampNs(5L).frameKind("id").toneCurve("linear")

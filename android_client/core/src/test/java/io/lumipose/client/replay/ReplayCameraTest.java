@@ -36,6 +36,8 @@ import io.lumipose.client.net.FrameUploader;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.sensor.GravityHistory;
 import io.lumipose.client.sensor.GravityTransform;
+import io.lumipose.client.sensor.GyroHistory;
+import io.lumipose.client.sensor.GyroTransform;
 import io.lumipose.client.sensor.LensFacing;
 
 class ReplayCameraTest {
@@ -61,6 +63,7 @@ class ReplayCameraTest {
                 .put("iso", "id".equals(kind) ? 640.0 : 400.0)
                 .put("rolling_shutter_skew_s", 0.03).put("timestamp_ns", 1000000000L + i * 33333333L)
                 .put("gravity_camera", new JSONArray(gravity)).put("frame_kind", kind)
+                .put("angular_velocity_camera_dps", new JSONArray(rateDps(i)))
                 .put("ground_truth", new JSONObject().put("position_m", new JSONArray(new double[] {0.1 * i, 0, 1.3}))
                         .put("rotation_wc", new JSONArray("[[1,0,0],[0,1,0],[0,0,1]]")));
         String stem = String.format("walk_%04d", i);
@@ -72,6 +75,11 @@ class ReplayCameraTest {
             }
         }
         Files.write(dir.resolve(stem + ".y"), y);
+    }
+
+    /** Frame i's rotation rate in the fixture, camera frame, deg/s. */
+    private static double[] rateDps(int i) {
+        return new double[] {0.5 * i, -1.0, 2.0};
     }
 
     private Recording recording(int frames) throws IOException {
@@ -193,8 +201,9 @@ class ReplayCameraTest {
         CapturePlan plan = CapturePlan.plan(camera.facts(), camera.captureOptions(2, 2.0));
         Capture sink = new Capture();
         GravityHistory gravity = new GravityHistory();
+        GyroHistory rates = new GyroHistory();
         final List<String> deliveries = new ArrayList<String>();
-        camera.play(plan, sink, gravity, new ReplayCamera.Pace() {
+        camera.play(plan, sink, gravity, rates, new ReplayCamera.Pace() {
             @Override
             public void beforeDelivery(RecordedFrame frame) {
                 deliveries.add(frame.name);
@@ -211,6 +220,11 @@ class ReplayCameraTest {
             double[] g = f.gravityCamera();
             double norm = Math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
             assertArrayEquals(new double[] {g[0] / norm, g[1] / norm, g[2] / norm}, back, 1e-6, f.name);
+            // The frame's rate over its readout (30 ms skew and the exposure) is the fixture's own.
+            long readoutEnd = f.timestampNs + Math.round((f.rollingShutterSkewS + f.exposureS) * 1e9);
+            assertArrayEquals(f.angularVelocityCameraDps(), GyroTransform.deviceToCameraDps(
+                    rates.meanOver(f.timestampNs, readoutEnd), SimulatedPhone.SENSOR_ORIENTATION_DEG,
+                    LensFacing.FRONT), 1e-4, f.name);
         }
         for (FrameResult result : sink.results) {
             long index = (result.timestampNs - 1000000000L) / 33333333L;
@@ -221,7 +235,7 @@ class ReplayCameraTest {
 
         // Without ID frames in the plan, the camera takes none.
         Capture poseOnly = new Capture();
-        camera.play(CapturePlan.plan(camera.facts(), camera.captureOptions(1, 2.0)), poseOnly, gravity,
+        camera.play(CapturePlan.plan(camera.facts(), camera.captureOptions(1, 2.0)), poseOnly, gravity, rates,
                 new ReplayCamera.Pace() {
                     @Override
                     public void beforeDelivery(RecordedFrame frame) {
@@ -243,7 +257,7 @@ class ReplayCameraTest {
             assertEquals(CameraFacts.SYNC_UNKNOWN, camera.facts().syncMaxLatency);
             CapturePlan plan = CapturePlan.plan(camera.facts(), camera.captureOptions(2, 2.0));
             Capture sink = new Capture();
-            camera.play(plan, sink, new GravityHistory(), NO_PACE);
+            camera.play(plan, sink, new GravityHistory(), new GyroHistory(), NO_PACE);
             for (FrameResult result : sink.results) {
                 long index = (result.timestampNs - 1000000000L) / 33333333L;
                 assertEquals(index % 5 == 0 ? 1000000L : 125000L, result.exposureNs.longValue(), "what its pixels show");
@@ -251,8 +265,9 @@ class ReplayCameraTest {
             }
 
             final List<FrameMeta> sent = new ArrayList<FrameMeta>();
+            GyroHistory rates = new GyroHistory();
             FramePipeline pipeline = FramePipeline.forCamera(camera.facts(), plan, null, new GravityHistory(),
-                    new FrameUploader() {
+                    rates, new FrameUploader() {
                         @Override
                         public LocateResult upload(byte[] luma, FrameMeta meta) {
                             sent.add(meta);
@@ -260,11 +275,17 @@ class ReplayCameraTest {
                                     + "\"reason\": \"no_beacon\"}");
                         }
                     }, DIRECT, IGNORE);
-            camera.play(plan, pipeline, new GravityHistory(), NO_PACE);
+            camera.play(plan, pipeline, new GravityHistory(), rates, NO_PACE);
             List<Long> poses = new ArrayList<Long>();
             for (FrameMeta m : sent) {
+                int index = (int) ((m.timestampNs - 1000000000L) / 33333333L);
                 if ("pose".equals(m.frameKind)) {
-                    poses.add((m.timestampNs - 1000000000L) / 33333333L);
+                    poses.add((long) index);
+                }
+                // The replayed gyroscope's rate reaches the sent JSON, turned back into the camera frame.
+                JSONArray rate = m.toJson().getJSONArray("angular_velocity_camera_dps");
+                for (int k = 0; k < 3; k++) {
+                    assertEquals(rateDps(index)[k], rate.getDouble(k), 1e-4, m.timestampNs + "[" + k + "]");
                 }
             }
             assertEquals(java.util.Arrays.asList(0L, 5L, 10L), poses, "lag " + lag + ": " + pipeline.dropCounts());
