@@ -22,10 +22,9 @@ import math
 import os
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from server.geometry import beacon_outline_m, beacon_to_world
@@ -36,8 +35,15 @@ from simulator.render import CameraPose, SensorModel, _noisy_u8, beacon_outline_
 @dataclass(frozen=True)
 class BlenderSettings:
     samples: int = 32  # per pixel; emission only, so this only smooths the pixel filter
-    filter_width_px: float = 3.0  # Cycles' Gaussian pixel filter; 1.5 (its default) is so sharp that a 50 % reading
-    # interpolated between pixels depends on the edge's sub-pixel phase (0.1 px at 3 m)
+    # Cycles' pixel filter: the radiance is point-sampled through it (no pixel area on top). Its Gaussian of width w
+    # has sigma w / 4 (CYCLES_GAUSSIAN_SIGMA_PER_WIDTH): 0.75 px at 3 px, which `bench fidelity --blender` keeps;
+    # Blackman-Harris 1.5 (Cycles' default) is so sharp that a 50 % reading interpolated between pixels depends on the
+    # edge's sub-pixel phase (0.1 px at 3 m). `render_blender_frame` sets the sensor's own (`sensor_pixel_filter`).
+    filter_width_px: float = 3.0
+    pixel_filter: str = "GAUSSIAN"  # Cycles' pixel_filter_type: BOX, GAUSSIAN or BLACKMAN_HARRIS
+    adaptive_sampling: bool = True  # Cycles' default
+    adaptive_threshold: float = 0.01  # Cycles' default
+    adaptive_min_samples: int = 0  # 0 = Cycles' choice
     margin_px: int = 12
     threads: int = 0  # 0 = Blender's choice (all cores)
 
@@ -75,10 +81,12 @@ def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, w
     from mathutils import Matrix
 
     outline_px = beacon_outline_px(beacon, camera, pose)  # only to place the render border
-    x0 = max(0, int(math.floor(outline_px[:, 0].min())) - settings.margin_px)
-    y0 = max(0, int(math.floor(outline_px[:, 1].min())) - settings.margin_px)
-    x1 = min(width, int(math.ceil(outline_px[:, 0].max())) + settings.margin_px + 1)
-    y1 = min(height, int(math.ceil(outline_px[:, 1].max())) + settings.margin_px + 1)
+    # the pixel filter reaches +-1.5 width (Gaussian), +-width (Blackman-Harris) or +-width / 2 (box)
+    margin = max(settings.margin_px, int(math.ceil(1.5 * settings.filter_width_px)) + 2)
+    x0 = max(0, int(math.floor(outline_px[:, 0].min())) - margin)
+    y0 = max(0, int(math.floor(outline_px[:, 1].min())) - margin)
+    x1 = min(width, int(math.ceil(outline_px[:, 0].max())) + margin + 1)
+    y1 = min(height, int(math.ceil(outline_px[:, 1].max())) + margin + 1)
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -86,7 +94,10 @@ def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, w
     scene.cycles.device = "CPU"
     scene.cycles.samples = settings.samples
     scene.cycles.use_denoising = False
-    scene.cycles.pixel_filter_type = "GAUSSIAN"
+    scene.cycles.pixel_filter_type = settings.pixel_filter
+    scene.cycles.use_adaptive_sampling = settings.adaptive_sampling
+    scene.cycles.adaptive_threshold = settings.adaptive_threshold
+    scene.cycles.adaptive_min_samples = settings.adaptive_min_samples
     scene.cycles.filter_width = settings.filter_width_px
     if settings.threads:
         scene.render.threads_mode = "FIXED"
@@ -151,17 +162,40 @@ def render_blender(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, w
     return BlenderCrop(radiance, (x0, y0))
 
 
+CYCLES_GAUSSIAN_SIGMA_PER_WIDTH = 0.25  # Cycles triples a Gaussian filter's width and draws exp(-2 (6 v / 3w)^2):
+# sigma = width / 4, cut at +-1.5 width (+-6 sigma); Blackman-Harris doubles it (sigma 0.42 px at its default 1.5 px)
+
+
+def sensor_pixel_filter(sensor: SensorModel, settings: BlenderSettings = BlenderSettings()) -> BlenderSettings:
+    """`settings` with Cycles' pixel filter set to the sensor's pixel response: the pixel's area (a 1 px box)
+    convolved with the lens PSF (a Gaussian of `sensor.psf_sigma_px`), as `simulator.render` draws it.
+
+    Cycles point-samples the image through its pixel filter, so the filter is the whole response. With no PSF
+    it is the box itself; else a Gaussian of the box's and the PSF's variances, sigma^2 + 1/12, which puts a
+    clipped edge within 0.001 px of the box-then-Gaussian response for sigma >= 0.8 px (its excess kurtosis,
+    -1.2 / (12 sigma^2 + 1)^2, is what differs). The filter's Monte Carlo noise is not smoothed by anything
+    afterwards, hence `FRAME_SETTINGS`' samples."""
+    if sensor.psf_sigma_px <= 0:
+        return replace(settings, pixel_filter="BOX", filter_width_px=1.0)
+    sigma = math.sqrt(sensor.psf_sigma_px**2 + 1.0 / 12.0)
+    return replace(settings, pixel_filter="GAUSSIAN", filter_width_px=sigma / CYCLES_GAUSSIAN_SIGMA_PER_WIDTH)
+
+
+# rms 0.0014 of the panel's level on edge pixels at the levels a clipped edge is read at (sigma 1; 0.00085 at 2048
+# samples, 0.0006 at 4096): 1.4 DN at a 4x plateau beside the sensor's 3.2 DN. About 1.5 min a full-resolution frame
+FRAME_SETTINGS = BlenderSettings(samples=1024, adaptive_threshold=0.001)
+
+
 def render_blender_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
                          sensor: SensorModel, rng: np.random.Generator,
-                         settings: BlenderSettings = BlenderSettings()) -> np.ndarray:
+                         settings: BlenderSettings = FRAME_SETTINGS) -> np.ndarray:
     """An 8-bit luma frame (height, width) from Cycles' radiance through the sensor of
-    `simulator.render.render_frame`: the radiance (each pixel already integrated by Cycles' pixel
-    filter) blurred by the lens PSF, at the panel's level over the background, vignetting, then
-    shot and read noise, rounding and clipping (the same noise model, `render._noisy_u8`)."""
-    crop = render_blender(beacon, camera, pose, width, height, settings)
+    `simulator.render.render_frame`: Cycles integrates the panel over each pixel's area blurred by
+    the lens PSF (its pixel filter, `sensor_pixel_filter`), at the panel's level over the
+    background, vignetting, then shot and read noise, rounding and clipping (the same noise
+    model, `render._noisy_u8`)."""
+    crop = render_blender(beacon, camera, pose, width, height, sensor_pixel_filter(sensor, settings))
     light = crop.radiance.astype(np.float32)
-    if sensor.psf_sigma_px > 0:  # the crop's margin is dark: replicating its border adds no light
-        light = cv2.GaussianBlur(light, (0, 0), sensor.psf_sigma_px, borderType=cv2.BORDER_REPLICATE)
     x0, y0 = crop.origin_px
     signal = np.full((height, width), sensor.background_dn, np.float32)
     signal[y0 : y0 + light.shape[0], x0 : x0 + light.shape[1]] += sensor.plateau_dn * light

@@ -34,3 +34,40 @@ def test_blender_refuses_what_it_cannot_draw():
                        CameraPose(np.zeros(3), np.eye(3)), 480, 640)
     with pytest.raises(ValueError, match="camera.cx"):
         render_blender(SQUARE, CAMERA.model_copy(update={"cx": 250.0}), CameraPose(np.zeros(3), np.eye(3)), 480, 640)
+
+
+def _box_times_gaussian(columns, edge_px, sigma_px):
+    """A rising straight edge at `edge_px` blurred by a Gaussian PSF and integrated over each 1 px column."""
+    from scipy.special import ndtr
+    from scipy.stats import norm
+
+    def integral(u):  # of ndtr
+        return u * ndtr(u) + norm.pdf(u)
+
+    return sigma_px * (integral((columns + 0.5 - edge_px) / sigma_px) - integral((columns - 0.5 - edge_px) / sigma_px))
+
+
+def _crossing(profile, level):
+    i = int(np.nonzero(profile >= level)[0][0])
+    return i - 1 + (level - profile[i - 1]) / (profile[i] - profile[i - 1])
+
+
+@pytest.mark.parametrize("sigma_px", [0.8, 1.5])
+def test_blender_frame_pixels_are_the_box_times_the_psf(sigma_px):
+    """`render_blender_frame`'s pixel filter draws the sensor's pixel (1 px box) blurred by the PSF: a clipped
+    edge's low crossing (a 4x overexposed panel read at half the clip level) lies where the analytic profile
+    puts it. Cycles' 3 px Gaussian filter plus a PSF sampled at whole pixels put it ~0.2 px outside."""
+    from simulator.blender import FRAME_SETTINGS, sensor_pixel_filter
+    from simulator.render import SensorModel
+
+    offset_m = 0.0013
+    pose = CameraPose(np.array([offset_m, 0.0, 0.0]), np.eye(3))
+    settings = sensor_pixel_filter(SensorModel(psf_sigma_px=sigma_px), FRAME_SETTINGS)
+    crop = render_blender(SQUARE, CAMERA, pose, 480, 640, settings)
+    exact = exact_corners_px(0.174, 1.0, CAMERA.fx, CAMERA.fy, CAMERA.cx - CAMERA.fx * offset_m, CAMERA.cy) - crop.origin_px
+    left_px = exact[:, 0].min()
+    rows = np.arange(int(exact[:, 1].min()) + 10, int(exact[:, 1].max()) - 10)
+    level = 0.125
+    expected = _crossing(_box_times_gaussian(np.arange(crop.radiance.shape[1], dtype=float), left_px, sigma_px), level)
+    measured = np.mean([_crossing(crop.radiance[row], level) for row in rows])
+    assert measured == pytest.approx(expected, abs=0.02)
