@@ -319,8 +319,9 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
         return None
     sigmas = np.linspace(0.1, 8.0, 160)
     growth = max(growth_px, 0.0)
-    ratio = ndtr(-(growth + level_gap_px) / sigmas) / ndtr(-growth / sigmas)
-    return float(np.interp(0.5, ratio, sigmas))
+    with np.errstate(invalid="ignore", divide="ignore"):  # both tails underflow for the narrowest blurs
+        ratio = ndtr(-(growth + level_gap_px) / sigmas) / ndtr(-growth / sigmas)
+    return float(np.interp(0.5, np.nan_to_num(ratio, nan=0.0), sigmas))  # the ratio's limit there is 0
 
 
 # Where a bare panel's blurred edge has fallen to the background: this band beyond its mid-level
