@@ -44,11 +44,11 @@ class ReplayEndToEndTest {
     private static final double WINDOW_TOLERANCE_MM = 0.01;
     /**
      * The office's fixes, one frame each at a quarter of the Mi 8's resolution from 1.4 m below
-     * the panels, while walking at 0.8 m/s (as the walk's); a wrong beacon is 1.2 m off.
+     * the panels, the phone held still at each capture (walking at 0.8 m/s smears a 10 ms pose
+     * frame by 5 px, which the server refuses or misreads: docs/accuracy.md, "Frames as a phone
+     * makes them"; this test is about the app's bursts, IDs and track); a wrong beacon is 1.2 m off.
      */
     private static final double OFFICE_TOLERANCE_MM = 60.0;
-    /** What the office's quarter-resolution walking frames can give, see {@link #officeMap()}. */
-    private static final double OFFICE_REQUIRED_SIGMA_M = 0.05;
     private static Lumipose.Serve serve;
     private static Recording walk;
     private static Recording office;
@@ -113,7 +113,7 @@ class ReplayEndToEndTest {
 
     @Test
     void theWindowDoesNotChangeTheAnswerInADeviceSession() throws Exception {
-        serve.putMap(officeMap());
+        serve.putMap(office.map());
         assertWindowsGiveTheWholeFramesFixes(ReplayRun.play(office, serve.baseUrl, "office-window-phone", true));
     }
 
@@ -128,8 +128,11 @@ class ReplayEndToEndTest {
             LocateResult whole = LocateResult.fromJson(s.whole.reply);
             assertTrue(window.ok && whole.ok, s.frame.name + ": " + window.reason + " / " + whole.reason);
             double difference = distanceMm(window.positionM(), whole.positionM());
-            assertTrue(difference <= WINDOW_TOLERANCE_MM, s.frame.name + ": window and whole frame "
-                    + difference + " mm apart");
+            // A whole frame with two whole panels in view fuses their fixes (server.rooms); the
+            // app's window holds one of them, so its fix is that panel's alone.
+            boolean fused = whole.warnings.stream().anyMatch(w -> w.startsWith("position fused from beacons"));
+            assertTrue(difference <= (fused ? OFFICE_TOLERANCE_MM : WINDOW_TOLERANCE_MM), s.frame.name
+                    + ": window and whole frame " + difference + " mm apart" + (fused ? " (whole: fused)" : ""));
             assertTrue(s.window.bodyBytes < s.whole.bodyBytes / 4, s.frame.name + ": the window is "
                     + s.window.bodyBytes + " of " + s.whole.bodyBytes + " bytes");
         }
@@ -158,7 +161,7 @@ class ReplayEndToEndTest {
         for (int i = 0; i < 6; i++) {
             poses.put(new JSONObject().put("position_m", new JSONArray(new double[] {-1.0 + 0.4 * i, -1.2, 1.32}))
                     .put("ypr_deg", new JSONArray(new double[] {0, 1, -1})).put("t_s", 0.5 * i)
-                    .put("velocity_mps", new JSONArray(new double[] {0.8, 0, 0})));
+                    .put("velocity_mps", new JSONArray(new double[] {0, 0, 0})));
         }
         scene.put("series", new JSONObject().put("path", new JSONObject().put("kind", "poses").put("poses", poses)));
         Path file = dir.resolve("office-app.json");
@@ -168,7 +171,7 @@ class ReplayEndToEndTest {
 
     @Test
     void fourBeaconOfficeWithIdBursts() throws Exception {
-        serve.putMap(officeMap());
+        serve.putMap(office.map());
         assertOfficeBurstsRight(ReplayRun.play(office, serve.baseUrl, "office-phone", true));
     }
 
@@ -180,19 +183,10 @@ class ReplayEndToEndTest {
      */
     @Test
     void fourBeaconOfficeOnAPhoneWhoseSettingsLag() throws Exception {
-        serve.putMap(officeMap());
+        serve.putMap(office.map());
         ReplayRun run = ReplayRun.play(office, serve.baseUrl, "office-lagging-phone", true, 2);
         assertFalse(run.facts.hasPerFrameControl());
         assertOfficeBurstsRight(run);
-    }
-
-    /**
-     * The office's map as these frames need it: a quarter of the Mi 8's resolution while walking
-     * fixes the position to 10-20 mm (1 sigma), which the default required_sigma_m (10 mm) refuses
-     * as pose_uncertain; the app sends full-resolution windows, four times finer.
-     */
-    private static JSONObject officeMap() {
-        return office.map().put("required_sigma_m", OFFICE_REQUIRED_SIGMA_M);
     }
 
     private static void assertOfficeBurstsRight(ReplayRun run) {
