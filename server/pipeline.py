@@ -49,9 +49,9 @@ from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
 DEVICE_TONE_CURVE = "the device's tone curve was applied (tone_curve 'device'), not the linear one asked for"
 
 
-# An outline fit that overrules the gravity sensor by this many of its sigmas has met a frame its
-# model does not hold for (the still frames of the robustness bench stay within 3)
-OUTLINE_GRAVITY_SIGMAS = 10.0
+# A fit that overrules the gravity sensor by this many of its sigmas has met a frame its model does
+# not hold for (the still frames of the robustness bench stay within 3; walking: 15-66)
+GRAVITY_OVERRULED_SIGMAS = 10.0
 
 
 class CornerMethod(StrEnum):
@@ -211,6 +211,26 @@ def locate_beacon(
             options.pose,
             growth_sigma,
         )
+        off_deg = _tilt_off_gravity_deg(pose.rotation_wc, gravity) if not isinstance(pose, Refusal) else 0.0
+        if gravity_mode is GravityMode.auto and off_deg > GRAVITY_OVERRULED_SIGMAS * options.gravity_sigma_deg:
+            # The corners overrule the gravity sensor by far: the square's shape is not the still
+            # panel's (smeared or skewed by a moving camera where the sides' blur did not tell)
+            warnings.append(
+                f"the panel's shape tilts the camera {off_deg:.1f} deg from the gravity sensor's reading: "
+                f"the sensor's tilt taken (did the camera move?)"
+            )
+            pose = solve_pose(
+                ordered.corners,
+                center,
+                beacon,
+                matrix,
+                gravity,
+                options.gravity_sigma_deg,
+                GravityMode.always,
+                corner_sigma,
+                options.pose,
+                growth_sigma,
+            )
     if isinstance(pose, Refusal):
         return timer.refusal(pose, warnings)
     reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
@@ -279,16 +299,22 @@ def _outline_doubt(by_outline: Fix, by_corners: Fix, frame: LumaFrame, options: 
                 f"the corners and the outline of the panel place the camera {np.hypot(*apart_m) * 1000:.0f} mm "
                 f"apart, more than their uncertainties allow"
             )
-    gravity = _gravity(frame, options)
-    if gravity is not None:
-        down = by_outline.rotation_wc.T @ np.array([0.0, 0.0, -1.0])  # the fit's gravity, camera frame
-        off_deg = math.degrees(math.acos(np.clip(down @ gravity / np.linalg.norm(gravity), -1.0, 1.0)))
-        if off_deg > OUTLINE_GRAVITY_SIGMAS * options.gravity_sigma_deg:
-            return (
-                f"the outline of the panel tilts the camera {off_deg:.1f} deg from the gravity sensor's "
-                f"reading (its error is {options.gravity_sigma_deg:g} deg)"
-            )
+    off_deg = _tilt_off_gravity_deg(by_outline.rotation_wc, _gravity(frame, options))
+    if off_deg > GRAVITY_OVERRULED_SIGMAS * options.gravity_sigma_deg:
+        return (
+            f"the outline of the panel tilts the camera {off_deg:.1f} deg from the gravity sensor's "
+            f"reading (its error is {options.gravity_sigma_deg:g} deg)"
+        )
     return None
+
+
+def _tilt_off_gravity_deg(rotation_wc: np.ndarray, gravity_camera: np.ndarray | None) -> float:
+    """The angle (deg) between a pose's down and the gravity sensor's, 0 without a sensor."""
+    if gravity_camera is None:
+        return 0.0
+    down = np.asarray(rotation_wc).T @ np.array([0.0, 0.0, -1.0])  # the pose's gravity, camera frame
+    cosine = down @ gravity_camera / np.linalg.norm(gravity_camera)
+    return math.degrees(math.acos(float(np.clip(cosine, -1.0, 1.0))))
 
 
 def _corner_path_fits(beacon: Beacon) -> bool:
