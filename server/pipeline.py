@@ -198,19 +198,23 @@ def locate_beacon(
     gravity_mode = GravityMode.always if moved else options.gravity_mode
     if device_curve:
         warnings.append(f"{DEVICE_TONE_CURVE}: the clipped-edge growth is uncertain by {unknown[0]:.2f} px more")
-    with timer.stage("pose"):
-        pose = solve_pose(
+
+    def solve(mode: GravityMode):
+        return solve_pose(
             ordered.corners,
             center,
             beacon,
             matrix,
             gravity,
             options.gravity_sigma_deg,
-            gravity_mode,
+            mode,
             corner_sigma,
             options.pose,
             growth_sigma,
         )
+
+    with timer.stage("pose"):
+        pose = solve(gravity_mode)
         off_deg = _tilt_off_gravity_deg(pose.rotation_wc, gravity) if not isinstance(pose, Refusal) else 0.0
         if gravity_mode is GravityMode.auto and off_deg > GRAVITY_OVERRULED_SIGMAS * options.gravity_sigma_deg:
             # The corners overrule the gravity sensor by far: the square's shape is not the still
@@ -219,18 +223,7 @@ def locate_beacon(
                 f"the panel's shape tilts the camera {off_deg:.1f} deg from the gravity sensor's reading: "
                 f"the sensor's tilt taken (did the camera move?)"
             )
-            pose = solve_pose(
-                ordered.corners,
-                center,
-                beacon,
-                matrix,
-                gravity,
-                options.gravity_sigma_deg,
-                GravityMode.always,
-                corner_sigma,
-                options.pose,
-                growth_sigma,
-            )
+            pose = solve(GravityMode.always)
     if isinstance(pose, Refusal):
         return timer.refusal(pose, warnings)
     reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
