@@ -365,6 +365,8 @@ def locate_by_outlines(
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
     with timer.stage("outline"):
         found = [outline_points(frame.pixels, box, levels, options.outline_points) for _, box in panels]
+        if not found:
+            return timer.refusal(Refusal(FailureReason.beacon_cut_off, "no cut panels to fit"))
         seen = [_undistorted(f.points_px, matrix, distortion) for f in found]
         turned = undo_readout_turn(np.vstack(seen), matrix, frame.meta)  # one instant for all panels
         split = np.split(turned, np.cumsum([len(p) for p in seen])[:-1])

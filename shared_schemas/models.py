@@ -429,7 +429,7 @@ class BeaconMap(Strict):
         default=0.01,
         ge=MIN_REQUIRED_SIGMA_M,
         le=MAX_SIDE_M,
-        description="the 1-sigma 2-D position error an outline fit (cut, rectangle, circle) must reach, or is refused",
+        description="the 1-sigma 2-D position error every fix must reach, or it is refused (pose_uncertain)",
     )
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)

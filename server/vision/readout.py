@@ -16,6 +16,10 @@ import numpy as np
 
 from shared_schemas import FrameMeta
 
+# Beyond this turn over the points' rows (a 30 ms readout at ~400 deg/s) the frame is a smear and
+# the small-turn model of a ray seen from one camera pose meaningless: the points are left alone.
+MAX_TURN_RAD = 0.2
+
 
 def row_time_s(meta: FrameMeta) -> float | None:
     """Seconds between the exposure starts of neighbouring rows of the full frame, or None when
@@ -39,6 +43,8 @@ def undo_readout_turn(points_px: np.ndarray, camera_matrix: np.ndarray, meta: Fr
     rays = np.column_stack([points, np.ones(len(points))]) @ np.linalg.inv(camera_matrix).T
     # rows of a crop are rows of the full frame shifted by its offset: only differences matter
     angles = (points[:, 1] - points[:, 1].mean()) * step_s * float(np.linalg.norm(omega))
+    if np.abs(angles).max() > MAX_TURN_RAD:  # rates the contract allows, but no readable frame has
+        return points
     axis = omega / np.linalg.norm(omega)
     cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
     turned = rays * cos + np.cross(axis, rays) * sin + np.outer(rays @ axis, axis) * (1 - cos)  # Rodrigues

@@ -346,7 +346,10 @@ def pedestal_levels(profiles: np.ndarray, offsets: np.ndarray, crossings: np.nda
     if not band.any():
         return levels
     surround = float(np.median(profiles[band]))
-    if surround - levels.background <= SURROUND_RISE * levels.contrast:
+    rise = surround - levels.background
+    # light at half the contrast or more beside the panel is no pedestal under its edge but glare
+    # over it: the edge would be read above its own plateau
+    if rise <= SURROUND_RISE * levels.contrast or rise >= 0.5 * levels.contrast:
         return levels
     return Levels(background=surround, plateau=levels.plateau)
 

@@ -54,3 +54,12 @@ def test_a_white_bezel_no_longer_pulls_the_camera_closer():
     # before: the bezel's 3 % pedestal moved the outline out, the camera 2.6 mm closer on average
     # at 1 m (40 frames), against 0.03 mm without it
     assert abs(_range_bias_mm(PanelSpec.typical("white").only("bezel"))) < 1.0
+
+
+def test_light_as_bright_as_the_panel_beside_it_is_not_taken_for_a_pedestal():
+    # glare at 70 % of the contrast a few pixels beyond the edge: reading from it would put the
+    # edge's level above its own plateau
+    light = 4 * 255 * ndtr(-OFFSETS / 1.2) + 170.0 * (OFFSETS > 3.5) + 8.0
+    profiles = np.tile(np.minimum(light, 255.0), (40, 1))
+    crossings = level_crossings(profiles, OFFSETS, FRAME_LEVELS.threshold)
+    assert pedestal_levels(profiles, OFFSETS, crossings, FRAME_LEVELS) == FRAME_LEVELS

@@ -70,3 +70,12 @@ def test_tremor_costs_little_once_the_gyroscope_is_heard(index):
         errors.append(1000 * float(np.hypot(*np.subtract(result.position_m, seen)[:2])))
     # frames 0 and 3: 3.9 and 2.6 mm without the rate, 0.7 and 0.5 mm with it
     assert errors[0] < 1.0 and errors[1] > 2 * errors[0], errors
+
+
+def test_a_turn_no_frame_survives_is_not_undone():
+    # 4000 deg/s (the contract's bound) over a 30 ms readout would turn rays behind the camera
+    camera = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], 970, 1296)
+    points = np.array([[100.0, 100.0], [900.0, 1200.0]])
+    meta = fixture_meta(camera, 970, 1296, CameraPose(np.zeros(3), np.eye(3)), rolling_shutter_skew_s=0.03,
+                        angular_velocity_camera_dps=[4000.0, 0.0, 0.0])
+    assert np.array_equal(undo_readout_turn(points, camera_matrix(camera), meta), points)
