@@ -19,6 +19,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
+from functools import partial
 
 import cv2
 import numpy as np
@@ -199,22 +200,22 @@ def locate_beacon(
     if device_curve:
         warnings.append(f"{DEVICE_TONE_CURVE}: the clipped-edge growth is uncertain by {unknown[0]:.2f} px more")
 
-    def solve(mode: GravityMode):
-        return solve_pose(
-            ordered.corners,
-            center,
-            beacon,
-            matrix,
-            gravity,
-            options.gravity_sigma_deg,
-            mode,
-            corner_sigma,
-            options.pose,
-            growth_sigma,
-        )
+    # both solves called from here, so that a numerical failure names this stage (server.locator)
+    solve = partial(
+        solve_pose,
+        ordered.corners,
+        center,
+        beacon,
+        matrix,
+        gravity,
+        options.gravity_sigma_deg,
+        corner_sigma_px=corner_sigma,
+        rules=options.pose,
+        growth_sigma_px=growth_sigma,
+    )
 
     with timer.stage("pose"):
-        pose = solve(gravity_mode)
+        pose = solve(gravity_mode=gravity_mode)
         off_deg = _tilt_off_gravity_deg(pose.rotation_wc, gravity) if not isinstance(pose, Refusal) else 0.0
         if gravity_mode is GravityMode.auto and off_deg > GRAVITY_OVERRULED_SIGMAS * options.gravity_sigma_deg:
             # The corners overrule the gravity sensor by far: the square's shape is not the still
@@ -223,7 +224,7 @@ def locate_beacon(
                 f"the panel's shape tilts the camera {off_deg:.1f} deg from the gravity sensor's reading: "
                 f"the sensor's tilt taken (did the camera move?)"
             )
-            pose = solve(GravityMode.always)
+            pose = solve(gravity_mode=GravityMode.always)
     if isinstance(pose, Refusal):
         return timer.refusal(pose, warnings)
     reported = _distorted(np.vstack([ordered.corners, center]), matrix, distortion)
