@@ -131,3 +131,15 @@ def world_to_camera(points_w: np.ndarray, position_m: np.ndarray, rotation_wc: n
 def worst_sigma_2d_m(covariance_m2: np.ndarray) -> float:
     """The horizontal position's 1-sigma along its worst direction, from a (3, 3) covariance."""
     return float(math.sqrt(max(np.linalg.eigvalsh(np.asarray(covariance_m2)[:2, :2]).max(), 0.0)))
+
+
+def gravity_in_camera(rotation_wc: np.ndarray) -> np.ndarray:
+    """Down (the map's -Z) in the camera frame of a camera-to-map rotation: what a gravity sensor reads."""
+    return np.asarray(rotation_wc, dtype=float).T @ np.array([0.0, 0.0, -1.0])
+
+
+def angle_deg(u: np.ndarray, v: np.ndarray) -> float:
+    """The angle (degrees) between two non-zero vectors of any lengths."""
+    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+    cosine = u @ v / (np.linalg.norm(u) * np.linalg.norm(v))
+    return math.degrees(math.acos(float(np.clip(cosine, -1.0, 1.0))))

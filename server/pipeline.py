@@ -25,10 +25,12 @@ import cv2
 import numpy as np
 
 from server.geometry import (
+    angle_deg,
     beacon_corners_m,
     beacon_to_world,
     camera_matrix,
     distortion_vector,
+    gravity_in_camera,
     world_to_camera,
     worst_sigma_2d_m,
 )
@@ -304,11 +306,7 @@ def _outline_doubt(by_outline: Fix, by_corners: Fix, frame: LumaFrame, options: 
 
 def _tilt_off_gravity_deg(rotation_wc: np.ndarray, gravity_camera: np.ndarray | None) -> float:
     """The angle (deg) between a pose's down and the gravity sensor's, 0 without a sensor."""
-    if gravity_camera is None:
-        return 0.0
-    down = np.asarray(rotation_wc).T @ np.array([0.0, 0.0, -1.0])  # the pose's gravity, camera frame
-    cosine = down @ gravity_camera / np.linalg.norm(gravity_camera)
-    return math.degrees(math.acos(float(np.clip(cosine, -1.0, 1.0))))
+    return 0.0 if gravity_camera is None else angle_deg(gravity_in_camera(rotation_wc), gravity_camera)
 
 
 def _corner_path_fits(beacon: Beacon) -> bool:

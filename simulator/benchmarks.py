@@ -26,7 +26,9 @@ import numpy as np
 
 from server.camera import intrinsics_from_profile
 from server.fov import fov_grid
-from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr, world_to_camera
+from server.geometry import (
+    angle_deg, beacon_to_world, dense_beacon_outline_m, gravity_in_camera, rotation_from_ypr, world_to_camera,
+)
 from server.ingest import LumaFrame
 from server.locator import locate
 from server.options import LocateOptions
@@ -253,9 +255,7 @@ def calibration(tests: list[tuple[bool | None, float | None]]) -> dict:
 
 def _tilt_error_deg(rotation_wc: np.ndarray, truth_wc: np.ndarray) -> float:
     """Angle between the estimated and the true down direction in the camera (pitch and roll)."""
-    down = np.array([0.0, 0.0, -1.0])
-    cosine = np.clip((rotation_wc.T @ down) @ (truth_wc.T @ down), -1.0, 1.0)
-    return float(np.degrees(np.arccos(cosine)))
+    return angle_deg(gravity_in_camera(rotation_wc), gravity_in_camera(truth_wc))
 
 
 def summarize(errors_m: list[float]) -> dict:

@@ -44,7 +44,7 @@ from enum import StrEnum
 import cv2
 import numpy as np
 
-from server.geometry import beacon_corners_m, beacon_rotation, beacon_to_world, rotation_z
+from server.geometry import angle_deg, beacon_corners_m, beacon_rotation, beacon_to_world, rotation_z
 from server.outcomes import Refusal
 from server.vision.subpixel import MIN_PHASE_SPAN_PX, EdgeRules
 from shared_schemas import Beacon, FailureReason
@@ -207,9 +207,7 @@ def fuse_gravity(
 
 def _gravity_angle_deg(rvec: np.ndarray, gravity_camera: np.ndarray) -> float:
     """Angle between the gravity a pose predicts in the camera and the measured one."""
-    predicted = -cv2.Rodrigues(rvec)[0][:, 2]
-    measured = np.asarray(gravity_camera, dtype=float) / np.linalg.norm(gravity_camera)
-    return float(np.degrees(np.arccos(np.clip(predicted @ measured, -1.0, 1.0))))
+    return angle_deg(-cv2.Rodrigues(rvec)[0][:, 2], gravity_camera)
 
 
 def _level_start(image_points, beacon: Beacon, camera_matrix, gravity_camera) -> tuple[np.ndarray, np.ndarray]:
