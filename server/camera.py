@@ -9,18 +9,26 @@ from shared_schemas import CameraIntrinsics, DeviceProfile, FrameMeta, ProfileRe
 
 
 def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> CameraIntrinsics:
-    """The profile's pinhole (paper eq. 9) at `width` x `height`.
+    """The profile's pinhole at `width` x `height`: its measured `intrinsics`, else the datasheet's (paper eq. 9).
 
-    Another size is the native image scaled by s = max(w / W, h / H) and centre-cropped.
-    The principal point is centred with pixel centres at integers: (w - 1) / 2, (h - 1) / 2.
+    Another size is the profile's image scaled by s = max(w / W, h / H) and centre-cropped: a
+    pixel centre u of the profile's image lands at (u + 1/2) s - 1/2 less the crop's offset. The
+    datasheet's principal point is the centre, (w - 1) / 2, (h - 1) / 2.
     """
     scale = max(width / profile.width, height / profile.height)
-    focal_px = profile.focal_length_m / profile.pixel_size_m * scale
+    measured = profile.intrinsics
+    if measured is None:
+        fx = fy = profile.focal_length_m / profile.pixel_size_m * scale
+        cx, cy = (width - 1) / 2, (height - 1) / 2
+    else:
+        fx, fy = measured.fx * scale, measured.fy * scale
+        cx = (measured.cx + 0.5) * scale - 0.5 - (profile.width * scale - width) / 2
+        cy = (measured.cy + 0.5) * scale - 0.5 - (profile.height * scale - height) / 2
     return CameraIntrinsics(
-        fx=focal_px,
-        fy=focal_px,
-        cx=(width - 1) / 2,
-        cy=(height - 1) / 2,
+        fx=fx,
+        fy=fy,
+        cx=cx,
+        cy=cy,
         distortion=list(profile.distortion),
         pixel_size_m=profile.pixel_size_m / scale,
         focal_length_m=profile.focal_length_m,

@@ -10,7 +10,9 @@ from pathlib import Path
 
 from pydantic import BaseModel
 
+from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, CalibrationRequest
 from shared_schemas.models import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
+from shared_schemas.survey import SurveyReport, SurveyRequest
 
 SCHEMA_DIR = Path(__file__).parent / "json"
 EXPORTED: dict[str, type[BaseModel]] = {
@@ -19,6 +21,12 @@ EXPORTED: dict[str, type[BaseModel]] = {
     "device_profile": DeviceProfile,
     "result": LocateResult,
     "error": ErrorBody,
+    "board": BoardSpec,
+    "board_view": BoardView,
+    "calibration_request": CalibrationRequest,
+    "calibration_report": CalibrationReport,
+    "survey_request": SurveyRequest,
+    "survey_report": SurveyReport,
 }
 
 

@@ -162,8 +162,24 @@ class Facing(StrEnum):
     rear = "rear"
 
 
+class MeasuredPinhole(Strict):
+    """A camera's pinhole as a calibration measured it (`lumipose calibrate camera`), at the profile's size."""
+
+    fx: float = Field(ge=MIN_FOCAL_PX, le=MAX_FOCAL_PX, description="focal length along x, pixels")
+    fy: float = Field(ge=MIN_FOCAL_PX, le=MAX_FOCAL_PX, description="focal length along y, pixels")
+    cx: float = Field(ge=MIN_PRINCIPAL_PX, le=MAX_PRINCIPAL_PX, description="principal point x, pixels")
+    cy: float = Field(ge=MIN_PRINCIPAL_PX, le=MAX_PRINCIPAL_PX, description="principal point y, pixels")
+    rms_px: float | None = Field(default=None, ge=0, description="the calibration's reprojection RMS")
+    views: int | None = Field(default=None, ge=1, description="board photos the calibration used")
+
+
 class DeviceProfile(Strict):
-    """A phone camera as its maker describes it, at its native output size."""
+    """A phone camera as its maker describes it, at its native output size, or as a calibration measured it.
+
+    With `intrinsics` (a calibrated profile: `width` x `height` are then the calibration photos' size)
+    the pinhole comes from them; without, from `focal_length_m` / `pixel_size_m` with the principal
+    point at the image centre. `distortion` is the calibration's or the maker's.
+    """
 
     id: str
     name: str
@@ -176,6 +192,9 @@ class DeviceProfile(Strict):
     distortion: Distortion = Field(default_factory=list)
     gravity_sigma_deg: float = Field(
         default=0.1, ge=0, le=MAX_GRAVITY_SIGMA_DEG, description="1-sigma tilt error of the gravity sensor at rest"
+    )
+    intrinsics: MeasuredPinhole | None = Field(
+        default=None, description="the measured pinhole at width x height; absent: the datasheet's"
     )
 
     @field_validator("distortion")
@@ -254,6 +273,13 @@ class FrameMeta(Open):
     rolling_shutter_skew_s: float | None = Field(default=None, ge=0, le=MAX_SKEW_S)
     timestamp_ns: int | None = Field(default=None, ge=0, lt=MAX_TIMESTAMP_NS)
     heading_deg: float | None = Field(default=None, ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)
+    compass_bearing_deg: float | None = Field(
+        default=None,
+        ge=-MAX_ANGLE_DEG,
+        le=MAX_ANGLE_DEG,
+        description="the compass bearing (deg clockwise from north) of the image's +x direction laid level: "
+        "the direction whose map yaw is heading_deg; a survey measures the map's bearing_deg from it",
+    )
     gravity_camera: GravityVec | None = None
     angular_velocity_camera_dps: Annotated[list[AngularRate], Field(min_length=3, max_length=3)] | None = Field(
         default=None,
@@ -430,6 +456,13 @@ class BeaconMap(Strict):
         ge=MIN_REQUIRED_SIGMA_M,
         le=MAX_SIDE_M,
         description="the 1-sigma 2-D position error every fix must reach, or it is refused (pose_uncertain)",
+    )
+    bearing_deg: float | None = Field(
+        default=None,
+        ge=-MAX_ANGLE_DEG,
+        le=MAX_ANGLE_DEG,
+        description="the compass bearing (deg clockwise from north) of the map's +X axis, as a survey measured it: "
+        "a phone turns its compass reading into heading_deg with it",
     )
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)

@@ -17,20 +17,21 @@ from pathlib import Path
 import pytest
 from pydantic import BaseModel, ValidationError
 
-from shared_schemas import models
+from shared_schemas import calibration, models, survey
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "contract.md"
 
 BASES = {models.Strict, models.Open}
+CONTRACT_MODULES = (models, calibration, survey)  # the contract's models; api.py's bodies are the HTTP API's
 CONTRACT_MODELS = {
-    name: cls for name, cls in vars(models).items()
-    if inspect.isclass(cls) and issubclass(cls, BaseModel) and cls.__module__ == models.__name__
+    name: cls for module in CONTRACT_MODULES for name, cls in vars(module).items()
+    if inspect.isclass(cls) and issubclass(cls, BaseModel) and cls.__module__ == module.__name__
     and cls not in BASES
 }
 CONTRACT_ENUMS = {
-    name: cls for name, cls in vars(models).items()
-    if inspect.isclass(cls) and issubclass(cls, Enum) and cls.__module__ == models.__name__
+    name: cls for module in CONTRACT_MODULES for name, cls in vars(module).items()
+    if inspect.isclass(cls) and issubclass(cls, Enum) and cls.__module__ == module.__name__
 }
 TOP_LEVEL = (models.FrameMeta, models.BeaconMap, models.DeviceProfile, models.LocateResult, models.ErrorBody)
 

@@ -1,0 +1,146 @@
+"""The contract of camera calibration: the ChArUco board, the corners found on a photo, the report.
+
+`lumipose calibrate board` writes a `BoardSpec` beside the printable board; `POST
+/v1/calibrations/views` finds a `BoardView` on one photo (the app keeps these small records
+instead of re-sending photos); `lumipose calibrate camera` and `POST /v1/calibrations` turn
+views into a `CalibrationReport` whose `profile` is a calibrated `DeviceProfile`.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated, Final, Literal
+
+from pydantic import ConfigDict, Field, model_validator
+
+from shared_schemas.models import MAX_SIDE_PX, DeviceProfile, Point2, Strict
+
+BOARD_SCHEMA: Final = "lumipose.board/1"
+CALIBRATION_SCHEMA: Final = "lumipose.calibration/1"
+MAX_BOARD_SQUARES: Final = 64  # per side: a board of 64 x 64 squares needs 2048 markers (DICT_*_1000 holds 1000)
+MAX_VIEWS: Final = 200  # photos in one calibration: OpenCV's fit is cubic in them; 20-40 is plenty
+MIN_SQUARE_M: Final = 1e-3
+MAX_SQUARE_M: Final = 1.0
+
+
+class ArucoDictionary(StrEnum):
+    """OpenCV's predefined ArUco dictionaries a board may use (cv2.aruco.DICT_*)."""
+
+    dict_4x4_50 = "DICT_4X4_50"
+    dict_4x4_100 = "DICT_4X4_100"
+    dict_4x4_250 = "DICT_4X4_250"
+    dict_4x4_1000 = "DICT_4X4_1000"
+    dict_5x5_100 = "DICT_5X5_100"
+    dict_5x5_250 = "DICT_5X5_250"
+    dict_5x5_1000 = "DICT_5X5_1000"
+    dict_6x6_250 = "DICT_6X6_250"
+    dict_6x6_1000 = "DICT_6X6_1000"
+
+    @property
+    def size(self) -> int:
+        """Markers in the dictionary."""
+        return int(self.value.rsplit("_", 1)[1])
+
+
+class BoardSpec(Strict):
+    """A ChArUco board: a chessboard of `squares_x` x `squares_y` squares with an ArUco marker in each white one.
+
+    Sizes are as printed (measure them: a printer may scale). The top-left square is black (OpenCV >= 4.6).
+    """
+
+    schema_: Literal["lumipose.board/1"] = Field(default=BOARD_SCHEMA, alias="schema")
+    squares_x: int = Field(ge=3, le=MAX_BOARD_SQUARES, description="squares along the board's width")
+    squares_y: int = Field(ge=3, le=MAX_BOARD_SQUARES, description="squares along the board's height")
+    square_m: float = Field(ge=MIN_SQUARE_M, le=MAX_SQUARE_M, description="side of one square, metres")
+    marker_m: float = Field(ge=MIN_SQUARE_M / 2, le=MAX_SQUARE_M, description="side of one marker, metres")
+    dictionary: ArucoDictionary = ArucoDictionary.dict_5x5_100
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
+
+    @model_validator(mode="after")
+    def _fits(self) -> BoardSpec:
+        if self.marker_m >= self.square_m:
+            raise ValueError(f"marker_m ({self.marker_m}) must be smaller than square_m ({self.square_m})")
+        markers = self.squares_x * self.squares_y // 2
+        if markers > self.dictionary.size:
+            raise ValueError(
+                f"a {self.squares_x} x {self.squares_y} board needs {markers} markers; "
+                f"{self.dictionary.value} has {self.dictionary.size}"
+            )
+        return self
+
+    @property
+    def inner_corners(self) -> int:
+        """ChArUco corners (where four squares meet)."""
+        return (self.squares_x - 1) * (self.squares_y - 1)
+
+
+CornerId = Annotated[int, Field(ge=0, lt=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES)]
+
+
+class BoardView(Strict):
+    """The board's corners found on one photo: ChArUco corner ids and their sub-pixel image points."""
+
+    name: str = Field(max_length=256, description="the photo's name, for the report")
+    width: int = Field(ge=1, le=MAX_SIDE_PX)
+    height: int = Field(ge=1, le=MAX_SIDE_PX)
+    corner_ids: list[CornerId] = Field(max_length=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES)
+    corners_px: list[Point2] = Field(max_length=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES)
+
+    @model_validator(mode="after")
+    def _paired(self) -> BoardView:
+        if len(self.corner_ids) != len(self.corners_px):
+            raise ValueError(f"{len(self.corner_ids)} corner_ids but {len(self.corners_px)} corners_px")
+        if len(set(self.corner_ids)) != len(self.corner_ids):
+            raise ValueError("corner_ids must be unique")
+        return self
+
+
+class CalibrationRequest(Strict):
+    """`POST /v1/calibrations`: views found on the photos (all of one size) and the phone they came from."""
+
+    board: BoardSpec
+    views: list[BoardView] = Field(min_length=1, max_length=MAX_VIEWS)
+    device: str | DeviceProfile = Field(
+        description="the phone's datasheet profile (an id the service knows, or the profile itself): "
+        "its name, sensor, facing and pixel size carry over to the calibrated profile"
+    )
+    profile_id: str | None = Field(
+        default=None,
+        pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$",
+        description="id of the calibrated profile; default '<device id>-calibrated'",
+    )
+
+
+class ViewFit(Strict):
+    """How one photo fitted the calibration."""
+
+    name: str
+    corners: int = Field(ge=0, description="ChArUco corners used")
+    rms_px: float | None = Field(default=None, ge=0, description="reprojection RMS of its corners; null when unused")
+    tilt_deg: float | None = Field(default=None, ge=0, description="angle between the board's normal and the axis")
+    distance_m: float | None = Field(default=None, description="board centre to camera")
+    note: str | None = Field(default=None, description="why the photo was left out, if it was")
+
+
+class CalibrationReport(Strict):
+    """What a calibration measured, how well, and what to shoot next when it is not good enough."""
+
+    schema_: Literal["lumipose.calibration/1"] = Field(default=CALIBRATION_SCHEMA, alias="schema")
+    ok: bool = Field(description="the set passed every check; only then is `profile` given")
+    profile: DeviceProfile | None = None
+    rms_px: float | None = Field(default=None, ge=0, description="reprojection RMS over all corners")
+    sigmas: dict[str, float] = Field(
+        default_factory=dict, description="1-sigma of each parameter (fx, fy, cx, cy px; k1, k2, p1, p2, k3)"
+    )
+    distortion_sigma_px: float | None = Field(
+        default=None, ge=0, description="the largest 1-sigma of the distortion's image shift over the whole frame"
+    )
+    coverage: float = Field(ge=0, le=1, description="share of the image's cells (`coverage_cells`) holding a corner")
+    coverage_cells: list[list[int]] = Field(
+        default_factory=list, description="corners seen per cell, rows of the image top to bottom"
+    )
+    max_tilt_deg: float | None = Field(default=None, ge=0, description="the most tilted view")
+    views: list[ViewFit] = Field(default_factory=list)
+    advice: list[str] = Field(default_factory=list, description="what to shoot next, when ok is false")
+    message: str | None = None
