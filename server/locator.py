@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import re
 import traceback
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -104,6 +105,7 @@ def _dispatch(
     # stripe decoder's model (a row's mean = gain x the code's box average + offset) and the
     # flattening (a row divided by its gain) are linear in light, as the clipped-edge model is.
     frame = linearized(frame)
+    frame = _with_map_heading(frame, beacon_map)
     if beacon_id is not None:
         beacon = beacon_map.beacon(beacon_id)
         if beacon is None:
@@ -116,6 +118,20 @@ def _dispatch(
     if device_id is not None and devices is not None:
         return devices.locate(device_id, frame, beacon_map, options)
     return locate_in_room(frame, beacon_map, options.pipeline, options.room)
+
+
+def _with_map_heading(frame: LumaFrame, beacon_map: BeaconMap) -> LumaFrame:
+    """A frame with a compass reading but no heading gets one from the map's surveyed bearing.
+
+    heading_deg = bearing_deg - compass_bearing_deg (docs/contract.md): a phone that has not read
+    the map's bearing, or a client that only knows its compass, still resolves a square's four
+    look-alike orientations. A heading the frame gives is its sender's word and is kept.
+    """
+    meta = frame.meta
+    if meta.heading_deg is not None or meta.compass_bearing_deg is None or beacon_map.bearing_deg is None:
+        return frame
+    heading = (beacon_map.bearing_deg - meta.compass_bearing_deg + 180.0) % 360.0 - 180.0
+    return replace(frame, meta=meta.model_copy(update={"heading_deg": heading}))
 
 
 def _one_panel(frame: LumaFrame, beacon, id_source: BeaconIdSource, options: LocateOptions) -> LocateResult:

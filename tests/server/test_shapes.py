@@ -206,3 +206,22 @@ def test_striped_frames_of_a_rectangle_give_a_fix_or_a_refusal_never_an_error():
     assert np.hypot(*(fix.position_m[:2] - [0.05, -0.08])) < 0.005
     striped = id_frames(0xA5, 2.0, 1 / 8000, 1, seed=10, ypr=(70, 4, -3), shape=rectangle)[0]
     assert isinstance(locate_beacon(striped, beacon), (Refusal, Fix))
+
+
+def test_a_compass_reading_and_the_maps_bearing_give_the_heading():
+    """A frame without heading_deg but with compass_bearing_deg, on a map with a surveyed
+    bearing_deg, is located as with heading_deg = bearing_deg - compass_bearing_deg; a frame's
+    own heading_deg is kept (the compass disagrees here by 180 degrees and is not used)."""
+    yaw, bearing = 20.0, 75.0
+    turned_frame = frame_of(RECTANGLE, POSITION, (yaw + 180.0, 3, -2))
+    surveyed = BeaconMap(name="shapes", beacons=[RECTANGLE], bearing_deg=bearing)
+    compass = turned_frame.meta.model_copy(update={"compass_bearing_deg": bearing - (yaw + 180.0) + 360.0})
+    result = locate(LumaFrame(turned_frame.pixels, compass, turned_frame.camera), surveyed)
+    assert result.ok and result.orientation_rule is OrientationRule.heading
+    assert error_2d_mm(result, POSITION) < 3.0
+    without_bearing = locate(LumaFrame(turned_frame.pixels, compass, turned_frame.camera), surveyed.model_copy(
+        update={"bearing_deg": None}))  # fmt: skip
+    assert without_bearing.orientation_rule is OrientationRule.yaw_within_90deg
+    own_heading = compass.model_copy(update={"heading_deg": yaw + 180.0, "compass_bearing_deg": bearing - yaw})
+    kept = locate(LumaFrame(turned_frame.pixels, own_heading, turned_frame.camera), surveyed)
+    assert kept.orientation_rule is OrientationRule.heading and error_2d_mm(kept, POSITION) < 3.0
