@@ -1,6 +1,7 @@
 """Device profiles over real HTTP: stored beside the bundled ones, named by frames, never a 500."""
 
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import suppress
 
 import httpx
 import numpy as np
@@ -204,3 +205,24 @@ def test_many_threads_putting_deleting_and_locating_at_once(tmp_path):
     assert health.status == "ok" and stored == [CALIBRATED.id]
     assert "Traceback" not in server.log(), server.log()
     assert [path.name for path in (tmp_path / "data" / "profiles").iterdir()] == [f"{CALIBRATED.id}.json"]
+
+
+def test_a_sample_whose_stored_profile_was_deleted_is_a_row_without_a_fix(client):
+    """The evaluation re-locates every sample: one naming a profile deleted since is refused alone."""
+    meta, data = calibrated_lens_frame(POSITION_M)
+    stored = _named("sampled-calibrated")
+    own_meta = meta.model_copy(update={"camera": meta.camera.model_copy(update={"profile": stored.id})})
+    client.put_profile(stored)
+    sample = client.store_sample(data, own_meta, map=MAP)
+    try:
+        assert sample.result.ok
+        client.delete_profile(stored.id)
+        rows = {row.id: row for row in client.evaluate_samples(map=MAP).rows}
+        assert not rows[sample.id].ok and rows[sample.id].reason == "bad_frame" and rows[sample.id].error_2d_mm is None
+        client.put_profile(stored)
+        rows = {row.id: row for row in client.evaluate_samples(map=MAP).rows}
+        assert rows[sample.id].ok and rows[sample.id].error_2d_mm < 3.0
+    finally:
+        client.delete_sample(sample.id)  # the session's other evaluations expect every sample to locate
+        with suppress(LumiposeError):
+            client.delete_profile(stored.id)
