@@ -14,7 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
-from shared_schemas import BeaconMap
+from shared_schemas import BeaconMap, DeviceProfile
 from shared_schemas.api import Evaluation
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
@@ -65,6 +65,19 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     activate = map_actions.add_parser("activate")
     activate.add_argument("name")
     activate.set_defaults(client_run=_activate_map)
+
+    profiles = actions.add_parser("profiles", help="device profiles (bundled, and stored calibrated ones)")
+    profile_actions = profiles.add_subparsers(dest="profiles_command", required=True)
+    profile_actions.add_parser("list").set_defaults(client_run=_list_profiles)
+    get_profile = profile_actions.add_parser("get")
+    get_profile.add_argument("id")
+    get_profile.set_defaults(client_run=_get_profile)
+    put_profile = profile_actions.add_parser("put", help="store a profile file under its own id")
+    put_profile.add_argument("file", type=Path)
+    put_profile.set_defaults(client_run=_put_profile)
+    delete_profile = profile_actions.add_parser("delete", help="remove stored profiles")
+    delete_profile.add_argument("ids", nargs="+")
+    delete_profile.set_defaults(client_run=_delete_profiles)
     client.set_defaults(run=_run)
 
 
@@ -154,4 +167,30 @@ def _put_map(client: Client, args) -> int:
 
 def _activate_map(client: Client, args) -> int:
     print(f"active map: {client.set_active_map(args.name).name}")
+    return 0
+
+
+def _list_profiles(client: Client, args) -> int:
+    for summary in client.profiles():
+        kind = "calibrated" if summary.calibrated else "datasheet"
+        print(f"{summary.id}  {summary.width}x{summary.height}  {summary.facing.value}  {kind}  ({summary.source})")
+    return 0
+
+
+def _get_profile(client: Client, args) -> int:
+    _print(client.profile(args.id))
+    return 0
+
+
+def _put_profile(client: Client, args) -> int:
+    stored = client.put_profile(DeviceProfile.model_validate_json(args.file.read_bytes()))
+    kind = "calibrated" if stored.intrinsics is not None else "datasheet"
+    print(f"stored profile '{stored.id}' ({stored.width}x{stored.height}, {kind})")
+    return 0
+
+
+def _delete_profiles(client: Client, args) -> int:
+    for profile_id in args.ids:
+        client.delete_profile(profile_id)
+        print(f"deleted profile {profile_id}")
     return 0

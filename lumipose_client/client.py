@@ -14,7 +14,7 @@ import zstandard
 from pydantic import BaseModel, ValidationError
 
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
-from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, SampleInfo, SampleList
+from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, ProfileSummary, SampleInfo, SampleList
 from shared_schemas.fixture_files import read_fixture_files
 
 FRAME_HEADER = "X-Lumipose-Frame"
@@ -180,7 +180,26 @@ class _Endpoints:
         return self._run(_Call("PUT", "/v1/maps/active", _model(ActiveMap), json={"name": name}))
 
     def profiles(self):
-        return self._run(_Call("GET", "/v1/profiles", _models(DeviceProfile)))
+        """Every device profile the service knows: ProfileSummary (id, size, `calibrated`, `source`)."""
+        return self._run(_Call("GET", "/v1/profiles", _models(ProfileSummary)))
+
+    def profile(self, profile_id: str):
+        """The DeviceProfile `profile_id`, bundled or stored."""
+        return self._run(_Call("GET", f"/v1/profiles/{profile_id}", _model(DeviceProfile)))
+
+    def put_profile(self, profile: DeviceProfile):
+        """Store (or replace) `profile` under its own id (a calibrated one); a bundled id is refused."""
+        return self._run(
+            _Call(
+                "PUT",
+                f"/v1/profiles/{profile.id}",
+                _model(DeviceProfile),
+                json=profile.model_dump(mode="json", by_alias=True, exclude_none=True),
+            )
+        )
+
+    def delete_profile(self, profile_id: str):
+        return self._run(_Call("DELETE", f"/v1/profiles/{profile_id}", _nothing))
 
     def store_sample(
         self,

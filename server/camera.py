@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
+
 from pydantic import ValidationError
 
 from server.outcomes import FrameError
@@ -36,24 +38,45 @@ def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> 
     )
 
 
-def resolve_camera(meta: FrameMeta) -> CameraIntrinsics:
+ProfileTable = Mapping[str, DeviceProfile]  # the device profiles a frame's `camera.profile` may name, by id
+
+
+def profile_table(extra: Iterable[DeviceProfile] = ()) -> dict[str, DeviceProfile]:
+    """The bundled profiles and `extra` ones (for example calibrated profile files) by id.
+
+    An extra profile may not take a bundled id, nor another extra one's: a frame naming an id must
+    mean one camera (the service's profile store refuses a bundled id too).
+    """
+    table = dict(device_profiles())
+    for profile in extra:
+        if profile.id in table:
+            taken = "a bundled profile's" if profile.id in device_profiles() else "another given profile's"
+            raise ValueError(f"device profile '{profile.id}' has {taken} id; give it another id")
+        table[profile.id] = profile
+    return table
+
+
+def resolve_camera(meta: FrameMeta, profiles: ProfileTable | None = None) -> CameraIntrinsics:
     """The intrinsics of the frame's own pixels; raises `server.outcomes.FrameError` for an unknown profile.
 
-    A cropped frame's camera is the full frame's with the principal point moved by the window's
-    offset, which is exact for the pinhole and for OpenCV's distortion (centred on the principal point).
+    `profiles` is what `camera.profile` may name (default: the bundled profiles); a calibrated
+    profile (with `intrinsics`) is used as measured. A cropped frame's camera is the full frame's
+    with the principal point moved by the window's offset, which is exact for the pinhole and for
+    OpenCV's distortion (centred on the principal point).
     """
-    camera = meta.camera if not isinstance(meta.camera, ProfileRef) else _profile_camera(meta.camera, meta)
+    camera = meta.camera
+    if isinstance(camera, ProfileRef):
+        camera = _profile_camera(camera, meta, device_profiles() if profiles is None else profiles)
     if meta.crop is None:
         return camera
     return camera.model_copy(update={"cx": camera.cx - meta.crop.x, "cy": camera.cy - meta.crop.y})
 
 
-def _profile_camera(ref: ProfileRef, meta: FrameMeta) -> CameraIntrinsics:
-    profile = device_profiles().get(ref.profile)
+def _profile_camera(ref: ProfileRef, meta: FrameMeta, profiles: ProfileTable) -> CameraIntrinsics:
+    profile = profiles.get(ref.profile)
     if profile is None:
         raise FrameError(
-            f"unknown device profile '{ref.profile}'; known: {', '.join(sorted(device_profiles()))}",
-            field="camera.profile",
+            f"unknown device profile '{ref.profile}'; known: {', '.join(sorted(profiles))}", field="camera.profile"
         )
     width, height = meta.full_size
     if (width > height) != (profile.width > profile.height):

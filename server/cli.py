@@ -20,6 +20,13 @@ def _add_locate(commands) -> None:
     parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
     parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
     parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
+    parser.add_argument(
+        "--profile",
+        type=Path,
+        action="append",
+        default=[],
+        help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
+    )
     parser.add_argument("--json", action="store_true", help="print the contract's result as JSON")
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
     parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
@@ -33,16 +40,29 @@ def _add_locate(commands) -> None:
 
 
 def _run_locate(args) -> int:
+    from server.camera import profile_table
     from server.ingest import read_fixture
     from server.locator import locate
     from server.options import LocateOptions
     from server.outcomes import FrameError
     from server.pipeline import CornerMethod, PipelineOptions
     from server.pose.solve import GravityMode
-    from shared_schemas import load_map
+    from shared_schemas import DeviceProfile, load_map
 
+    given = []
+    for path in args.profile:
+        try:
+            given.append(DeviceProfile.model_validate_json(path.read_bytes()))
+        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+            print(f"error: cannot read the device profile {path}: {error}", file=sys.stderr)
+            return EXIT_BAD_INPUT
     try:
-        frame = read_fixture(args.frame)
+        profiles = profile_table(given)
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        frame = read_fixture(args.frame, profiles)
         beacon_map = load_map(args.map)
     except FrameError as error:
         print(f"error: {error}", file=sys.stderr)

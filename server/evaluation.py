@@ -16,12 +16,18 @@ def sample_truth_m(sample: SampleInfo, cell_m: float, height_m: float) -> list[f
 
 
 def evaluate(
-    map_name: str, located: list[tuple[SampleInfo, LocateResult]], cell_m: float, height_m: float = 0.0
+    map_name: str, located: list[tuple[SampleInfo, LocateResult | str]], cell_m: float, height_m: float = 0.0
 ) -> Evaluation:
-    """Error statistics (mm, horizontal) over the samples that have a truth; coverage over all."""
+    """Error statistics (mm, horizontal) over the samples that have a truth; coverage over all.
+
+    A sample's result is a LocateResult, or the error code that refused its frame now (a stored
+    profile its camera names was deleted or damaged since): a row without a fix."""
     rows = []
     for sample, result in located:
         truth = sample_truth_m(sample, cell_m, height_m)
+        if isinstance(result, str):
+            rows.append(EvaluationRow(id=sample.id, label=sample.label, ok=False, reason=result, truth_m=truth))
+            continue
         error = None
         if result.ok and result.position_m is not None and truth is not None:
             error = 1000.0 * float(np.hypot(result.position_m[0] - truth[0], result.position_m[1] - truth[1]))

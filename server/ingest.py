@@ -15,7 +15,7 @@ import numpy as np
 import pydantic_core
 from pydantic import ValidationError
 
-from server.camera import resolve_camera
+from server.camera import ProfileTable, resolve_camera
 from server.outcomes import FrameError
 from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
 from shared_schemas.fixture_files import PNG_SIGNATURE, read_fixture_files
@@ -104,18 +104,19 @@ def _png_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
     return image
 
 
-def decode_frame(data: bytes | memoryview, meta: FrameMeta) -> LumaFrame:
-    """The luma plane of `data` as described by `meta`."""
+def decode_frame(data: bytes | memoryview, meta: FrameMeta, profiles: ProfileTable | None = None) -> LumaFrame:
+    """The luma plane of `data` as described by `meta`; `profiles`: what `camera.profile` may name
+    (default: the bundled profiles)."""
     view = memoryview(data)
     pixels = _png_luma(view, meta) if meta.format is FrameFormat.png else _raw_luma(view, meta)
-    return LumaFrame(pixels=pixels, meta=meta, camera=resolve_camera(meta))
+    return LumaFrame(pixels=pixels, meta=meta, camera=resolve_camera(meta, profiles))
 
 
-def read_fixture(path: Path | str) -> LumaFrame:
+def read_fixture(path: Path | str, profiles: ProfileTable | None = None) -> LumaFrame:
     """A recorded frame from NAME.json and its sibling NAME.y / NAME.yuv / NAME.png, in the format
     of the file found (the client reads fixtures with the same function)."""
     try:
         meta, data = read_fixture_files(path, parse_meta)
     except FileNotFoundError as error:
         raise FrameError(str(error)) from None
-    return decode_frame(data, meta)
+    return decode_frame(data, meta, profiles)

@@ -1,20 +1,22 @@
-"""Stored data of the service: beacon maps and recorded samples, in one data folder.
+"""Stored data of the service: beacon maps, device profiles and recorded samples, in one data folder.
 
 Every write is atomic (a temporary file or folder, then `os.replace`), so a crash mid-write
 leaves the old data whole. The folder is the only state the service keeps: replicas that
-share it (a volume) see the same maps, active map and samples.
+share it (a volume) see the same maps, active map, profiles and samples.
 
     DATA/maps/NAME.json         stored maps (override bundled ones of the same name)
     DATA/active_map.json        {"name": ...}; absent = the startup map
+    DATA/profiles/ID.json       stored device profiles (calibrated ones; never a bundled id)
     DATA/samples/ID/meta.json   the frame's metadata
     DATA/samples/ID/frame.bin   the frame bytes, uncompressed, as uploaded
     DATA/samples/ID/sample.json SampleInfo (label, result, ...)
     DATA/.write.lock            held shared by writers, exclusive by the start-up clean-up
 
 Damaged files (docs/reliability.md, "Damaged data folder") never make a request fail with a
-500: a map or sample that cannot be read is left where it is, logged, named by `damaged()`
-(the service's /healthz) and skipped in listings; asked for by name it is a `damaged_map` or
-`damaged_sample` StoreError; an unreadable active_map.json means the default map. What an
+500: a map, profile or sample that cannot be read is left where it is, logged, named by
+`damaged()` (the service's /healthz) and skipped in listings; asked for by name it is a
+`damaged_map`, `damaged_profile` or `damaged_sample` StoreError; an unreadable active_map.json
+means the default map. What an
 interrupted write leaves (temporary files, staging and half-deleted sample folders, all
 hidden names) is never listed, and is removed when a store is built (`recover`).
 """
@@ -29,17 +31,18 @@ import shutil
 import threading
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from functools import cached_property, lru_cache
 from pathlib import Path
+from typing import Generic, TypeVar
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
-from shared_schemas import DEMO_MAP_PATH, BeaconMap, FrameMeta, LocateResult, load_map
-from shared_schemas.api import NAME_PATTERN, ActiveMap, MapSummary, SampleInfo
+from shared_schemas import DEMO_MAP_PATH, BeaconMap, DeviceProfile, FrameMeta, LocateResult, device_profiles, load_map
+from shared_schemas.api import NAME_PATTERN, ActiveMap, MapSummary, ProfileSummary, SampleInfo
 
 log = logging.getLogger("lumipose.store")
 
@@ -228,22 +231,121 @@ class _Damaged(Exception):
         self.path, self.why = path, why
 
 
-def _read_map(path: Path) -> BeaconMap:
-    """The map in `path`, parsed again only when the file has been replaced (a locate per frame
-    must not parse the map's JSON each time)."""
-    stat = path.stat()
-    return _parsed_map(path, stat.st_mtime_ns, stat.st_size, stat.st_ino)
+Model = TypeVar("Model", bound=BaseModel)
 
 
-@lru_cache(maxsize=64)
-def _parsed_map(path: Path, mtime_ns: int, size: int, inode: int) -> BeaconMap:
-    return load_map(path)
+@lru_cache(maxsize=128)
+def _parsed(model: type[BaseModel], path: Path, mtime_ns: int, size: int, inode: int) -> BaseModel:
+    # Keyed on the file's identity: a file is parsed again only when it has been replaced (a locate
+    # per frame must not parse the map's or the profile's JSON each time).
+    return model.model_validate_json(path.read_bytes())
 
 
-def _check_name(name: str) -> str:
+def _check_name(name: str, what: str = "map name", field: str = "name") -> str:
     if not _NAME.match(name):
-        raise StoreError("bad_name", f"map name '{name}' must match {NAME_PATTERN}", field="name")
+        raise StoreError("bad_name", f"{what} '{name}' must match {NAME_PATTERN}", field=field)
     return name
+
+
+@dataclass(frozen=True)
+class _JsonFolder(Generic[Model]):
+    """A folder of the data folder holding NAME.json files, one `model` each: read through a cache
+    that keys on the file's identity, written atomically, a file that cannot be read noted in `damage`.
+
+    `problem(name, item)` says why a readable file is still unusable (None: it is usable).
+    """
+
+    data_dir: Path
+    folder: str  # "maps", "profiles"
+    kind: str  # "map", "profile": in messages and in the code `damaged_<kind>`
+    model: type[Model]
+    damage: Damage
+    key_field: str = "name"  # the route's parameter that names an item, for errors
+    problem: Callable[[str, Model], str | None] = lambda name, item: None
+
+    @property
+    def path(self) -> Path:
+        return self.data_dir / self.folder
+
+    def relative(self, path: Path) -> str:
+        return path.relative_to(self.data_dir).as_posix()
+
+    def files(self) -> dict[str, Path]:
+        # Listed on every call: another replica may have written one.
+        return {path.stem: path for path in sorted(self.path.glob("*.json")) if _NAME.match(path.stem)}
+
+    def read(self, path: Path) -> Model:
+        """The item in `path`; `_Damaged` if it cannot be read or used, FileNotFoundError if gone."""
+        try:
+            stat = path.stat()
+            item = _parsed(self.model, path, stat.st_mtime_ns, stat.st_size, stat.st_ino)
+        except FileNotFoundError:
+            raise
+        except (OSError, ValueError) as error:
+            raise _Damaged(self.relative(path), _why(error)) from None
+        assert isinstance(item, self.model)  # _parsed's cache is shared by the models
+        why = self.problem(path.stem, item)
+        if why is not None:
+            raise _Damaged(self.relative(path), why)
+        return item
+
+    def readable(self) -> dict[str, Model | None]:
+        """Every stored item by name, None for a damaged one (noted in `damage`)."""
+        items: dict[str, Model | None] = {}
+        damaged: dict[str, str] = {}
+        for name, path in self.files().items():
+            try:
+                items[name] = self.read(path)
+            except FileNotFoundError:
+                continue
+            except _Damaged as damage:
+                damaged[damage.path] = damage.why
+                items[name] = None
+        self.damage.update(self.folder, damaged)
+        return items
+
+    def get(self, name: str, repair: str) -> Model | None:
+        """The stored item `name`, None if there is none; `damaged_<kind>` naming the file (and
+        `repair`, what mends it) if it cannot be read."""
+        path = self.path / f"{name}.json"
+        relative = self.relative(path)
+        try:
+            item = self.read(path)
+        except FileNotFoundError:
+            self.damage.update(relative, {})
+            return None
+        except _Damaged as damage:
+            self.damage.update(relative, {relative: damage.why})
+            raise StoreError(
+                f"damaged_{self.kind}",
+                f"the stored {self.kind} '{name}' is damaged ({relative}: {damage.why}); {repair}",
+                field=self.key_field,
+            ) from None
+        self.damage.update(relative, {})
+        return item
+
+    def put(self, name: str, item: Model) -> None:
+        path = self.path / f"{name}.json"
+        self.path.mkdir(parents=True, exist_ok=True)
+        with _data_lock(self.data_dir, exclusive=False):
+            write_atomic(path, item.model_dump_json(by_alias=True, exclude_none=True, indent=2).encode())
+        self.damage.update(self.relative(path), {})
+
+    def delete(self, name: str) -> bool:
+        """Remove the stored item `name`, whole or damaged; False if there was none."""
+        path = self.path / f"{name}.json"
+        try:
+            path.unlink()  # atomic: readers see the file or nothing
+        except FileNotFoundError:
+            return False
+        _fsync_folder(self.path)
+        self.damage.update(self.relative(path), {})
+        return True
+
+    def recover(self) -> None:
+        """Remove the temporary files of interrupted writes; note every damaged file."""
+        _remove_leftovers(self.data_dir, [(self.path, _TEMPORARY_FILE)])
+        self.readable()
 
 
 @dataclass(frozen=True)
@@ -256,14 +358,12 @@ class MapStore:
     data_dir: Path
     startup_map: Path | None = None
     _damage: Damage = field(init=False, repr=False, compare=False)
+    _files: _JsonFolder[BeaconMap] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_damage", Damage(self.data_dir))
+        object.__setattr__(self, "_files", _JsonFolder(self.data_dir, "maps", "map", BeaconMap, self._damage))
         self.recover()
-
-    @property
-    def _stored_dir(self) -> Path:
-        return self.data_dir / "maps"
 
     @cached_property
     def _fixed(self) -> dict[str, tuple[str, BeaconMap]]:
@@ -275,21 +375,8 @@ class MapStore:
             fixed[startup.name] = ("startup", startup)
         return fixed
 
-    def _stored(self) -> dict[str, Path]:
-        # Listed on every call: another replica may have written one.
-        return {path.stem: path for path in sorted(self._stored_dir.glob("*.json")) if _NAME.match(path.stem)}
-
     def _names(self) -> set[str]:
-        return set(self._fixed) | set(self._stored())
-
-    def _read_stored(self, path: Path) -> BeaconMap:
-        """The stored map in `path`; `_Damaged` if it cannot be read, FileNotFoundError if gone."""
-        try:
-            return _read_map(path)
-        except FileNotFoundError:
-            raise
-        except (OSError, ValueError) as error:
-            raise _Damaged(path.relative_to(self.data_dir).as_posix(), _why(error)) from None
+        return set(self._fixed) | set(self._files.files())
 
     def default_name(self) -> str:
         """The startup map's name, or else the bundled demo map's (the startup map comes last)."""
@@ -319,16 +406,10 @@ class MapStore:
     def _readable(self) -> list[tuple[str, str, BeaconMap]]:
         """(name, source, map) of every map that can be read; damaged stored maps are noted, left out."""
         maps = {name: (source, beacon_map) for name, (source, beacon_map) in self._fixed.items()}
-        damaged: dict[str, str] = {}
-        for name, path in self._stored().items():
+        for name, stored in self._files.readable().items():
             maps.pop(name, None)  # a stored map hides the fixed one of its name, even damaged
-            try:
-                maps[name] = ("stored", self._read_stored(path))
-            except FileNotFoundError:
-                continue
-            except _Damaged as damage:
-                damaged[damage.path] = damage.why
-        self._damage.update("maps", damaged)
+            if stored is not None:
+                maps[name] = ("stored", stored)
         return [(name, source, beacon_map) for name, (source, beacon_map) in maps.items()]
 
     def summaries(self) -> list[MapSummary]:
@@ -347,44 +428,158 @@ class MapStore:
 
     def get(self, name: str) -> BeaconMap:
         """The map `name`: `not_found`, or `damaged_map` (naming the file) if it cannot be read."""
-        path = self._stored().get(_check_name(name))
-        if path is None:
-            if name in self._fixed:
-                return self._fixed[name][1]
-            raise StoreError("not_found", f"no map named '{name}'", field="name")
-        relative = path.relative_to(self.data_dir).as_posix()
-        try:
-            beacon_map = self._read_stored(path)
-        except FileNotFoundError:
-            raise StoreError("not_found", f"no map named '{name}'", field="name") from None
-        except _Damaged as damage:
-            self._damage.update(relative, {relative: damage.why})
-            raise StoreError(
-                "damaged_map",
-                f"the stored map '{name}' is damaged ({relative}: {damage.why}); PUT the map again to replace it",
-                field="name",
-            ) from None
-        self._damage.update(relative, {})
-        return beacon_map
+        stored = self._files.get(_check_name(name), "PUT the map again to replace it")
+        if stored is not None:
+            return stored
+        if name in self._fixed:
+            return self._fixed[name][1]
+        raise StoreError("not_found", f"no map named '{name}'", field="name")
 
     def put(self, name: str, beacon_map: BeaconMap) -> BeaconMap:
         if beacon_map.name != _check_name(name):
             raise StoreError(
                 "name_mismatch", f"the map's name '{beacon_map.name}' differs from '{name}' in the URL", field="name"
             )
-        path = self._stored_dir / f"{name}.json"
-        self._stored_dir.mkdir(parents=True, exist_ok=True)
-        with _data_lock(self.data_dir, exclusive=False):
-            write_atomic(path, beacon_map.model_dump_json(by_alias=True, exclude_none=True, indent=2).encode())
-        self._damage.update(path.relative_to(self.data_dir).as_posix(), {})
+        self._files.put(name, beacon_map)
         return beacon_map
 
     def recover(self) -> None:
         """Remove the temporary files of interrupted writes; log every damaged map file."""
         if not self.data_dir.is_dir():
             return
-        _remove_leftovers(self.data_dir, [(self.data_dir, _TEMPORARY_FILE), (self._stored_dir, _TEMPORARY_FILE)])
+        _remove_leftovers(self.data_dir, [(self.data_dir, _TEMPORARY_FILE), (self._files.path, _TEMPORARY_FILE)])
         self.damaged()
+
+
+_PROFILE_REPAIR = "PUT the profile again to replace it, or DELETE it"
+
+
+def _check_id(profile_id: str) -> str:
+    return _check_name(profile_id, "device profile id", "profile_id")
+
+
+def _check_principal_point(profile: DeviceProfile) -> None:
+    """A calibration never puts the principal point off its image: such a number is a typing error."""
+    measured = profile.intrinsics
+    if measured is None:
+        return
+    for name, centre, side in (("cx", measured.cx, profile.width), ("cy", measured.cy, profile.height)):
+        if not 0 <= centre <= side:
+            raise StoreError(
+                "invalid_request",
+                f"intrinsics.{name}: the principal point's {centre:g} px lies outside the profile's {side} px image",
+                field=f"intrinsics.{name}",
+            )
+
+
+def _stored_profile_problem(profile_id: str, profile: DeviceProfile) -> str | None:
+    """Why a stored profile file is unusable although readable."""
+    if profile.id != profile_id:
+        return f"it holds the profile '{profile.id}'"
+    if profile_id in device_profiles():  # only by hand: put refuses it
+        return f"'{profile_id}' is a bundled profile's id; the bundled profile is used"
+    return None
+
+
+@dataclass(frozen=True)
+class ProfileStore:
+    """The bundled device profiles and those stored in the data folder (calibrated ones, written by
+    `PUT /v1/profiles/{id}`), so that a frame may name either.
+
+    A bundled profile is never replaced: put and delete refuse its id (`bundled_profile`), and a
+    stored file of that id (left there by hand) is reported damaged and ignored, so that a frame
+    naming a bundled id means the same camera on every server. Built, the store removes the
+    temporary files of interrupted writes and logs damaged profile files.
+    """
+
+    data_dir: Path
+    _files: _JsonFolder[DeviceProfile] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        files = _JsonFolder(
+            self.data_dir,
+            "profiles",
+            "profile",
+            DeviceProfile,
+            Damage(self.data_dir),
+            key_field="profile_id",
+            problem=_stored_profile_problem,
+        )
+        object.__setattr__(self, "_files", files)
+        if self.data_dir.is_dir():
+            files.recover()
+
+    def table(self, named: str | None = None) -> dict[str, DeviceProfile]:
+        """Every usable profile by id, bundled first: what a frame's `camera.profile` may name.
+
+        A damaged stored profile is left out (logged, and in `damaged`), unless it is the one a frame
+        `named`: that is a `damaged_profile` StoreError naming the file rather than 'unknown'."""
+        stored = self._files.readable()
+        if named is not None and named not in device_profiles() and named in stored and stored[named] is None:
+            self._files.get(named, _PROFILE_REPAIR)  # raises, naming the file and why
+        return {**device_profiles(), **{key: profile for key, profile in stored.items() if profile is not None}}
+
+    def summaries(self) -> list[ProfileSummary]:
+        """Every usable profile, bundled ones first; a damaged stored profile is left out."""
+        bundled = device_profiles()
+        return [
+            ProfileSummary(
+                id=profile.id,
+                name=profile.name,
+                facing=profile.facing,
+                width=profile.width,
+                height=profile.height,
+                calibrated=profile.intrinsics is not None,
+                source="bundled" if key in bundled else "stored",
+            )
+            for key, profile in self.table().items()
+        ]
+
+    def get(self, profile_id: str) -> DeviceProfile:
+        """The profile `profile_id`: `not_found` (listing the known ids), or `damaged_profile`."""
+        bundled = device_profiles().get(_check_id(profile_id))
+        if bundled is not None:
+            return bundled
+        stored = self._files.get(profile_id, _PROFILE_REPAIR)
+        if stored is None:
+            raise StoreError(
+                "not_found",
+                f"no device profile '{profile_id}'; known: {', '.join(sorted(self.table()))}",
+                field="profile_id",
+            )
+        return stored
+
+    def put(self, profile_id: str, profile: DeviceProfile) -> DeviceProfile:
+        """Store (or replace) the profile `profile_id`; the body's `id` must match, and not be a bundled id."""
+        if profile.id != _check_id(profile_id):
+            raise StoreError(
+                "name_mismatch", f"the profile's id '{profile.id}' differs from '{profile_id}' in the URL", field="id"
+            )
+        self._refuse_bundled(profile_id, "replaced", "id")
+        _check_principal_point(profile)
+        self._files.put(profile_id, profile)
+        return profile
+
+    def delete(self, profile_id: str) -> None:
+        """Remove a stored profile, whole or damaged."""
+        self._refuse_bundled(_check_id(profile_id), "deleted", "profile_id")
+        if not self._files.delete(profile_id):
+            raise StoreError("not_found", f"no stored device profile '{profile_id}'", field="profile_id")
+
+    def damaged(self) -> list[str]:
+        """The damaged profile files, relative to the data folder, checked now."""
+        self._files.readable()
+        return self._files.damage.names()
+
+    @staticmethod
+    def _refuse_bundled(profile_id: str, done: str, field: str) -> None:
+        if profile_id in device_profiles():
+            raise StoreError(
+                "bundled_profile",
+                f"'{profile_id}' is a bundled device profile and cannot be {done}; store yours under another id "
+                f"(a calibrated profile: for example '{profile_id}-calibrated')",
+                field=field,
+            )
 
 
 @dataclass(frozen=True)

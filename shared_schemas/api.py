@@ -1,4 +1,4 @@
-"""Models of the HTTP API beyond the contract's frame, map and result: samples, maps, health.
+"""Models of the HTTP API beyond the contract's frame, map and result: samples, maps, profiles, health.
 
 The service (`server/api/`) answers with these and the Python client (`lumipose_client`)
 reads them; `shared_schemas/openapi.json` is exported from the app that uses them.
@@ -11,7 +11,7 @@ from datetime import datetime
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from shared_schemas.models import FrameMeta, LocateResult, Vec3
+from shared_schemas.models import Facing, FrameMeta, LocateResult, Vec3
 
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
 CELL_LABEL = re.compile(r"^\s*(-?\d+)\s*,\s*(-?\d+)\s*$")
@@ -36,6 +36,18 @@ class MapSummary(BaseModel):
     beacons: int
     active: bool
     source: str = Field(description="'bundled', 'startup' (the --map file) or 'stored' (data folder)")
+
+
+class ProfileSummary(BaseModel):
+    """A device profile in `GET /v1/profiles`; `GET /v1/profiles/{id}` gives the whole profile."""
+
+    id: str = Field(description="what a frame's `camera.profile` names")
+    name: str
+    facing: Facing
+    width: int = Field(description="the profile's image width, pixels (native, or the calibration photos')")
+    height: int = Field(description="the profile's image height, pixels")
+    calibrated: bool = Field(description="it carries a calibration's measured `intrinsics` (else the datasheet's)")
+    source: str = Field(description="'bundled' (shipped with the service, read-only) or 'stored' (data folder)")
 
 
 class ActiveMap(BaseModel):

@@ -6,10 +6,11 @@ from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
 from server.vlc.codec import LedWaveform
-from shared_schemas import Beacon, BeaconMap, FrameKind, FrameMeta, device_profiles
+from shared_schemas import Beacon, BeaconMap, FrameKind, FrameMeta, ProfileRef, device_profiles, load_map
+from shared_schemas.models import MeasuredPinhole
 from simulator.fixtures import fixture_meta
 from simulator.led import row_gains
-from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_emitters
+from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_emitters, render_frame
 
 DARK_WIDTH, DARK_HEIGHT = 48, 64
 DARK_CAMERA = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], DARK_WIDTH, DARK_HEIGHT)
@@ -52,3 +53,27 @@ def two_panel_frame(level_dn=1000.0, exposure_s=0.01, seed=0, t_s=0.0) -> LumaFr
         "exposure_s": exposure_s, "rolling_shutter_skew_s": 0.03, "timestamp_ns": int(t_s * 1e9),
         "frame_kind": FrameKind.id if exposure_s < 1e-3 else FrameKind.pose})
     return LumaFrame(pixels, meta, CAMERA)
+
+
+# A calibrated lens unlike its datasheet: fx 3 % longer, fy 1.5 % shorter, the principal point
+# 120 px right and 100 px up of the centre at the native 3880 x 5184 (15 and 12.5 px at 1/8).
+FRONT = device_profiles()["xiaomi-mi8-front"]
+_DATASHEET_FOCAL_PX = FRONT.focal_length_m / FRONT.pixel_size_m
+CALIBRATED = FRONT.model_copy(update={
+    "id": "mi8-front-calibrated",
+    "intrinsics": MeasuredPinhole(fx=_DATASHEET_FOCAL_PX * 1.03, fy=_DATASHEET_FOCAL_PX * 0.985, rms_px=0.2,
+                                  cx=(FRONT.width - 1) / 2 + 120, cy=(FRONT.height - 1) / 2 - 100, views=20),
+})
+DATASHEET = CALIBRATED.model_copy(update={"intrinsics": None})  # the same id, the maker's pinhole
+LENS_WIDTH, LENS_HEIGHT = 485, 648  # 1/8 of the native size: 85 px of panel at 1 m
+
+
+def calibrated_lens_frame(position_m: tuple[float, float, float], seed: int = 0) -> tuple[FrameMeta, bytes]:
+    """A Y8 frame of the demo map's panel through the CALIBRATED lens; its camera names CALIBRATED's id."""
+    camera = intrinsics_from_profile(CALIBRATED, LENS_WIDTH, LENS_HEIGHT)
+    pose = CameraPose(np.array(position_m), rotation_from_ypr(10.0, 2.0, -1.0))
+    pixels = render_frame(load_map().beacons[0], camera, pose, LENS_WIDTH, LENS_HEIGHT,
+                          SensorModel(psf_sigma_px=1.0), np.random.default_rng(seed))
+    gravity = (pose.rotation_wc.T @ [0, 0, -1.0]).tolist()
+    meta = fixture_meta(camera, LENS_WIDTH, LENS_HEIGHT, pose, gravity_camera=gravity)
+    return meta.model_copy(update={"camera": ProfileRef(profile=CALIBRATED.id)}), pixels.tobytes()

@@ -15,7 +15,7 @@ from server.api.config import Settings
 from server.api.errors import ApiError
 from server.api.metrics import Metrics
 from server.options import LocateOptions
-from server.store import MapStore, SampleStore
+from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
 
 
@@ -42,6 +42,7 @@ class Services:
 
     settings: Settings
     maps: MapStore
+    profiles: ProfileStore  # bundled and stored device profiles: what a frame's camera may name
     samples: SampleStore
     metrics: Metrics
     options: LocateOptions  # from the settings; a request's query refines its pipeline part

@@ -29,7 +29,7 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     for status, text in {
         400: "unreadable frame, metadata or body",
         401: "missing or wrong API key",
-        404: "unknown map or sample",
+        404: "unknown map, profile or sample",
         408: "headers or body too slow",
         413: "upload or body too large",
         415: "unsupported content type or encoding",
@@ -38,7 +38,16 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     }.items()
 }
 
-STORE_STATUS = {"not_found": 404, "bad_name": 400, "name_mismatch": 400, "damaged_map": 409, "damaged_sample": 409}
+STORE_STATUS = {
+    "not_found": 404,
+    "bad_name": 400,
+    "name_mismatch": 400,
+    "invalid_request": 422,
+    "damaged_map": 409,
+    "damaged_profile": 409,
+    "damaged_sample": 409,
+    "bundled_profile": 409,
+}
 
 
 class ApiError(Exception):

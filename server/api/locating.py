@@ -9,9 +9,10 @@ from starlette.concurrency import run_in_threadpool
 from server.api.deps import Services
 from server.api.params import LocateQuery
 from server.api.upload import FrameUpload
+from server.camera import ProfileTable
 from server.ingest import decode_frame
 from server.locator import locate
-from shared_schemas import BeaconMap, LocateResult
+from shared_schemas import BeaconMap, LocateResult, ProfileRef
 
 
 @dataclass(frozen=True)
@@ -21,10 +22,15 @@ class Located:
 
 
 def _locate_now(
-    services: Services, upload: FrameUpload, beacon_map: BeaconMap, query: LocateQuery, device: str | None
+    services: Services,
+    upload: FrameUpload,
+    beacon_map: BeaconMap,
+    profiles: ProfileTable | None,
+    query: LocateQuery,
+    device: str | None,
 ) -> LocateResult:
     return locate(
-        decode_frame(upload.data, upload.meta),
+        decode_frame(upload.data, upload.meta, profiles),
         beacon_map,
         query.options,
         beacon_id=query.beacon_id,
@@ -40,7 +46,13 @@ async def locate_upload(
     session (tracking, ID frames combined) when the map has several beacons."""
     name = map_name if map_name else await run_in_threadpool(services.maps.active_name)
     beacon_map = await run_in_threadpool(services.maps.get, name)  # reads the data folder: off the event loop
+    camera = upload.meta.camera
+    # Only a frame naming a profile needs the table (bundled and stored); one naming a damaged stored
+    # profile is refused by name (409) rather than as unknown.
+    profiles = None
+    if isinstance(camera, ProfileRef):
+        profiles = await run_in_threadpool(services.profiles.table, camera.profile)
     async with services.pipeline_limiter:
-        result = await run_in_threadpool(_locate_now, services, upload, beacon_map, query, device)
+        result = await run_in_threadpool(_locate_now, services, upload, beacon_map, profiles, query, device)
     services.metrics.record_result(result)
     return Located(result=result, map_name=name)

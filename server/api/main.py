@@ -12,7 +12,7 @@ from server.api.deps import FrameSlots, Services
 from server.api.errors import BugCatcher, install_error_handlers
 from server.api.metrics import Metrics, MetricsMiddleware
 from server.api.routes import health, locate, maps, profiles, samples
-from server.store import MapStore, SampleStore
+from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
 
 
@@ -28,6 +28,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.services = Services(
         settings=settings,
         maps=MapStore(settings.data_dir, settings.map),
+        profiles=ProfileStore(settings.data_dir),
         samples=SampleStore(settings.data_dir),
         metrics=metrics,
         options=settings.locate_options(),

@@ -51,3 +51,25 @@ def test_client_locate_sends_a_png_beside_a_json_that_says_y8(server_url, capsys
         results.append(json.loads(capsys.readouterr().out))
     png, y8 = results
     assert png["ok"] and png["position_m"] == y8["position_m"]  # the same pixels, the same fix
+
+
+def test_client_profiles_put_list_get_delete(server_url, capsys, tmp_path):
+    from tests.helpers import CALIBRATED
+
+    stored = CALIBRATED.model_copy(update={"id": "cli-calibrated"})
+    path = tmp_path / "profile.json"
+    path.write_text(stored.model_dump_json())
+    url = ["client", "--url", server_url, "--api-key", API_KEY]
+    assert main([*url, "profiles", "put", str(path)]) == 0
+    assert "stored profile 'cli-calibrated' (3880x5184, calibrated)" in capsys.readouterr().out
+    assert main([*url, "profiles", "list"]) == 0
+    listed = capsys.readouterr().out
+    assert "cli-calibrated  3880x5184  front  calibrated  (stored)" in listed
+    assert "xiaomi-mi8-rear  3024x4032  rear  datasheet  (bundled)" in listed
+    assert main([*url, "profiles", "get", "cli-calibrated"]) == 0
+    assert json.loads(capsys.readouterr().out)["intrinsics"]["fx"] == stored.intrinsics.fx
+    assert main([*url, "profiles", "delete", "cli-calibrated", "xiaomi-mi8-front"]) == 2
+    captured = capsys.readouterr()
+    assert "deleted profile cli-calibrated" in captured.out and "bundled_profile" in captured.err
+    assert main([*url, "profiles", "get", "cli-calibrated"]) == 2
+    assert "no device profile 'cli-calibrated'" in capsys.readouterr().err

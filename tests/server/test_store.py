@@ -13,8 +13,10 @@ from pathlib import Path
 import pytest
 
 import server.store as store_module
-from server.store import LOCK_FILE, STALE_AFTER_S, MapStore, SampleStore, StoreError, write_atomic
+from server.store import LOCK_FILE, STALE_AFTER_S, MapStore, ProfileStore, SampleStore, StoreError, write_atomic
 from shared_schemas import BeaconMap, FailureReason, FrameMeta, LocateResult, load_map
+from shared_schemas.models import MeasuredPinhole
+from tests.helpers import CALIBRATED, FRONT
 
 
 def test_startup_map_is_the_default_and_stored_maps_override(tmp_path):
@@ -177,14 +179,95 @@ def test_the_clean_up_spares_what_a_live_writer_holds(tmp_path, monkeypatch):
     assert not young.exists()
 
 
+# --- Device profiles: stored beside the bundled ones, which are never replaced ---
+
+
+def _calibrated(version: int):
+    """CALIBRATED with its focal length changed by `version` px (the same size on disk)."""
+    measured = CALIBRATED.intrinsics
+    return CALIBRATED.model_copy(update={"intrinsics": measured.model_copy(update={"fx": measured.fx + version})})
+
+
+def test_profiles_are_stored_listed_found_and_deleted_beside_the_bundled_ones(tmp_path):
+    profiles = ProfileStore(tmp_path)
+    bundled = {"xiaomi-mi8-front": "bundled", "xiaomi-mi8-rear": "bundled"}
+    assert {s.id: s.source for s in profiles.summaries()} == bundled
+    assert profiles.put(CALIBRATED.id, CALIBRATED) == CALIBRATED
+    assert ProfileStore(tmp_path).get(CALIBRATED.id) == CALIBRATED  # on disk, for a restart or a replica
+    summary = {s.id: s for s in profiles.summaries()}[CALIBRATED.id]
+    assert summary.source == "stored" and summary.calibrated and (summary.width, summary.height) == (3880, 5184)
+    assert set(profiles.table()) == {"xiaomi-mi8-front", "xiaomi-mi8-rear", CALIBRATED.id}
+    profiles.put(CALIBRATED.id, _calibrated(1))
+    assert profiles.get(CALIBRATED.id) == _calibrated(1)  # replaced, read again
+    profiles.delete(CALIBRATED.id)
+    with pytest.raises(StoreError, match="no device profile 'mi8-front-calibrated'; known: xiaomi-mi8-front, xia"):
+        profiles.get(CALIBRATED.id)
+    with pytest.raises(StoreError) as refused:
+        profiles.delete(CALIBRATED.id)
+    assert refused.value.code == "not_found" and _hidden(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    "call, code, field",
+    [
+        (lambda store: store.put("xiaomi-mi8-front", FRONT), "bundled_profile", "id"),
+        (lambda store: store.delete("xiaomi-mi8-front"), "bundled_profile", "profile_id"),
+        (lambda store: store.put("other", CALIBRATED), "name_mismatch", "id"),
+        (lambda store: store.put("../x", CALIBRATED), "bad_name", "profile_id"),
+        (lambda store: store.get("a b"), "bad_name", "profile_id"),
+        (lambda store: store.put(CALIBRATED.id, CALIBRATED.model_copy(update={"intrinsics": MeasuredPinhole(
+            fx=4000, fy=4000, cx=3880.5, cy=2000)})), "invalid_request", "intrinsics.cx"),
+        (lambda store: store.put(CALIBRATED.id, CALIBRATED.model_copy(update={"intrinsics": MeasuredPinhole(
+            fx=4000, fy=4000, cx=2000, cy=-1)})), "invalid_request", "intrinsics.cy"),
+    ],
+)
+def test_bad_profile_writes_are_refused_and_leave_nothing(tmp_path, call, code, field):
+    profiles = ProfileStore(tmp_path)
+    with pytest.raises(StoreError) as refused:
+        call(profiles)
+    assert (refused.value.code, refused.value.field) == (code, field), refused.value.message
+    assert not (tmp_path / "profiles").exists() or list((tmp_path / "profiles").iterdir()) == []
+    assert profiles.get("xiaomi-mi8-front") == FRONT
+
+
+def test_damaged_profiles_are_skipped_named_refused_and_can_be_deleted(tmp_path):
+    profiles = ProfileStore(tmp_path)
+    for version, name in enumerate(("cut", "moved", "kept")):
+        profiles.put(name, _calibrated(version).model_copy(update={"id": name}))
+    folder = tmp_path / "profiles"
+    (folder / "cut.json").write_bytes((folder / "cut.json").read_bytes()[:50])
+    (folder / "moved.json").rename(folder / "elsewhere.json")  # holds the profile 'moved'
+    by_hand = CALIBRATED.model_copy(update={"id": "xiaomi-mi8-front"})
+    (folder / "xiaomi-mi8-front.json").write_text(by_hand.model_dump_json())
+    (folder / f".kept.json.{uuid.uuid4().hex}.tmp").write_text('{"i')  # an interrupted write
+    damaged = ["profiles/cut.json", "profiles/elsewhere.json", "profiles/xiaomi-mi8-front.json"]
+    for store in (profiles, ProfileStore(tmp_path)):  # on read, and at start-up
+        assert _hidden(tmp_path) == []
+        assert [s.id for s in store.summaries()] == ["xiaomi-mi8-front", "xiaomi-mi8-rear", "kept"]
+        assert store.damaged() == damaged
+        assert store.get("xiaomi-mi8-front") == FRONT  # the bundled one, never the file
+        for name in ("cut", "elsewhere"):
+            with pytest.raises(StoreError) as refused:
+                store.get(name)
+            assert refused.value.code == "damaged_profile" and f"profiles/{name}.json" in refused.value.message
+        with pytest.raises(StoreError) as refused:
+            store.table(named="cut")  # a frame naming it: refused by name, not as unknown
+        assert refused.value.code == "damaged_profile" and refused.value.field == "profile_id"
+        assert set(store.table(named="kept")) == {"xiaomi-mi8-front", "xiaomi-mi8-rear", "kept"}
+    profiles.delete("cut")
+    profiles.put("elsewhere", CALIBRATED.model_copy(update={"id": "elsewhere"}))
+    assert profiles.damaged() == ["profiles/xiaomi-mi8-front.json"]
+
+
 CRASHING_CHILD = """
 import os, signal, sys
 from pathlib import Path
-from server.store import MapStore, SampleStore
-from tests.server.test_store import _add, _room
+from server.store import MapStore, ProfileStore, SampleStore
+from tests.helpers import CALIBRATED
+from tests.server.test_store import _add, _calibrated, _room
 
 data_dir, operation, function, nth = Path(sys.argv[1]), sys.argv[2], sys.argv[3], int(sys.argv[4])
-maps, samples = MapStore(data_dir), SampleStore(data_dir)
+maps, samples, profiles = MapStore(data_dir), SampleStore(data_dir), ProfileStore(data_dir)
 real, calls = getattr(os, function), [0]
 
 def crash(*args, **kwargs):  # the process dies here, as under kill -9 or a power cut
@@ -200,6 +283,8 @@ elif operation == "delete":
     samples.delete(sys.argv[5])
 elif operation == "put":
     maps.put("room", _room(2))
+elif operation == "put_profile":
+    profiles.put(CALIBRATED.id, _calibrated(2))
 else:
     maps.set_active("room")
 """
@@ -218,12 +303,15 @@ else:
         ("put", "fsync", 1, False),  # the temporary file written
         ("put", "replace", 1, False),
         ("put", "fsync", 2, True),
+        ("put_profile", "replace", 1, False),
+        ("put_profile", "fsync", 2, True),
         ("activate", "replace", 1, False),
     ],
 )
 def test_a_crash_at_any_step_of_a_write_leaves_the_item_whole_or_absent(tmp_path, operation, function, nth, done):
     maps, samples = MapStore(tmp_path), SampleStore(tmp_path)
     maps.put("room", _room(1))
+    ProfileStore(tmp_path).put(CALIBRATED.id, _calibrated(1))
     first = _add(samples)
     child = subprocess.run(
         [sys.executable, "-c", CRASHING_CHILD, str(tmp_path), operation, function, str(nth), first],
@@ -234,8 +322,9 @@ def test_a_crash_at_any_step_of_a_write_leaves_the_item_whole_or_absent(tmp_path
     )
     assert child.returncode == -signal.SIGKILL, child.stderr
 
-    maps, samples = MapStore(tmp_path), SampleStore(tmp_path)  # the restart
-    assert _hidden(tmp_path) == [] and maps.damaged() == [] and samples.damaged() == []
+    maps, samples, profiles = MapStore(tmp_path), SampleStore(tmp_path), ProfileStore(tmp_path)  # the restart
+    assert _hidden(tmp_path) == [] and maps.damaged() == [] and samples.damaged() == [] and profiles.damaged() == []
+    assert profiles.get(CALIBRATED.id) == _calibrated(2 if operation == "put_profile" and done else 1)
     listed = [s.id for s in samples.all()]
     assert sorted(listed) == sorted(p.name for p in (tmp_path / "samples").iterdir())
     for sample_id in listed:

@@ -20,7 +20,7 @@ async def health(services: ServicesDep) -> Health:
 
 
 def _health(services: Services) -> Health:
-    damaged = services.maps.damaged() + services.samples.damaged()
+    damaged = sorted(services.maps.damaged() + services.profiles.damaged() + services.samples.damaged())
     return Health(
         status="degraded" if damaged else "ok",
         version=VERSION,

@@ -1,29 +1,46 @@
-"""Device profiles bundled with the service (read-only)."""
+"""Device profiles: the bundled ones (read-only) and stored ones (calibrated: put, get, delete)."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from typing import Any
 
-from server.api.errors import ERROR_RESPONSES, ApiError
+from fastapi import APIRouter, Response
+from starlette.concurrency import run_in_threadpool
+
+from server.api.deps import ServicesDep, WriteAccess
+from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
-from shared_schemas import DeviceProfile, device_profiles
+from server.api.routes import DAMAGED_RESPONSES
+from shared_schemas import DeviceProfile, ErrorBody
+from shared_schemas.api import ProfileSummary
 
 router = APIRouter(prefix="/v1/profiles", tags=["profiles"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
+BUNDLED_RESPONSES: dict[int | str, dict[str, Any]] = {
+    409: {"model": ErrorBody, "description": "`bundled_profile`: a bundled profile is never replaced or deleted"}
+}
 
-@router.get("", response_model=list[DeviceProfile])
-async def list_profiles() -> list[DeviceProfile]:
-    return list(device_profiles().values())
+
+@router.get("", response_model=list[ProfileSummary])
+async def list_profiles(services: ServicesDep) -> list[ProfileSummary]:
+    """Bundled and stored profiles (`source`); a damaged stored one is left out (named by /healthz)."""
+    return await run_in_threadpool(services.profiles.summaries)
 
 
-@router.get("/{profile_id}", response_model=DeviceProfile)
-async def get_profile(profile_id: str) -> DeviceProfile:
-    profile = device_profiles().get(profile_id)
-    if profile is None:
-        raise ApiError(
-            404,
-            "not_found",
-            f"no device profile '{profile_id}'; known: {', '.join(sorted(device_profiles()))}",
-            field="profile_id",
-        )
-    return profile
+@router.get("/{profile_id}", response_model=DeviceProfile, responses=DAMAGED_RESPONSES)
+async def get_profile(profile_id: str, services: ServicesDep) -> DeviceProfile:
+    return await run_in_threadpool(services.profiles.get, profile_id)
+
+
+@router.put("/{profile_id}", response_model=DeviceProfile, dependencies=[WriteAccess], responses=BUNDLED_RESPONSES)
+async def put_profile(profile_id: str, profile: DeviceProfile, services: ServicesDep) -> DeviceProfile:
+    """Store (or replace) the profile `profile_id`, for example a calibrated one; the body's `id` must
+    match, and a bundled profile's id is refused (409 `bundled_profile`)."""
+    return await run_in_threadpool(services.profiles.put, profile_id, profile)
+
+
+@router.delete("/{profile_id}", status_code=204, dependencies=[WriteAccess], responses=BUNDLED_RESPONSES)
+async def delete_profile(profile_id: str, services: ServicesDep) -> Response:
+    """Remove a stored profile, also a damaged one; a bundled one is refused (409 `bundled_profile`)."""
+    await run_in_threadpool(services.profiles.delete, profile_id)
+    return Response(status_code=204)

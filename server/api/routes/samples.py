@@ -15,7 +15,9 @@ from server.api.params import FRAME_REQUEST_BODY, DeviceHeader, LocateQuery, Map
 from server.api.routes import DAMAGED_RESPONSES
 from server.api.upload import FRAME_HEADER, FrameUpload
 from server.evaluation import evaluate
+from server.outcomes import FrameError
 from server.store import StoreError
+from shared_schemas import LocateResult
 from shared_schemas.api import Evaluation, SampleInfo, SampleList
 
 router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
@@ -67,17 +69,29 @@ async def evaluate_samples(
 ) -> Evaluation:
     """Re-locate every stored sample in `map` and compare with its truth (paper Table 2).
 
-    Damaged samples are left out, and so is one deleted or damaged while this runs."""
+    Damaged samples are left out, and so is one deleted or damaged while this runs; one whose
+    camera names a stored profile deleted or damaged since is a row without a fix (`bad_frame`,
+    `damaged_profile`)."""
     name: str = map if map else await run_in_threadpool(services.maps.active_name)
     await run_in_threadpool(services.maps.get, name)
-    located = []
+    located: list[tuple[SampleInfo, LocateResult | str]] = []
     for sample in await run_in_threadpool(services.samples.all):
         try:
             data = await run_in_threadpool(services.samples.frame, sample.id)
         except StoreError:
             continue
         upload = FrameUpload(meta=sample.meta, data=data)
-        located.append((sample, (await locate_upload(services, upload, name, LocateQuery(services.options))).result))
+        try:
+            result: LocateResult | str = (
+                await locate_upload(services, upload, name, LocateQuery(services.options))
+            ).result
+        except FrameError:
+            result = "bad_frame"
+        except StoreError as error:
+            if error.code != "damaged_profile":
+                raise
+            result = error.code
+        located.append((sample, result))
     return evaluate(name, located, cell_m, height_m)
 
 

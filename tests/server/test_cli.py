@@ -1,0 +1,28 @@
+"""`lumipose locate --profile FILE`: a profile file beside the bundled ones, for frames that name it."""
+
+import json
+
+from lumipose_cli.main import main
+from tests.helpers import CALIBRATED, FRONT, calibrated_lens_frame
+
+
+def test_locate_uses_a_given_profile_file_and_refuses_unknown_or_taken_ids(tmp_path, capsys):
+    meta, data = calibrated_lens_frame((0.05, -0.03, 0.0))
+    frame = tmp_path / "frame.json"
+    (tmp_path / "frame.y").write_bytes(data)
+    frame.write_text(meta.model_dump_json(by_alias=True, exclude_none=True))
+    profile, bundled, broken = tmp_path / "calibrated.json", tmp_path / "bundled.json", tmp_path / "broken.json"
+    profile.write_text(CALIBRATED.model_dump_json())
+    bundled.write_text(FRONT.model_dump_json())
+    broken.write_text(CALIBRATED.model_dump_json().replace('"width":3880', '"width":-1'))
+
+    assert main(["locate", str(frame)]) == 2
+    assert "unknown device profile 'mi8-front-calibrated'; known: xiaomi-mi8-front" in capsys.readouterr().err
+    assert main(["locate", str(frame), "--profile", str(profile), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["ok"] and abs(result["position_m"][0] - 0.05) < 0.003 and abs(result["position_m"][1] + 0.03) < 0.003
+    assert main(["locate", str(frame), "--profile", str(bundled)]) == 2
+    assert "'xiaomi-mi8-front' has a bundled profile's id" in capsys.readouterr().err
+    assert main(["locate", str(frame), "--profile", str(broken)]) == 2
+    err = capsys.readouterr().err
+    assert f"cannot read the device profile {broken}" in err and "width" in err
