@@ -53,7 +53,8 @@ public final class SettingsActivity extends Activity {
                 InputType.TYPE_CLASS_NUMBER);
 
         Double b = prefs.mapXBearingDeg();
-        bearing = field(form, "Compass bearing of the map's +X axis, deg (empty: send no heading)",
+        bearing = field(form, "Compass bearing of the map's +X axis, deg, for maps without a surveyed bearing "
+                + "(empty: no heading then)",
                 b == null ? "" : String.valueOf(b), DECIMAL | InputType.TYPE_NUMBER_FLAG_SIGNED);
         readIds = new CheckBox(this);
         readIds.setText("Read beacon IDs in live mode (short-exposure frames after each pose frame, on maps "
