@@ -4,7 +4,6 @@ import android.graphics.Canvas;
 import android.graphics.Color;
 import android.graphics.Paint;
 import android.os.Build;
-import android.view.View;
 import android.widget.Button;
 import android.widget.EditText;
 import android.widget.LinearLayout;
@@ -58,39 +57,21 @@ public final class CameraCalibrationActivity extends StillActivity {
                 + "the grid (red: no corner yet). Board spec (the board.json printed with it):");
         boardField = new EditText(this);
         boardField.setText(prefs.boardSpecJson());
-        preview = new PreviewView(this);
-        preview.setOverlay(new PreviewView.Overlay() {
-            @Override
-            public void draw(Canvas canvas, GreyPreview p) {
-                drawCoverage(canvas, p);
-            }
-        });
-        shutter = new Button(this);
-        shutter.setText("Take photo");
-        shutter.setOnClickListener(new View.OnClickListener() {
-            @Override
-            public void onClick(View v) {
-                shoot();
-            }
-        });
-        calibrate = new Button(this);
-        calibrate.setText("Calibrate");
-        calibrate.setEnabled(false);
-        calibrate.setOnClickListener(new View.OnClickListener() {
-            @Override
-            public void onClick(View v) {
-                calibrate();
-            }
-        });
-        LinearLayout buttons = new LinearLayout(this);
-        buttons.addView(shutter);
-        buttons.addView(calibrate);
         counts = new TextView(this);
         report = new TextView(this);
         root.addView(intro);
         root.addView(boardField);
-        root.addView(preview, new LinearLayout.LayoutParams(LinearLayout.LayoutParams.MATCH_PARENT, 0, 1f));
-        root.addView(buttons);
+        calibrate = addCameraViews(root, new PreviewView.Overlay() {
+            @Override
+            public void draw(Canvas canvas, GreyPreview p) {
+                drawCoverage(canvas, p);
+            }
+        }, "Calibrate", new Runnable() {
+            @Override
+            public void run() {
+                calibrate();
+            }
+        });
         root.addView(counts);
         root.addView(report);
         root.addView(status);
@@ -109,7 +90,8 @@ public final class CameraCalibrationActivity extends StillActivity {
         return new FrameDescriber(facts, plan, mapBearingDeg(), null);
     }
 
-    private void shoot() {
+    @Override
+    protected void onShutter() {
         if (session == null) {
             try {
                 BoardSpec board = prefs.boardSpec(boardField.getText().toString());

@@ -98,14 +98,7 @@ public final class SettingsActivity extends Activity {
     }
 
     private EditText field(LinearLayout form, String label, String value, int inputType) {
-        TextView l = new TextView(this);
-        l.setText(label);
-        form.addView(l);
-        EditText e = new EditText(this);
-        e.setInputType(inputType);
-        e.setText(value);
-        form.addView(e);
-        return e;
+        return Forms.field(this, form, label, value, inputType);
     }
 
     private void save() {

@@ -1,6 +1,8 @@
 package io.lumipose.app;
 
+import android.view.View;
 import android.widget.Button;
+import android.widget.LinearLayout;
 
 import java.util.concurrent.ExecutorService;
 
@@ -28,6 +30,44 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
 
     /** The describer of this screen's photos (the map's bearing; a calibration or not). */
     protected abstract FrameDescriber describer(CameraFacts facts, CapturePlan plan);
+
+    /** The shutter button was pressed (UI thread). */
+    protected abstract void onShutter();
+
+    /**
+     * Adds the preview (with the screen's overlay, filling the free height) and a row of the shutter
+     * and the screen's action button (disabled until the screen enables it) to {@code root}.
+     *
+     * @return the action button
+     */
+    protected Button addCameraViews(LinearLayout root, PreviewView.Overlay overlay, String actionText,
+                                    final Runnable action) {
+        preview = new PreviewView(this);
+        preview.setOverlay(overlay);
+        shutter = new Button(this);
+        shutter.setText("Take photo");
+        shutter.setOnClickListener(new View.OnClickListener() {
+            @Override
+            public void onClick(View v) {
+                onShutter();
+            }
+        });
+        Button act = new Button(this);
+        act.setText(actionText);
+        act.setEnabled(false);
+        act.setOnClickListener(new View.OnClickListener() {
+            @Override
+            public void onClick(View v) {
+                action.run();
+            }
+        });
+        LinearLayout buttons = new LinearLayout(this);
+        buttons.addView(shutter);
+        buttons.addView(act);
+        root.addView(preview, new LinearLayout.LayoutParams(LinearLayout.LayoutParams.MATCH_PARENT, 0, 1f));
+        root.addView(buttons);
+        return act;
+    }
 
     @Override
     protected FrameSink frameSink(CameraFacts facts, CapturePlan plan, ExecutorService network) {

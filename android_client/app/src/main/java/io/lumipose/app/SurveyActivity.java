@@ -4,7 +4,6 @@ import android.graphics.Canvas;
 import android.graphics.Color;
 import android.graphics.Paint;
 import android.text.InputType;
-import android.view.View;
 import android.widget.Button;
 import android.widget.EditText;
 import android.widget.LinearLayout;
@@ -54,38 +53,20 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         anchorField = field(root, "Anchor panel ID (its place in the map '" + prefs.mapName() + "' is kept)", "",
                 InputType.TYPE_CLASS_NUMBER);
         panelField = field(root, "Panel ID: tap a panel on the photo to name it", "", InputType.TYPE_CLASS_NUMBER);
-        preview = new PreviewView(this);
-        preview.setTapListener(this);
-        preview.setOverlay(new PreviewView.Overlay() {
+        surveyButton = addCameraViews(root, new PreviewView.Overlay() {
             @Override
             public void draw(Canvas canvas, GreyPreview p) {
                 drawLabels(canvas, p);
             }
-        });
-        shutter = new Button(this);
-        shutter.setText("Take photo");
-        shutter.setOnClickListener(new View.OnClickListener() {
+        }, "Survey", new Runnable() {
             @Override
-            public void onClick(View v) {
-                shoot();
-            }
-        });
-        surveyButton = new Button(this);
-        surveyButton.setText("Survey");
-        surveyButton.setEnabled(false);
-        surveyButton.setOnClickListener(new View.OnClickListener() {
-            @Override
-            public void onClick(View v) {
+            public void run() {
                 survey();
             }
         });
-        LinearLayout buttons = new LinearLayout(this);
-        buttons.addView(shutter);
-        buttons.addView(surveyButton);
+        preview.setTapListener(this);
         photosView = new TextView(this);
         reportView = new TextView(this);
-        root.addView(preview, new LinearLayout.LayoutParams(LinearLayout.LayoutParams.MATCH_PARENT, 0, 1f));
-        root.addView(buttons);
         root.addView(photosView);
         root.addView(reportView);
         root.addView(status);
@@ -93,14 +74,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     }
 
     private EditText field(LinearLayout root, String label, String value, int type) {
-        TextView l = new TextView(this);
-        l.setText(label);
-        root.addView(l);
-        EditText e = new EditText(this);
-        e.setInputType(type);
-        e.setText(value);
-        root.addView(e);
-        return e;
+        return Forms.field(this, root, label, value, type);
     }
 
     /** Survey photos see the panels as positioning frames do, but with no ID frames: one photo, whole. */
@@ -115,7 +89,8 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         return new FrameDescriber(facts, plan, mapBearingDeg(), prefs.calibratedProfile(facts.cameraId));
     }
 
-    private void shoot() {
+    @Override
+    protected void onShutter() {
         if (held >= 0) {
             held = -1; // back to the camera to aim the next photo
             shutter.setText("Take photo");

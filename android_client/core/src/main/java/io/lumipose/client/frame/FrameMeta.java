@@ -21,7 +21,8 @@ public final class FrameMeta {
     public static final String SCHEMA = "lumipose.frame/1";
     private static final Set<String> KNOWN = new HashSet<String>(Arrays.asList("schema", "format", "width", "height",
             "row_stride", "camera", "exposure_s", "iso", "rolling_shutter_skew_s", "timestamp_ns", "heading_deg",
-            "compass_bearing_deg", "gravity_camera", "angular_velocity_camera_dps", "frame_kind", "crop", "tone_curve"));
+            "compass_bearing_deg", "gravity_camera", "angular_velocity_camera_dps", "frame_kind", "crop",
+            "tone_curve"));
     private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
             "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
     private static final Set<String> TONE_CURVES = new HashSet<String>(Arrays.asList("linear", "srgb", "device"));

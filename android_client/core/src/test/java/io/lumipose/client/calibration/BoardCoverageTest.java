@@ -57,7 +57,8 @@ class BoardCoverageTest {
 
     @Test
     void boardSpecsAreCheckedAsTheServerChecksThem() {
-        BoardSpec ok = BoardSpec.fromJson("{\"squares_x\": 7, \"squares_y\": 5, \"square_m\": 0.03, \"marker_m\": 0.022}");
+        BoardSpec ok = BoardSpec.fromJson(
+                "{\"squares_x\": 7, \"squares_y\": 5, \"square_m\": 0.03, \"marker_m\": 0.022}");
         assertEquals("DICT_5X5_100", ok.dictionary);
         assertEquals(24, ok.innerCorners());
         assertEquals(ok.toJson().toString(), BoardSpec.fromJson(ok.toJson().toString()).toJson().toString());

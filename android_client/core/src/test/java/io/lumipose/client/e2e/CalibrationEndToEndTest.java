@@ -4,7 +4,6 @@ import static org.junit.jupiter.api.Assertions.assertEquals;
 import static org.junit.jupiter.api.Assertions.assertFalse;
 import static org.junit.jupiter.api.Assertions.assertNotNull;
 import static org.junit.jupiter.api.Assertions.assertTrue;
-import static org.junit.jupiter.api.Assertions.fail;
 
 import java.nio.charset.StandardCharsets;
 import java.nio.file.Files;
@@ -13,7 +12,6 @@ import java.nio.file.Path;
 import org.json.JSONArray;
 import org.json.JSONObject;
 import org.junit.jupiter.api.AfterAll;
-import org.junit.jupiter.api.Assumptions;
 import org.junit.jupiter.api.BeforeAll;
 import org.junit.jupiter.api.Test;
 
@@ -26,6 +24,7 @@ import io.lumipose.client.net.ClientConfig;
 import io.lumipose.client.net.LumiposeClient;
 import io.lumipose.client.net.RetryPolicy;
 import io.lumipose.client.sensor.LensFacing;
+import io.lumipose.client.testutil.EndToEnd;
 import io.lumipose.client.testutil.Lumipose;
 import io.lumipose.client.testutil.Python;
 
@@ -45,21 +44,10 @@ class CalibrationEndToEndTest {
 
     @BeforeAll
     static void start() throws Exception {
-        if (Lumipose.executable() == null) {
-            if (Boolean.getBoolean("lumipose.e2e.required")) {
-                fail("no lumipose executable (lumipose.e2e.required=true)");
-            }
-            Assumptions.abort("no lumipose executable; run scripts/android_test.sh, which sets it up");
-        }
+        EndToEnd.assumeExecutable();
         serve = Lumipose.Serve.start();
-        boolean routes = serve.hasPostRoute(CalibrationSession.VIEWS_PATH)
-                && serve.hasPostRoute(CalibrationSession.CALIBRATIONS_PATH);
-        if (!routes) {
-            String reason = "CalibrationEndToEndTest: this checkout's server has no " + CalibrationSession.VIEWS_PATH
-                    + " or " + CalibrationSession.CALIBRATIONS_PATH + " (issue 14's server part) - not run";
-            System.err.println(reason);
-            Assumptions.abort(reason);
-        }
+        EndToEnd.assumePostRoutes(serve, "CalibrationEndToEndTest (issue 14's server part)",
+                CalibrationSession.VIEWS_PATH, CalibrationSession.CALIBRATIONS_PATH);
         photos = Files.createTempDirectory("lumipose-board");
         Python.run("calibration/board_photos.py", photos.toString(), BOARD.toJson().toString());
     }

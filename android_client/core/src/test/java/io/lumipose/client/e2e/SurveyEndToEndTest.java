@@ -3,7 +3,6 @@ package io.lumipose.client.e2e;
 import static org.junit.jupiter.api.Assertions.assertEquals;
 import static org.junit.jupiter.api.Assertions.assertThrows;
 import static org.junit.jupiter.api.Assertions.assertTrue;
-import static org.junit.jupiter.api.Assertions.fail;
 
 import java.io.File;
 import java.nio.charset.StandardCharsets;
@@ -16,7 +15,6 @@ import java.util.Locale;
 import org.json.JSONArray;
 import org.json.JSONObject;
 import org.junit.jupiter.api.AfterAll;
-import org.junit.jupiter.api.Assumptions;
 import org.junit.jupiter.api.BeforeAll;
 import org.junit.jupiter.api.Test;
 
@@ -29,6 +27,7 @@ import io.lumipose.client.net.RetryPolicy;
 import io.lumipose.client.net.ServerRejectedException;
 import io.lumipose.client.survey.SurveyReport;
 import io.lumipose.client.survey.SurveySession;
+import io.lumipose.client.testutil.EndToEnd;
 import io.lumipose.client.testutil.Lumipose;
 
 /**
@@ -52,19 +51,9 @@ class SurveyEndToEndTest {
 
     @BeforeAll
     static void start() throws Exception {
-        if (Lumipose.executable() == null) {
-            if (Boolean.getBoolean("lumipose.e2e.required")) {
-                fail("no lumipose executable (lumipose.e2e.required=true)");
-            }
-            Assumptions.abort("no lumipose executable; run scripts/android_test.sh, which sets it up");
-        }
+        EndToEnd.assumeExecutable();
         serve = Lumipose.Serve.start();
-        if (!serve.hasPostRoute(SurveySession.SURVEYS_PATH)) {
-            String reason = "SurveyEndToEndTest: this checkout's server has no " + SurveySession.SURVEYS_PATH
-                    + " (issue 14's server part) - not run";
-            System.err.println(reason);
-            Assumptions.abort(reason);
-        }
+        EndToEnd.assumePostRoutes(serve, "SurveyEndToEndTest (issue 14's server part)", SurveySession.SURVEYS_PATH);
         Path dir = Files.createTempDirectory("lumipose-survey");
         for (int i = 0; i < POSES.length; i++) {
             double[] p = POSES[i];
