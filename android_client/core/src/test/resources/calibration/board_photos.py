@@ -30,8 +30,20 @@ centre = np.array([spec["squares_x"], spec["squares_y"]]) * spec["square_m"] / 2
 
 names = []
 rng = np.random.default_rng(7)
-tilts = [(0, 0), (25, 0), (-25, 0), (0, 25), (0, -25), (20, 20), (-20, 20), (20, -20), (-20, -20), (30, 10),
-         (-10, 30), (15, -30)]
+tilts = [
+    (0, 0),
+    (25, 0),
+    (-25, 0),
+    (0, 25),
+    (0, -25),
+    (20, 20),
+    (-20, 20),
+    (20, -20),
+    (-20, -20),
+    (30, 10),
+    (-10, 30),
+    (15, -30),
+]
 for i, (ax, ay) in enumerate(tilts):
     rvec = np.radians([ax, ay, rng.uniform(-20, 20)])
     rot, _ = cv2.Rodrigues(rvec)
@@ -46,5 +58,6 @@ for i, (ax, ay) in enumerate(tilts):
     (out / f"{name}.y").write_bytes(np.ascontiguousarray(photo, np.uint8).tobytes())
     names.append(name)
 (out / "blank.y").write_bytes(np.full((HEIGHT, WIDTH), 128, np.uint8).tobytes())
-(out / "truth.json").write_text(json.dumps({"fx": FX, "fy": FY, "cx": CX, "cy": CY, "width": WIDTH,
-                                            "height": HEIGHT, "photos": names}))
+(out / "truth.json").write_text(
+    json.dumps({"fx": FX, "fy": FY, "cx": CX, "cy": CY, "width": WIDTH, "height": HEIGHT, "photos": names})
+)
