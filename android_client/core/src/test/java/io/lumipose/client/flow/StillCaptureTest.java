@@ -82,7 +82,12 @@ class StillCaptureTest {
         assertEquals(positioning.pose.cropRegion, plan.pose.cropRegion);
         assertEquals(positioning.pose.focusDiopters, plan.pose.focusDiopters);
         assertEquals(20_000_000L, plan.pose.exposureNs);
+        assertEquals(Math.max(facts.sensitivityMin, Math.min(facts.sensitivityMax, 800)),
+                (int) plan.pose.sensitivityIso);
         assertNull(plan.id);
+        CapturePlan loud = positioning.forStills(facts, 20_000_000L, 10_000_000);
+        assertEquals(facts.sensitivityMax, loud.pose.sensitivityIso, "clamped to the camera's range");
+        assertTrue(loud.notes.contains("ISO 10000000 clamped to " + facts.sensitivityMax), loud.notes.toString());
     }
 
     @Test
