@@ -139,7 +139,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                 coverage = s.coverage();
                 outcome = photo.name + ": " + photo.view.corners() + " corners";
             } else {
-                outcome = photo.name + ": no board found (" + photo.refusal + ")";
+                outcome = photo.name + " not used: " + photo.refusal; // the server's reason (no board, ...)
             }
         } catch (InterruptedException e) {
             Thread.currentThread().interrupt();

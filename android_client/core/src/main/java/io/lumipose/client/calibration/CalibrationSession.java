@@ -67,7 +67,7 @@ public final class CalibrationSession {
         public final String name;
         /** Null when no board was found. */
         public final BoardView view;
-        /** The server's reason when no board was found; null otherwise. */
+        /** The server's reason when it found no board on the photo (its 422 answer); null otherwise. */
         public final String refusal;
 
         Photo(String name, BoardView view, String refusal) {
