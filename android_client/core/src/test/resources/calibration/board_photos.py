@@ -1,6 +1,6 @@
 """Board photos for CalibrationEndToEndTest: a ChArUco board (the BoardSpec given as JSON) seen by a
 known pinhole from several tilted poses, rendered by OpenCV (the board image warped by the plane's
-homography, blurred by half a pixel) as packed Y8 files NAME.y, and a blank photo with no board.
+homography at 4 x 4 samples a pixel, then averaged) as packed Y8 files NAME.y, and a blank photo with no board.
 Writes truth.json ({fx, fy, cx, cy, width, height, photos: [names]}) into the directory given.
 
 usage: board_photos.py OUT_DIR BOARD_JSON
@@ -18,7 +18,8 @@ spec = json.loads(sys.argv[2])
 WIDTH, HEIGHT = 640, 480
 FX, FY, CX, CY = 600.0, 598.0, 322.0, 236.5
 K = np.array([[FX, 0, CX], [0, FY, CY], [0, 0, 1]])
-PX_PER_SQUARE = 80  # the board image: finer than the photos, so warping does not alias
+PX_PER_SQUARE = 200  # the board image: finer than the supersampled photos
+SUPERSAMPLE = 4  # rendered at 4 x 4 samples a pixel, then averaged: edges as a lens and sensor make them
 
 dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, spec.get("dictionary", "DICT_5X5_100")))
 board = cv2.aruco.CharucoBoard((spec["squares_x"], spec["squares_y"]), spec["square_m"], spec["marker_m"], dictionary)
@@ -30,30 +31,26 @@ centre = np.array([spec["squares_x"], spec["squares_y"]]) * spec["square_m"] / 2
 
 names = []
 rng = np.random.default_rng(7)
-tilts = [
-    (0, 0),
-    (25, 0),
-    (-25, 0),
-    (0, 25),
-    (0, -25),
-    (20, 20),
-    (-20, 20),
-    (20, -20),
-    (-20, -20),
-    (30, 10),
-    (-10, 30),
-    (15, -30),
-]
-for i, (ax, ay) in enumerate(tilts):
+# the board's centre aimed at the image's corners and edges, each four times with other tilts, so
+# that the corners cover every cell of the server's grid and the normals vary (Zhang's method)
+aims = [(-0.3, -0.3), (0.3, -0.3), (-0.3, 0.3), (0.3, 0.3), (0.0, -0.3), (0.0, 0.3), (-0.3, 0.0), (0.3, 0.0)]
+tilts = [(25, 0), (-25, 0), (0, 25), (0, -25), (20, 20), (-20, 20), (20, -20), (-20, -20)]
+for i in range(4 * len(aims)):
+    ax, ay = tilts[(i * 3) % len(tilts)]
+    u, v = aims[i % len(aims)]
     rvec = np.radians([ax, ay, rng.uniform(-20, 20)])
     rot, _ = cv2.Rodrigues(rvec)
-    distance = rng.uniform(0.28, 0.36)
-    # the board's centre on a spread of image points, so the corners cover the frame
-    aim = np.array([rng.uniform(-0.25, 0.25) * WIDTH / FX, rng.uniform(-0.25, 0.25) * HEIGHT / FY, 1.0])
+    # far enough in the corners that the whole board stays in the frame, near enough elsewhere to fill it
+    distance = rng.uniform(0.5, 0.56) if i % len(aims) < 4 else rng.uniform(0.3, 0.36)
+    aim = np.array([u * WIDTH / FX, v * HEIGHT / FY, 1.0])
     t = aim * distance - rot @ np.array([centre[0], centre[1], 0.0])
     h = K @ np.column_stack([rot[:, 0], rot[:, 1], t]) @ to_board
-    photo = cv2.warpPerspective(art, h, (WIDTH, HEIGHT), flags=cv2.INTER_AREA, borderValue=128)
-    photo = cv2.GaussianBlur(photo, (0, 0), 0.5)
+    # a pixel centre x of the photo is x' = S (x + 1/2) - 1/2 of the supersampled image
+    fine = np.array([[SUPERSAMPLE, 0, (SUPERSAMPLE - 1) / 2], [0, SUPERSAMPLE, (SUPERSAMPLE - 1) / 2], [0, 0, 1]])
+    big = cv2.warpPerspective(
+        art, fine @ h, (WIDTH * SUPERSAMPLE, HEIGHT * SUPERSAMPLE), flags=cv2.INTER_LINEAR, borderValue=128
+    )
+    photo = cv2.resize(big, (WIDTH, HEIGHT), interpolation=cv2.INTER_AREA)
     name = f"board_{i:02d}"
     (out / f"{name}.y").write_bytes(np.ascontiguousarray(photo, np.uint8).tobytes())
     names.append(name)

@@ -54,7 +54,7 @@ public final class CameraCalibrationActivity extends StillActivity {
         root.setPadding(16, 16, 16, 16);
         TextView intro = new TextView(this);
         intro.setText("Photograph the printed board at the distance of the ceiling, tilted, filling every cell of "
-                + "the grid (red: no corner yet). Board spec (the board.json printed with it):");
+                + "the grid (red: too few corners yet). Board spec (the board.json printed with it):");
         boardField = new EditText(this);
         boardField.setText(prefs.boardSpecJson());
         counts = new TextView(this);
@@ -229,7 +229,7 @@ public final class CameraCalibrationActivity extends StillActivity {
         return b.toString();
     }
 
-    /** The coverage grid over the picture: red cells without a corner, green with. */
+    /** The coverage grid over the picture: red cells still to fill, green ones with enough corners. */
     private void drawCoverage(Canvas canvas, GreyPreview p) {
         BoardCoverage c = coverage;
         if (c == null || c.width != p.frameWidth || c.height != p.frameHeight) {
@@ -240,7 +240,7 @@ public final class CameraCalibrationActivity extends StillActivity {
         for (int r = 0; r < c.rows; r++) {
             for (int col = 0; col < c.columns; col++) {
                 canvas.drawRect(col * cellW, r * cellH, (col + 1) * cellW, (r + 1) * cellH,
-                        c.count(r, col) > 0 ? covered : empty);
+                        c.covered(r, col) ? covered : empty);
                 canvas.drawRect(col * cellW, r * cellH, (col + 1) * cellW, (r + 1) * cellH, grid);
             }
         }

@@ -5,16 +5,21 @@ import java.util.List;
 /**
  * Which parts of the image the board's corners have covered so far: a grid of rows x columns over
  * the photo, each cell counting the corners seen in it, as the report's {@code coverage_cells}
- * (rows top to bottom) and {@code coverage} (the share of cells holding a corner) say. A
- * calibration pins the distortion down only where corners were seen, so the screen shows the empty
- * cells to fill.
+ * (rows top to bottom) counts them, and {@link #coverage()} the share of cells holding at least
+ * {@link #MIN_CELL_CORNERS}. A calibration pins the distortion down only where corners were seen,
+ * so the screen shows the cells still to fill.
  *
- * <p>Until the server's report gives its grid, the grid has {@link #LONG_SIDE_CELLS} cells along the
- * image's longer side and as many square-ish cells along the shorter; after a report, its shape.
+ * <p>The grid is the server's (server/calibration, {@code CalibrationRules}: 6 cells along the
+ * image's longer side, 4 along the shorter, a cell counts with 3 corners), and after a report the
+ * report's own shape.
  */
 public final class BoardCoverage {
     /** Cells along the longer side of the image before a report says otherwise. */
-    public static final int LONG_SIDE_CELLS = 8;
+    public static final int LONG_SIDE_CELLS = 6;
+    /** Cells along the shorter side. */
+    public static final int SHORT_SIDE_CELLS = 4;
+    /** Corners a cell needs to count as covered. */
+    public static final int MIN_CELL_CORNERS = 3;
     public final int width;
     public final int height;
     public final int rows;
@@ -38,10 +43,8 @@ public final class BoardCoverage {
 
     /** The default grid for an image: {@link #LONG_SIDE_CELLS} along its longer side. */
     public static BoardCoverage forImage(int width, int height) {
-        int longer = Math.max(width, height);
-        int shorter = Math.max(1, (int) Math.round(LONG_SIDE_CELLS * (double) Math.min(width, height) / longer));
-        return width >= height ? new BoardCoverage(width, height, shorter, LONG_SIDE_CELLS)
-                : new BoardCoverage(width, height, LONG_SIDE_CELLS, shorter);
+        return width >= height ? new BoardCoverage(width, height, SHORT_SIDE_CELLS, LONG_SIDE_CELLS)
+                : new BoardCoverage(width, height, LONG_SIDE_CELLS, SHORT_SIDE_CELLS);
     }
 
     /** A grid of the given shape holding every view's corners. */
@@ -90,12 +93,17 @@ public final class BoardCoverage {
         return out;
     }
 
-    /** The share of cells holding at least one corner, in [0, 1]. */
+    /** Whether the cell holds {@link #MIN_CELL_CORNERS} or more corners. */
+    public boolean covered(int row, int column) {
+        return counts[row][column] >= MIN_CELL_CORNERS;
+    }
+
+    /** The share of cells holding {@link #MIN_CELL_CORNERS} or more corners, in [0, 1]. */
     public double coverage() {
         int covered = 0;
-        for (int[] row : counts) {
-            for (int n : row) {
-                if (n > 0) {
+        for (int r = 0; r < rows; r++) {
+            for (int c = 0; c < columns; c++) {
+                if (covered(r, c)) {
                     covered++;
                 }
             }

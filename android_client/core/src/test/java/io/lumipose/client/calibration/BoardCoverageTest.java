@@ -3,6 +3,7 @@ package io.lumipose.client.calibration;
 import static org.junit.jupiter.api.Assertions.assertArrayEquals;
 import static org.junit.jupiter.api.Assertions.assertEquals;
 import static org.junit.jupiter.api.Assertions.assertThrows;
+import static org.junit.jupiter.api.Assertions.assertTrue;
 
 import java.util.Arrays;
 
@@ -18,13 +19,13 @@ class BoardCoverageTest {
     }
 
     @Test
-    void theDefaultGridHasEightCellsAlongTheLongerSide() {
+    void theDefaultGridIsTheServersSixByFour() {
         BoardCoverage landscape = BoardCoverage.forImage(1920, 1080);
-        assertEquals(8, landscape.columns);
-        assertEquals(5, landscape.rows, "1080 / 1920 of 8 cells, rounded");
+        assertEquals(6, landscape.columns);
+        assertEquals(4, landscape.rows);
         BoardCoverage portrait = BoardCoverage.forImage(3000, 4000);
-        assertEquals(8, portrait.rows);
-        assertEquals(6, portrait.columns);
+        assertEquals(6, portrait.rows);
+        assertEquals(4, portrait.columns);
     }
 
     /** Each corner counts in the cell it falls in, rows top to bottom; edges and beyond count at the edge. */
@@ -37,12 +38,14 @@ class BoardCoverageTest {
         assertArrayEquals(new int[] {2, 1, 0, 0}, c.counts()[0]);
         assertArrayEquals(new int[] {0, 0, 1, 0}, c.counts()[1]);
         assertArrayEquals(new int[] {1, 0, 0, 1}, c.counts()[2]);
-        assertEquals(5.0 / 12, c.coverage(), 1e-12);
-        c.add(view("b", 800, 600, new double[] {10, 10}));
+        assertEquals(0.0, c.coverage(), 0.0, "no cell holds 3 corners yet");
+        c.add(view("b", 800, 600, new double[] {10, 10}, new double[] {790, 599}, new double[] {795, 580}));
         assertEquals(3, c.count(0, 0));
-        assertEquals(5.0 / 12, c.coverage(), 1e-12, "a cell counts once, however many corners");
-        BoardCoverage again = BoardCoverage.of(Arrays.asList(view("a", 800, 600, new double[] {10, 10})), 800, 600,
-                3, 4);
+        assertTrue(c.covered(0, 0));
+        assertTrue(c.covered(2, 3));
+        assertEquals(2.0 / 12, c.coverage(), 1e-12);
+        BoardCoverage again = BoardCoverage.of(Arrays.asList(view("a", 800, 600, new double[] {10, 10},
+                new double[] {11, 10}, new double[] {12, 10})), 800, 600, 3, 4);
         assertEquals(1.0 / 12, again.coverage(), 1e-12);
     }
 

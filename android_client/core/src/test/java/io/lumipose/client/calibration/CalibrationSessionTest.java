@@ -100,9 +100,11 @@ class CalibrationSessionTest {
         assertEquals(3, session.photos());
         assertEquals(2, session.views().size());
         BoardCoverage c = session.coverage();
-        assertEquals(6, c.rows, "the default grid of a 64 x 48 image: 8 x 6");
-        assertEquals(8, c.columns);
-        assertEquals(3.0 / 48, c.coverage(), 1e-12);
+        assertEquals(4, c.rows, "the default grid of a landscape image: 6 x 4");
+        assertEquals(6, c.columns);
+        assertEquals(1, c.count(0, 0));
+        assertEquals(1, c.count(0, 3), "photo-3's corner");
+        assertEquals(0.0, c.coverage(), 0.0, "no cell with 3 corners");
     }
 
     @Test

@@ -32,8 +32,8 @@ import io.lumipose.client.testutil.Python;
  * The calibration screen's session against a real {@code lumipose serve}: board photos rendered
  * through a known pinhole (resources/calibration/board_photos.py, OpenCV's ChArUco board warped by
  * each pose's homography) go up as the app sends them, a blank photo is refused as having no board,
- * and the calibration must find the pinhole (fx, fy within 0.5 %, cx, cy within 2 px: twelve
- * views of a 640 x 480 camera) and store the profile, which the server then serves.
+ * and the calibration must find the pinhole (fx, fy within 0.5 %, cx, cy within 2 px: at least
+ * twelve of 32 views of a 640 x 480 camera) and store the profile, which the server then serves.
  */
 class CalibrationEndToEndTest {
     private static final BoardSpec BOARD = new BoardSpec(7, 5, 0.03, 0.022, null);
@@ -78,12 +78,14 @@ class CalibrationEndToEndTest {
         assertFalse(blank.found(), "a photo without a board");
         assertNotNull(blank.refusal);
         JSONArray names = truth.getJSONArray("photos");
+        int found = 0;
         for (int i = 0; i < names.length(); i++) {
             byte[] luma = Files.readAllBytes(photos.resolve(names.getString(i) + ".y"));
-            CalibrationSession.Photo p = session.addPhoto(luma, meta(w, h));
-            assertTrue(p.found(), names.getString(i) + ": " + p.refusal);
-            assertTrue(p.view.corners() >= 12, names.getString(i) + ": " + p.view.corners() + " corners");
+            // a board mostly outside the frame may show too few corners: refused, as on a phone
+            found += session.addPhoto(luma, meta(w, h)).found() ? 1 : 0;
         }
+        assertTrue(found >= 12, found + " of " + names.length() + " photos with the board found");
+        assertEquals(found, session.views().size());
         assertTrue(session.coverage().coverage() > 0.5, "the views spread over the frame: " + session.coverage()
                 .coverage());
 
@@ -91,6 +93,9 @@ class CalibrationEndToEndTest {
         CalibrationSession.Outcome o = session.calibrate(phone, null);
         assertTrue(o.report.ok, "refused: " + o.report.message + " " + o.report.advice);
         DeviceProfile.MeasuredPinhole k = o.report.profile.intrinsics;
+        System.out.printf(java.util.Locale.US, "calibration e2e: %d views, fx %.3f fy %.3f cx %.3f cy %.3f px "
+                + "(truth %.1f %.1f %.1f %.1f), rms %.3f px%n", found, k.fx, k.fy, k.cx, k.cy, truth.getDouble("fx"),
+                truth.getDouble("fy"), truth.getDouble("cx"), truth.getDouble("cy"), o.report.rmsPx);
         assertEquals(truth.getDouble("fx"), k.fx, 0.005 * truth.getDouble("fx"));
         assertEquals(truth.getDouble("fy"), k.fy, 0.005 * truth.getDouble("fy"));
         assertEquals(truth.getDouble("cx"), k.cx, 2.0);
