@@ -159,6 +159,8 @@ class SurveyEndToEndTest {
         SurveyReport r = s.survey("office-sketch", 17);
         assertEquals(POSES.length, r.framesUsed, "skipped: " + r.skipped.size());
         assertEquals(truth.beacons.size(), r.beacons.size());
+        double worstMm = 0;
+        double worstYawDeg = 0;
         for (SurveyReport.SurveyedBeacon b : r.beacons) {
             Beacon t = truth.beacon(b.beaconId);
             double[] c = b.centerM();
@@ -167,7 +169,12 @@ class SurveyEndToEndTest {
             assertTrue(error < 0.005, "panel " + b.beaconId + " " + error * 1000 + " mm off");
             double yawError = ((b.yawDeg - t.yawDeg) % 360 + 540) % 360 - 180;
             assertEquals(0, yawError, 0.5, "panel " + b.beaconId + " yaw " + b.yawDeg);
+            worstMm = Math.max(worstMm, error * 1000);
+            worstYawDeg = Math.max(worstYawDeg, Math.abs(yawError));
         }
+        System.out.printf(Locale.US, "survey e2e: %d frames, worst centre %.2f mm, worst yaw %.3f deg, bearing %.2f"
+                + " deg (sigma %s), rms %.3f px%n", r.framesUsed, worstMm, worstYawDeg, r.bearingDeg,
+                r.bearingSigmaDeg, r.rmsPx);
         assertEquals(BEARING_DEG, r.bearingDeg, 1.0);
         assertEquals(BEARING_DEG, r.map.bearingDeg, 1.0);
         assertTrue(r.stored);
