@@ -102,11 +102,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                 return;
             }
         }
-        if (takePhoto()) {
-            shutter.setEnabled(false);
-        } else {
-            showStatus("The camera is not running yet.");
-        }
+        takePhoto();
     }
 
     @Override

@@ -78,10 +78,17 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
         return c;
     }
 
-    /** Arms the shutter; false when the camera is not running or a shot already waits. */
-    protected boolean takePhoto() {
+    /**
+     * Arms the shutter (UI thread): the shutter button stays off until the photo is handled (the
+     * screen enables it again); says so when the camera is not running yet.
+     */
+    protected void takePhoto() {
         StillCapture c = capture;
-        return c != null && c.arm();
+        if (c != null && c.arm()) {
+            shutter.setEnabled(false);
+        } else {
+            showStatus("The camera is not running yet.");
+        }
     }
 
     @Override

@@ -105,11 +105,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
                 return;
             }
         }
-        if (takePhoto()) {
-            shutter.setEnabled(false);
-        } else {
-            showStatus("The camera is not running yet.");
-        }
+        takePhoto();
     }
 
     @Override
