@@ -94,7 +94,7 @@ public final class CameraCalibrationActivity extends StillActivity {
     protected void onShutter() {
         if (session == null) {
             try {
-                BoardSpec board = prefs.boardSpec(boardField.getText().toString());
+                BoardSpec board = prefs.saveBoardSpec(boardField.getText().toString());
                 session = new CalibrationSession(client, board);
                 boardField.setEnabled(false);
             } catch (IllegalArgumentException e) {

@@ -114,8 +114,12 @@ final class Prefs {
         return p.getString(BOARD_SPEC, DEFAULT_BOARD_SPEC);
     }
 
-    /** @throws IllegalArgumentException naming the field when the text is not a board spec */
-    BoardSpec boardSpec(String json) {
+    /**
+     * Reads the board spec the user gave and keeps it for next time.
+     *
+     * @throws IllegalArgumentException naming the field when the text is not a board spec
+     */
+    BoardSpec saveBoardSpec(String json) {
         BoardSpec spec = BoardSpec.fromJson(json);
         p.edit().putString(BOARD_SPEC, json).apply();
         return spec;

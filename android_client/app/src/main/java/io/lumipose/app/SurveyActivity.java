@@ -49,10 +49,12 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         LinearLayout root = new LinearLayout(this);
         root.setOrientation(LinearLayout.VERTICAL);
         root.setPadding(16, 16, 16, 16);
-        nameField = field(root, "Surveyed map's name", prefs.mapName() + "-surveyed", InputType.TYPE_CLASS_TEXT);
-        anchorField = field(root, "Anchor panel ID (its place in the map '" + prefs.mapName() + "' is kept)", "",
+        nameField = Forms.field(this, root, "Surveyed map's name", prefs.mapName() + "-surveyed",
+                InputType.TYPE_CLASS_TEXT);
+        anchorField = Forms.field(this, root, "Anchor panel ID (its place in the map '" + prefs.mapName()
+                + "' is kept)", "", InputType.TYPE_CLASS_NUMBER);
+        panelField = Forms.field(this, root, "Panel ID: tap a panel on the photo to name it", "",
                 InputType.TYPE_CLASS_NUMBER);
-        panelField = field(root, "Panel ID: tap a panel on the photo to name it", "", InputType.TYPE_CLASS_NUMBER);
         surveyButton = addCameraViews(root, new PreviewView.Overlay() {
             @Override
             public void draw(Canvas canvas, GreyPreview p) {
@@ -71,10 +73,6 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         root.addView(reportView);
         root.addView(status);
         setContentView(root);
-    }
-
-    private EditText field(LinearLayout root, String label, String value, int type) {
-        return Forms.field(this, root, label, value, type);
     }
 
     /** Survey photos see the panels as positioning frames do, but with no ID frames: one photo, whole. */
