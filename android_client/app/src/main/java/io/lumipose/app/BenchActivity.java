@@ -15,6 +15,7 @@ import io.lumipose.client.bench.TestBenchGrid;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.flow.FramePipeline;
 import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.frame.FrameMeta;
@@ -109,8 +110,10 @@ public final class BenchActivity extends CameraActivity implements FramePipeline
                 return s.result;
             }
         };
-        final FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(),
-                gravity.rates(), storeSample, network, this);
+        FrameDescriber describer = new FrameDescriber(facts, plan, mapBearingDeg(),
+                prefs.calibratedProfile(facts.cameraId));
+        final FramePipeline p = FramePipeline.forCamera(describer, facts, plan, gravity.history(), gravity.rates(),
+                storeSample, network, this);
         pipeline = p;
         // Frames reach the pipeline only while a sample is wanted, until it has taken one.
         return new FrameSink() {

@@ -46,6 +46,12 @@ import io.lumipose.client.flow.FrameSink;
 final class Camera2Controller {
     /** Told what happens; every call comes on the camera thread. */
     interface Listener {
+        /**
+         * The plan to capture with, from the positioning plan (the calibration screen swaps in the
+         * board's exposure; the others keep it). On the camera thread, before anything is opened.
+         */
+        CapturePlan plan(CameraFacts facts, CapturePlan positioning) throws UnsupportedCameraException;
+
         /** The camera is configured; returns where frames go (the Activity builds it from facts and plan). */
         FrameSink onStarted(CameraFacts facts, CapturePlan plan, String summary);
 
@@ -202,6 +208,7 @@ final class Camera2Controller {
             if (!CameraFactsReader.reportsRollingShutterSkew(cc)) {
                 plan = plan.withoutIdFrames("no rolling-shutter skew: beacon IDs off");
             }
+            plan = listener.plan(facts, plan);
             reader = ImageReader.newInstance(plan.output.width, plan.output.height, ImageFormat.YUV_420_888,
                     MAX_IMAGES);
             reader.setOnImageAvailableListener(this::deliver, handler);

@@ -14,6 +14,7 @@ import java.util.concurrent.RejectedExecutionException;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.capture.CaptureOptions;
 import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.UnsupportedCameraException;
 import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.LumiposeClient;
@@ -187,6 +188,21 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
                 status.setText(text);
             }
         });
+    }
+
+    /** The positioning plan as it is; a screen that photographs something else changes its exposure. */
+    @Override
+    public CapturePlan plan(CameraFacts facts, CapturePlan positioning) throws UnsupportedCameraException {
+        return positioning;
+    }
+
+    /**
+     * The compass bearing of the map's +X axis for the frames' heading: the map's own (a survey
+     * measured it), else the one typed in the settings, else none.
+     */
+    protected Double mapBearingDeg() {
+        RoomMap m = map;
+        return m == null ? prefs.mapXBearingDeg() : m.bearingOr(prefs.mapXBearingDeg());
     }
 
     @Override

@@ -7,6 +7,7 @@ import java.util.concurrent.ExecutorService;
 
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.flow.FramePipeline;
 import io.lumipose.client.flow.FrameSink;
 import io.lumipose.client.frame.FrameMeta;
@@ -30,8 +31,11 @@ abstract class LocatingActivity extends CameraActivity implements FramePipeline.
         this.plan = plan;
         // live frames: one attempt, a short timeout, no gzip, the map this screen draws
         LumiposeClient live = LumiposeClient.create(prefs.liveConfig());
-        FramePipeline p = FramePipeline.forCamera(facts, plan, prefs.mapXBearingDeg(), gravity.history(),
-                gravity.rates(), live, network, this);
+        // the map's bearing for the heading, and this camera's calibration when it has one
+        FrameDescriber describer = new FrameDescriber(facts, plan, mapBearingDeg(),
+                prefs.calibratedProfile(facts.cameraId));
+        FramePipeline p = FramePipeline.forCamera(describer, facts, plan, gravity.history(), gravity.rates(), live,
+                network, this);
         pipeline = p;
         return p;
     }

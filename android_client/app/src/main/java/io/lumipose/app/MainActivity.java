@@ -8,7 +8,7 @@ import android.widget.Button;
 import android.widget.LinearLayout;
 import android.widget.TextView;
 
-/** The four modes. */
+/** The modes. */
 public final class MainActivity extends Activity {
     @Override
     protected void onCreate(Bundle savedInstanceState) {
@@ -20,7 +20,9 @@ public final class MainActivity extends Activity {
         intro.setText("Point the camera at a ceiling panel of the map. Set the server in Settings first.");
         root.addView(intro);
         root.addView(mode("Live position", LiveActivity.class));
-        root.addView(mode("Calibration (align under the panel)", CalibrationActivity.class));
+        root.addView(mode("Align under the panel (test bench)", AlignmentActivity.class));
+        root.addView(mode("Calibrate camera (ChArUco board)", CameraCalibrationActivity.class));
+        root.addView(mode("Survey room (panel positions)", SurveyActivity.class));
         root.addView(mode("Test bench (391 cells)", BenchActivity.class));
         root.addView(mode("Settings", SettingsActivity.class));
         setContentView(root);

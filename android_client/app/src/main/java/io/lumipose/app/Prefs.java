@@ -6,6 +6,8 @@ import android.os.Build;
 
 import java.util.UUID;
 
+import io.lumipose.client.calibration.BoardSpec;
+import io.lumipose.client.camera.DeviceProfile;
 import io.lumipose.client.map.Beacon;
 import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.ClientConfig;
@@ -25,6 +27,15 @@ final class Prefs {
     static final String READ_IDS = "read_ids";
     static final String MAP_X_BEARING_DEG = "map_x_bearing_deg";
     static final String INSTALL_ID = "install_id";
+    static final String BOARD_SPEC = "board_spec";
+    /** Followed by the camera id: each camera has its own calibration. */
+    static final String CALIBRATED_PROFILE = "calibrated_profile:";
+    /**
+     * A 7 x 5 board of 30 mm squares and 22 mm markers until the user pastes the board.json that
+     * {@code lumipose calibrate board} wrote beside the printed board (the screen edits it).
+     */
+    static final String DEFAULT_BOARD_SPEC = "{\"schema\": \"lumipose.board/1\", \"squares_x\": 7, \"squares_y\": 5, "
+            + "\"square_m\": 0.03, \"marker_m\": 0.022, \"dictionary\": \"DICT_5X5_100\"}";
 
     private final SharedPreferences p;
 
@@ -82,7 +93,10 @@ final class Prefs {
         return p.getBoolean(READ_IDS, true);
     }
 
-    /** Compass bearing of the map's +X axis (deg clockwise from north); null when not set: no heading is sent. */
+    /**
+     * Compass bearing of the map's +X axis (deg clockwise from north) as typed; the map's own
+     * {@code bearing_deg} wins when it has one. Null when not set: then no heading is sent.
+     */
     Double mapXBearingDeg() {
         String v = p.getString(MAP_X_BEARING_DEG, "").trim();
         if (v.isEmpty()) {
@@ -93,6 +107,51 @@ final class Prefs {
         } catch (NumberFormatException e) {
             return null;
         }
+    }
+
+    /** The board.json of the printed board (as text: the screen shows and edits it). */
+    String boardSpecJson() {
+        return p.getString(BOARD_SPEC, DEFAULT_BOARD_SPEC);
+    }
+
+    /**
+     * Reads the board spec the user gave and keeps it for next time.
+     *
+     * @throws IllegalArgumentException naming the field when the text is not a board spec
+     */
+    BoardSpec saveBoardSpec(String json) {
+        BoardSpec spec = BoardSpec.fromJson(json);
+        p.edit().putString(BOARD_SPEC, json).apply();
+        return spec;
+    }
+
+    /**
+     * The calibrated profile of camera {@code cameraId}, or null: none, or one this version cannot
+     * read (then the frames go with Camera2's intrinsics, as before the calibration).
+     */
+    DeviceProfile calibratedProfile(String cameraId) {
+        String json = p.getString(CALIBRATED_PROFILE + cameraId, null);
+        if (json == null) {
+            return null;
+        }
+        try {
+            return DeviceProfile.fromJson(json);
+        } catch (IllegalArgumentException e) {
+            return null;
+        }
+    }
+
+    void setCalibratedProfile(String cameraId, DeviceProfile profile) {
+        p.edit().putString(CALIBRATED_PROFILE + cameraId, profile.toJson().toString()).apply();
+    }
+
+    void setMapName(String name) {
+        p.edit().putString(MAP_NAME, name).apply();
+    }
+
+    /** A profile id for this phone's camera (the calibrated one is "<this>-calibrated"). */
+    String phoneProfileId(String cameraId) {
+        return DeviceProfile.safeId(Build.MANUFACTURER + "-" + Build.MODEL + "-camera" + cameraId);
     }
 
     int benchIndex() {

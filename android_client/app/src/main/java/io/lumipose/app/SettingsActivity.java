@@ -53,7 +53,8 @@ public final class SettingsActivity extends Activity {
                 InputType.TYPE_CLASS_NUMBER);
 
         Double b = prefs.mapXBearingDeg();
-        bearing = field(form, "Compass bearing of the map's +X axis, deg (empty: send no heading)",
+        bearing = field(form, "Compass bearing of the map's +X axis, deg, for maps without a surveyed bearing "
+                + "(empty: no heading then)",
                 b == null ? "" : String.valueOf(b), DECIMAL | InputType.TYPE_NUMBER_FLAG_SIGNED);
         readIds = new CheckBox(this);
         readIds.setText("Read beacon IDs in live mode (short-exposure frames after each pose frame, on maps "
@@ -97,14 +98,7 @@ public final class SettingsActivity extends Activity {
     }
 
     private EditText field(LinearLayout form, String label, String value, int inputType) {
-        TextView l = new TextView(this);
-        l.setText(label);
-        form.addView(l);
-        EditText e = new EditText(this);
-        e.setInputType(inputType);
-        e.setText(value);
-        form.addView(e);
-        return e;
+        return Forms.field(this, form, label, value, inputType);
     }
 
     private void save() {

@@ -140,6 +140,29 @@ public final class CapturePlan {
         return new CapturePlan(output, alone, null, 0, alone.frameDurationNs, more, poseMinimumFrameNs);
     }
 
+    /**
+     * The plan for still photos of a scene lit by the room (a printed calibration board): this plan's
+     * output size, crop region, focus, tone curve and processing, so that the photos have the
+     * positioning frames' intrinsics, but {@code exposureNs} and {@code iso} (both clamped to what
+     * the camera offers) for the scene, and no ID frames. Its frames are "pose" frames.
+     */
+    public CapturePlan forStills(CameraFacts facts, long exposureNs, int iso) throws UnsupportedCameraException {
+        CameraRanges ranges = ranges(facts, output);
+        CaptureSettings s = CaptureSettingsChooser.choose(ranges, exposureNs);
+        List<String> more = new ArrayList<String>(notes);
+        more.addAll(s.notes);
+        Integer clampedIso = null;
+        if (ranges.sensitivityMinIso != null) {
+            int max = ranges.sensitivityMaxIso == null ? iso : ranges.sensitivityMaxIso;
+            clampedIso = Math.max(ranges.sensitivityMinIso, Math.min(max, iso));
+            if (clampedIso != iso) {
+                more.add("ISO " + iso + " clamped to " + clampedIso);
+            }
+        }
+        RequestSpec still = pose.withExposure(RequestSpec.POSE, s.exposureNs, clampedIso, s.frameDurationNs);
+        return new CapturePlan(output, still, null, 0, still.frameDurationNs, more, s.frameDurationNs);
+    }
+
     /** The repeating burst in capture order: the pose request, then the ID requests. */
     public List<RequestSpec> burst() {
         List<RequestSpec> out = new ArrayList<RequestSpec>();

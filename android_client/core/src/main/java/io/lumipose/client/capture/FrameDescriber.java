@@ -6,6 +6,7 @@ import java.util.List;
 
 import io.lumipose.client.camera.ArrayRect;
 import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.DeviceProfile;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.camera.Intrinsics;
 import io.lumipose.client.camera.IntrinsicsCalculator;
@@ -56,15 +57,26 @@ public final class FrameDescriber {
     private final CameraFacts facts;
     private final CapturePlan plan;
     private final Double mapXBearingDeg;
+    private final DeviceProfile calibration;
 
     /**
      * @param mapXBearingDeg compass bearing of the map's +X axis (deg clockwise from north), or null
      *                       to send no heading
      */
     public FrameDescriber(CameraFacts facts, CapturePlan plan, Double mapXBearingDeg) {
+        this(facts, plan, mapXBearingDeg, null);
+    }
+
+    /**
+     * @param calibration this camera's calibrated profile (the "Calibrate camera" screen's), or null:
+     *                    frames then carry its pinhole and distortion scaled to the output, instead of
+     *                    what Camera2 reports, as long as the result's focal length is the profile's
+     */
+    public FrameDescriber(CameraFacts facts, CapturePlan plan, Double mapXBearingDeg, DeviceProfile calibration) {
         this.facts = facts;
         this.plan = plan;
         this.mapXBearingDeg = mapXBearingDeg;
+        this.calibration = calibration;
     }
 
     /** {@link #describe(FrameResult, float[], float[], float[])} without a gyroscope reading. */
@@ -102,7 +114,7 @@ public final class FrameDescriber {
         }
         Intrinsics camera;
         try {
-            camera = IntrinsicsCalculator.forFrame(facts, result, plan.output, warnings);
+            camera = calibrated(IntrinsicsCalculator.forFrame(facts, result, plan.output, warnings), warnings);
         } catch (IllegalArgumentException e) {
             return drop(kind, e.getMessage(), warnings);
         }
@@ -149,10 +161,35 @@ public final class FrameDescriber {
                 warnings.add("rotation rates beyond the contract's 4000 deg/s not sent"); // the same text: said once
             }
         }
-        if (deviceToEnu != null && facing != null && mapXBearingDeg != null) {
-            b.headingDeg(HeadingEstimator.cameraYawDeg(deviceToEnu, facts.sensorOrientationDeg, facing, mapXBearingDeg));
+        if (deviceToEnu != null && facing != null) {
+            // Every frame says where its image's +x points on the compass (a survey measures the map's
+            // bearing from it); the heading needs the map's bearing too.
+            Double compass = HeadingEstimator.compassBearingDeg(deviceToEnu, facts.sensorOrientationDeg, facing);
+            b.compassBearingDeg(compass);
+            if (compass != null && mapXBearingDeg != null) {
+                b.headingDeg(HeadingEstimator.headingDeg(mapXBearingDeg, compass));
+            }
         }
         return b.build();
+    }
+
+    /**
+     * The calibrated profile's pinhole at the output size in place of Camera2's; Camera2's when there
+     * is no profile, or when the frame's lens is not the calibrated one (a logical multi-camera
+     * switched lenses: its focal length differs by more than 1 %), with a warning.
+     */
+    private Intrinsics calibrated(Intrinsics reported, List<String> warnings) {
+        if (calibration == null) {
+            return reported;
+        }
+        if (reported.focalLengthM != null
+                && Math.abs(reported.focalLengthM - calibration.focalLengthM) > 0.01 * calibration.focalLengthM) {
+            warnings.add("calibration '" + calibration.id + "' not used: the frame's focal length "
+                    + reported.focalLengthM * 1000 + " mm is not the calibrated " + calibration.focalLengthM * 1000
+                    + " mm (another lens)");
+            return reported;
+        }
+        return calibration.forFrame(plan.output.width, plan.output.height);
     }
 
     /**

@@ -1,5 +1,7 @@
 package io.lumipose.client.contract;
 
+import java.util.regex.Pattern;
+
 import io.lumipose.client.json.ContractException;
 
 /**
@@ -76,7 +78,9 @@ public final class ContractRanges {
     public static final Range EXPOSURE_S = new Range(1e-9, 3600);
     public static final Range ISO = new Range(1, 1e7);
     public static final Range ROLLING_SHUTTER_SKEW_S = new Range(0, 1);
-    /** heading_deg and a beacon's yaw_deg: one turn either way. */
+    /**
+     * heading_deg, compass_bearing_deg, a beacon's yaw_deg and a map's bearing_deg: one turn either way.
+     */
     public static final Range ANGLE_DEG = new Range(-360, 360);
     /** Each component of gravity_camera (a unit vector or m/s^2). */
     public static final Range GRAVITY = new Range(-100, 100);
@@ -92,6 +96,17 @@ public final class ContractRanges {
     public static final Range BEACON_SIZE_M = new Range(0.005, 10);
     /** A beacon's corner_radius_m (also below half its shorter side; a circle has none). */
     public static final Range CORNER_RADIUS_M = new Range(0, 5);
+
+    /** The service's names of maps and ids of profiles (shared_schemas/api.py, NAME_PATTERN). */
+    public static final Pattern NAME = Pattern.compile("[A-Za-z0-9][A-Za-z0-9_.-]{0,63}");
+
+    /** @throws ContractException naming {@code field} when {@code name} is not one of {@link #NAME} */
+    public static String checkName(String field, String name) {
+        if (name == null || !NAME.matcher(name).matches()) {
+            throw new ContractException(field, "must match " + NAME.pattern() + ", got '" + name + "'");
+        }
+        return name;
+    }
 
     /** @throws ContractException when {@code v} is negative (a Long is always below 2^63) */
     public static Long checkTimestampNs(String field, Long v) {

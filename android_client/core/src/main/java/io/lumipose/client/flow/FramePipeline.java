@@ -155,8 +155,16 @@ public final class FramePipeline implements FrameSink {
     public static FramePipeline forCamera(CameraFacts facts, CapturePlan plan, Double mapXBearingDeg,
                                           GravityHistory attitude, GyroHistory rates, FrameUploader uploader,
                                           Executor uploadExecutor, Listener listener) {
-        return new FramePipeline(new FrameDescriber(facts, plan, mapXBearingDeg), attitude, rates,
-                facts.timestampsAreRealtime(), plan.idFramesPerBurst, uploader, uploadExecutor, listener);
+        return forCamera(new FrameDescriber(facts, plan, mapXBearingDeg), facts, plan, attitude, rates, uploader,
+                uploadExecutor, listener);
+    }
+
+    /** The same with the screen's own describer (a calibrated profile, say). */
+    public static FramePipeline forCamera(FrameDescriber describer, CameraFacts facts, CapturePlan plan,
+                                          GravityHistory attitude, GyroHistory rates, FrameUploader uploader,
+                                          Executor uploadExecutor, Listener listener) {
+        return new FramePipeline(describer, attitude, rates, facts.timestampsAreRealtime(), plan.idFramesPerBurst,
+                uploader, uploadExecutor, listener);
     }
 
     @Override
@@ -258,7 +266,7 @@ public final class FramePipeline implements FrameSink {
      * When the last row's exposure ends: SENSOR_TIMESTAMP is the first row's start, the last row
      * starts a skew later (a missing skew or exposure counts as none).
      */
-    private static long readoutEndNs(FrameResult result) {
+    static long readoutEndNs(FrameResult result) {
         long skew = result.rollingShutterSkewNs == null ? 0 : result.rollingShutterSkewNs;
         long exposure = result.exposureNs == null ? 0 : result.exposureNs;
         return result.timestampNs + skew + exposure;

@@ -21,7 +21,8 @@ public final class FrameMeta {
     public static final String SCHEMA = "lumipose.frame/1";
     private static final Set<String> KNOWN = new HashSet<String>(Arrays.asList("schema", "format", "width", "height",
             "row_stride", "camera", "exposure_s", "iso", "rolling_shutter_skew_s", "timestamp_ns", "heading_deg",
-            "gravity_camera", "angular_velocity_camera_dps", "frame_kind", "crop", "tone_curve"));
+            "compass_bearing_deg", "gravity_camera", "angular_velocity_camera_dps", "frame_kind", "crop",
+            "tone_curve"));
     private static final Set<String> KNOWN_CAMERA = new HashSet<String>(Arrays.asList("fx", "fy", "cx", "cy",
             "distortion", "pixel_size_m", "focal_length_m", "device", "profile"));
     private static final Set<String> TONE_CURVES = new HashSet<String>(Arrays.asList("linear", "srgb", "device"));
@@ -39,6 +40,8 @@ public final class FrameMeta {
     public final Double rollingShutterSkewS;
     public final Long timestampNs;
     public final Double headingDeg;
+    /** Compass bearing (deg clockwise from north) of the image's +x laid level; null when not measured. */
+    public final Double compassBearingDeg;
     private final double[] gravityCamera;
     private final double[] angularVelocityCameraDps;
     /** "pose" or "id" (a short-exposure VLC frame); null = not stated, which the contract reads as pose. */
@@ -73,6 +76,7 @@ public final class FrameMeta {
         ContractRanges.ROLLING_SHUTTER_SKEW_S.check("rolling_shutter_skew_s", b.rollingShutterSkewS);
         ContractRanges.checkTimestampNs("timestamp_ns", b.timestampNs);
         ContractRanges.ANGLE_DEG.check("heading_deg", b.headingDeg);
+        ContractRanges.ANGLE_DEG.check("compass_bearing_deg", b.compassBearingDeg);
         if (b.frameKind != null && !"pose".equals(b.frameKind) && !"id".equals(b.frameKind)) {
             throw new ContractException("frame_kind", "must be 'pose' or 'id', got '" + b.frameKind + "'");
         }
@@ -99,6 +103,7 @@ public final class FrameMeta {
         this.rollingShutterSkewS = b.rollingShutterSkewS;
         this.timestampNs = b.timestampNs;
         this.headingDeg = b.headingDeg;
+        this.compassBearingDeg = b.compassBearingDeg;
         this.gravityCamera = b.gravityCamera == null ? null : b.gravityCamera.clone();
         this.angularVelocityCameraDps = b.angularVelocityCameraDps == null ? null
                 : b.angularVelocityCameraDps.clone();
@@ -210,6 +215,7 @@ public final class FrameMeta {
         putIfSet(o, "rolling_shutter_skew_s", rollingShutterSkewS);
         putIfSet(o, "timestamp_ns", timestampNs);
         putIfSet(o, "heading_deg", headingDeg);
+        putIfSet(o, "compass_bearing_deg", compassBearingDeg);
         if (gravityCamera != null) {
             Json.put(o, "gravity_camera", Json.array(gravityCamera));
         }
@@ -271,6 +277,7 @@ public final class FrameMeta {
         b.rollingShutterSkewS(Json.optDouble(o, "rolling_shutter_skew_s", "rolling_shutter_skew_s"));
         b.timestampNs(Json.optLong(o, "timestamp_ns", "timestamp_ns"));
         b.headingDeg(Json.optDouble(o, "heading_deg", "heading_deg"));
+        b.compassBearingDeg(Json.optDouble(o, "compass_bearing_deg", "compass_bearing_deg"));
         b.gravityCamera(Json.optDoubles(o, "gravity_camera", "gravity_camera", 3));
         b.angularVelocityCameraDps(Json.optDoubles(o, "angular_velocity_camera_dps", "angular_velocity_camera_dps", 3));
         b.frameKind(Json.optString(o, "frame_kind", "frame_kind"));
@@ -296,6 +303,7 @@ public final class FrameMeta {
         private Double rollingShutterSkewS;
         private Long timestampNs;
         private Double headingDeg;
+        private Double compassBearingDeg;
         private double[] gravityCamera;
         private double[] angularVelocityCameraDps;
         private String frameKind;
@@ -346,6 +354,12 @@ public final class FrameMeta {
 
         public Builder headingDeg(Double v) {
             headingDeg = v;
+            return this;
+        }
+
+        /** The compass bearing of the image's +x laid level, deg clockwise from north; null for none. */
+        public Builder compassBearingDeg(Double v) {
+            compassBearingDeg = v;
             return this;
         }
 

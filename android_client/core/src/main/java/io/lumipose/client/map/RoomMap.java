@@ -21,10 +21,28 @@ public final class RoomMap {
     private static final String[] SIZE_FIELDS = {"side_m", "width_m", "height_m", "diameter_m"};
     public final String name;
     public final List<Beacon> beacons;
+    /**
+     * Compass bearing (deg clockwise from north) of the map's +X axis, as a survey measured it; null
+     * when the map does not say (the app then falls back to the bearing typed in its settings).
+     */
+    public final Double bearingDeg;
 
     public RoomMap(String name, List<Beacon> beacons) {
+        this(name, beacons, null);
+    }
+
+    public RoomMap(String name, List<Beacon> beacons, Double bearingDeg) {
         this.name = name;
         this.beacons = Collections.unmodifiableList(new ArrayList<Beacon>(beacons));
+        this.bearingDeg = bearingDeg;
+    }
+
+    /**
+     * The bearing of +X that turns compass readings into headings: the map's own (measured), else
+     * {@code typedDeg} (the settings' value, may be null: then frames carry no heading).
+     */
+    public Double bearingOr(Double typedDeg) {
+        return bearingDeg != null ? bearingDeg : typedDeg;
     }
 
     public Beacon beacon(int id) {
@@ -57,7 +75,8 @@ public final class RoomMap {
                     yaw == null ? 0 : yaw));
         }
         String name = Json.optString(o, "name", "name");
-        return new RoomMap(name == null ? "" : name, beacons);
+        Double bearing = ContractRanges.ANGLE_DEG.check("bearing_deg", Json.optDouble(o, "bearing_deg", "bearing_deg"));
+        return new RoomMap(name == null ? "" : name, beacons, bearing);
     }
 
     /**

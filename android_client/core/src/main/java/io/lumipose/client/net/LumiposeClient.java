@@ -9,7 +9,10 @@ import java.util.Map;
 import java.util.zip.Deflater;
 import java.util.zip.GZIPOutputStream;
 
+import org.json.JSONObject;
+
 import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.json.Json;
 import io.lumipose.client.map.RoomMap;
 
 /**
@@ -62,6 +65,41 @@ public final class LumiposeClient implements FrameUploader {
         return StoredSample.fromJson(reply.text());
     }
 
+    /**
+     * POST a frame as {@link #locate} sends it (Y8 body, frame JSON header) to another route, with
+     * extra headers ({@code X-Lumipose-Board}, say); returns the 2xx answer's body. The screens'
+     * sessions (calibration, survey) parse it into their own contract types.
+     *
+     * @param pathAndQuery from the server's root, e.g. {@code /v1/calibrations/views?name=p1} (encode with
+     *                     {@link #urlEncode})
+     */
+    public String postFrame(String pathAndQuery, Map<String, String> headers, byte[] luma, FrameMeta meta)
+            throws IOException, ServerRejectedException, InterruptedException {
+        return call(frameCall(config.baseUrl + pathAndQuery, luma, meta, headers), ANY_SUCCESS).text();
+    }
+
+    /**
+     * A JSON request ({@code body} null: none) to a route of the server; returns the 2xx answer's
+     * body. The API key goes with it (PUT /v1/profiles and PUT /v1/maps/active need it).
+     */
+    public String sendJson(String method, String pathAndQuery, JSONObject body) throws IOException,
+            ServerRejectedException, InterruptedException {
+        Map<String, String> headers = baseHeaders();
+        byte[] bytes = null;
+        if (body != null) {
+            headers.put("Content-Type", "application/json");
+            bytes = body.toString().getBytes("UTF-8");
+        }
+        return call(new HttpCall(method, config.baseUrl + pathAndQuery, headers, bytes), ANY_SUCCESS).text();
+    }
+
+    /** PUT /v1/maps/active: the server locates in map {@code name} when a frame names none. */
+    public void setActiveMap(String name) throws IOException, ServerRejectedException, InterruptedException {
+        JSONObject body = new JSONObject();
+        Json.put(body, "name", name);
+        sendJson("PUT", "/v1/maps/active", body);
+    }
+
     /** GET /v1/maps/{name}: the beacon map to draw. */
     public RoomMap fetchMap(String name) throws IOException, ServerRejectedException, InterruptedException {
         HttpReply reply = call(new HttpCall("GET", config.baseUrl + "/v1/maps/" + urlEncode(name),
@@ -79,6 +117,11 @@ public final class LumiposeClient implements FrameUploader {
     }
 
     HttpCall frameCall(String url, byte[] luma, FrameMeta meta) throws IOException {
+        return frameCall(url, luma, meta, new LinkedHashMap<String, String>());
+    }
+
+    private HttpCall frameCall(String url, byte[] luma, FrameMeta meta, Map<String, String> extraHeaders)
+            throws IOException {
         if (!"Y8".equals(meta.format)) {
             throw new IllegalArgumentException("format: the client uploads Y8 frames, got " + meta.format);
         }
@@ -89,6 +132,7 @@ public final class LumiposeClient implements FrameUploader {
         Map<String, String> headers = baseHeaders();
         headers.put("Content-Type", "application/octet-stream");
         headers.put("X-Lumipose-Frame", meta.toHeaderValue());
+        headers.putAll(extraHeaders);
         byte[] body = luma;
         boolean poseWindow = meta.isWindow() && !"id".equals(meta.frameKind);
         if (config.gzip || config.gzipPoseWindows && poseWindow) {
@@ -110,6 +154,9 @@ public final class LumiposeClient implements FrameUploader {
         return h;
     }
 
+    /** {@link #call}'s expected status for "any 2xx". */
+    private static final int ANY_SUCCESS = -1;
+
     private HttpReply call(HttpCall c, int expectedStatus) throws IOException, ServerRejectedException,
             InterruptedException {
         IOException lastError = null;
@@ -125,7 +172,8 @@ public final class LumiposeClient implements FrameUploader {
                 lastError = e;
                 continue;
             }
-            if (lastReply.status == expectedStatus) {
+            if (lastReply.status == expectedStatus
+                    || expectedStatus == ANY_SUCCESS && lastReply.status >= 200 && lastReply.status < 300) {
                 return lastReply;
             }
             if (!RetryPolicy.retryable(lastReply.status)) {
@@ -155,7 +203,8 @@ public final class LumiposeClient implements FrameUploader {
         return out.toByteArray();
     }
 
-    private static String urlEncode(String s) {
+    /** A path segment or query value, URL-encoded (UTF-8). */
+    public static String urlEncode(String s) {
         try {
             return URLEncoder.encode(s, "UTF-8");
         } catch (UnsupportedEncodingException e) {

@@ -9,6 +9,7 @@ import org.junit.jupiter.api.Test;
 
 import io.lumipose.client.camera.ArrayRect;
 import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.DeviceProfile;
 import io.lumipose.client.camera.Devices;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.frame.FrameMeta;
@@ -182,5 +183,44 @@ class FrameDescriberTest {
                 IDENTITY).meta;
         assertNull(m.gravityCamera(), "an external camera's attitude is unknown");
         assertNull(m.headingDeg);
+    }
+
+    /** Every frame says where its image's +x points on the compass; the heading needs the map's bearing too. */
+    @Test
+    void compassBearingGoesWithOrWithoutAMapBearing() {
+        CameraFacts front = Devices.load(Devices.FRONT_270);
+        CapturePlan poseOnly = plan(front, 1);
+        FrameResult r = FrameResult.builder(1L).exposureNs(8_400_000L).sensitivityIso(100).build();
+        // Screen up, top north: the front sensor's image x is the device's +y, north: bearing 0.
+        FrameMeta alone = new FrameDescriber(front, poseOnly, null).describe(r, SCREEN_UP, IDENTITY).meta;
+        assertEquals(0.0, alone.compassBearingDeg, 1e-9);
+        assertNull(alone.headingDeg, "no map bearing, no heading");
+        float[] east = {0, 1, 0, -1, 0, 0, 0, 0, 1}; // top (device y) east, device x south
+        FrameMeta turned = new FrameDescriber(front, poseOnly, 90.0).describe(r, SCREEN_UP, east).meta;
+        assertEquals(90.0, turned.compassBearingDeg, 1e-6);
+        assertEquals(0.0, turned.headingDeg, 1e-6, "image x east, map +X east: yaw 0");
+        assertNull(new FrameDescriber(front, poseOnly, 90.0).describe(r, SCREEN_UP, null).meta.compassBearingDeg);
+    }
+
+    /** A calibrated profile's pinhole replaces Camera2's, scaled to the output; another lens keeps Camera2's. */
+    @Test
+    void aCalibratedProfileGivesTheFramesItsIntrinsics() {
+        int w = plan.output.width;
+        int h = plan.output.height;
+        DeviceProfile calibrated = new DeviceProfile("phone-calibrated", "phone", "unknown", "rear", 3.2e-6, 4.8e-3,
+                2 * w, 2 * h, new double[] {0.1, -0.2, 0, 0, 0.05}, 0.1,
+                new DeviceProfile.MeasuredPinhole(3010.0, 3008.0, w - 0.5 + 3, h - 0.5 - 2, 0.21, 25));
+        FrameDescriber.Described d = new FrameDescriber(facts, plan, null, calibrated)
+                .describe(asAsked(plan.pose, 70L).build(), SCREEN_UP, null);
+        assertEquals(1505.0, d.meta.camera.fx, 1e-9, "half the profile's size: half its focal length");
+        assertEquals(1504.0, d.meta.camera.fy, 1e-9);
+        assertEquals((w - 1) / 2.0 + 1.5, d.meta.camera.cx, 1e-9);
+        assertEquals((h - 1) / 2.0 - 1.0, d.meta.camera.cy, 1e-9);
+        assertArrayEquals(new double[] {0.1, -0.2, 0, 0, 0.05}, d.meta.camera.distortion(), 0.0);
+        FrameDescriber.Described other = new FrameDescriber(facts, plan, null, calibrated)
+                .describe(asAsked(plan.pose, 71L).focalLengthMm(2.2).build(), SCREEN_UP, null);
+        assertTrue(other.meta.camera.fx < 1000, "the ultra-wide's own intrinsics, not the calibration's");
+        assertTrue(other.warnings.toString().contains("calibration 'phone-calibrated' not used"), other.warnings
+                .toString());
     }
 }

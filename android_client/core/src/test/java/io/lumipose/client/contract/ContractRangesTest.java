@@ -47,6 +47,7 @@ class ContractRangesTest {
         MIRRORED.put("frame#FrameMeta.iso", ContractRanges.ISO);
         MIRRORED.put("frame#FrameMeta.rolling_shutter_skew_s", ContractRanges.ROLLING_SHUTTER_SKEW_S);
         MIRRORED.put("frame#FrameMeta.heading_deg", ContractRanges.ANGLE_DEG);
+        MIRRORED.put("frame#FrameMeta.compass_bearing_deg", ContractRanges.ANGLE_DEG);
         MIRRORED.put("frame#FrameMeta.gravity_camera", ContractRanges.GRAVITY);
         MIRRORED.put("frame#FrameMeta.angular_velocity_camera_dps", ContractRanges.ANGULAR_RATE_DPS);
         MIRRORED.put("frame#CameraIntrinsics.fx", ContractRanges.FOCAL_PX);
@@ -63,6 +64,7 @@ class ContractRangesTest {
         MIRRORED.put("frame#Crop.levels_dn", ContractRanges.GREY_LEVEL_DN);
         MIRRORED.put("map#Beacon.center_m", ContractRanges.COORDINATE_M);
         MIRRORED.put("map#Beacon.yaw_deg", ContractRanges.ANGLE_DEG);
+        MIRRORED.put("map#BeaconMap.bearing_deg", ContractRanges.ANGLE_DEG);
         MIRRORED.put("map#Beacon.side_m", ContractRanges.BEACON_SIZE_M);
         MIRRORED.put("map#Beacon.width_m", ContractRanges.BEACON_SIZE_M);
         MIRRORED.put("map#Beacon.height_m", ContractRanges.BEACON_SIZE_M);
@@ -197,6 +199,7 @@ class ContractRangesTest {
             {null, "iso", 1e300, "iso"},
             {null, "rolling_shutter_skew_s", 2.0, "rolling_shutter_skew_s"},
             {null, "heading_deg", 1e300, "heading_deg"},
+            {null, "compass_bearing_deg", -361.0, "compass_bearing_deg"},
             {null, "crop", new JSONObject("{\"x\": 0, \"y\": 0, \"full_width\": 100001, \"full_height\": 1296}"),
                 "crop.full_width"},
             {null, "crop", new JSONObject("{\"x\": 1, \"y\": 0, \"full_width\": 970, \"full_height\": 1296}"), "crop"},
@@ -215,10 +218,13 @@ class ContractRangesTest {
         frame.getJSONObject("camera").put("fx", 1.0).put("fy", 1e6).put("cx", -970.0).put("cy", 2592.0)
                 .put("distortion", new JSONArray(new double[] {1000, -1000, 1000, -1000, 1000, -1000, 1000, -1000}));
         frame.put("gravity_camera", new JSONArray(new double[] {100, -100, 100})).put("timestamp_ns", Long.MAX_VALUE)
-                .put("heading_deg", -360.0).put("exposure_s", 1e-9).put("rolling_shutter_skew_s", 0.0)
+                .put("heading_deg", -360.0).put("compass_bearing_deg", 360.0).put("exposure_s", 1e-9)
+                .put("rolling_shutter_skew_s", 0.0)
                 .put("angular_velocity_camera_dps", new JSONArray(new double[] {4000, -4000, 0}));
         FrameMeta meta = FrameMeta.fromJson(frame.toString());
         assertEquals(Long.MAX_VALUE, (long) meta.timestampNs);
+        assertEquals(360.0, meta.compassBearingDeg, 0.0);
+        assertEquals(360.0, FrameMeta.fromJson(meta.toJson()).compassBearingDeg, 0.0, "written back");
         JSONObject cropped = goldenFrame().put("width", 100).put("height", 100).put("row_stride", 100)
                 .put("crop", new JSONObject("{\"x\": 2000, \"y\": 3000, \"full_width\": 3024, \"full_height\": 4032}"));
         cropped.getJSONObject("camera").put("cx", 1511.5).put("cy", 2015.5);
@@ -238,10 +244,15 @@ class ContractRangesTest {
             o.getJSONArray("beacons").getJSONObject(0).put(c[0], Double.parseDouble(c[1]));
             fields.add(assertThrows(ContractException.class, () -> RoomMap.fromJson(o.toString())).field);
         }
+        JSONObject turned = new JSONObject(map).put("bearing_deg", 400.0);
+        fields.add(assertThrows(ContractException.class, () -> RoomMap.fromJson(turned.toString())).field);
+        assertEquals(-360.0, RoomMap.fromJson(new JSONObject(map).put("bearing_deg", -360.0).toString()).bearingDeg,
+                0.0);
         JSONObject far = new JSONObject(map);
         far.getJSONArray("beacons").getJSONObject(0).put("center_m", new JSONArray(new double[] {0, 0, 1e308}));
         fields.add(assertThrows(ContractException.class, () -> RoomMap.fromJson(far.toString())).field);
-        assertEquals(new TreeSet<String>(java.util.Arrays.asList("beacons[0].side_m", "beacons[0].yaw_deg",
+        assertEquals(new TreeSet<String>(java.util.Arrays.asList("bearing_deg", "beacons[0].side_m",
+                "beacons[0].yaw_deg",
                 "beacons[0].corner_radius_m", "beacons[0].center_m[2]")), new TreeSet<String>(fields));
     }
 

@@ -35,6 +35,21 @@ class RoomMapTest {
                 .beacon(2));
     }
 
+    /** A surveyed map's bearing wins over the typed one; without one the typed one (or none) is used. */
+    @Test
+    void theMapsBearingWinsOverTheTypedOne() {
+        String beacons = "\"beacons\": [{\"id\": 1, \"center_m\": [0, 0, 1], \"side_m\": 1}]";
+        RoomMap surveyed = RoomMap.fromJson("{" + beacons + ", \"bearing_deg\": 12.5}");
+        assertEquals(12.5, surveyed.bearingDeg, 0.0);
+        assertEquals(12.5, surveyed.bearingOr(90.0), 0.0);
+        RoomMap sketch = RoomMap.fromJson("{" + beacons + "}");
+        assertNull(sketch.bearingDeg);
+        assertEquals(90.0, sketch.bearingOr(90.0), 0.0);
+        assertNull(sketch.bearingOr(null));
+        assertEquals("bearing_deg", assertThrows(ContractException.class, () -> RoomMap.fromJson("{" + beacons
+                + ", \"bearing_deg\": \"north\"}")).field);
+    }
+
     private static Beacon only(String beacon) {
         return RoomMap.fromJson("{\"beacons\": [{\"id\": 1, \"center_m\": [0, 0, 1], " + beacon + "}]}").beacon(1);
     }

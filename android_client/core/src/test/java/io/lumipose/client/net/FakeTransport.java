@@ -6,17 +6,17 @@ import java.util.ArrayList;
 import java.util.Deque;
 import java.util.List;
 
-/** Replays scripted replies (or IOExceptions) and records every call. */
-final class FakeTransport implements HttpTransport {
-    final List<HttpCall> calls = new ArrayList<>();
+/** Replays scripted replies (or IOExceptions) and records every call (public: the sessions' tests use it too). */
+public final class FakeTransport implements HttpTransport {
+    public final List<HttpCall> calls = new ArrayList<>();
     private final Deque<Object> script = new ArrayDeque<>();
 
-    FakeTransport reply(int status, String body) {
+    public FakeTransport reply(int status, String body) {
         script.add(new HttpReply(status, body.getBytes(java.nio.charset.StandardCharsets.UTF_8)));
         return this;
     }
 
-    FakeTransport fail(String message) {
+    public FakeTransport fail(String message) {
         script.add(new IOException(message));
         return this;
     }

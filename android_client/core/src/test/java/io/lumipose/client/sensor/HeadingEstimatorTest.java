@@ -50,4 +50,21 @@ class HeadingEstimatorTest {
         assertThrows(IllegalArgumentException.class,
                 () -> HeadingEstimator.cameraYawDeg(new float[4], 270, LensFacing.FRONT, 0));
     }
+
+    /** The compass bearing of the image's x axis, and the heading as the map's bearing minus it. */
+    @Test
+    void compassBearingAndHeadingSplit() {
+        assertEquals(30.0, HeadingEstimator.compassBearingDeg(flatScreenUp(30), 270, LensFacing.FRONT), 1e-5);
+        assertEquals(-170.0, HeadingEstimator.compassBearingDeg(flatScreenUp(190), 270, LensFacing.FRONT), 1e-5);
+        assertEquals(-30.0, HeadingEstimator.headingDeg(0, 30), 1e-12);
+        assertEquals(170.0, HeadingEstimator.headingDeg(350, 180), 1e-12, "wrapped into (-180, 180]");
+        assertEquals(180.0, HeadingEstimator.headingDeg(90, -90), 1e-12);
+        float[] upright = {1, 0, 0, 0, 0, 1, 0, -1, 0};
+        assertNull(HeadingEstimator.compassBearingDeg(upright, 270, LensFacing.FRONT));
+        for (double b : new double[] {0, 45, 133, 260, 359}) {
+            double compass = HeadingEstimator.compassBearingDeg(flatScreenUp(b), 270, LensFacing.FRONT);
+            assertEquals(HeadingEstimator.cameraYawDeg(flatScreenUp(b), 270, LensFacing.FRONT, 77),
+                    HeadingEstimator.headingDeg(77, compass), 1e-9);
+        }
+    }
 }

@@ -13,10 +13,11 @@ import io.lumipose.client.map.RoomMap;
 import io.lumipose.client.net.LocateResult;
 
 /**
- * Calibration mode (paper Fig. 2b): guides the user until the camera sits straight under the
- * beacon centre, so the test-bench grid can be anchored with its origin there.
+ * Alignment mode (the paper's "calibration", Fig. 2b): guides the user until the camera sits
+ * straight under the beacon centre, so the test-bench grid can be anchored with its origin there.
+ * (The camera's own calibration is {@link CameraCalibrationActivity}.)
  */
-public final class CalibrationActivity extends LocatingActivity {
+public final class AlignmentActivity extends LocatingActivity {
     private final AlignmentGuide guide = new AlignmentGuide(0.001, 0.5);
     private TextView hint;
     private TextView numbers;

@@ -1,0 +1,244 @@
+package io.lumipose.app;
+
+import android.graphics.Canvas;
+import android.graphics.Color;
+import android.graphics.Paint;
+import android.os.Build;
+import android.widget.Button;
+import android.widget.EditText;
+import android.widget.LinearLayout;
+import android.widget.TextView;
+
+import java.util.Locale;
+
+import io.lumipose.client.calibration.BoardCoverage;
+import io.lumipose.client.calibration.BoardSpec;
+import io.lumipose.client.calibration.CalibrationReport;
+import io.lumipose.client.calibration.CalibrationSession;
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.camera.DeviceProfile;
+import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.FrameDescriber;
+import io.lumipose.client.capture.UnsupportedCameraException;
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.frame.GreyPreview;
+
+/**
+ * "Calibrate camera": photographs the printed ChArUco board with the positioning frames' geometry
+ * (output size, crop, focus, processing) at the board's exposure, sends each photo once to
+ * POST /v1/calibrations/views, shows which cells of the image the corners have covered, then posts
+ * the views (POST /v1/calibrations) and shows the report. An accepted profile is stored on the
+ * server (PUT /v1/profiles/{id}) and on the phone: from then on every frame of this camera carries
+ * its intrinsics (docs/android.md, "Calibrate camera"). The core's CalibrationSession does the work.
+ */
+public final class CameraCalibrationActivity extends StillActivity {
+    private final Paint empty = new Paint();
+    private final Paint covered = new Paint();
+    private final Paint grid = new Paint();
+    private EditText boardField;
+    private TextView counts;
+    private TextView report;
+    private Button calibrate;
+    private volatile CalibrationSession session;
+    private volatile FrameMeta firstPhoto;
+    private volatile BoardCoverage coverage;
+
+    @Override
+    protected void buildViews() {
+        empty.setColor(Color.argb(70, 255, 0, 0));
+        covered.setColor(Color.argb(70, 0, 200, 0));
+        grid.setColor(Color.YELLOW);
+        grid.setStyle(Paint.Style.STROKE);
+        LinearLayout root = new LinearLayout(this);
+        root.setOrientation(LinearLayout.VERTICAL);
+        root.setPadding(16, 16, 16, 16);
+        TextView intro = new TextView(this);
+        intro.setText("Photograph the printed board at the distance of the ceiling, tilted, filling every cell of "
+                + "the grid (red: too few corners yet). Board spec (the board.json printed with it):");
+        boardField = new EditText(this);
+        boardField.setText(prefs.boardSpecJson());
+        counts = new TextView(this);
+        report = new TextView(this);
+        root.addView(intro);
+        root.addView(boardField);
+        calibrate = addCameraViews(root, new PreviewView.Overlay() {
+            @Override
+            public void draw(Canvas canvas, GreyPreview p) {
+                drawCoverage(canvas, p);
+            }
+        }, "Calibrate", new Runnable() {
+            @Override
+            public void run() {
+                calibrate();
+            }
+        });
+        root.addView(counts);
+        root.addView(report);
+        root.addView(status);
+        setContentView(root);
+    }
+
+    /** The board's exposure on the positioning plan's geometry, so the photos share its intrinsics. */
+    @Override
+    public CapturePlan plan(CameraFacts facts, CapturePlan positioning) throws UnsupportedCameraException {
+        return CalibrationSession.boardPlan(positioning, facts);
+    }
+
+    /** Board photos carry Camera2's intrinsics: the phone's datasheet profile is made from them. */
+    @Override
+    protected FrameDescriber describer(CameraFacts facts, CapturePlan plan) {
+        return new FrameDescriber(facts, plan, mapBearingDeg(), null);
+    }
+
+    @Override
+    protected void onShutter() {
+        if (session == null) {
+            try {
+                BoardSpec board = prefs.saveBoardSpec(boardField.getText().toString());
+                session = new CalibrationSession(client, board);
+                boardField.setEnabled(false);
+            } catch (IllegalArgumentException e) {
+                report.setText("Board spec: " + e.getMessage());
+                return;
+            }
+        }
+        takePhoto();
+    }
+
+    @Override
+    protected void onPreviewShown(GreyPreview p) {
+        super.onPreviewShown(p);
+        String hint = CalibrationSession.exposureHint(p.meanDn());
+        counts.setText(photoCounts() + (hint == null ? "" : "\nLight: " + hint));
+    }
+
+    private String photoCounts() {
+        CalibrationSession s = session;
+        BoardCoverage c = coverage;
+        if (s == null) {
+            return "No photo yet.";
+        }
+        return String.format(Locale.US, "%d photos, %d with the board; %.0f %% of the cells covered", s.photos(),
+                s.views().size(), c == null ? 0.0 : 100 * c.coverage());
+    }
+
+    @Override
+    public void onPhoto(byte[] luma, FrameMeta meta) {
+        CalibrationSession s = session;
+        String outcome;
+        try {
+            CalibrationSession.Photo photo = s.addPhoto(luma, meta);
+            if (photo.found()) {
+                if (firstPhoto == null) {
+                    firstPhoto = meta;
+                }
+                coverage = s.coverage();
+                outcome = photo.name + ": " + photo.view.corners() + " corners";
+            } else {
+                outcome = photo.name + " not used: " + photo.refusal; // the server's reason (no board, ...)
+            }
+        } catch (InterruptedException e) {
+            Thread.currentThread().interrupt();
+            return;
+        } catch (Exception e) {
+            outcome = "Photo not sent: " + e.getMessage();
+        }
+        final String shown = outcome;
+        runOnUiThread(new Runnable() {
+            @Override
+            public void run() {
+                report.setText(shown);
+                counts.setText(photoCounts());
+                shutter.setEnabled(true);
+                calibrate.setEnabled(firstPhoto != null);
+                preview.invalidate();
+            }
+        });
+    }
+
+    private void calibrate() {
+        final CalibrationSession s = session;
+        final FrameMeta first = firstPhoto;
+        final CameraFacts f = facts;
+        if (s == null || first == null || f == null) {
+            return;
+        }
+        calibrate.setEnabled(false);
+        report.setText("Calibrating...");
+        boolean queued = inBackground(new Runnable() {
+            @Override
+            public void run() {
+                String text;
+                try {
+                    DeviceProfile phone = DeviceProfile.ofPhone(prefs.phoneProfileId(f.cameraId),
+                            Build.MANUFACTURER + " " + Build.MODEL + " camera " + f.cameraId,
+                            f.facing(), first.camera, first.width, first.height);
+                    CalibrationSession.Outcome o = s.calibrate(phone, null);
+                    if (o.report.ok) {
+                        prefs.setCalibratedProfile(f.cameraId, o.report.profile);
+                    }
+                    coverage = s.coverage();
+                    text = describe(o);
+                } catch (InterruptedException e) {
+                    Thread.currentThread().interrupt();
+                    return;
+                } catch (Exception e) {
+                    text = "Calibration failed: " + e.getMessage();
+                }
+                final String shown = text;
+                runOnUiThread(new Runnable() {
+                    @Override
+                    public void run() {
+                        report.setText(shown);
+                        calibrate.setEnabled(true);
+                        preview.invalidate();
+                    }
+                });
+            }
+        });
+        if (!queued) {
+            calibrate.setEnabled(true);
+        }
+    }
+
+    private static String describe(CalibrationSession.Outcome o) {
+        CalibrationReport r = o.report;
+        StringBuilder b = new StringBuilder();
+        b.append(r.ok ? "Calibrated" : "Not calibrated: " + r.message).append(String.format(Locale.US,
+                "%nRMS %s px, coverage %.0f %%, most tilted view %s deg", r.rmsPx == null ? "?"
+                        : String.format(Locale.US, "%.3f", r.rmsPx), 100 * r.coverage,
+                r.maxTiltDeg == null ? "?" : String.format(Locale.US, "%.0f", r.maxTiltDeg)));
+        if (r.ok) {
+            DeviceProfile.MeasuredPinhole k = r.profile.intrinsics;
+            if (k != null) {
+                b.append(String.format(Locale.US, "%nfx %.1f  fy %.1f  cx %.1f  cy %.1f px", k.fx, k.fy, k.cx, k.cy));
+            }
+            b.append("\nProfile ").append(r.profile.id).append(o.stored ? " stored on the server"
+                    : " kept on the phone only (" + o.storeError + ")").append("; frames use it from now on.");
+        }
+        for (String a : r.advice) {
+            b.append("\n- ").append(a);
+        }
+        for (String left : r.leftOut) {
+            b.append("\nleft out: ").append(left);
+        }
+        return b.toString();
+    }
+
+    /** The coverage grid over the picture: red cells still to fill, green ones with enough corners. */
+    private void drawCoverage(Canvas canvas, GreyPreview p) {
+        BoardCoverage c = coverage;
+        if (c == null || c.width != p.frameWidth || c.height != p.frameHeight) {
+            c = BoardCoverage.forImage(p.frameWidth, p.frameHeight); // every cell still to fill
+        }
+        float cellW = (float) p.width / c.columns;
+        float cellH = (float) p.height / c.rows;
+        for (int r = 0; r < c.rows; r++) {
+            for (int col = 0; col < c.columns; col++) {
+                canvas.drawRect(col * cellW, r * cellH, (col + 1) * cellW, (r + 1) * cellH,
+                        c.covered(r, col) ? covered : empty);
+                canvas.drawRect(col * cellW, r * cellH, (col + 1) * cellW, (r + 1) * cellH, grid);
+            }
+        }
+    }
+}

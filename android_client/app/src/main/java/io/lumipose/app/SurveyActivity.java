@@ -1,0 +1,272 @@
+package io.lumipose.app;
+
+import android.graphics.Canvas;
+import android.graphics.Color;
+import android.graphics.Paint;
+import android.text.InputType;
+import android.widget.Button;
+import android.widget.EditText;
+import android.widget.LinearLayout;
+import android.widget.TextView;
+
+import java.nio.ByteBuffer;
+import java.util.List;
+import java.util.Locale;
+
+import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.FrameDescriber;
+import io.lumipose.client.capture.UnsupportedCameraException;
+import io.lumipose.client.flow.StillCapture;
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.frame.GreyPreview;
+import io.lumipose.client.survey.SurveyReport;
+import io.lumipose.client.survey.SurveySession;
+
+/**
+ * "Survey room": photos of the ceiling from the floor, each seeing two or more panels, taken as
+ * positioning frames (pose exposure, gravity and compass bearing) but whole, stored as samples;
+ * after each photo the user taps every panel on it with its ID, then the survey (POST /v1/surveys,
+ * the map in use as the sketch, the chosen anchor) places every panel; on success the surveyed map
+ * becomes the server's active map and the app's (docs/android.md, "Survey room").
+ */
+public final class SurveyActivity extends StillActivity implements PreviewView.TapListener {
+    private final Paint labelPaint = new Paint(Paint.ANTI_ALIAS_FLAG);
+    private EditText nameField;
+    private EditText anchorField;
+    private EditText panelField;
+    private TextView photosView;
+    private TextView reportView;
+    private Button surveyButton;
+    private volatile SurveySession session;
+    /** The photo on screen for labelling (its index in the session), or -1 while the camera is shown. */
+    private volatile int held = -1;
+
+    @Override
+    protected void buildViews() {
+        labelPaint.setColor(Color.rgb(255, 60, 0));
+        labelPaint.setTextSize(14f);
+        LinearLayout root = new LinearLayout(this);
+        root.setOrientation(LinearLayout.VERTICAL);
+        root.setPadding(16, 16, 16, 16);
+        nameField = Forms.field(this, root, "Surveyed map's name", prefs.mapName() + "-surveyed",
+                InputType.TYPE_CLASS_TEXT);
+        anchorField = Forms.field(this, root, "Anchor panel ID (its place in the map '" + prefs.mapName()
+                + "' is kept)", "", InputType.TYPE_CLASS_NUMBER);
+        panelField = Forms.field(this, root, "Panel ID: tap a panel on the photo to name it", "",
+                InputType.TYPE_CLASS_NUMBER);
+        surveyButton = addCameraViews(root, new PreviewView.Overlay() {
+            @Override
+            public void draw(Canvas canvas, GreyPreview p) {
+                drawLabels(canvas, p);
+            }
+        }, "Survey", new Runnable() {
+            @Override
+            public void run() {
+                survey();
+            }
+        });
+        preview.setTapListener(this);
+        photosView = new TextView(this);
+        reportView = new TextView(this);
+        root.addView(photosView);
+        root.addView(reportView);
+        root.addView(status);
+        setContentView(root);
+    }
+
+    /** Survey photos see the panels as positioning frames do, but with no ID frames: one photo, whole. */
+    @Override
+    public CapturePlan plan(CameraFacts facts, CapturePlan positioning) throws UnsupportedCameraException {
+        return positioning.withoutIdFrames("survey: panels named by labels, no ID frames");
+    }
+
+    /** The sketch's positions are rough: its bearing (if any) is no better, but the compass bearing goes anyway. */
+    @Override
+    protected FrameDescriber describer(CameraFacts facts, CapturePlan plan) {
+        return new FrameDescriber(facts, plan, mapBearingDeg(), prefs.calibratedProfile(facts.cameraId));
+    }
+
+    @Override
+    protected void onShutter() {
+        if (held >= 0) {
+            held = -1; // back to the camera to aim the next photo
+            shutter.setText("Take photo");
+            return;
+        }
+        if (session == null) {
+            try {
+                session = new SurveySession(client, nameField.getText().toString().trim());
+                nameField.setEnabled(false);
+            } catch (IllegalArgumentException e) {
+                reportView.setText("Map name: " + e.getMessage());
+                return;
+            }
+        }
+        takePhoto();
+    }
+
+    @Override
+    protected void onPreviewShown(GreyPreview p) {
+        if (held < 0) {
+            super.onPreviewShown(p);
+        }
+    }
+
+    @Override
+    public void onPhoto(byte[] luma, FrameMeta meta) {
+        final GreyPreview still = GreyPreview.of(ByteBuffer.wrap(luma), meta.width, meta.height, meta.width, 1,
+                StillCapture.PREVIEW_SIDE);
+        String outcome;
+        int index = -1;
+        try {
+            SurveySession.Shot shot = session.addPhoto(luma, meta);
+            index = session.shots().size() - 1;
+            outcome = "Photo " + (index + 1) + " stored as " + shot.sampleId + ": tap each panel with its ID."
+                    + (meta.compassBearingDeg == null ? " (no compass reading)" : "");
+        } catch (InterruptedException e) {
+            Thread.currentThread().interrupt();
+            return;
+        } catch (Exception e) {
+            outcome = "Photo not stored: " + e.getMessage();
+        }
+        final String shown = outcome;
+        final int stored = index;
+        runOnUiThread(new Runnable() {
+            @Override
+            public void run() {
+                shutter.setEnabled(true);
+                reportView.setText(shown);
+                if (stored >= 0) {
+                    held = stored;
+                    preview.show(still);
+                    shutter.setText("Next photo");
+                    surveyButton.setEnabled(true);
+                }
+                showPhotos();
+            }
+        });
+    }
+
+    @Override
+    public void onTap(double frameX, double frameY) {
+        SurveySession s = session;
+        int index = held;
+        if (s == null || index < 0) {
+            return;
+        }
+        try {
+            s.label(index, Integer.parseInt(panelField.getText().toString().trim()), frameX, frameY);
+        } catch (NumberFormatException e) {
+            reportView.setText("Type the panel's ID first, then tap the panel.");
+            return;
+        } catch (IllegalArgumentException e) {
+            reportView.setText(e.getMessage());
+            return;
+        }
+        preview.invalidate();
+        showPhotos();
+    }
+
+    private void showPhotos() {
+        SurveySession s = session;
+        if (s == null) {
+            return;
+        }
+        StringBuilder b = new StringBuilder();
+        List<SurveySession.Shot> shots = s.shots();
+        for (int i = 0; i < shots.size(); i++) {
+            b.append("photo ").append(i + 1).append(": panels");
+            for (SurveySession.Label l : shots.get(i).labels) {
+                b.append(' ').append(l.beaconId);
+            }
+            b.append('\n');
+        }
+        photosView.setText(b.toString().trim());
+    }
+
+    /** The held photo's labels: a dot and the ID where the user tapped. */
+    private void drawLabels(Canvas canvas, GreyPreview p) {
+        SurveySession s = session;
+        int index = held;
+        if (s == null || index < 0) {
+            return;
+        }
+        for (SurveySession.Label l : s.shots().get(index).labels) {
+            float x = (float) (l.xPx / p.step);
+            float y = (float) (l.yPx / p.step);
+            canvas.drawCircle(x, y, 4f, labelPaint);
+            canvas.drawText(String.valueOf(l.beaconId), x + 6, y - 6, labelPaint);
+        }
+    }
+
+    private void survey() {
+        final SurveySession s = session;
+        final String sketch = prefs.mapName();
+        final int anchor;
+        try {
+            anchor = Integer.parseInt(anchorField.getText().toString().trim());
+        } catch (NumberFormatException e) {
+            reportView.setText("Type the anchor panel's ID.");
+            return;
+        }
+        if (s == null) {
+            return;
+        }
+        surveyButton.setEnabled(false);
+        reportView.setText("Surveying...");
+        boolean queued = inBackground(new Runnable() {
+            @Override
+            public void run() {
+                String text;
+                try {
+                    SurveyReport r = s.survey(sketch, anchor);
+                    text = describe(r);
+                    if (r.stored) {
+                        s.activate(r);
+                        prefs.setMapName(r.map.name);
+                        text += "\nMap '" + r.map.name + "' is now the active map.";
+                    }
+                } catch (InterruptedException e) {
+                    Thread.currentThread().interrupt();
+                    return;
+                } catch (Exception e) {
+                    text = "Survey refused: " + e.getMessage();
+                }
+                final String shown = text;
+                runOnUiThread(new Runnable() {
+                    @Override
+                    public void run() {
+                        reportView.setText(shown);
+                        surveyButton.setEnabled(true);
+                    }
+                });
+            }
+        });
+        if (!queued) {
+            surveyButton.setEnabled(true);
+        }
+    }
+
+    private static String describe(SurveyReport r) {
+        StringBuilder b = new StringBuilder(String.format(Locale.US, "%d frames used, RMS %.2f px", r.framesUsed,
+                r.rmsPx));
+        if (r.bearingDeg != null) {
+            b.append(String.format(Locale.US, ", +X at compass bearing %.1f deg", r.bearingDeg));
+            if (r.bearingSigmaDeg != null) {
+                b.append(String.format(Locale.US, " (sigma %.1f)", r.bearingSigmaDeg));
+            }
+        }
+        for (SurveyReport.SurveyedBeacon p : r.beacons) {
+            double[] c = p.centerM();
+            double[] sd = p.centerSigmaM();
+            b.append(String.format(Locale.US, "%npanel %d: (%.3f, %.3f, %.3f) m +- (%.1f, %.1f, %.1f) mm, yaw %.2f"
+                    + " +- %.2f deg, %d frames", p.beaconId, c[0], c[1], c[2], sd[0] * 1000, sd[1] * 1000,
+                    sd[2] * 1000, p.yawDeg, p.yawSigmaDeg, p.frames));
+        }
+        for (SurveyReport.Skipped k : r.skipped) {
+            b.append("\nskipped ").append(k.name).append(": ").append(k.why);
+        }
+        return b.toString();
+    }
+}

@@ -1,0 +1,138 @@
+package io.lumipose.client.survey;
+
+import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertFalse;
+import static org.junit.jupiter.api.Assertions.assertThrows;
+import static org.junit.jupiter.api.Assertions.assertTrue;
+
+import java.nio.charset.StandardCharsets;
+
+import org.json.JSONArray;
+import org.json.JSONObject;
+import org.junit.jupiter.api.Test;
+
+import io.lumipose.client.camera.Intrinsics;
+import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.json.ContractException;
+import io.lumipose.client.net.ClientConfig;
+import io.lumipose.client.net.FakeTransport;
+import io.lumipose.client.net.HttpCall;
+import io.lumipose.client.net.LumiposeClient;
+import io.lumipose.client.net.RetryPolicy;
+import io.lumipose.client.net.ServerRejectedException;
+import io.lumipose.client.testutil.Repo;
+
+/** The survey screen's flow against scripted server answers: samples, labels, the request, the active map. */
+class SurveySessionTest {
+    private static final int W = 80;
+    private static final int H = 60;
+    private static final String NO_FIX = "{\"schema\": \"lumipose.result/1\", \"ok\": false, \"reason\": "
+            + "\"beacon_id_unknown\"}";
+
+    private final FakeTransport transport = new FakeTransport();
+    private final SurveySession session = new SurveySession(new LumiposeClient(new ClientConfig("http://server:8000",
+            "key", "phone-1", false, new RetryPolicy(1, 0, 1.0, 0)), transport, ms -> { }), "office-surveyed");
+
+    private static FrameMeta photo() {
+        return FrameMeta.builder(W, H).camera(new Intrinsics(70, 70, 39.5, 29.5, null, null, null, null))
+                .gravityCamera(new double[] {0, 0, -1}).compassBearingDeg(33.0).frameKind("pose").build();
+    }
+
+    private static String sample(String id) {
+        return "{\"id\": \"" + id + "\", \"label\": \"survey\", \"result\": " + NO_FIX + "}";
+    }
+
+    private static String report(boolean stored) throws Exception {
+        JSONObject map = new JSONObject(Repo.text("shared_schemas/examples/map.json")).put("name", "office-surveyed")
+                .put("bearing_deg", 21.5);
+        JSONArray beacons = new JSONArray();
+        for (int id : new int[] {17, 42}) {
+            beacons.put(new JSONObject().put("beacon_id", id).put("center_m", new JSONArray("[1.0, 2.0, 2.7]"))
+                    .put("yaw_deg", 0.5).put("center_sigma_m", new JSONArray("[0.001, 0.0012, 0.002]"))
+                    .put("yaw_sigma_deg", 0.05).put("frames", 12));
+        }
+        return new JSONObject().put("schema", "lumipose.survey-report/1").put("map", map).put("beacons", beacons)
+                .put("frames_used", 2).put("rms_px", 0.4).put("bearing_deg", 21.5).put("bearing_sigma_deg", 3.1)
+                .put("skipped", new JSONArray().put(new JSONObject().put("name", "s3").put("why", "one panel named")))
+                .put("stored", stored).toString();
+    }
+
+    private static JSONObject body(HttpCall c) {
+        return new JSONObject(new String(c.body(), StandardCharsets.UTF_8));
+    }
+
+    @Test
+    void photosAreStoredLabelledSurveyedAndTheMapBecomesActive() throws Exception {
+        transport.reply(201, sample("s1")).reply(201, sample("s2")).reply(200, report(true))
+                .reply(200, "{\"name\": \"office-surveyed\"}");
+        byte[] luma = new byte[W * H];
+        luma[3] = 7;
+        SurveySession.Shot first = session.addPhoto(luma, photo());
+        session.addPhoto(luma, photo());
+        assertEquals("s1", first.sampleId);
+        assertFalse(first.stored.ok, "the sketch may not locate it: the survey does");
+        HttpCall store = transport.calls.get(0);
+        assertEquals("http://server:8000/v1/samples?label=survey%3Aoffice-surveyed%3A1", store.url);
+        FrameMeta sent = FrameMeta.fromJson(store.headers.get("X-Lumipose-Frame"));
+        assertEquals(33.0, sent.compassBearingDeg, 0.0, "the compass reading goes with every photo");
+        assertEquals(W, sent.width, "whole");
+        session.label(0, 17, 10.5, 20);
+        session.label(0, 42, 70, 20);
+        session.label(1, 42, 40, 30);
+
+        SurveyReport r = session.survey("office", 17);
+        JSONObject request = body(transport.calls.get(2));
+        assertEquals("http://server:8000/v1/surveys", transport.calls.get(2).url);
+        assertEquals("office-surveyed", request.getString("name"));
+        assertEquals("office", request.getString("sketch"));
+        assertEquals(17, request.getInt("anchor"));
+        assertTrue(request.getBoolean("store"));
+        JSONArray samples = request.getJSONArray("samples");
+        assertEquals(2, samples.length());
+        assertEquals("s1", samples.getJSONObject(0).getString("sample_id"));
+        assertTrue(new JSONObject("{\"beacon_id\": 17, \"x_px\": 10.5, \"y_px\": 20}")
+                .similar(samples.getJSONObject(0).getJSONArray("labels").getJSONObject(0)));
+        assertEquals(1, samples.getJSONObject(1).getJSONArray("labels").length());
+
+        assertEquals(2, r.beacons.size());
+        assertEquals(0.0012, r.beacons.get(0).centerSigmaM()[1], 0.0);
+        assertEquals("one panel named", r.skipped.get(0).why);
+        assertEquals(21.5, r.map.bearingDeg, 0.0);
+        assertEquals(3.1, r.bearingSigmaDeg, 0.0);
+        session.activate(r);
+        HttpCall active = transport.calls.get(3);
+        assertEquals("PUT", active.method);
+        assertEquals("http://server:8000/v1/maps/active", active.url);
+        assertEquals("office-surveyed", body(active).getString("name"));
+        assertEquals("key", active.headers.get("X-API-Key"));
+    }
+
+    @Test
+    void anUnconnectedPanelIsTheServersRefusalNamingIt() throws Exception {
+        transport.reply(201, sample("s1")).reply(422, "{\"error\": \"survey_refused\", \"field\": \"samples\", "
+                + "\"message\": \"panel 42 is not connected to the anchor 17 by any frame\"}");
+        session.addPhoto(new byte[W * H], photo());
+        ServerRejectedException e = assertThrows(ServerRejectedException.class, () -> session.survey("office", 17));
+        assertEquals(422, e.status);
+        assertTrue(e.getMessage().contains("panel 42 is not connected"), e.getMessage());
+    }
+
+    @Test
+    void badInputIsRefusedNamingWhatIsWrong() throws Exception {
+        assertEquals("name", assertThrows(ContractException.class, () -> new SurveySession(null, "my map")).field);
+        assertThrows(IllegalStateException.class, () -> session.survey("office", 17));
+        assertThrows(IllegalArgumentException.class, () -> session.label(0, 17, 1, 1));
+        assertThrows(IllegalArgumentException.class,
+                () -> session.addPhoto(new byte[100], photo().window(0, 0, 10, 10, null)));
+        transport.reply(201, sample("s1")).reply(200, report(false));
+        session.addPhoto(new byte[W * H], photo());
+        assertTrue(assertThrows(IllegalArgumentException.class, () -> session.label(0, 17, 80, 1)).getMessage()
+                .contains("outside the 80x60 photo"));
+        assertThrows(IllegalArgumentException.class, () -> session.label(0, 256, 1, 1));
+        assertThrows(IllegalArgumentException.class, () -> session.survey("office", -1));
+        assertEquals("sketch", assertThrows(ContractException.class, () -> session.survey("", 17)).field);
+        SurveyReport notStored = session.survey("office", 17);
+        assertThrows(IllegalStateException.class, () -> session.activate(notStored));
+        assertEquals(2, transport.calls.size(), "no PUT for a map that was not stored");
+    }
+}
