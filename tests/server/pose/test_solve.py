@@ -15,7 +15,8 @@ from server.geometry import (
     ypr_from_rotation,
 )
 from server.pose.ordering import order_corners
-from server.pose.solve import GravityMode, _map_residuals, _orthonormal_pair, pose_with_gravity, solve_pose
+from server.geometry import orthonormal_pair
+from server.pose.solve import GravityMode, _map_residuals, pose_with_gravity, solve_pose
 from server.outcomes import Refusal
 from shared_schemas import Beacon, CameraIntrinsics, FailureReason, OrientationRule
 
@@ -101,7 +102,7 @@ def test_map_jacobian_matches_finite_differences():
     objects = np.vstack([model_corners_m(beacon.side_m), np.zeros(3)])
     images = np.vstack([corners, center]) + 0.3
     params = np.array([0.1, -0.05, 0.3, 0.02, -0.01, 2.0])
-    across = _orthonormal_pair(np.array([0.05, -0.02, -1.0]) / np.linalg.norm([0.05, -0.02, -1.0]))
+    across = orthonormal_pair(np.array([0.05, -0.02, -1.0]) / np.linalg.norm([0.05, -0.02, -1.0]))
     weights = (1 / 0.05, 1 / np.radians(0.1))
     _, analytic = _map_residuals(params, objects, images, K, across, weights)
     numeric = np.zeros_like(analytic)
