@@ -208,7 +208,7 @@ def adjust(frames: list[FrameSightings], start: Start, anchor: int, rules: Surve
     sigmas = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
     errors = problem.point_errors(fit.x)
     per_point = np.sum(errors**2, axis=-1)  # (N, 5)
-    counts = {k: 0 for k in start.panels}
+    counts = dict.fromkeys(start.panels, 0)
     for k in problem.panel_ids:
         counts[k] += 1
     panels = {

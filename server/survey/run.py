@@ -66,8 +66,8 @@ def _without_outliers(
             skipped.append(
                 SkippedFrame(
                     name=frame.name,
-                    why=f"the fit leaves its panels far off ({', '.join(off)} RMS; the limit is {rules.outlier_factor:g} "
-                    f"times the median): a wrong label, or a panel that moved or smeared",
+                    why=f"the fit leaves its panels far off ({', '.join(off)} RMS; the limit is "
+                    f"{rules.outlier_factor:g} times the median): a wrong label, or a panel that moved or smeared",
                 )
             )
     return kept, skipped
@@ -88,7 +88,7 @@ def survey(
         raise SurveyRefused(f"no frame sees two named panels, so nothing ties the panels together ({first})")
     adjusted = adjust(used, chain_start(used, sketch, anchor), anchor, rules)
     kept, dropped = _without_outliers(used, adjusted, rules)
-    if len(kept) < len(used) or any(len(a.sightings) != len(b.sightings) for a, b in zip(kept, used)):
+    if dropped or sum(len(f.sightings) for f in kept) < sum(len(f.sightings) for f in used):
         if not kept:
             raise SurveyRefused("the fit leaves every frame's panels far off: " + dropped[0].why)
         used, skipped = kept, skipped + dropped
