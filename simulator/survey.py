@@ -14,8 +14,10 @@ visible part of a convex panel is convex).
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -23,6 +25,7 @@ import numpy as np
 from server.geometry import beacon_outline_m, beacon_to_world, camera_matrix, distortion_vector, world_to_camera
 from shared_schemas import Beacon, BeaconMap, FrameMeta
 from shared_schemas.survey import PanelLabel
+from simulator.fixtures import write_fixture
 from simulator.render import CameraPose
 from simulator.scene import Scene, render_sample
 
@@ -158,3 +161,15 @@ def sketch_of(beacon_map: BeaconMap, anchor: int, rng: np.random.Generator, erro
             })
         beacons.append(beacon)
     return beacon_map.model_copy(update={"name": f"{beacon_map.name}-sketch", "beacons": beacons})
+
+
+def write_survey_fixtures(folder: Path, shots: list[SurveyShot], sketch: BeaconMap) -> tuple[list[Path], Path, Path]:
+    """The shots as `lumipose survey` reads them: fixtures `frame_NN.json` + `.y`, `labels.json` (a frame's
+    file name -> its labels) and the sketch `sketch.json`; (frame JSON paths, labels path, sketch path)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    frames = [write_fixture(folder / f"frame_{k:02d}", shot.pixels, shot.meta)[1] for k, shot in enumerate(shots)]
+    labels = {path.name: [label.model_dump() for label in shot.labels] for path, shot in zip(frames, shots, strict=True)}
+    labels_path, sketch_path = folder / "labels.json", folder / "sketch.json"
+    labels_path.write_text(json.dumps(labels, indent=1) + "\n")
+    sketch_path.write_text(sketch.model_dump_json(by_alias=True, exclude_none=True, indent=2) + "\n")
+    return frames, labels_path, sketch_path
