@@ -40,19 +40,25 @@ def _read_labels(path: Path | None, frames: list[Path]):
     names = [{str(f), f.name, f.stem} for f in frames]
     unknown = [key for key in given if not any(key in n for n in names)]
     if unknown:
-        raise ValueError(f"labels for {unknown} name no frame given (keys are frame file names, e.g. '{frames[0].name}')")
+        example = frames[0].name
+        raise ValueError(f"labels for {unknown} name no frame given (keys are frame file names, e.g. '{example}')")
     return [next((given[key] for key in given if key in n), []) for n in names]
 
 
 def _print_report(report, out: Path) -> None:
-    print(f"{'beacon':>6}  {'x (m)':>9} {'y (m)':>9} {'z (m)':>9}  {'sigma x/y/z (mm)':>18}  {'yaw (deg)':>9} "
-          f"{'sigma':>6}  frames")
+    print(
+        f"{'beacon':>6}  {'x (m)':>9} {'y (m)':>9} {'z (m)':>9}  {'sigma x/y/z (mm)':>18}  {'yaw (deg)':>9} "
+        f"{'sigma':>6}  frames"
+    )
     for b in report.beacons:
         x, y, z = b.center_m
         sx, sy, sz = (1000 * v for v in b.center_sigma_m)
-        print(f"{b.beacon_id:>6}  {x:+9.4f} {y:+9.4f} {z:+9.4f}  {sx:5.2f} {sy:5.2f} {sz:5.2f}     "
-              f"{b.yaw_deg:+9.3f} {b.yaw_sigma_deg:6.3f}  {b.frames}")
-    print(f"frames    {report.frames_used} used, {len(report.skipped)} skipped; reprojection RMS {report.rms_px:.3f} px")
+        print(
+            f"{b.beacon_id:>6}  {x:+9.4f} {y:+9.4f} {z:+9.4f}  {sx:5.2f} {sy:5.2f} {sz:5.2f}     "
+            f"{b.yaw_deg:+9.3f} {b.yaw_sigma_deg:6.3f}  {b.frames}"
+        )
+    used, left_out, rms = report.frames_used, len(report.skipped), report.rms_px
+    print(f"frames    {used} used, {left_out} skipped; reprojection RMS {rms:.3f} px")
     for skipped in report.skipped:
         print(f"skipped   {skipped.name}: {skipped.why}")
     if report.bearing_deg is None:

@@ -42,8 +42,8 @@ def check_request(sketch: BeaconMap, anchor: int, frames: list[tuple[str, list[P
                 f"with corners only",
                 field=f"sketch.beacons.{k}.shape",
             )
-    for name, labels in frames:
-        check_labels(labels, sketch, name)
+    for k, (name, labels) in enumerate(frames):
+        check_labels(labels, sketch, name, f"samples.{k}.labels")
 
 
 def _without_outliers(

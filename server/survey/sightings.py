@@ -68,8 +68,8 @@ class FrameSightings:
     notes: tuple[str, ...]  # panels in view that were not used, and why
 
 
-def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str) -> None:
-    """Labels must name sketch panels, each once per frame."""
+def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str, field: str = "labels") -> None:
+    """Labels must name sketch panels, each once per frame; `field` names the labels in the request."""
     ids = {b.id for b in sketch.beacons}
     seen: set[int] = set()
     for k, label in enumerate(labels):
@@ -77,10 +77,10 @@ def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str) -> None
             raise SurveyInputError(
                 f"frame '{name}': label {k} names beacon {label.beacon_id}, which is not in sketch '{sketch.name}' "
                 f"(its beacons: {sorted(ids)})",
-                field=f"labels.{k}.beacon_id",
+                field=f"{field}.{k}.beacon_id",
             )
         if label.beacon_id in seen:
-            raise SurveyInputError(f"frame '{name}': beacon {label.beacon_id} is labelled twice", f"labels.{k}")
+            raise SurveyInputError(f"frame '{name}': beacon {label.beacon_id} is labelled twice", f"{field}.{k}")
         seen.add(label.beacon_id)
 
 
