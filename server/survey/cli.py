@@ -29,7 +29,9 @@ def add_survey_command(commands) -> None:
 
 
 def _read_labels(path: Path | None, frames: list[Path]):
-    """Each frame's labels; a key that names no frame is an error (a typo would silently drop its labels)."""
+    """Each frame's labels, by its path, file name or stem. A file whose keys name none of the frames is
+    an error (a wrong file); keys of other frames are ignored, so one file serves every subset of a set
+    (a frame left without labels is skipped, and the report says why)."""
     from pydantic import TypeAdapter
 
     from shared_schemas.survey import PanelLabel
@@ -38,10 +40,9 @@ def _read_labels(path: Path | None, frames: list[Path]):
         return [[] for _ in frames]
     given = TypeAdapter(dict[str, list[PanelLabel]]).validate_json(path.read_bytes())
     names = [{str(f), f.name, f.stem} for f in frames]
-    unknown = [key for key in given if not any(key in n for n in names)]
-    if unknown:
+    if given and not any(key in n for key in given for n in names):
         example = frames[0].name
-        raise ValueError(f"labels for {unknown} name no frame given (keys are frame file names, e.g. '{example}')")
+        raise ValueError(f"its keys name none of the frames given (keys are frame file names, e.g. '{example}')")
     return [next((given[key] for key in given if key in n), []) for n in names]
 
 
