@@ -94,7 +94,8 @@ def _aimed(camera_m: np.ndarray, target_m: np.ndarray, turn_rad: float) -> Camer
     return CameraPose(camera_m, np.column_stack([right, down, forward]))
 
 
-def survey_poses(scene: Scene, count: int, rng: np.random.Generator, shots: SurveyShots = SurveyShots()) -> list[CameraPose]:
+def survey_poses(scene: Scene, count: int, rng: np.random.Generator,
+                 shots: SurveyShots = SurveyShots()) -> list[CameraPose]:
     """`count` hand-held camera poses under the scene's panels, each with two or more panel centres in view."""
     centres = np.array([b.center_m for b in scene.beacons], float)
     pairs = [(i, j) for i in range(len(centres)) for j in range(i + 1, len(centres))
@@ -168,7 +169,8 @@ def write_survey_fixtures(folder: Path, shots: list[SurveyShot], sketch: BeaconM
     file name -> its labels) and the sketch `sketch.json`; (frame JSON paths, labels path, sketch path)."""
     folder.mkdir(parents=True, exist_ok=True)
     frames = [write_fixture(folder / f"frame_{k:02d}", shot.pixels, shot.meta)[1] for k, shot in enumerate(shots)]
-    labels = {path.name: [label.model_dump() for label in shot.labels] for path, shot in zip(frames, shots, strict=True)}
+    labels = {path.name: [label.model_dump() for label in shot.labels]
+              for path, shot in zip(frames, shots, strict=True)}
     labels_path, sketch_path = folder / "labels.json", folder / "sketch.json"
     labels_path.write_text(json.dumps(labels, indent=1) + "\n")
     sketch_path.write_text(sketch.model_dump_json(by_alias=True, exclude_none=True, indent=2) + "\n")

@@ -8,7 +8,8 @@ from pathlib import Path
 
 
 def add_survey_bench(benches) -> None:
-    bench = benches.add_parser("survey", help="beacon survey of an office of 4 or 9 panels against the truth (issue 14)")
+    bench = benches.add_parser("survey",
+                               help="beacon survey of an office of 4 or 9 panels against the truth (issue 14)")
     bench.add_argument("--panels", type=int, nargs="+", default=[4, 9], choices=[4, 9])
     bench.add_argument("--frames", type=int, default=40, help="survey frames per office")
     bench.add_argument("--scale", type=float, default=None, help="of the Mi 8 front resolution (default: 0.5)")
@@ -27,7 +28,8 @@ def _fmt(value) -> str:
 
 
 def _print(report: dict) -> None:
-    print(f"{report['scene']}: {report['frames_used']} of {report['frames']} frames used, RMS {report['rms_px']:.3f} px, "
+    print(f"{report['scene']}: {report['frames_used']} of {report['frames']} frames used, "
+          f"RMS {report['rms_px']:.3f} px, "
           f"survey {report['survey_s']:.1f} s")
     print(f"{'beacon':>6} {'frames':>6} {'centre err':>10} {'err x/y/z (mm)':>22} {'sigma x/y/z (mm)':>18} "
           f"{'yaw err':>8} {'sigma':>6}")
@@ -39,7 +41,8 @@ def _print(report: dict) -> None:
               f"{sx:6.2f} {sy:5.2f} {sz:5.2f} {p['yaw_error_deg']:+8.3f} {p['yaw_sigma_deg']:6.3f}{note}")
     met = report["max_centre_error_mm"] <= report["targets"]["centre_mm"] and \
         report["max_yaw_error_deg"] <= report["targets"]["yaw_deg"]
-    print(f"worst     centre {report['max_centre_error_mm']:.2f} mm (target 2), yaw {report['max_yaw_error_deg']:.3f} deg "
+    print(f"worst     centre {report['max_centre_error_mm']:.2f} mm (target 2), "
+          f"yaw {report['max_yaw_error_deg']:.3f} deg "
           f"(target 0.1): {'met' if met else 'NOT met'}")
     print(f"bearing   {_fmt(report['bearing_deg'])} deg +- {_fmt(report['bearing_sigma_deg'])}, error "
           f"{_fmt(report['bearing_error_deg'])} deg")
@@ -51,7 +54,8 @@ def _print(report: dict) -> None:
         for label in ("surveyed_map", "true_map"):
             s = walk[label]
             f = s["fixes"]
-            print(f"  {label:>13}: {s['captures']} captures, cover {s['coverage_pct']:.1f} %, mean {_fmt(f['mean_mm'])}, "
+            print(f"  {label:>13}: {s['captures']} captures, cover {s['coverage_pct']:.1f} %, "
+                  f"mean {_fmt(f['mean_mm'])}, "
                   f"p95 {_fmt(f['p95_mm'])}, max {_fmt(f['max_mm'])}, ID errors {s['id_errors']}")
 
 
