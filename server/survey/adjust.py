@@ -38,6 +38,7 @@ from server.survey.sightings import FrameSightings, Sighting
 from shared_schemas import Beacon
 
 DOWN = np.array([0.0, 0.0, -1.0])
+GROWTH_UNKNOWNS = 2  # D0, D2: the clipped-edge growth at the image's centre and its fall with r^2
 
 
 @dataclass(frozen=True)
@@ -78,9 +79,15 @@ class _Problem:
         self.panel_ids = [s.beacon.id for _, s in sightings]
         self.sigma = np.array([s.sigmas_px for _, s in sightings])  # (N, 5)
         self.grown = np.array([s.grown for _, s in sightings], bool)
+        self.observed = np.array([s.points_px for _, s in sightings])  # (N, 5, 2)
         growths = [s.growth_px for _, s in sightings if s.grown and s.growth_px is not None]
         self.growth_start_px = float(np.median(growths)) if growths else HELD_GROWTH_PX
-        self.observed = np.array([s.points_px for _, s in sightings])  # (N, 5, 2)
+        # the growth falls towards the image's corners, where the lens vignettes (less overexposure):
+        # growth = D0 + D2 r^2, r the panel's distance from the principal point in focal lengths
+        centres = self.observed[:, 4]
+        principal = np.array([[f.matrix[0, 2], f.matrix[1, 2]] for f in frames])[self.frame_of]
+        focal = np.array([f.matrix[0, 0] for f in frames])[self.frame_of]
+        self.radius2 = np.sum(((centres - principal) / focal[:, None]) ** 2, axis=1)
         self.model = np.array([_labelled(start, f, frames[f], s) for f, s in sightings])  # (N, 5, 3)
         self.matrix = np.array([frame.matrix for frame in frames])  # (F, 3, 3)
         with_gravity = [f for f, frame in enumerate(frames) if frame.gravity_camera is not None]
@@ -91,13 +98,13 @@ class _Problem:
     def x0(self) -> np.ndarray:
         panels = [[*self.start.panels[k].center_m, math.radians(self.start.panels[k].yaw_deg)] for k in self.free]
         cameras = [[*Rotation.from_matrix(c.rotation_wc).as_rotvec(), *c.position_m] for c in self.start.cameras]
-        return np.concatenate([np.ravel(panels), np.ravel(cameras), [self.growth_start_px]])
+        return np.concatenate([np.ravel(panels), np.ravel(cameras), [self.growth_start_px, 0.0]])
 
     def unpack(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(panel centres (P, 3), yaws (P,) rad by `self.free` order, rotations_wc (F, 3, 3), positions (F, 3));
-        the growth is the last unknown."""
+        the growth's two (D0, D2) are the last unknowns."""
         panels = x[: self.frame_base].reshape(-1, 4)
-        cameras = x[self.frame_base : -1].reshape(-1, 6)
+        cameras = x[self.frame_base : -GROWTH_UNKNOWNS].reshape(-1, 6)
         return panels[:, :3], panels[:, 3], Rotation.from_rotvec(cameras[:, :3]).as_matrix(), cameras[:, 3:]
 
     def sighting_panels(self, centres: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,7 +120,8 @@ class _Problem:
         c, y = self.sighting_panels(centres, yaws)
         f = self.frame_of
         projected = _project(self.model, c, y, rotations[f], positions[f], self.matrix[f])
-        projected[self.grown, :4] = grown_quads(projected[self.grown, :4], x[-1])
+        growth = x[-2] + x[-1] * self.radius2[self.grown]
+        projected[self.grown, :4] = grown_quads(projected[self.grown, :4], growth)
         return projected - self.observed
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
@@ -129,7 +137,7 @@ class _Problem:
         n_points = 10 * len(self.frame_of)
         rows = n_points + 2 * len(self.gravity_frames)
         growth = self.frame_base + 6 * len(self.frames)
-        pattern = lil_matrix((rows, growth + 1), dtype=int)
+        pattern = lil_matrix((rows, growth + GROWTH_UNKNOWNS), dtype=int)
         for k, (panel, frame) in enumerate(zip(self.panel_ids, self.frame_of, strict=True)):
             block = slice(10 * k, 10 * k + 10)
             if panel != self.anchor:
@@ -137,7 +145,7 @@ class _Problem:
             start = self.frame_base + 6 * frame
             pattern[block, start : start + 6] = 1
             if self.grown[k]:
-                pattern[10 * k : 10 * k + 8, growth] = 1  # the corners, not the centre
+                pattern[10 * k : 10 * k + 8, growth : growth + GROWTH_UNKNOWNS] = 1  # the corners, not the centre
         for k, frame in enumerate(self.gravity_frames):
             start = self.frame_base + 6 * frame
             pattern[n_points + 2 * k : n_points + 2 * k + 2, start : start + 3] = 1
