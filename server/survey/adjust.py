@@ -3,13 +3,19 @@
 Unknowns: each panel's centre (x, y, z) and yaw, except the anchor's (its sketch centre and yaw
 fix the map's frame); each frame's camera pose (rotation vector of `rotation_wc`, optical
 centre). Panels hang level on the ceiling: their tilt is not an unknown (a panel's own tilt of a
-few tenths of a degree would move its corners by well under a tenth of a millimetre).
+few tenths of a degree would move its corners by well under a tenth of a millimetre). And the
+clipped-edge growth of the whole panels' mid-level corners (`server.survey.sightings`): one for
+the survey (one exposure, one panel luminance, one lens), D0 + D2 r^2 with r the panel's distance
+from the principal point in focal lengths (the lens vignettes, so the overexposure and the growth
+fall towards the corners). The panels' sizes set the map's scale, and the frames' different
+distances tell the growth from it.
 
 Residuals (`scipy.optimize.least_squares`, a sparse Jacobian through `jac_sparsity`: a panel's
 points depend on its four numbers and its frame's six only):
 
 - each sighting's five points (four corners and the centre, ideal pixels) against the panel's
-  model projected by the frame's camera, over the sighting's sigma;
+  model projected by the frame's camera (a whole panel's corners grown by the growth), over the
+  sighting's sigma;
 - each frame's gravity reading against the camera's down, over the sensor's sigma (the two
   components across the reading), which levels the map: without it a common tilt of all cameras
   and panels would fit the images nearly as well.

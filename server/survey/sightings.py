@@ -7,7 +7,7 @@ is measured by the one-panel pipeline on its own crop (`server.rooms.locate_pane
 
 - a square wholly in view takes the corner path; its points are the sub-pixel corners where the
   sides cross at the mid level (the pipeline's own estimate of the clipped-edge growth put back:
-  the fit measures one growth for the whole survey instead, `server.survey.adjust`) and the
+  the fit measures the growth for the whole survey instead, `server.survey.adjust`) and the
   intersection of the corrected corners' diagonals. The sides are measured to about 0.02 px,
   independently of the pose, and the corners of a 0.17 m panel 1.4 m away span about 230 px at
   half the Mi 8's resolution: the panel's size, which is what sets the map's scale, is then known

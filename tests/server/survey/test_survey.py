@@ -20,7 +20,7 @@ from server.survey.bearing import map_bearing
 from server.survey.chain import chain_start, nearest_equivalent_deg
 from server.survey.rules import SurveyInputError, SurveyRefused, SurveyRules
 from server.survey.run import survey
-from server.survey.sightings import FrameSightings, Sighting
+from server.survey.sightings import FrameSightings, Sighting, frame_sightings
 from shared_schemas import Beacon, BeaconMap
 from shared_schemas.survey import PanelLabel
 from tests.helpers import survey_frame, survey_set
@@ -196,3 +196,14 @@ def test_an_unknown_anchor_or_a_label_of_an_unknown_beacon_is_bad_input():
     with pytest.raises(SurveyInputError, match="names beacon 5, which is not in sketch") as wrong:
         survey(bad, sketch, anchor, "x")
     assert wrong.value.field == "samples.0.labels.0.beacon_id"
+
+
+def test_the_panels_of_an_id_frame_are_named_by_their_own_stripes():
+    from tests.server.test_rooms import big_panels, room_id_frame  # two 0.6 m coded panels, one cut by the border
+
+    room = big_panels((0.62, 0.0), (-0.1, 0.0))
+    seen = frame_sightings(room_id_frame(room), "id", [], room)
+    assert isinstance(seen, FrameSightings), seen
+    assert sorted((s.beacon.id, s.cut) for s in seen.sightings) == [(17, False), (42, True)]
+    whole = next(s for s in seen.sightings if not s.cut)
+    assert whole.grown and whole.sigmas_px[0] < seen.sightings[1].sigmas_px[0]
