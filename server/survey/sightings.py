@@ -165,6 +165,8 @@ def frame_sightings(
         notes += [p.note for p in room.panels if p.note is not None]
         measured += [(p.blob, p.beacon, p.fix) for p in room.panels if p.beacon is not None and p.fix is not None]
         striped = {b.id for _, b, _ in measured}
+        # a label names only a panel its stripes did not; such a panel is measured on its striped pixels
+        # (not flattened without its code), which the pipeline often refuses: label pose frames instead
         labels = [label for label in labels if label.beacon_id not in striped]
         blobs = tuple(p.blob for p in room.panels if p.beacon is None) if labels else ()
     else:
