@@ -16,6 +16,7 @@ from pydantic import BaseModel, ValidationError
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
 from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, ProfileSummary, SampleInfo, SampleList
 from shared_schemas.fixture_files import read_fixture_files
+from shared_schemas.survey import SurveyReport, SurveyRequest
 
 FRAME_HEADER = "X-Lumipose-Frame"
 T = TypeVar("T")
@@ -229,6 +230,12 @@ class _Endpoints:
 
     def delete_sample(self, sample_id: str):
         return self._run(_Call("DELETE", f"/v1/samples/{sample_id}", _nothing))
+
+    def survey(self, request: SurveyRequest):
+        """`POST /v1/surveys`: a room's map from stored samples (a `SurveyReport`); `store` needs the API key."""
+        return self._run(
+            _Call("POST", "/v1/surveys", _model(SurveyReport), json=request.model_dump(mode="json", by_alias=True))
+        )
 
     def evaluate_samples(self, *, map: str | None = None, cell_m: float = 0.05, height_m: float = 0.0):
         return self._run(

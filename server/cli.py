@@ -1,4 +1,4 @@
-"""The server's commands of `lumipose`: `locate`, `fov` and `serve`.
+"""The server's commands of `lumipose`: `locate`, `fov`, `serve` and `survey` (`server.survey.cli`).
 
 `lumipose_cli.main` joins them with the client's and the simulator's commands into the one
 `lumipose` command (`python -m lumipose_cli` without the console script).
@@ -221,7 +221,10 @@ def _startup_map_name(settings) -> str:
 
 
 def add_commands(commands) -> None:
-    """Add `locate`, `fov` and `serve` to an argparse subparsers object."""
+    """Add `locate`, `fov`, `serve` and `survey` to an argparse subparsers object."""
+    from server.survey.cli import add_survey_command
+
     _add_locate(commands)
     _add_fov(commands)
     _add_serve(commands)
+    add_survey_command(commands)

@@ -143,3 +143,40 @@ def angle_deg(u: np.ndarray, v: np.ndarray) -> float:
     u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
     cosine = u @ v / (np.linalg.norm(u) * np.linalg.norm(v))
     return math.degrees(math.acos(float(np.clip(cosine, -1.0, 1.0))))
+
+
+def orthonormal_pair(vector: np.ndarray) -> np.ndarray:
+    """Two unit vectors (2, 3) orthogonal to `vector` and to each other."""
+    x, y, z = vector
+    # the cross product with the axis least aligned with `vector`, written out (np.cross is slow)
+    first = (
+        np.array([0.0, z, -y])
+        if abs(x) <= min(abs(y), abs(z))
+        else (np.array([-z, 0.0, x]) if abs(y) <= abs(z) else np.array([y, -x, 0.0]))
+    )
+    first /= np.linalg.norm(first)
+    fx, fy, fz = first
+    return np.array([first, [y * fz - z * fy, z * fx - x * fz, x * fy - y * fx]])
+
+
+def wrap_deg(angle_deg: float) -> float:
+    """`angle_deg` in (-180, 180]."""
+    return float(-((-angle_deg + 180.0) % 360.0 - 180.0))
+
+
+def grown_quads(corners_px: np.ndarray, growth_px: np.ndarray | float) -> np.ndarray:
+    """Quadrilaterals (..., 4, 2) with every side moved outward along its normal by `growth_px`
+    (broadcast over the leading axes; negative moves inward): corner k is where the moved sides
+    k - 1 -> k and k -> k + 1 meet. This is how the sub-pixel stage's clipped-edge growth moves the
+    sides of a panel's image (`server.vision.subpixel.refine_edges`)."""
+    corners = np.asarray(corners_px, dtype=float)
+    along = np.roll(corners, -1, axis=-2) - corners  # side k: corner k -> k + 1
+    normal = np.stack([along[..., 1], -along[..., 0]], axis=-1) / np.linalg.norm(along, axis=-1, keepdims=True)
+    outward = np.sign(np.sum(normal * (corners - corners.mean(axis=-2, keepdims=True)), axis=-1, keepdims=True))
+    normal = normal * np.where(outward == 0, 1.0, outward)
+    offset = np.sum(normal * corners, axis=-1) + np.asarray(growth_px, dtype=float)[..., None]  # n . x = c
+    n1, c1 = np.roll(normal, 1, axis=-2), np.roll(offset, 1, axis=-1)  # side k - 1
+    det = n1[..., 0] * normal[..., 1] - n1[..., 1] * normal[..., 0]
+    x = (c1 * normal[..., 1] - offset * n1[..., 1]) / det
+    y = (n1[..., 0] * offset - normal[..., 0] * c1) / det
+    return np.stack([x, y], axis=-1)

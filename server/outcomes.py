@@ -61,6 +61,7 @@ class Fix:
     ambiguity_ratio: float | None = None
     covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame, from the fit
     growth_px: float | None = None  # how far the panel's mid-level contour lies outside its outline
+    from_outline: bool = False  # the outline fit's: its corners are projected from the pose, not measured
     warnings: tuple[str, ...] = ()
     timing_ms: Mapping[str, float] = field(default_factory=dict)
 

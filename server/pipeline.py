@@ -427,6 +427,7 @@ def _outline_fix(
         orientation_rule=fit.orientation_rule,
         covariance_m2=fit.covariance_m2,
         growth_px=fit.growth_px,
+        from_outline=True,
         warnings=(note, f"{DEVICE_TONE_CURVE}: the outline fit's uncertainty does not include it")
         if frame.meta.tone_curve is ToneCurve.device
         else (note,),

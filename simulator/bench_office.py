@@ -22,6 +22,7 @@ import sys
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, replace
+from functools import partial
 from pathlib import Path
 
 import cv2
@@ -32,7 +33,7 @@ from server.ingest import LumaFrame
 from server.locator import locate
 from server.tracking.devices import Devices
 from server.vlc.capture import ID_BURST_FRAMES, id_frame_interval_s, stepped_interval_s
-from shared_schemas import Beacon, FrameMeta
+from shared_schemas import Beacon, BeaconMap, FrameMeta
 from simulator.bursts import burst_scenes, render_burst
 from simulator.render import CameraPose
 from simulator.scene import Scene, TrajectorySeries, find_scene
@@ -137,11 +138,14 @@ def walk_captures(config: OfficeConfig) -> Iterator[Capture]:
                       tuple(_luma_frame(id_scene, frame) for frame in id_frames))
 
 
-def run_walk(config: OfficeConfig) -> dict:
-    """Render and process one walk, capture by capture; per-capture records and a summary."""
+def run_walk(config: OfficeConfig, beacon_map: BeaconMap | None = None) -> dict:
+    """Render and process one walk, capture by capture; per-capture records and a summary. The frames
+    are located in `beacon_map` (a surveyed one, `lumipose bench survey`), else in the scene's true map;
+    errors are always against the true poses."""
     pose_scene, _ = office_scenes(config)
-    beacon_map = pose_scene.beacon_map()
-    beacons = list(beacon_map.beacons)
+    true_map = pose_scene.beacon_map()
+    beacon_map = beacon_map or true_map
+    beacons = list(true_map.beacons)
     pose_camera = pose_scene.camera.intrinsics()
     devices = Devices()
     records = []
@@ -216,13 +220,15 @@ def summarize_walk(records: list[dict]) -> dict:
     }
 
 
-def run_office(config: OfficeConfig, walks: tuple[str, ...] = WALKS, workers: int | None = None) -> list[dict]:
+def run_office(config: OfficeConfig, walks: tuple[str, ...] = WALKS, workers: int | None = None,
+               beacon_map: BeaconMap | None = None) -> list[dict]:
     workers = min(len(walks), workers or os.cpu_count() or 1)
     configs = [replace(config, walk=w) for w in walks]
+    walk = partial(run_walk, beacon_map=beacon_map)
     if workers == 1:
-        return [run_walk(c) for c in configs]
+        return [walk(c) for c in configs]
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(run_walk, configs))
+        return list(pool.map(walk, configs))
 
 
 def plot_walk(report: dict, path: Path) -> None:

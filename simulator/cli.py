@@ -151,6 +151,9 @@ def add_commands(commands) -> None:
     from simulator.vlc_cli import add_vlc_benches  # `bench vlc` and `bench office` (issue 4)
 
     add_vlc_benches(benches)
+    from simulator.survey_cli import add_survey_bench  # `bench survey` (issue 14)
+
+    add_survey_bench(benches)
 
 
 def plot_sample_evaluation(report, folder: Path) -> list[Path]:

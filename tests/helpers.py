@@ -1,5 +1,7 @@
 """Frames and maps shared by several test modules (not tests themselves)."""
 
+import functools
+
 import numpy as np
 
 from server.camera import intrinsics_from_profile
@@ -11,19 +13,29 @@ from shared_schemas.models import MeasuredPinhole
 from simulator.fixtures import fixture_meta
 from simulator.led import row_gains
 from simulator.render import CameraPose, Emitter, SensorModel, beacon_outline_px, render_emitters, render_frame
+from simulator.scene import find_scene
+from simulator.survey import render_survey, sketch_of, survey_poses
 
 DARK_WIDTH, DARK_HEIGHT = 48, 64
 DARK_CAMERA = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], DARK_WIDTH, DARK_HEIGHT)
-ROOM = BeaconMap(name="room", beacons=[Beacon(id=1, center_m=[0, 0, 2], side_m=0.2),
-                                       Beacon(id=2, center_m=[1.2, 0, 2], side_m=0.2)])
+ROOM = BeaconMap(
+    name="room", beacons=[Beacon(id=1, center_m=[0, 0, 2], side_m=0.2), Beacon(id=2, center_m=[1.2, 0, 2], side_m=0.2)]
+)
 OTHER_ROOM = ROOM.model_copy(update={"name": "other"})
 
 
 def dark_frame(kind: FrameKind = FrameKind.pose, t_s: float = 0.0) -> LumaFrame:
     """A tiny frame with nothing in it: the session runs, finds no panel, and answers at once."""
-    meta = FrameMeta(width=DARK_WIDTH, height=DARK_HEIGHT, format="Y8", camera=DARK_CAMERA, timestamp_ns=int(t_s * 1e9),
-                     frame_kind=kind, exposure_s=1 / 8000 if kind is FrameKind.id else 0.01,
-                     rolling_shutter_skew_s=0.03)
+    meta = FrameMeta(
+        width=DARK_WIDTH,
+        height=DARK_HEIGHT,
+        format="Y8",
+        camera=DARK_CAMERA,
+        timestamp_ns=int(t_s * 1e9),
+        frame_kind=kind,
+        exposure_s=1 / 8000 if kind is FrameKind.id else 0.01,
+        rolling_shutter_skew_s=0.03,
+    )
     pixels = np.full((DARK_HEIGHT, DARK_WIDTH), 10, np.uint8)
     pixels.flags.writeable = False
     return LumaFrame(pixels, meta, DARK_CAMERA)
@@ -31,10 +43,13 @@ def dark_frame(kind: FrameKind = FrameKind.pose, t_s: float = 0.0) -> LumaFrame:
 
 WIDTH, HEIGHT = 970, 1296
 CAMERA = intrinsics_from_profile(device_profiles()["xiaomi-mi8-front"], WIDTH, HEIGHT)
-TWO_PANELS = BeaconMap(name="two", beacons=[
-    Beacon(id=17, center_m=[-0.12, -0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
-    Beacon(id=42, center_m=[0.12, 0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
-])
+TWO_PANELS = BeaconMap(
+    name="two",
+    beacons=[
+        Beacon(id=17, center_m=[-0.12, -0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
+        Beacon(id=42, center_m=[0.12, 0.2, 1.0], side_m=0.174, corner_radius_m=0.02),
+    ],
+)
 POSE = CameraPose(np.array([0.02, -0.03, 0.0]), rotation_from_ypr(10.0, 2.0, -1.0))
 
 
@@ -49,9 +64,14 @@ def two_panel_frame(level_dn=1000.0, exposure_s=0.01, seed=0, t_s=0.0) -> LumaFr
         emitters.append(Emitter(beacon_outline_px(beacon, CAMERA, POSE), level_dn, gain))
     pixels = render_emitters(emitters, WIDTH, HEIGHT, SensorModel(psf_sigma_px=1.0), rng)
     gravity = (POSE.rotation_wc.T @ [0, 0, -1.0]).tolist()
-    meta = fixture_meta(CAMERA, WIDTH, HEIGHT, POSE, gravity_camera=gravity).model_copy(update={
-        "exposure_s": exposure_s, "rolling_shutter_skew_s": 0.03, "timestamp_ns": int(t_s * 1e9),
-        "frame_kind": FrameKind.id if exposure_s < 1e-3 else FrameKind.pose})
+    meta = fixture_meta(CAMERA, WIDTH, HEIGHT, POSE, gravity_camera=gravity).model_copy(
+        update={
+            "exposure_s": exposure_s,
+            "rolling_shutter_skew_s": 0.03,
+            "timestamp_ns": int(t_s * 1e9),
+            "frame_kind": FrameKind.id if exposure_s < 1e-3 else FrameKind.pose,
+        }
+    )
     return LumaFrame(pixels, meta, CAMERA)
 
 
@@ -77,3 +97,30 @@ def calibrated_lens_frame(position_m: tuple[float, float, float], seed: int = 0)
     gravity = (pose.rotation_wc.T @ [0, 0, -1.0]).tolist()
     meta = fixture_meta(camera, LENS_WIDTH, LENS_HEIGHT, pose, gravity_camera=gravity)
     return meta.model_copy(update={"camera": ProfileRef(profile=CALIBRATED.id)}), pixels.tobytes()
+
+
+SURVEY_SCALE = 0.25  # of the Mi 8 front camera: 970 x 1296
+SURVEY_FRAMES = 12
+
+
+@functools.cache
+def survey_set(frames: int = SURVEY_FRAMES, seed: int = 3):
+    """(true map, sketch, anchor ID, shots) of the office (four panels) surveyed by `frames` quarter-scale
+    frames (`simulator.survey`), rendered once per test session."""
+    scene = find_scene("office")
+    scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"scale": SURVEY_SCALE})})
+    rng = np.random.default_rng(seed)
+    shots = render_survey(scene, survey_poses(scene, frames, rng), rng)
+    truth = scene.beacon_map()
+    anchor = truth.beacons[0].id
+    return truth, sketch_of(truth, anchor, rng), anchor, tuple(shots)
+
+
+def survey_frame(shot, name: str, labels=None):
+    """A `SurveyFrame` of a rendered survey shot, with its own labels unless others are given."""
+    from server.survey.run import SurveyFrame
+
+    meta = FrameMeta.model_validate(shot.meta.model_dump(by_alias=True))
+    return SurveyFrame(
+        name, LumaFrame(shot.pixels, meta, shot.meta.camera), list(shot.labels if labels is None else labels)
+    )

@@ -44,7 +44,7 @@ from enum import StrEnum
 import cv2
 import numpy as np
 
-from server.geometry import angle_deg, beacon_corners_m, beacon_rotation, beacon_to_world, rotation_z
+from server.geometry import angle_deg, beacon_corners_m, beacon_rotation, beacon_to_world, orthonormal_pair, rotation_z
 from server.outcomes import Refusal
 from server.vision.subpixel import MIN_PHASE_SPAN_PX, EdgeRules
 from shared_schemas import Beacon, FailureReason
@@ -145,20 +145,6 @@ def pose_with_gravity(
     return position, rotation_z(yaw_deg) @ tilt
 
 
-def _orthonormal_pair(vector: np.ndarray) -> np.ndarray:
-    """Two unit vectors (2, 3) orthogonal to `vector` and to each other."""
-    x, y, z = vector
-    # the cross product with the axis least aligned with `vector`, written out (np.cross is slow)
-    first = (
-        np.array([0.0, z, -y])
-        if abs(x) <= min(abs(y), abs(z))
-        else (np.array([-z, 0.0, x]) if abs(y) <= abs(z) else np.array([y, -x, 0.0]))
-    )
-    first /= np.linalg.norm(first)
-    fx, fy, fz = first
-    return np.array([first, [y * fz - z * fy, z * fx - x * fz, x * fy - y * fx]])
-
-
 def _map_residuals(params, object_points, image_points, camera_matrix, across_gravity, weights):
     """Weighted residuals (2 N + 2,) and their Jacobian (2 N + 2, 6) of the MAP fit.
 
@@ -192,7 +178,7 @@ def fuse_gravity(
     (chi-square with 2 N + 2 terms), so that two starts can be compared.
     """
     g = np.asarray(gravity_camera, dtype=float)
-    across = _orthonormal_pair(g / np.linalg.norm(g))
+    across = orthonormal_pair(g / np.linalg.norm(g))
     weights = (1.0 / corner_sigma_px, 1.0 / np.radians(gravity_sigma_deg))
     params = np.concatenate([np.ravel(start[0]), np.ravel(start[1])]).astype(float)
     for _ in range(iterations):
@@ -503,7 +489,7 @@ def _position_covariance(
         vector, sigma_deg, mode = gravity
         sigma_rad = math.radians(sigma_deg)
         # d (across . -R[:, 2]) / d rvec (2, 3); tvec does not move the predicted gravity
-        tilt = -(_orthonormal_pair(vector / math.sqrt(float(vector @ vector))) @ by_rvec[:, :, 2].T)
+        tilt = -(orthonormal_pair(vector / math.sqrt(float(vector @ vector))) @ by_rvec[:, :, 2].T)
         if mode is GravityMode.always:
             # the tilt taken as measured: min |J d - dz|^2 subject to T d = dg (KKT system)
             system = np.zeros((8, 8))

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from server.geometry import rotation_z
 from server.outcomes import Fix
 from server.rooms import PanelFix, vlc_reading
 from server.tracking.track import Track
@@ -100,8 +101,17 @@ class PanelNamer:
         if beacon is None:
             return None
         source = BeaconIdSource.vlc if panel.beacon_id is not None else BeaconIdSource.track
+        # the template is the map's first beacon at the origin (`session.template_beacon`); a beacon whose
+        # yaw differs from it by a little (a surveyed map) turns the relative fix by the difference
+        turn = rotation_z(beacon.yaw_deg - self.beacon_map.beacons[0].yaw_deg)
+        covariance = None if relative.covariance_m2 is None else turn @ relative.covariance_m2 @ turn.T
         named = replace(
-            relative, position_m=relative_m + np.asarray(beacon.center_m), beacon_id=beacon.id, id_source=source
+            relative,
+            position_m=np.asarray(beacon.center_m) + turn @ relative_m,
+            rotation_wc=turn @ np.asarray(relative.rotation_wc),
+            covariance_m2=covariance,
+            beacon_id=beacon.id,
+            id_source=source,
         )
         return PanelFix(blob, beacon, named, reading)
 

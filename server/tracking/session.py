@@ -21,7 +21,14 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from server.geometry import camera_matrix, distortion_vector, rotation_from_ypr, world_to_camera, ypr_from_rotation
+from server.geometry import (
+    camera_matrix,
+    distortion_vector,
+    rotation_from_ypr,
+    world_to_camera,
+    wrap_deg,
+    ypr_from_rotation,
+)
 from server.ingest import LumaFrame
 from server.outcomes import Refusal, located, refused
 from server.pipeline import PipelineOptions, locate_by_outlines
@@ -63,16 +70,27 @@ class SessionStats:
     foreign_ids: int = 0  # confident codes of beacons not in the map
 
 
+# Panels whose yaws differ by this little still share the template: a surveyed map's yaws differ by
+# hundredths of a degree (docs/survey.md). Each fix is turned by its own panel's yaw when the panel
+# is named (`naming.PanelNamer.name`); the turn's error in the panels' matching (a degree over a
+# metre: 17 mm) is far within their gates.
+ALIKE_YAW_DEG = 1.0
+
+
 def _geometry(beacon: Beacon) -> tuple:
-    sizes = (*beacon.extent_m, beacon.outline_radius_m, beacon.yaw_deg % 360.0)
+    sizes = (*beacon.extent_m, beacon.outline_radius_m)
     return (beacon.shape, *(round(v, 6) for v in sizes))
 
 
 def template_beacon(beacon_map: BeaconMap) -> Beacon | None:
-    """A beacon at the origin standing for every map beacon, when they all look alike."""
+    """A beacon at the origin standing for every map beacon, when they all look alike: the first
+    beacon, its yaw within `ALIKE_YAW_DEG` of every other's."""
+    first = beacon_map.beacons[0]
     if len({_geometry(b) for b in beacon_map.beacons}) != 1:
         return None
-    return beacon_map.beacons[0].model_copy(update={"center_m": [0.0, 0.0, 0.0]})
+    if any(abs(wrap_deg(b.yaw_deg - first.yaw_deg)) > ALIKE_YAW_DEG for b in beacon_map.beacons):
+        return None
+    return first.model_copy(update={"center_m": [0.0, 0.0, 0.0]})
 
 
 def attach_sightings(

@@ -10,13 +10,14 @@ from server.geometry import (
     beacon_to_world,
     camera_matrix,
     model_corners_m,
+    orthonormal_pair,
     rotation_from_ypr,
     world_to_camera,
     ypr_from_rotation,
 )
-from server.pose.ordering import order_corners
-from server.pose.solve import GravityMode, _map_residuals, _orthonormal_pair, pose_with_gravity, solve_pose
 from server.outcomes import Refusal
+from server.pose.ordering import order_corners
+from server.pose.solve import GravityMode, _map_residuals, pose_with_gravity, solve_pose
 from shared_schemas import Beacon, CameraIntrinsics, FailureReason, OrientationRule
 
 CAMERA = CameraIntrinsics(fx=977.78, fy=977.78, cx=484.5, cy=647.5)
@@ -101,7 +102,7 @@ def test_map_jacobian_matches_finite_differences():
     objects = np.vstack([model_corners_m(beacon.side_m), np.zeros(3)])
     images = np.vstack([corners, center]) + 0.3
     params = np.array([0.1, -0.05, 0.3, 0.02, -0.01, 2.0])
-    across = _orthonormal_pair(np.array([0.05, -0.02, -1.0]) / np.linalg.norm([0.05, -0.02, -1.0]))
+    across = orthonormal_pair(np.array([0.05, -0.02, -1.0]) / np.linalg.norm([0.05, -0.02, -1.0]))
     weights = (1 / 0.05, 1 / np.radians(0.1))
     _, analytic = _map_residuals(params, objects, images, K, across, weights)
     numeric = np.zeros_like(analytic)
@@ -146,10 +147,18 @@ def test_map_prior_weighs_vision_and_gravity_by_what_each_knows():
 # axis-aligned image, where IPPE_SQUARE's closed form returns NaN poses.
 FACE_TO_FACE_K = np.array([[3911.1111111111113, 0.0, 1939.5], [0.0, 3911.1111111111113, 2591.5], [0.0, 0.0, 1.0]])
 FACE_TO_FACE_CORNERS = {
-    1.7: [[956.053686884913, 2791.946270314395], [1356.9463687501868, 2791.9462743756853],
-          [1356.946366919429, 2391.0537193573796], [956.0536800437734, 2391.053733396644]],
-    2.1: [[1777.2356524691281, 4940.764348385068], [2101.764347760772, 4940.764347785786],
-          [2101.7643477333822, 4616.235651757382], [1777.2356520030137, 4616.23565233638]],
+    1.7: [
+        [956.053686884913, 2791.946270314395],
+        [1356.9463687501868, 2791.9462743756853],
+        [1356.946366919429, 2391.0537193573796],
+        [956.0536800437734, 2391.053733396644],
+    ],
+    2.1: [
+        [1777.2356524691281, 4940.764348385068],
+        [2101.764347760772, 4940.764347785786],
+        [2101.7643477333822, 4616.235651757382],
+        [1777.2356520030137, 4616.23565233638],
+    ],
 }
 
 
@@ -157,12 +166,14 @@ FACE_TO_FACE_CORNERS = {
 def test_face_to_face_square_gives_a_finite_ambiguity_ratio(height_m):
     corners = np.array(FACE_TO_FACE_CORNERS[height_m])
     beacon = Beacon(id=0, center_m=[0, 0, height_m], side_m=0.174, corner_radius_m=0.02)
-    raw = cv2.solvePnPGeneric(model_corners_m(beacon.side_m), corners, FACE_TO_FACE_K, None,
-                              flags=cv2.SOLVEPNP_IPPE_SQUARE)[3]
+    raw = cv2.solvePnPGeneric(
+        model_corners_m(beacon.side_m), corners, FACE_TO_FACE_K, None, flags=cv2.SOLVEPNP_IPPE_SQUARE
+    )[3]
     assert not np.all(np.isfinite(raw))  # the degenerate case this test is about
     for mode in GravityMode:
-        pose = solve_pose(corners, corners.mean(axis=0), beacon, FACE_TO_FACE_K, np.array([0.0, 0.0, -1.0]),
-                          gravity_mode=mode)
+        pose = solve_pose(
+            corners, corners.mean(axis=0), beacon, FACE_TO_FACE_K, np.array([0.0, 0.0, -1.0]), gravity_mode=mode
+        )
         assert not isinstance(pose, Refusal), pose
         # off the panel's axis the second minimum is far worse: not ambiguous
         assert np.isfinite(pose.ambiguity_ratio) and pose.ambiguity_ratio < 0.01

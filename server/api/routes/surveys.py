@@ -1,0 +1,87 @@
+"""Beacon surveys: stored samples in, a room's map out (`server.survey`, docs/survey.md)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Header
+from starlette.concurrency import run_in_threadpool
+
+from server.api.deps import Services, ServicesDep, api_key_problem
+from server.api.errors import ERROR_RESPONSES, ApiError
+from server.api.guard import GuardedRoute
+from server.api.routes import DAMAGED_RESPONSES
+from server.ingest import decode_frame
+from server.outcomes import FrameError
+from server.store import StoreError
+from server.survey.rules import SurveyInputError, SurveyRefused
+from server.survey.run import SurveyFrame, check_request, survey
+from shared_schemas import BeaconMap
+from shared_schemas.survey import SurveyReport, SurveyRequest
+
+router = APIRouter(prefix="/v1/surveys", tags=["surveys"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
+
+
+def _sketch(services: Services, request: SurveyRequest) -> BeaconMap:
+    if isinstance(request.sketch, BeaconMap):
+        return request.sketch
+    try:
+        return services.maps.get(request.sketch)
+    except StoreError as error:
+        if error.code == "not_found":
+            message = f"no stored map named '{request.sketch}' to take as the sketch"
+            raise ApiError(404, "not_found", message, "sketch") from None
+        raise
+
+
+def _frames(services: Services, request: SurveyRequest) -> list[SurveyFrame]:
+    """Each sample's frame, read from the store; an unknown or unreadable one names its place in the request."""
+    frames = []
+    profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
+    for k, sample in enumerate(request.samples):
+        field = f"samples.{k}.sample_id"
+        try:
+            info = services.samples.get(sample.sample_id)
+            frame = decode_frame(services.samples.frame(sample.sample_id), info.meta, profiles)
+        except StoreError as error:
+            if error.code == "not_found":
+                raise ApiError(404, "not_found", f"no stored sample '{sample.sample_id}'", field) from None
+            raise StoreError(error.code, error.message, field) from None
+        except FrameError as error:
+            raise ApiError(409, "damaged_sample", f"sample '{sample.sample_id}': {error.message}", field) from None
+        frames.append(SurveyFrame(sample.sample_id, frame, sample.labels))
+    return frames
+
+
+def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
+    sketch = _sketch(services, request)
+    try:
+        # what the request gets wrong is said before any frame is read
+        check_request(sketch, request.anchor, [(s.sample_id, s.labels) for s in request.samples])
+        report = survey(_frames(services, request), sketch, request.anchor, request.name)
+    except SurveyInputError as error:
+        raise ApiError(422, "invalid_request", error.message, error.field) from None
+    except SurveyRefused as error:
+        raise ApiError(422, "survey_refused", error.message, "samples") from None
+    if request.store:
+        services.maps.put(request.name, report.map)
+        report = report.model_copy(update={"stored": True})
+    return report
+
+
+@router.post("", response_model=SurveyReport, responses=DAMAGED_RESPONSES)
+async def post_survey(
+    request: SurveyRequest,
+    services: ServicesDep,
+    x_api_key: Annotated[str | None, Header(description="needed with `store: true` when the server has a key")] = None,
+) -> SurveyReport:
+    """Survey the room's panels from stored samples (each sees two or more panels); with `store`, store the map.
+
+    Refused with 422 `survey_refused` (naming the panel) when the samples leave a sketch panel unconnected to
+    the anchor or no sample sees two named panels."""
+    if request.store:
+        problem = api_key_problem(services.settings.api_key, x_api_key)
+        if problem is not None:
+            raise problem
+    async with services.pipeline_limiter:
+        return await run_in_threadpool(_survey_now, services, request)

@@ -1,0 +1,113 @@
+"""`lumipose bench survey`: a room's panels surveyed from the floor, against the truth (issue 14).
+
+The office (`office`, 4 panels) or the larger office (`office-9`, 9 panels): `frames` hand-held
+pose frames from the floor (`simulator.survey`: 1.2-1.6 m, tilts up to 30 degrees, two or more
+panels in each, some cut by the border; the scene's sensor, gravity with its 0.1 degree error, a
+compass with a 15 degree indoor error, labels from the true projection), a tape-measure sketch
+(every panel but the anchor off by 5 cm in x, y and z and 5 degrees in yaw), and the survey
+(`server.survey.run.survey`). Each panel's centre error (mm, 3-D) and yaw error (degrees, modulo
+the panel's symmetry) against the truth, beside the sigmas the survey reports; the bearing's
+error. Then the office walk (`simulator.bench_office`) positioned once with the surveyed map and
+once with the true map: the same captures (same seed), their 2-D errors against the true path.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from server.geometry import wrap_deg
+from server.ingest import LumaFrame
+from server.survey.chain import symmetry_deg
+from server.survey.run import SurveyFrame, survey
+from shared_schemas import FrameMeta
+from simulator.bench_office import OfficeConfig, run_walk
+from simulator.scene import find_scene
+from simulator.survey import SurveyShots, render_survey, sketch_of, survey_poses, write_survey_fixtures
+
+SCENES = {4: "office", 9: "office-9"}
+
+
+@dataclass(frozen=True)
+class SurveyBenchConfig:
+    panels: int = 4
+    frames: int = 40
+    scale: float | None = None  # of the Mi 8 front camera's resolution; None: the scene's (0.5)
+    seed: int = 1
+    sketch_error_m: float = 0.05
+    sketch_yaw_error_deg: float = 5.0
+    walk: str | None = "zigzag"  # None: no walk
+    walk_limit: int | None = None  # captures of the walk
+
+
+def survey_shots(config: SurveyBenchConfig):
+    """(scene, true map, sketch, anchor ID, rendered shots) of the bench's office."""
+    scene = find_scene(SCENES[config.panels])
+    if config.scale is not None:
+        scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"scale": config.scale})})
+    rng = np.random.default_rng([config.seed, config.panels])
+    shots = render_survey(scene, survey_poses(scene, config.frames, rng), rng)
+    truth = scene.beacon_map()
+    anchor = truth.beacons[0].id
+    sketch = sketch_of(truth, anchor, rng, config.sketch_error_m, config.sketch_yaw_error_deg)
+    return scene, truth, sketch, anchor, shots
+
+
+def run_survey_bench(config: SurveyBenchConfig, fixtures: Path | None = None) -> dict:
+    """Survey one office and compare with its truth; then its walk with both maps. `fixtures`: a folder
+    to write the frames, labels and sketch to (`lumipose survey` reads them)."""
+    scene, truth, sketch, anchor, shots = survey_shots(config)
+    if fixtures is not None:
+        write_survey_fixtures(fixtures / scene.name, shots, sketch)
+    frames = [
+        SurveyFrame(f"frame_{k:02d}", LumaFrame(s.pixels, FrameMeta.model_validate(s.meta.model_dump(by_alias=True)),
+                                                s.meta.camera), s.labels)
+        for k, s in enumerate(shots)
+    ]
+    start = time.perf_counter()
+    report = survey(frames, sketch, anchor, f"{scene.name}-surveyed")
+    survey_s = time.perf_counter() - start
+    panels = []
+    for estimate in report.beacons:
+        true = truth.beacon(estimate.beacon_id)
+        assert true is not None
+        error = 1000 * (np.asarray(estimate.center_m) - np.asarray(true.center_m))
+        step = symmetry_deg(true)
+        yaw_error = wrap_deg(estimate.yaw_deg - true.yaw_deg)
+        yaw_error = float(yaw_error - step * round(yaw_error / step))
+        panels.append({
+            "beacon_id": estimate.beacon_id, "anchor": estimate.beacon_id == anchor, "frames": estimate.frames,
+            "centre_error_mm": float(np.linalg.norm(error)), "centre_error_xyz_mm": error.tolist(),
+            "centre_sigma_xyz_mm": [1000 * v for v in estimate.center_sigma_m],
+            "yaw_error_deg": yaw_error, "yaw_sigma_deg": estimate.yaw_sigma_deg,
+        })
+    free = [p for p in panels if not p["anchor"]]
+    true_bearing = SurveyShots().true_bearing_deg
+    result = {
+        "config": asdict(config),
+        "scene": scene.name,
+        "frames": len(frames),
+        "frames_used": report.frames_used,
+        "skipped": [s.model_dump() for s in report.skipped],
+        "rms_px": report.rms_px,
+        "survey_s": survey_s,
+        "panels": panels,
+        "max_centre_error_mm": max(p["centre_error_mm"] for p in free),
+        "max_yaw_error_deg": max(abs(p["yaw_error_deg"]) for p in free),
+        "bearing_deg": report.bearing_deg,
+        "bearing_sigma_deg": report.bearing_sigma_deg,
+        "bearing_error_deg": None if report.bearing_deg is None else wrap_deg(report.bearing_deg - true_bearing),
+        "targets": {"centre_mm": 2.0, "yaw_deg": 0.1},
+        "map": report.map.model_dump(by_alias=True, exclude_none=True),
+    }
+    if config.walk is not None:
+        office = OfficeConfig(walk=config.walk, scene=scene.name, max_captures=config.walk_limit, seed=config.seed)
+        result["walk"] = {
+            "walk": config.walk,
+            "surveyed_map": run_walk(office, report.map)["summary"],
+            "true_map": run_walk(office)["summary"],
+        }
+    return result

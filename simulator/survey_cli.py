@@ -1,0 +1,75 @@
+"""`lumipose bench survey`: a table on stdout (or --json); `--fixtures DIR` also writes the frames."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+
+def add_survey_bench(benches) -> None:
+    bench = benches.add_parser("survey",
+                               help="beacon survey of an office of 4 or 9 panels against the truth (issue 14)")
+    bench.add_argument("--panels", type=int, nargs="+", default=[4, 9], choices=[4, 9])
+    bench.add_argument("--frames", type=int, default=40, help="survey frames per office")
+    bench.add_argument("--scale", type=float, default=None, help="of the Mi 8 front resolution (default: 0.5)")
+    bench.add_argument("--seed", type=int, default=1)
+    bench.add_argument("--walk", choices=["zigzag", "spiral", "none"], default="zigzag",
+                       help="the office walk positioned with the surveyed and the true map (none: skip)")
+    bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
+    bench.add_argument("--fixtures", type=Path, default=None,
+                       help="also write each office's frames, labels.json and sketch.json here (for `lumipose survey`)")
+    bench.add_argument("--json", action="store_true")
+    bench.set_defaults(run=_run_survey_bench)
+
+
+def _fmt(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def _print(report: dict) -> None:
+    print(f"{report['scene']}: {report['frames_used']} of {report['frames']} frames used, "
+          f"RMS {report['rms_px']:.3f} px, "
+          f"survey {report['survey_s']:.1f} s")
+    print(f"{'beacon':>6} {'frames':>6} {'centre err':>10} {'err x/y/z (mm)':>22} {'sigma x/y/z (mm)':>18} "
+          f"{'yaw err':>8} {'sigma':>6}")
+    for p in report["panels"]:
+        ex, ey, ez = p["centre_error_xyz_mm"]
+        sx, sy, sz = p["centre_sigma_xyz_mm"]
+        note = "  (anchor)" if p["anchor"] else ""
+        print(f"{p['beacon_id']:>6} {p['frames']:>6} {p['centre_error_mm']:8.2f}mm {ex:+7.2f} {ey:+7.2f} {ez:+7.2f} "
+              f"{sx:6.2f} {sy:5.2f} {sz:5.2f} {p['yaw_error_deg']:+8.3f} {p['yaw_sigma_deg']:6.3f}{note}")
+    met = report["max_centre_error_mm"] <= report["targets"]["centre_mm"] and \
+        report["max_yaw_error_deg"] <= report["targets"]["yaw_deg"]
+    print(f"worst     centre {report['max_centre_error_mm']:.2f} mm (target 2), "
+          f"yaw {report['max_yaw_error_deg']:.3f} deg "
+          f"(target 0.1): {'met' if met else 'NOT met'}")
+    print(f"bearing   {_fmt(report['bearing_deg'])} deg +- {_fmt(report['bearing_sigma_deg'])}, error "
+          f"{_fmt(report['bearing_error_deg'])} deg")
+    for s in report["skipped"]:
+        print(f"skipped   {s['name']}: {s['why']}")
+    walk = report.get("walk")
+    if walk:
+        print(f"walk      {walk['walk']} (2D error of the raw fixes, mm)")
+        for label in ("surveyed_map", "true_map"):
+            s = walk[label]
+            f = s["fixes"]
+            print(f"  {label:>13}: {s['captures']} captures, cover {s['coverage_pct']:.1f} %, "
+                  f"mean {_fmt(f['mean_mm'])}, "
+                  f"p95 {_fmt(f['p95_mm'])}, max {_fmt(f['max_mm'])}, ID errors {s['id_errors']}")
+
+
+def _run_survey_bench(args) -> int:
+    from simulator.bench_survey import SurveyBenchConfig, run_survey_bench
+
+    base = SurveyBenchConfig(frames=args.frames, scale=args.scale, seed=args.seed,
+                             walk=None if args.walk == "none" else args.walk, walk_limit=args.walk_limit)
+    reports = []
+    for panels in args.panels:
+        reports.append(run_survey_bench(replace(base, panels=panels), args.fixtures))
+    if args.json:
+        print(json.dumps({"survey": reports}, indent=2))
+        return 0
+    for report in reports:
+        _print(report)
+    return 0

@@ -1,0 +1,86 @@
+"""POST /v1/surveys against the real server: stored samples in, the surveyed map out (and stored)."""
+
+from __future__ import annotations
+
+import httpx
+import numpy as np
+import pytest
+
+from lumipose_client import Client, LumiposeError
+from shared_schemas.survey import PanelLabel, SurveyRequest, SurveySample
+from tests.conftest import API_KEY
+from tests.helpers import survey_set
+
+
+@pytest.fixture(scope="module")
+def stored(server_url):
+    """The quarter-scale office set stored as samples: (truth, sketch, anchor, [(sample ID, labels)])."""
+    truth, sketch, anchor, shots = survey_set()
+    with Client(server_url, api_key=API_KEY) as client:
+        samples = [(client.store_sample(s.pixels.tobytes(), s.meta).id, s.labels) for s in shots]
+    return truth, sketch, anchor, samples
+
+
+def _request(stored, **changes) -> SurveyRequest:
+    _, sketch, anchor, samples = stored
+    fields = {
+        "name": "office-surveyed",
+        "sketch": sketch,
+        "anchor": anchor,
+        "samples": [SurveySample(sample_id=i, labels=labels) for i, labels in samples],
+    }
+    return SurveyRequest(**(fields | changes))
+
+
+def _refusal(call) -> LumiposeError:
+    with pytest.raises(LumiposeError) as refused:
+        call()
+    return refused.value
+
+
+def test_a_survey_of_stored_samples_gives_the_map_and_stores_it(stored, client, server_url):
+    truth = stored[0]
+    report = client.survey(_request(stored, store=True))
+    assert report.stored and report.frames_used >= len(stored[3]) - 2
+    for beacon in truth.beacons:
+        assert np.linalg.norm(np.subtract(report.map.beacon(beacon.id).center_m, beacon.center_m)) < 0.004
+    assert client.get_map("office-surveyed") == report.map
+    # the stored map serves as the next survey's sketch, by name
+    again = client.survey(_request(stored, sketch="office-surveyed", name="office-again"))
+    assert not again.stored and again.map.name == "office-again"
+    with Client(server_url) as anonymous:  # storing the map is a write; a survey alone is not
+        refused = _refusal(lambda: anonymous.survey(_request(stored, store=True)))
+        assert refused.status == 401 and refused.body.field == "X-API-Key"
+        refused = _refusal(lambda: anonymous.survey(_request(stored, anchor=7)))
+        assert refused.status == 422 and refused.body.field == "anchor"
+
+
+def test_unknown_samples_and_sketches_are_404_naming_the_field(stored, client):
+    samples = [SurveySample(sample_id="0" * 32), *_request(stored).samples]
+    refused = _refusal(lambda: client.survey(_request(stored, samples=samples)))
+    assert refused.status == 404 and refused.body.field == "samples.0.sample_id"
+    refused = _refusal(lambda: client.survey(_request(stored, sketch="no-such-room")))
+    assert refused.status == 404 and refused.body.field == "sketch" and "no-such-room" in refused.body.message
+
+
+def test_bad_requests_and_refused_surveys_are_422_naming_what_is_wrong(stored, client):
+    refused = _refusal(lambda: client.survey(_request(stored, anchor=7)))
+    assert (refused.status, refused.body.field) == (422, "anchor")
+    assert "anchor 7 is not in sketch" in refused.body.message
+    unknown = PanelLabel(beacon_id=5, x_px=10, y_px=10)
+    samples = [SurveySample(sample_id=stored[3][0][0], labels=[unknown])]
+    refused = _refusal(lambda: client.survey(_request(stored, samples=samples)))
+    assert (refused.status, refused.body.field) == (422, "samples.0.labels.0.beacon_id")
+    without_99 = [SurveySample(sample_id=i, labels=[x for x in labels if x.beacon_id != 99]) for i, labels in stored[3]]
+    refused = _refusal(lambda: client.survey(_request(stored, samples=without_99)))
+    assert refused.status == 422 and refused.body.error == "survey_refused"
+    assert "beacon 99 is not connected to anchor 17" in refused.body.message
+    one_panel = [SurveySample(sample_id=i, labels=labels[:1]) for i, labels in stored[3][:2]]
+    refused = _refusal(lambda: client.survey(_request(stored, samples=one_panel)))
+    assert refused.status == 422 and "no frame sees two named panels" in refused.body.message
+
+
+def test_a_malformed_survey_request_is_422(server_url):
+    for body, field in (({"name": "x", "anchor": 1, "samples": []}, "sketch"), ({"sketch": "demo"}, "name")):
+        response = httpx.post(f"{server_url}/v1/surveys", json=body)
+        assert response.status_code == 422 and response.json()["field"] == field, response.text

@@ -1,0 +1,209 @@
+"""The survey's stages: the fit on exact geometry, its refusals, and rendered quarter-scale office frames."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from server.geometry import (
+    beacon_corners_m,
+    beacon_rotation,
+    grown_quads,
+    rotation_from_ypr,
+    rotation_z,
+    world_to_camera,
+)
+from server.survey.adjust import adjust
+from server.survey.bearing import map_bearing
+from server.survey.chain import chain_start, nearest_equivalent_deg
+from server.survey.rules import SurveyInputError, SurveyRefused, SurveyRules
+from server.survey.run import survey
+from server.survey.sightings import FrameSightings, Sighting, frame_sightings
+from shared_schemas import Beacon, BeaconMap
+from shared_schemas.survey import PanelLabel
+from tests.helpers import survey_frame, survey_set
+
+MATRIX = np.array([[980.0, 0.0, 484.5], [0.0, 980.0, 647.5], [0.0, 0.0, 1.0]])
+ROOM = BeaconMap(
+    name="room",
+    beacons=[
+        Beacon(id=1, center_m=[0.0, 0.0, 2.7], side_m=0.2, corner_radius_m=0.02),
+        Beacon(id=2, center_m=[1.2, 0.03, 2.71], yaw_deg=1.5, side_m=0.2, corner_radius_m=0.02),
+        Beacon(id=3, center_m=[1.25, 1.2, 2.69], yaw_deg=-2.0, side_m=0.2, corner_radius_m=0.02),
+    ],
+)
+GROWTH_PX = 1.5
+
+
+def _sighting(beacon: Beacon, position: np.ndarray, rotation_wc: np.ndarray, rng, noise_px: float) -> Sighting:
+    """A whole panel seen from a camera: mid-level corners (grown by GROWTH_PX) and centre with noise, and a
+    start pose a little off (as a single panel's fix would give)."""
+    model = np.vstack([beacon_corners_m(beacon) @ beacon_rotation(beacon).T + beacon.center_m, beacon.center_m])
+    pixels = world_to_camera(model, position, rotation_wc) @ MATRIX.T
+    pixels = pixels[:, :2] / pixels[:, 2:]
+    pixels[:4] = grown_quads(pixels[:4], GROWTH_PX)
+    pixels += rng.normal(0.0, noise_px, pixels.shape)
+    rotation_wb = beacon_rotation(beacon)
+    off = rotation_from_ypr(*rng.normal(0.0, 0.3, 3))
+    return Sighting(
+        beacon=beacon,
+        points_px=pixels,
+        sigmas_px=np.array([0.05, 0.05, 0.05, 0.05, 0.03]),
+        cut=False,
+        grown=True,
+        position_b=rotation_wb.T @ (position - beacon.center_m) + rng.normal(0.0, 0.01, 3),
+        rotation_bc=rotation_wb.T @ off @ rotation_wc,
+        area_px=1e4,
+        growth_px=GROWTH_PX + 0.2,
+    )
+
+
+def _frames(pairs: list[tuple[int, ...]], rng, noise_px: float = 0.03, room: BeaconMap = ROOM) -> list[FrameSightings]:
+    """A frame under each group of panels (IDs), looking up at their middle with a little tilt."""
+    frames = []
+    for k, ids in enumerate(pairs):
+        beacons = [room.beacon(i) for i in ids]
+        middle = np.mean([b.center_m for b in beacons], axis=0)
+        position = middle + [*rng.normal(0.0, 0.2, 2), -1.3]
+        rotation = rotation_from_ypr(rng.uniform(-180, 180), *rng.normal(0.0, 8.0, 2))
+        gravity = rotation.T @ rotation_from_ypr(0.0, *rng.normal(0.0, 0.05, 2)) @ [0.0, 0.0, -1.0]
+        frames.append(
+            FrameSightings(
+                name=f"f{k}",
+                matrix=MATRIX,
+                gravity_camera=gravity,
+                gravity_sigma_deg=0.05,
+                compass_bearing_deg=None,
+                sightings=tuple(_sighting(b, position, rotation, rng, noise_px) for b in beacons),
+                notes=(),
+            )
+        )
+    return frames
+
+
+def _sketch(room: BeaconMap, anchor: int, error_m: float = 0.05, yaw_error_deg: float = 4.0) -> BeaconMap:
+    rng = np.random.default_rng(7)
+    moved = [
+        b
+        if b.id == anchor
+        else b.model_copy(
+            update={
+                "center_m": list(np.asarray(b.center_m) + rng.normal(0.0, error_m, 3)),
+                "yaw_deg": b.yaw_deg + rng.normal(0.0, yaw_error_deg),
+            }
+        )
+        for b in room.beacons
+    ]
+    return room.model_copy(update={"beacons": moved})
+
+
+def test_the_fit_finds_every_panel_from_a_rough_sketch_within_its_sigmas():
+    rng = np.random.default_rng(1)
+    frames = _frames([(1, 2), (2, 3), (1, 3), (1, 2, 3)] * 4, rng)
+    adjusted = adjust(frames, chain_start(frames, _sketch(ROOM, 1), 1), 1, SurveyRules())
+    for beacon in ROOM.beacons[1:]:
+        estimate = adjusted.panels[beacon.id]
+        error = estimate.pose.center_m - beacon.center_m
+        assert np.linalg.norm(error) < 0.5e-3, (beacon.id, error)
+        assert np.all(np.abs(error) < 5 * estimate.center_sigma_m + 2e-5), (error, estimate.center_sigma_m)
+        assert abs(estimate.pose.yaw_deg - beacon.yaw_deg) < max(5 * estimate.yaw_sigma_deg, 0.005)
+        assert 0 < estimate.center_sigma_m.max() < 1e-3
+    assert adjusted.panels[1].pose.yaw_deg == 0.0 and np.all(adjusted.panels[1].center_sigma_m == 0)
+    assert adjusted.rms_px < 0.1
+
+
+def test_a_panel_the_frames_do_not_tie_to_the_anchor_is_refused_naming_it_and_the_frames():
+    room = ROOM.model_copy(
+        update={"beacons": [*ROOM.beacons, Beacon(id=4, center_m=[0.0, 1.2, 2.7], side_m=0.2, corner_radius_m=0.02)]}
+    )
+    frames = _frames([(1, 2), (3, 4), (3, 4)], np.random.default_rng(2), room=room)
+    with pytest.raises(SurveyRefused) as refused:
+        chain_start(frames, _sketch(room, 1), 1)
+    assert refused.value.beacon_id == 3
+    message = refused.value.message
+    assert "beacon 3 is not connected to anchor 1" in message and "'f1', 'f2'" in message
+    assert "only with beacons [4]" in message and "connected beacons [1, 2]" in message
+
+
+def test_a_square_turned_a_quarter_in_the_sketch_keeps_its_sketch_yaw():
+    assert nearest_equivalent_deg(1.0, 91.5, 90.0) == pytest.approx(91.0)
+    assert nearest_equivalent_deg(179.0, -179.0, 90.0) == pytest.approx(-181.0 + 360.0)
+    assert nearest_equivalent_deg(10.0, -170.0, 180.0) == pytest.approx(-170.0)
+
+
+def test_the_bearing_is_a_circular_mean_with_its_spread():
+    turned = [rotation_z(yaw) for yaw in (0.0, 20.0, -30.0)]
+    bearing = map_bearing(turned + [rotation_z(5.0)], [350.0, 345.0, 25.0, None])  # +X at 350, 5, -5
+    assert bearing is not None and bearing.frames == 3
+    assert bearing.bearing_deg == pytest.approx(360.0 - 10.0 / 3.0, abs=0.01)  # across north, in [0, 360)
+    assert bearing.sigma_deg == pytest.approx(math.degrees(np.std(np.radians([-10, 5, -5]))) / math.sqrt(3), rel=0.1)
+    assert map_bearing(turned, [None, None, None]) is None
+    assert map_bearing(turned[:1], [12.0]).sigma_deg is None  # one reading shows no spread
+
+
+def test_grown_quads_move_every_side_out():
+    square = np.array([[0.0, 10.0], [10.0, 10.0], [10.0, 0.0], [0.0, 0.0]])
+    assert np.allclose(grown_quads(square, 1.0), [[-1, 11], [11, 11], [11, -1], [-1, -1]])
+    assert np.allclose(grown_quads(square[::-1], 1.0), grown_quads(square, 1.0)[::-1])
+    assert np.allclose(grown_quads(grown_quads(square, 2.0), -2.0), square)
+
+
+# rendered frames of the office (4 panels, a quarter of the Mi 8's resolution)
+
+
+def test_a_quarter_scale_office_is_surveyed_to_millimetres():
+    truth, sketch, anchor, shots = survey_set()
+    report = survey([survey_frame(s, f"frame_{k}") for k, s in enumerate(shots)], sketch, anchor, "surveyed")
+    assert report.frames_used >= len(shots) - 2 and report.rms_px < 0.5
+    for beacon in report.beacons:
+        true = truth.beacon(beacon.beacon_id)
+        error = np.subtract(beacon.center_m, true.center_m)
+        assert np.linalg.norm(error) < 0.004, (beacon.beacon_id, error)  # figures at half scale: docs/survey.md
+        assert abs(beacon.yaw_deg - true.yaw_deg) < 0.1
+        assert beacon.frames >= 1
+    assert report.map.name == "surveyed" and report.map.beacon(anchor) == sketch.beacon(anchor)
+    # a 15-degree compass error over ~12 frames
+    assert report.bearing_deg is not None and abs((report.bearing_deg - 30.0 + 180) % 360 - 180) < 15
+    assert report.map.bearing_deg == report.bearing_deg and report.bearing_sigma_deg > 0
+
+
+def test_frames_that_see_one_panel_are_skipped_and_a_set_without_two_is_refused():
+    _, sketch, anchor, shots = survey_set()
+    frames = [survey_frame(s, f"frame_{k}", s.labels[:1]) for k, s in enumerate(shots[:3])]
+    with pytest.raises(SurveyRefused, match="no frame sees two named panels") as refused:
+        survey(frames, sketch, anchor, "surveyed")
+    assert "only beacon" in refused.value.message and "a survey frame must see two or more" in refused.value.message
+
+
+def test_labels_on_no_panel_are_said():
+    _, sketch, anchor, shots = survey_set()
+    label = shots[0].labels[0]
+    nowhere = PanelLabel(beacon_id=label.beacon_id, x_px=5000.0, y_px=5000.0)  # beyond the frame
+    with pytest.raises(SurveyRefused) as refused:
+        survey([survey_frame(shots[0], "frame_0", [nowhere, *shots[0].labels[1:]])], sketch, anchor, "x")
+    assert f"the label of beacon {label.beacon_id} at (5000, 5000) px is on no panel" in refused.value.message
+
+
+def test_an_unknown_anchor_or_a_label_of_an_unknown_beacon_is_bad_input():
+    _, sketch, anchor, shots = survey_set()
+    frames = [survey_frame(s, f"frame_{k}") for k, s in enumerate(shots[:2])]
+    with pytest.raises(SurveyInputError, match="anchor 7 is not in sketch") as wrong:
+        survey(frames, sketch, 7, "x")
+    assert wrong.value.field == "anchor"
+    bad = [survey_frame(shots[0], "frame_0", [PanelLabel(beacon_id=5, x_px=10, y_px=10)])]
+    with pytest.raises(SurveyInputError, match="names beacon 5, which is not in sketch") as wrong:
+        survey(bad, sketch, anchor, "x")
+    assert wrong.value.field == "samples.0.labels.0.beacon_id"
+
+
+def test_the_panels_of_an_id_frame_are_named_by_their_own_stripes():
+    from tests.server.test_rooms import big_panels, room_id_frame  # two 0.6 m coded panels, one cut by the border
+
+    room = big_panels((0.62, 0.0), (-0.1, 0.0))
+    seen = frame_sightings(room_id_frame(room), "id", [], room)
+    assert isinstance(seen, FrameSightings), seen
+    assert sorted((s.beacon.id, s.cut) for s in seen.sightings) == [(17, False), (42, True)]
+    whole = next(s for s in seen.sightings if not s.cut)
+    assert whole.grown and whole.sigmas_px[0] < seen.sightings[1].sigmas_px[0]
