@@ -46,8 +46,6 @@ class CalibrationEndToEndTest {
     static void start() throws Exception {
         EndToEnd.assumeExecutable();
         serve = Lumipose.Serve.start();
-        EndToEnd.assumePostRoutes(serve, "CalibrationEndToEndTest (issue 14's server part)",
-                CalibrationSession.VIEWS_PATH, CalibrationSession.CALIBRATIONS_PATH);
         photos = Files.createTempDirectory("lumipose-board");
         Python.run("calibration/board_photos.py", photos.toString(), BOARD.toJson().toString());
     }

@@ -53,7 +53,6 @@ class SurveyEndToEndTest {
     static void start() throws Exception {
         EndToEnd.assumeExecutable();
         serve = Lumipose.Serve.start();
-        EndToEnd.assumePostRoutes(serve, "SurveyEndToEndTest (issue 14's server part)", SurveySession.SURVEYS_PATH);
         Path dir = Files.createTempDirectory("lumipose-survey");
         for (int i = 0; i < POSES.length; i++) {
             double[] p = POSES[i];

@@ -1,6 +1,5 @@
 package io.lumipose.client.testutil;
 
-import java.io.IOException;
 
 import org.junit.jupiter.api.Assertions;
 import org.junit.jupiter.api.Assumptions;
@@ -20,21 +19,6 @@ public final class EndToEnd {
                 Assertions.fail("no lumipose executable (lumipose.e2e.required=true)");
             }
             Assumptions.abort("no lumipose executable; run scripts/android_test.sh, which sets it up");
-        }
-    }
-
-    /**
-     * Skips the test class, saying why on stderr (Surefire does not print a class-level abort's
-     * reason), when {@code serve} lacks one of the POST routes the test needs (another part of an
-     * issue adds them).
-     */
-    public static void assumePostRoutes(Lumipose.Serve serve, String test, String... paths) throws IOException {
-        for (String path : paths) {
-            if (!serve.hasPostRoute(path)) {
-                String reason = test + ": this checkout's server has no POST " + path + " - not run";
-                System.err.println(reason);
-                Assumptions.abort(reason);
-            }
         }
     }
 }

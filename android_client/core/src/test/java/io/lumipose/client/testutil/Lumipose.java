@@ -144,24 +144,6 @@ public final class Lumipose {
             }
         }
 
-        /**
-         * Whether the server has a POST route at {@code path}: an empty JSON body gets 404 (or 405)
-         * from a server without it, a validation error from one with it. For end-to-end tests of
-         * routes that another part of an issue adds.
-         */
-        public boolean hasPostRoute(String path) throws IOException {
-            HttpURLConnection c = (HttpURLConnection) new URL(baseUrl + path).openConnection();
-            c.setRequestMethod("POST");
-            c.setDoOutput(true);
-            c.setRequestProperty("Content-Type", "application/json");
-            c.setRequestProperty("X-API-Key", KEY);
-            try (OutputStream out = c.getOutputStream()) {
-                out.write("{}".getBytes(StandardCharsets.UTF_8));
-            }
-            int status = c.getResponseCode();
-            return status != 404 && status != 405;
-        }
-
         /** PUT the map under its own name (the app names its map in every request). */
         public void putMap(JSONObject map) throws IOException {
             put("/v1/maps/" + map.getString("name"), map);
