@@ -60,7 +60,7 @@ def corner_points_m(spec: BoardSpec, corner_ids: list[int] | np.ndarray) -> np.n
             f"corner id {int(ids.max())} is not on a {spec.squares_x} x {spec.squares_y} board "
             f"({spec.inner_corners} corners)"
         )
-    return charuco_board(spec).getChessboardCorners()[ids].astype(float)
+    return np.asarray(charuco_board(spec).getChessboardCorners(), float)[ids]
 
 
 def _grey(image: np.ndarray) -> np.ndarray:

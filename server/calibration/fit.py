@@ -70,7 +70,8 @@ def _jacobian(lens: Lens, objects: list[np.ndarray], rvecs, tvecs, masks: list[n
 
 def _calibrate(objects, images, size, rules: FitRules):
     criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, rules.max_iterations, 1e-12)
-    return cv2.calibrateCameraExtended(objects, images, size, None, None, criteria=criteria)
+    # the initial matrix and coefficients are placeholders: without CALIB_USE_INTRINSIC_GUESS OpenCV starts from Zhang
+    return cv2.calibrateCameraExtended(objects, images, size, np.eye(3), np.zeros(5), criteria=criteria)
 
 
 def fit_views(views: list[BoardView], spec: BoardSpec, rules: FitRules = FitRules()) -> Fit:

@@ -46,7 +46,9 @@ class Lens:
     def rays(self, pixels: np.ndarray) -> np.ndarray:
         """Distorted pixels (N, 2) to normalised undistorted coordinates (N, 2)."""
         points = np.asarray(pixels, float).reshape(-1, 1, 2)
-        undistorted = cv2.undistortPointsIter(points, self.matrix, self.coefficients, None, None, UNDISTORT_CRITERIA)
+        undistorted = cv2.undistortPointsIter(
+            points, self.matrix, self.coefficients, np.eye(3), np.eye(3), UNDISTORT_CRITERIA
+        )
         return undistorted.reshape(-1, 2)
 
     def distort(self, ideal_px: np.ndarray) -> np.ndarray:

@@ -5,7 +5,9 @@ HTTP only: the work is `server.calibration`'s, run in a worker thread under the 
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from collections.abc import Callable
+from functools import partial
+from typing import Annotated, Any, cast
 
 import pydantic_core
 from fastapi import APIRouter, Header, Query, Request
@@ -35,7 +37,7 @@ router = APIRouter(
 
 BoardHeader = Annotated[str | None, Header(alias=BOARD_HEADER, description="the board spec (lumipose.board/1) as JSON")]
 # the JSON request's own rule for the id, for the multipart field
-PROFILE_ID: TypeAdapter[str] = TypeAdapter(Annotated[str, CalibrationRequest.model_fields["profile_id"]])
+PROFILE_ID: TypeAdapter[str] = TypeAdapter(cast(Any, Annotated[str, CalibrationRequest.model_fields["profile_id"]]))
 NameQuery = Annotated[str, Query(max_length=256, description="the photo's name in the view")]
 
 CALIBRATION_REQUEST_BODY: dict[str, Any] = {
@@ -144,7 +146,9 @@ async def _multipart(request: Request, body: bytes) -> tuple[str | None, str | N
     return fields["board"], fields["device"], fields["profile_id"], photos
 
 
-def _calibrate_photos(photos: list, spec: BoardSpec, device: DeviceProfile, profile_id: str | None):
+def _calibrate_photos(
+    photos: list, spec: BoardSpec, device: DeviceProfile, profile_id: str | None
+) -> CalibrationReport:
     views, skipped = find_views(photos, spec)
     if not views:
         return no_board_report(skipped)
@@ -158,13 +162,14 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
     `ok: false` with `advice` (what to shoot next) when it does not. 422 for bad input (views of
     different sizes, a board spec the views do not fit, an unknown device, no readable photo)."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    work: Callable[[], CalibrationReport]
     if content_type == JSON:
         try:
             calibration = CalibrationRequest.model_validate_json(body)
         except ValidationError as error:
             raise _invalid("body", error) from None
         spec, device = calibration.board, _device(calibration.device)
-        work, args = calibrate, (calibration.views, spec, device, calibration.profile_id)
+        work = partial(calibrate, calibration.views, spec, device, calibration.profile_id)
     elif content_type == MULTIPART:
         board, device_text, profile_id, photos = await _multipart(request, body)
         spec = _board(board, "board")
@@ -177,7 +182,7 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
                 PROFILE_ID.validate_python(profile_id)
             except ValidationError as error:
                 raise _invalid("profile_id", error) from None
-        work, args = _calibrate_photos, (photos, spec, _device(device_text), profile_id)
+        work = partial(_calibrate_photos, photos, spec, _device(device_text), profile_id)
     else:
         raise ApiError(
             415,
@@ -188,7 +193,7 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
         )
     try:
         async with services.pipeline_limiter:
-            return await run_in_threadpool(work, *args)
+            return await run_in_threadpool(work)
     except (CalibrationInputError, PhotoError) as error:
         raise ApiError(
             422, "invalid_request", str(error), field="photos" if isinstance(error, PhotoError) else "views"
