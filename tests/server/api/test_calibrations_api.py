@@ -69,10 +69,11 @@ def test_a_poor_set_is_200_with_advice(client):
 def test_json_views_of_different_sizes_or_another_board_are_422(client):
     views = list(view_set(PoseSet.good))
     mixed = [views[0].model_copy(update={"width": 480, "height": 640}), *views[1:]]
-    refused = _refusal(lambda: client.calibrate(CalibrationRequest(board=BOARD, views=mixed, device="xiaomi-mi8-front")))
+    mi8 = "xiaomi-mi8-front"
+    refused = _refusal(lambda: client.calibrate(CalibrationRequest(board=BOARD, views=mixed, device=mi8)))
     assert refused.status == 422 and "must all have one size" in refused.body.message
     small = BoardSpec.model_validate({**BOARD.model_dump(), "squares_x": 4, "squares_y": 4})
-    refused = _refusal(lambda: client.calibrate(CalibrationRequest(board=small, views=views, device="xiaomi-mi8-front")))
+    refused = _refusal(lambda: client.calibrate(CalibrationRequest(board=small, views=views, device=mi8)))
     assert refused.status == 422 and "is not on a 4 x 4 board" in refused.body.message
     unknown = _refusal(lambda: client.calibrate(CalibrationRequest(board=BOARD, views=views, device="nokia-3310")))
     assert unknown.status == 422 and unknown.body.field == "device" and "no device profile 'nokia-3310'" in \
