@@ -21,7 +21,6 @@ from server.calibration.lens import DISTORTION_NAMES, PINHOLE_NAMES
 from server.calibration.quality import CORNER_CELLS, coverage_grid, distortion_sigma_px, tilt_deg
 from shared_schemas import DeviceProfile
 from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, ViewFit
-from shared_schemas.models import MeasuredPinhole
 
 
 class CalibrationInputError(ValueError):
@@ -71,10 +70,12 @@ def _check_views(views: list[BoardView], spec: BoardSpec) -> None:
 
 
 def _profile(device: DeviceProfile, profile_id: str | None, fit: Fit, views: int, size: tuple[int, int]):
+    """The calibrated profile, validated (a wild fit's values are refused here, not in the answer)."""
     lens = fit.lens
-    pinhole = MeasuredPinhole(fx=lens.fx, fy=lens.fy, cx=lens.cx, cy=lens.cy, rms_px=fit.rms_px, views=views)
-    return device.model_copy(
-        update={
+    pinhole = {"fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "rms_px": fit.rms_px, "views": views}
+    return DeviceProfile.model_validate(
+        {
+            **device.model_dump(),
             "id": profile_id or f"{device.id}-calibrated",
             "width": size[0],
             "height": size[1],
@@ -154,29 +155,39 @@ def calibrate(
     ]
     all_points = np.concatenate([np.asarray(v.corners_px, float).reshape(-1, 2) for v in usable] or [np.zeros((0, 2))])
     cells = coverage_grid(all_points, width, height, rules.long_cells, rules.short_cells)
-    coverage = float((cells >= rules.min_cell_corners).mean())
-    if len(usable) < rules.min_fit_views:
-        advice = [f"more photos: {len(usable)} with the board found, at least {rules.min_views} needed"]
+
+    def refused(message: str, advice: str) -> CalibrationReport:
+        coverage = float((cells >= rules.min_cell_corners).mean())
         return CalibrationReport(
-            ok=False,
-            coverage=coverage,
-            coverage_cells=cells.tolist(),
-            views=skipped,
-            advice=advice,
-            message="too few views to fit: " + advice[0],
+            ok=False, coverage=coverage, coverage_cells=cells.tolist(), views=skipped, advice=[advice], message=message
         )
+
+    if len(usable) < rules.min_fit_views:
+        advice = f"more photos: {len(usable)} with the board found, at least {rules.min_views} needed"
+        return refused("too few views to fit: " + advice, advice)
     try:
         fit = fit_views(usable, spec, rules.fit)
-    except cv2.error as error:
+    except (cv2.error, np.linalg.LinAlgError) as error:
         message = f"the fit failed ({str(error).strip().splitlines()[-1][:200]}): the views may not show the board"
-        return CalibrationReport(
-            ok=False,
-            coverage=coverage,
-            coverage_cells=cells.tolist(),
-            views=skipped,
-            advice=["retake the photos: " + message],
-            message=message,
-        )
+        return refused(message, "retake the photos: " + message)
+    try:
+        return _judged(fit, usable, skipped, spec, device, profile_id, rules)
+    except ValidationError:  # NaN or out-of-range numbers of a fit that went wild
+        message = "the fit did not converge: the views may not show the board, or the board spec does not match"
+        return refused(message, "retake the photos: " + message)
+
+
+def _judged(
+    fit: Fit,
+    usable: list[BoardView],
+    skipped: list[ViewFit],
+    spec: BoardSpec,
+    device: DeviceProfile,
+    profile_id: str | None,
+    rules: CalibrationRules,
+) -> CalibrationReport:
+    """The report of a fit: per view, coverage, the distortion's uncertainty, the verdict and the profile."""
+    width, height = usable[0].width, usable[0].height
     # coverage and tilts count the corners the fit kept
     kept_points = np.concatenate(
         [np.asarray(v.corners_px, float)[p.kept] for v, p in zip(usable, fit.poses, strict=True)]
@@ -205,7 +216,9 @@ def calibrate(
         try:
             profile = _profile(device, profile_id, fit, len(usable), (width, height))
         except ValidationError as error:
-            advice.append(f"retake the photos: the fitted camera is out of range ({error.errors()[0]['msg']})")
+            problem = error.errors()[0]
+            where = ".".join(map(str, problem["loc"]))
+            advice.append(f"retake the photos: the fitted camera is out of range ({where}: {problem['msg']})")
     sigmas = dict(
         zip(PINHOLE_NAMES + DISTORTION_NAMES, np.sqrt(np.clip(np.diag(fit.covariance), 0, None)).tolist(), strict=True)
     )

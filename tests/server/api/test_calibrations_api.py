@@ -121,3 +121,11 @@ def test_bad_multipart_input_is_named(server_url, change, status, field, message
 def test_another_content_type_is_415(server_url):
     response = httpx.post(f"{server_url}/v1/calibrations", content=b"x", headers={"Content-Type": "text/plain"})
     assert response.status_code == 415 and response.json()["field"] == "Content-Type"
+
+
+def test_views_of_noise_are_refused_not_a_server_error(client):
+    rng = np.random.default_rng(2)
+    views = [BoardView(name=f"noise{k}", width=WIDTH, height=HEIGHT, corner_ids=list(range(20)),
+                       corners_px=(rng.uniform(0, 1, (20, 2)) * [WIDTH, HEIGHT]).tolist()) for k in range(12)]
+    report = client.calibrate(CalibrationRequest(board=BOARD, views=views, device="xiaomi-mi8-front"))
+    assert not report.ok and report.profile is None and report.advice
