@@ -99,7 +99,8 @@ def bench_calibration(views: int = 20, scale: float = 1.0, seed: int = 1, lens_n
     device = device_profiles()[PROFILE]
     start = time.perf_counter()
     report, timing = run_set(lens, width, height, views, PoseSet.good, seed, device, profile_id)
-    result = {"lens": lens_name, "frame": f"{width}x{height}", "scale": scale, "seed": seed, "board": BOARD.model_dump(),
+    result = {"lens": lens_name, "frame": f"{width}x{height}", "scale": scale, "seed": seed,
+              "board": BOARD.model_dump(),
               "true_lens": {"fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy,
                             "distortion": list(lens.distortion)},
               "good": {**errors(lens, report, width, height), "ok": report.ok, "rms_px": report.rms_px,

@@ -9,7 +9,8 @@ def test_a_few_views_run_through_and_are_refused_for_their_number():
     result = bench_calibration(views=3, scale=0.25, seed=2, poor_sets=False)
     good = result["good"]
     assert good["views"] == 3 and not good["ok"] and "fx_error_pct" not in good
-    assert any(advice.startswith(f"more photos: {good['views_found']} with the board found") for advice in good["advice"])
+    asked = f"more photos: {good['views_found']} with the board found"
+    assert any(advice.startswith(asked) for advice in good["advice"])
     assert "good set REFUSED: more photos" in format_calibration(result)
 
 
