@@ -52,20 +52,23 @@ class Fit:
     dropped: int  # outlier corners
 
 
-def _jacobian(lens: Lens, objects: list[np.ndarray], rvecs, tvecs, masks: list[np.ndarray]) -> np.ndarray:
-    """d(pixels) / d(intrinsics, poses): rows 2 per kept corner, columns 9 + 6 per view."""
-    rows = sum(int(mask.sum()) for mask in masks) * 2
-    jacobian = np.zeros((rows, PARAMETERS + POSE_PARAMETERS * len(objects)))
-    start = 0
+def _normal_matrix(lens: Lens, objects: list[np.ndarray], rvecs, tvecs, masks: list[np.ndarray]) -> np.ndarray:
+    """J^T J over the intrinsics (first 9) and each view's pose (6 each), built view by view.
+
+    J (2 rows per corner) is never held whole: 200 views of 4000 corners would make it 15 GB.
+    """
+    size = PARAMETERS + POSE_PARAMETERS * len(objects)
+    normal = np.zeros((size, size))
     for k, (points, rvec, tvec, mask) in enumerate(zip(objects, rvecs, tvecs, masks, strict=True)):
         _, local = cv2.projectPoints(points[mask], rvec, tvec, lens.matrix, lens.coefficients)
         # OpenCV's columns: rvec 3, tvec 3, fx fy, cx cy, distortion 5
-        end = start + 2 * int(mask.sum())
-        jacobian[start:end, :PARAMETERS] = local[:, 6 : 6 + PARAMETERS]
+        intrinsic, pose = local[:, 6 : 6 + PARAMETERS], local[:, :POSE_PARAMETERS]
         column = PARAMETERS + POSE_PARAMETERS * k
-        jacobian[start:end, column : column + POSE_PARAMETERS] = local[:, :6]
-        start = end
-    return jacobian
+        normal[:PARAMETERS, :PARAMETERS] += intrinsic.T @ intrinsic
+        normal[:PARAMETERS, column : column + POSE_PARAMETERS] = intrinsic.T @ pose
+        normal[column : column + POSE_PARAMETERS, :PARAMETERS] = pose.T @ intrinsic
+        normal[column : column + POSE_PARAMETERS, column : column + POSE_PARAMETERS] = pose.T @ pose
+    return normal
 
 
 def _calibrate(objects, images, size, rules: FitRules):
@@ -107,10 +110,10 @@ def fit_views(views: list[BoardView], spec: BoardSpec, rules: FitRules = FitRule
         residuals.append(p[mask] - reprojected)
         poses.append(ViewPose(cv2.Rodrigues(r)[0], np.asarray(t, float).ravel(), residuals[-1], mask))
     stacked = np.concatenate(residuals)
-    jacobian = _jacobian(lens, objects64, rvecs, tvecs, masks)
-    dof = max(1, stacked.size - jacobian.shape[1])
+    normal = _normal_matrix(lens, objects64, rvecs, tvecs, masks)
+    dof = max(1, stacked.size - normal.shape[0])
     variance = float(np.sum(stacked**2)) / dof
-    covariance = np.linalg.pinv(jacobian.T @ jacobian)[:PARAMETERS, :PARAMETERS] * variance
+    covariance = np.linalg.pinv(normal)[:PARAMETERS, :PARAMETERS] * variance
     return Fit(
         lens=lens,
         rms_px=float(np.sqrt(np.mean(np.sum(stacked**2, axis=1)))),
