@@ -76,12 +76,29 @@ def _grid_cells(spec: BoardSpec, ids: np.ndarray) -> np.ndarray:
     return np.column_stack([ids % (spec.squares_x - 1), ids // (spec.squares_x - 1)])
 
 
+def _within(spec: BoardSpec, corner_id: int, reach: int) -> list[int]:
+    """Corner ids within `reach` squares of `corner_id` (Chebyshev distance on the grid), itself excluded."""
+    cols, rows = spec.squares_x - 1, spec.squares_y - 1
+    col, row = corner_id % cols, corner_id // cols
+    return [
+        r * cols + c
+        for r in range(max(0, row - reach), min(rows, row + reach + 1))
+        for c in range(max(0, col - reach), min(cols, col + reach + 1))
+        if (r, c) != (row, col)
+    ]
+
+
 def _square_px(spec: BoardSpec, ids: np.ndarray, points: np.ndarray) -> float:
     """The smallest image distance (px) between two corners one square apart: the view's finest scale."""
-    cells = _grid_cells(spec, ids)
-    steps = np.abs(cells[:, None, :] - cells[None, :, :]).sum(axis=2) == 1
-    first, second = np.nonzero(steps)
-    return float(np.linalg.norm(points[first] - points[second], axis=1).min()) if len(first) else 0.0
+    cols = spec.squares_x - 1
+    where = {int(i): k for k, i in enumerate(ids)}
+    steps = [
+        np.linalg.norm(points[k] - points[where[i + step]])
+        for i, k in where.items()
+        for step in (1, cols)
+        if (step == cols or (i + 1) % cols) and i + step in where
+    ]
+    return float(min(steps)) if steps else 0.0
 
 
 def _saddle_window(gap_px: float, rules: BoardRules) -> tuple[int, float]:
@@ -124,13 +141,21 @@ def _saddle_points(
     return refined, converged
 
 
-def _local_homography(cells: np.ndarray, points: np.ndarray, cell: np.ndarray, reach: int) -> np.ndarray | None:
-    """The homography grid cell -> pixel fitted to the known corners within `reach` squares of `cell`, or None."""
-    near = np.abs(cells - cell).max(axis=1) <= reach
-    if near.sum() < 4:
+def _predicted(
+    spec: BoardSpec, where: dict[int, int], points: np.ndarray, corner_id: int, reach: int
+) -> np.ndarray | None:
+    """Where the known corners (`where`: id -> index into `points`) within `reach` squares put `corner_id`,
+    through their homography grid -> pixels; None with fewer than five of them."""
+    others = [where[i] for i in _within(spec, corner_id, reach) if i in where]
+    if len(others) < 5:
         return None
-    homography, _ = cv2.findHomography(cells[near].astype(float), points[near], 0)
-    return homography
+    ids = np.array([i for i in _within(spec, corner_id, reach) if i in where])
+    cells = _grid_cells(spec, ids).astype(float)
+    homography, _ = cv2.findHomography(cells, points[others], 0)
+    if homography is None:
+        return None
+    cell = _grid_cells(spec, np.array([corner_id])).astype(float).reshape(1, 1, 2)
+    return cv2.perspectiveTransform(cell, homography).ravel()
 
 
 def _grow(
@@ -144,27 +169,21 @@ def _grow(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Add the corners next to the found ones that the detector missed (their markers cut by the border)."""
     height, width = smooth.shape
-    all_cells = _grid_cells(spec, np.arange(spec.inner_corners))
     for _ in range(rules.grow_rounds):
-        cells = _grid_cells(spec, ids)
-        known = set(ids.tolist())
-        candidates = [
-            i
-            for i in range(spec.inner_corners)
-            if i not in known and np.abs(cells - all_cells[i]).max(axis=1).min() == 1
-        ]
+        where = {int(i): k for k, i in enumerate(ids)}
+        candidates = sorted({n for i in where for n in _within(spec, i, 1)} - set(where))
         predicted_ids, predicted = [], []
         for i in candidates:
-            near = np.abs(cells - all_cells[i]).max(axis=1) <= rules.patch_squares
-            if near.sum() < rules.min_neighbours:
+            if sum(n in where for n in _within(spec, i, rules.patch_squares)) < rules.min_neighbours:
                 continue
-            homography = _local_homography(cells, points, all_cells[i], rules.patch_squares)
-            if homography is None:
-                continue
-            x, y = cv2.perspectiveTransform(all_cells[i].reshape(1, 1, 2).astype(float), homography).ravel()
-            if margin_px <= x <= width - 1 - margin_px and margin_px <= y <= height - 1 - margin_px:
+            point = _predicted(spec, where, points, i, rules.patch_squares)
+            if (
+                point is not None
+                and margin_px <= point[0] <= width - 1 - margin_px
+                and (margin_px <= point[1] <= height - 1 - margin_px)
+            ):
                 predicted_ids.append(i)
-                predicted.append((x, y))
+                predicted.append(point)
         if not predicted:
             break
         refined, converged = _saddle_points(smooth, np.array(predicted), radius, rules)
@@ -177,24 +196,16 @@ def _grow(
 
 def _misfits(spec: BoardSpec, ids: np.ndarray, points: np.ndarray, rules: BoardRules) -> np.ndarray:
     """Corners (bool mask) that their neighbours' local homography misplaces; the worst is dropped first."""
-    cells = _grid_cells(spec, ids).astype(float)
-    near = np.abs(cells[:, None, :] - cells[None, :, :]).max(axis=2) <= rules.patch_squares
     dropped = np.zeros(len(ids), bool)
     while True:
+        where = {int(i): k for k, i in enumerate(ids) if not dropped[k]}
         errors = np.zeros(len(ids))
-        for k in np.nonzero(~dropped)[0]:
-            others = np.nonzero(near[k] & ~dropped)[0]
-            others = others[others != k]
-            if len(others) < 5:  # too few to judge: the corner stays
-                continue
-            homography, _ = cv2.findHomography(cells[others], points[others], 0)
-            if homography is None:
-                continue
-            predicted = cv2.perspectiveTransform(cells[k].reshape(1, 1, 2), homography).ravel()
-            errors[k] = np.linalg.norm(predicted - points[k])
+        for i, k in where.items():
+            point = _predicted(spec, where, points, i, rules.patch_squares)
+            if point is not None:  # with too few neighbours to judge, the corner stays
+                errors[k] = np.linalg.norm(point - points[k])
         worst = int(np.argmax(errors))
-        square_px = _square_px(spec, ids[~dropped], points[~dropped])
-        if errors[worst] <= rules.max_misfit_square * square_px:
+        if errors[worst] <= rules.max_misfit_square * _square_px(spec, ids[~dropped], points[~dropped]):
             return dropped
         dropped[worst] = True
 
