@@ -129,3 +129,10 @@ def test_views_of_noise_are_refused_not_a_server_error(client):
                        corners_px=(rng.uniform(0, 1, (20, 2)) * [WIDTH, HEIGHT]).tolist()) for k in range(12)]
     report = client.calibrate(CalibrationRequest(board=BOARD, views=views, device="xiaomi-mi8-front"))
     assert not report.ok and report.profile is None and report.advice
+
+
+def test_a_body_over_the_upload_limit_is_413_before_it_is_read(server_url):
+    big = b"x" * (5 << 20)  # the test server's frame and photo limit is 4 MB
+    response = httpx.post(f"{server_url}/v1/calibrations", content=big,
+                          headers={"Content-Type": "multipart/form-data; boundary=x"}, timeout=30)
+    assert response.status_code == 413 and response.json()["error"] == "too_large"
