@@ -177,9 +177,8 @@ class PoseRules:
     roll_deg: float = 20.0  # the board turned in its plane
     min_corners_in_frame: float = 0.35  # share of the board's corners a view must show (partial views reach corners)
     # the good set's first views each put a board corner this close (share of the frame's width) to a frame
-    # corner, as a careful user does: the distortion is largest, and least certain, there; three per corner
-    # (of 20 views): with two, one seed of three left 0.12 px of distortion error at a corner (docs/calibration.md)
-    corner_views: int = 12
+    # corner, as a careful user does: the distortion is largest, and least certain, there
+    corner_views: int = 8
     corner_reach: float = 0.05
     attempts: int = 200
 
