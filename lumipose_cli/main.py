@@ -13,6 +13,7 @@ def build_parser() -> argparse.ArgumentParser:
     # Each package adds its own commands and imports its heavy modules only when one of them runs,
     # so `lumipose --help` stays fast. The client's evaluation figures are the simulator's.
     from lumipose_client.cli import add_commands as add_client_commands
+    from server.calibration.cli import add_commands as add_calibration_commands
     from server.cli import add_commands as add_server_commands
     from simulator.cli import add_commands as add_simulator_commands
     from simulator.cli import plot_sample_evaluation
@@ -20,6 +21,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
     add_server_commands(commands)
+    add_calibration_commands(commands)
     add_client_commands(commands, plot_evaluation=plot_sample_evaluation)
     add_simulator_commands(commands)
     return parser

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ValidationError
 
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
 from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, ProfileSummary, SampleInfo, SampleList
+from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, CalibrationRequest
 from shared_schemas.fixture_files import read_fixture_files
 from shared_schemas.survey import SurveyReport, SurveyRequest
 
@@ -153,6 +154,25 @@ class _Endpoints:
                 **request,
             )
         )
+
+    def calibrate_view(
+        self,
+        data: bytes | EncodedFrame,
+        meta: FrameMeta,
+        board: BoardSpec,
+        *,
+        name: str = "photo",
+        compress: str | None = "gzip",
+    ):
+        """The board's corners on one photo (sent as a frame): a BoardView; 422 when no board is found."""
+        request = _frame_request(meta, data, compress)
+        request["headers"] |= {"X-Lumipose-Board": board.model_dump_json(by_alias=True)}
+        return self._run(_Call("POST", "/v1/calibrations/views", _model(BoardView), params={"name": name}, **request))
+
+    def calibrate(self, request: CalibrationRequest):
+        """Calibrate from views: a CalibrationReport (ok with the profile, or ok=False with advice)."""
+        body = request.model_dump(mode="json", by_alias=True, exclude_none=True)
+        return self._run(_Call("POST", "/v1/calibrations", _model(CalibrationReport), json=body))
 
     def locate_fixture(self, path: Path | str, **options):
         meta, data = read_fixture_files(path)

@@ -104,12 +104,16 @@ def _png_luma(data: memoryview, meta: FrameMeta) -> np.ndarray:
     return image
 
 
-def decode_frame(data: bytes | memoryview, meta: FrameMeta, profiles: ProfileTable | None = None) -> LumaFrame:
-    """The luma plane of `data` as described by `meta`; `profiles`: what `camera.profile` may name
-    (default: the bundled profiles)."""
+def decode_luma(data: bytes | memoryview, meta: FrameMeta) -> np.ndarray:
+    """The luma plane (height, width) uint8 of `data` as described by `meta`, whatever its camera."""
     view = memoryview(data)
-    pixels = _png_luma(view, meta) if meta.format is FrameFormat.png else _raw_luma(view, meta)
-    return LumaFrame(pixels=pixels, meta=meta, camera=resolve_camera(meta, profiles))
+    return _png_luma(view, meta) if meta.format is FrameFormat.png else _raw_luma(view, meta)
+
+
+def decode_frame(data: bytes | memoryview, meta: FrameMeta, profiles: ProfileTable | None = None) -> LumaFrame:
+    """The luma plane of `data` as described by `meta`, with its camera; `profiles`: what `camera.profile`
+    may name (default: the bundled profiles)."""
+    return LumaFrame(pixels=decode_luma(data, meta), meta=meta, camera=resolve_camera(meta, profiles))
 
 
 def read_fixture(path: Path | str, profiles: ProfileTable | None = None) -> LumaFrame:

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from server.camera import intrinsics_from_profile
 from server.pipeline import PipelineOptions
-from shared_schemas import device_profiles
+from shared_schemas import DeviceProfile, device_profiles
 from simulator import reports
 from simulator.sampling import series_poses
 from simulator.scene import GridSeries, RotationSpec, Scene, SeriesSpec, find_scene
@@ -132,14 +132,22 @@ def bench_grid(out_dir: Path, scale: float = 1.0, seed: int | None = None, worke
 
 
 def bench_real(out_dir: Path, bench: RealBench = RealBench(), scale: float = 1.0, seed: int | None = None,
-               workers: int | None = None, limit: int | None = None) -> dict:
+               workers: int | None = None, limit: int | None = None, profile: DeviceProfile | None = None) -> dict:
+    """The real-like bench located with the true lens, the datasheet pinhole (`bench.calibrated` False) or a
+    calibrated `profile` (scaled and cropped to the bench's frames as any frame naming it)."""
     scene = real_bench_scene(bench, scale, seed)
     pipeline_camera = None
-    if not bench.calibrated:
-        profile = device_profiles()[scene.camera.profile]
+    if profile is not None:
         pipeline_camera = intrinsics_from_profile(profile, *scene.camera.frame_size())
-    title = "real-like bench, 1 m, " + ("calibrated" if bench.calibrated else "datasheet pinhole")
+        title = f"real-like bench, 1 m, calibrated profile {profile.id}"
+    elif not bench.calibrated:
+        pipeline_camera = intrinsics_from_profile(device_profiles()[scene.camera.profile], *scene.camera.frame_size())
+        title = "real-like bench, 1 m, datasheet pinhole"
+    else:
+        title = "real-like bench, 1 m, true lens"
     report = run_grid_bench(scene, out_dir, title, workers, pipeline_camera, limit)
     report["paper"] = PAPER_TABLE_2
     report["bench"] = bench.__dict__
+    if profile is not None:
+        report["profile"] = profile.model_dump(mode="json")
     return report

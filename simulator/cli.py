@@ -118,6 +118,9 @@ def add_commands(commands) -> None:
         if name == "bench-real":
             grid.add_argument("--uncalibrated", action="store_true",
                               help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
+            grid.add_argument("--profile", type=Path, default=None,
+                              help="the pipeline uses this calibrated profile (e.g. from `lumipose bench calibration "
+                                   "--lens bench-real --out profile.json`)")
         else:
             grid.add_argument("--scene", default=None,
                               help="locate the series of this scene file instead (its own resolution; --scale ignored)")
@@ -137,6 +140,16 @@ def add_commands(commands) -> None:
         sweep.add_argument("--workers", type=int, default=None)
         sweep.add_argument("--json", action="store_true")
         sweep.set_defaults(run=_run_sweep, bench_name=name)
+    calibration = benches.add_parser("calibration", help="camera calibration on rendered ChArUco photos (issue 14)")
+    calibration.add_argument("--views", type=int, default=20, help="photos per set")
+    calibration.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
+    calibration.add_argument("--seed", type=int, default=1)
+    calibration.add_argument("--lens", choices=["phone", "bench-real"], default="phone",
+                             help="phone: a phone-like Mi 8 front lens; bench-real: `bench bench-real`'s lens")
+    calibration.add_argument("--no-poor-sets", action="store_true", help="skip the frontal and corner-only sets")
+    calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
+    calibration.add_argument("--json", action="store_true")
+    calibration.set_defaults(run=_run_calibration_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
     fidelity.add_argument("--out", type=Path, default=Path("reports/fidelity"), help="report folder")
     fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
@@ -336,11 +349,40 @@ def _run_grid_bench(args) -> int:
             print(f"error: {error}", file=sys.stderr)
             return 2
     else:
+        profile = None
+        if args.profile is not None:
+            from pydantic import ValidationError
+
+            from shared_schemas import DeviceProfile
+
+            try:
+                profile = DeviceProfile.model_validate_json(args.profile.read_text())
+            except (OSError, ValidationError) as error:
+                print(f"error: --profile {args.profile}: {str(error).splitlines()[0]}", file=sys.stderr)
+                return 2
         report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
-                            args.workers, args.limit)
+                            args.workers, args.limit, profile)
     report["out"] = str(args.out)
     _print_report(report, args.json)
     return 0
+
+
+def _run_calibration_bench(args) -> int:
+    from simulator.bench_calibration import bench_calibration, format_calibration
+
+    if args.views < 3 or args.scale <= 0:
+        print("error: --views must be at least 3 and --scale positive", file=sys.stderr)
+        return 2
+    result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets)
+    profile = result["report"]["profile"]
+    if args.out is not None:
+        if profile is None:
+            print("error: the good set was refused: no profile to write", file=sys.stderr)
+        else:
+            args.out.write_text(json.dumps(profile, indent=2) + "\n")
+            result["profile_written"] = str(args.out)
+    print(json.dumps(result, indent=2) if args.json else format_calibration(result))
+    return 0 if profile is not None else 1
 
 
 def _run_sweep(args) -> int:

@@ -4,7 +4,7 @@ FastAPI reads and parses a route's JSON body before it runs the route's dependen
 map sent without its API key used to be received and parsed whole before the 401 (a 200 MB
 body held gigabytes). `GuardedRoute` answers first, from the route's own declarations:
 - a route that depends on `require_api_key` gets its key checked before anything is read;
-- a route that takes a frame (`frame_upload`) gets one of `max_frames_in_flight` slots and its
+- a route that takes a frame (`frame_upload`) or photos (`photos_body`) gets one of `max_frames_in_flight` slots and its
   declared length checked against `max_upload_bytes`; it reads its body itself, streaming,
   within `read_timeout_s` (`server.api.upload`);
 - any other route gets its body read here, at most `max_body_bytes` with or without a
@@ -26,7 +26,7 @@ from starlette.types import Message, Receive
 from server.api.config import Settings
 from server.api.deps import api_key_problem, require_api_key
 from server.api.errors import ApiError
-from server.api.params import frame_upload
+from server.api.params import frame_upload, photos_body
 from server.api.upload import receive_body, too_large
 
 
@@ -36,7 +36,7 @@ class GuardedRoute(APIRoute):
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
         needs_key = any(getattr(d, "dependency", None) is require_api_key for d in self.dependencies)
-        takes_frame = any(d.call is frame_upload for d in self.dependant.dependencies)
+        takes_frame = any(d.call in (frame_upload, photos_body) for d in self.dependant.dependencies)
 
         async def guarded(request: Request) -> Response:
             services = request.app.state.services

@@ -11,7 +11,7 @@ from server.api.config import Settings
 from server.api.deps import FrameSlots, Services
 from server.api.errors import BugCatcher, install_error_handlers
 from server.api.metrics import Metrics, MetricsMiddleware
-from server.api.routes import health, locate, maps, profiles, samples, surveys
+from server.api.routes import calibrations, health, locate, maps, profiles, samples, surveys
 from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
 
@@ -37,7 +37,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         frame_slots=FrameSlots(settings.max_frames_in_flight),
     )
     install_error_handlers(app)
-    for router in (health.router, locate.router, maps.router, profiles.router, samples.router, surveys.router):
+    for router in (
+        health.router,
+        locate.router,
+        maps.router,
+        profiles.router,
+        samples.router,
+        surveys.router,
+        calibrations.router,
+    ):
         app.include_router(router)
     # outermost last: metrics see every answer, bugs become counted 500s, CORS answers preflights
     app.add_middleware(

@@ -8,7 +8,7 @@ from typing import Annotated
 from fastapi import Depends, Header, Query, Request
 
 from server.api.deps import ServicesDep
-from server.api.upload import FRAME_HEADER, FrameUpload, receive_frame
+from server.api.upload import FRAME_HEADER, FrameUpload, receive_body, receive_frame
 from server.options import LocateOptions
 from server.pipeline import CornerMethod
 from server.pose.solve import GravityMode
@@ -70,7 +70,14 @@ async def frame_upload(request: Request, services: ServicesDep, frame_json: Fram
     return await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
 
 
+async def photos_body(request: Request, services: ServicesDep) -> bytes:
+    """A body of photos (a calibration's): read here within the upload limit and time, as a frame is."""
+    settings = services.settings
+    return bytes(await receive_body(request, settings.max_upload_bytes, settings.read_timeout_s))
+
+
 # Route parameters: the pipeline's query options, and the uploaded frame (read by `frame_upload`
 # itself, with its own limits; `server.api.guard` has checked the key and the length before).
 QueryDep = Annotated[LocateQuery, Depends(_locate_query)]
 UploadDep = Annotated[FrameUpload, Depends(frame_upload)]
+PhotosBodyDep = Annotated[bytes, Depends(photos_body)]

@@ -1,0 +1,200 @@
+"""Camera calibration: find the board on one photo, or calibrate from views or photos (issue 14).
+
+HTTP only: the work is `server.calibration`'s, run in a worker thread under the pipeline limiter.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from typing import Annotated, Any, cast
+
+import pydantic_core
+from fastapi import APIRouter, Header, Query, Request
+from pydantic import TypeAdapter, ValidationError
+from starlette.concurrency import run_in_threadpool
+from starlette.datastructures import UploadFile
+from starlette.formparsers import MultiPartException, MultiPartParser
+
+from server.api.deps import ServicesDep
+from server.api.errors import ERROR_RESPONSES, ApiError
+from server.api.guard import GuardedRoute
+from server.api.params import FRAME_REQUEST_BODY, PhotosBodyDep, UploadDep
+from server.calibration.board import find_board
+from server.calibration.photos import PhotoError, find_views
+from server.calibration.report import CalibrationInputError, calibrate, no_board_report
+from server.ingest import decode_luma
+from shared_schemas import DeviceProfile, device_profiles
+from shared_schemas.calibration import MAX_VIEWS, BoardSpec, BoardView, CalibrationReport, CalibrationRequest
+
+BOARD_HEADER = "X-Lumipose-Board"
+MULTIPART = "multipart/form-data"
+JSON = "application/json"
+
+router = APIRouter(
+    prefix="/v1/calibrations", tags=["calibrations"], responses=ERROR_RESPONSES, route_class=GuardedRoute
+)
+
+BoardHeader = Annotated[str | None, Header(alias=BOARD_HEADER, description="the board spec (lumipose.board/1) as JSON")]
+# the JSON request's own rule for the id, for the multipart field
+PROFILE_ID: TypeAdapter[str] = TypeAdapter(cast(Any, Annotated[str, CalibrationRequest.model_fields["profile_id"]]))
+NameQuery = Annotated[str, Query(max_length=256, description="the photo's name in the view")]
+
+CALIBRATION_REQUEST_BODY: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "description": "Views found on the photos (CalibrationRequest, JSON), or the photos themselves: multipart "
+        "with a 'board' field (board spec JSON), a 'device' field (a profile id or profile JSON), an optional "
+        "'profile_id' field and one 'photos' file per photo (PNG or JPEG).",
+        "content": {
+            JSON: {"schema": {"$ref": "#/components/schemas/CalibrationRequest"}},
+            MULTIPART: {
+                "schema": {
+                    "type": "object",
+                    "required": ["board", "device", "photos"],
+                    "properties": {
+                        "board": {"type": "string", "description": "board spec JSON (lumipose.board/1)"},
+                        "device": {"type": "string", "description": "a bundled profile id, or a profile's JSON"},
+                        "profile_id": {"type": "string"},
+                        "photos": {"type": "array", "items": {"type": "string", "format": "binary"}},
+                    },
+                }
+            },
+        },
+    }
+}
+
+
+def _invalid(field: str, error: ValidationError | ValueError) -> ApiError:
+    if isinstance(error, ValidationError):
+        problem = error.errors()[0]
+        where = ".".join(str(part) for part in problem["loc"])
+        message = f"{field}{'.' + where if where else ''}: {problem['msg']}"
+    else:
+        message = f"{field}: {error}"
+    return ApiError(422, "invalid_request", message, field=field)
+
+
+def _board(text: str | None, field: str) -> BoardSpec:
+    if not text:
+        raise ApiError(422, "invalid_request", f"{field}: the board spec (JSON) is missing", field=field)
+    try:
+        return BoardSpec.model_validate(pydantic_core.from_json(text))
+    except ValidationError as error:
+        raise _invalid(field, error) from None
+    except ValueError as error:
+        raise ApiError(422, "invalid_request", f"{field}: not valid JSON: {error}", field=field) from None
+
+
+def _device(value: str | DeviceProfile) -> DeviceProfile:
+    if isinstance(value, DeviceProfile):
+        return value
+    if value.lstrip().startswith("{"):
+        try:
+            return DeviceProfile.model_validate_json(value)
+        except ValidationError as error:
+            raise _invalid("device", error) from None
+    profile = device_profiles().get(value)
+    if profile is None:
+        known = ", ".join(sorted(device_profiles()))
+        raise ApiError(422, "invalid_request", f"device: no device profile '{value}'; known: {known}", field="device")
+    return profile
+
+
+@router.post("/views", response_model=BoardView, openapi_extra=FRAME_REQUEST_BODY)
+async def find_view(
+    services: ServicesDep, upload: UploadDep, board: BoardHeader = None, name: NameQuery = "photo"
+) -> BoardView:
+    """The board's corners on one photo (a frame upload, as to /v1/locate; its camera is not used).
+
+    The app keeps these small views and sends them to `POST /v1/calibrations` instead of the photos.
+    422 when the board spec is missing or invalid, or when no board is found.
+    """
+    spec = _board(board, BOARD_HEADER)
+    pixels = decode_luma(upload.data, upload.meta)
+    async with services.pipeline_limiter:
+        view = await run_in_threadpool(find_board, pixels, spec, name)
+    if view is None:
+        raise ApiError(
+            422,
+            "no_board",
+            f"no {spec.squares_x} x {spec.squares_y} {spec.dictionary.value} board found on the "
+            "photo (or too few of its corners): does the board spec match the printed board?",
+            field="frame",
+        )
+    return view
+
+
+async def _multipart(request: Request, body: bytes) -> tuple[str | None, str | None, str | None, list]:
+    async def stream():
+        yield body
+
+    try:
+        form = await MultiPartParser(request.headers, stream(), max_files=MAX_VIEWS, max_fields=8).parse()
+    except MultiPartException as error:
+        raise ApiError(400, "bad_multipart", f"the multipart body cannot be read: {error.message}", "body") from None
+    fields = {}
+    for key in ("board", "device", "profile_id"):
+        value = form.get(key)
+        fields[key] = (await value.read()).decode("utf-8", "replace") if isinstance(value, UploadFile) else value
+    photos = []
+    for index, item in enumerate(form.getlist("photos")):
+        if not isinstance(item, UploadFile):
+            raise ApiError(422, "invalid_request", "photos: each photo must be a file part", field="photos")
+        photos.append((item.filename or f"photo {index + 1}", await item.read()))
+    await form.close()
+    return fields["board"], fields["device"], fields["profile_id"], photos
+
+
+def _calibrate_photos(
+    photos: list, spec: BoardSpec, device: DeviceProfile, profile_id: str | None
+) -> CalibrationReport:
+    views, skipped = find_views(photos, spec)
+    if not views:
+        return no_board_report(skipped)
+    report = calibrate(views, spec, device, profile_id)
+    return report.model_copy(update={"views": report.views + skipped})
+
+
+@router.post("", response_model=CalibrationReport, openapi_extra=CALIBRATION_REQUEST_BODY)
+async def create_calibration(request: Request, services: ServicesDep, body: PhotosBodyDep) -> CalibrationReport:
+    """Calibrate a camera: 200 with the report, `ok: true` and the calibrated `profile` when the set passes,
+    `ok: false` with `advice` (what to shoot next) when it does not. 422 for bad input (views of
+    different sizes, a board spec the views do not fit, an unknown device, no readable photo)."""
+    content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    work: Callable[[], CalibrationReport]
+    if content_type == JSON:
+        try:
+            calibration = CalibrationRequest.model_validate_json(body)
+        except ValidationError as error:
+            raise _invalid("body", error) from None
+        spec, device = calibration.board, _device(calibration.device)
+        work = partial(calibrate, calibration.views, spec, device, calibration.profile_id)
+    elif content_type == MULTIPART:
+        board, device_text, profile_id, photos = await _multipart(request, body)
+        spec = _board(board, "board")
+        if not device_text:
+            raise ApiError(422, "invalid_request", "device: a profile id or profile JSON is needed", field="device")
+        if not photos:
+            raise ApiError(422, "invalid_request", "photos: no photo was sent", field="photos")
+        if profile_id is not None:
+            try:
+                PROFILE_ID.validate_python(profile_id)
+            except ValidationError as error:
+                raise _invalid("profile_id", error) from None
+        work = partial(_calibrate_photos, photos, spec, _device(device_text), profile_id)
+    else:
+        raise ApiError(
+            415,
+            "unsupported_media_type",
+            f"Content-Type '{content_type or '(none)'}' is not accepted; "
+            f"send {JSON} (CalibrationRequest) or {MULTIPART} (photos)",
+            field="Content-Type",
+        )
+    try:
+        async with services.pipeline_limiter:
+            return await run_in_threadpool(work)
+    except (CalibrationInputError, PhotoError) as error:
+        raise ApiError(
+            422, "invalid_request", str(error), field="photos" if isinstance(error, PhotoError) else "views"
+        ) from None

@@ -1,0 +1,250 @@
+"""The ChArUco board of a `BoardSpec`, and its corners found on one photo (a `BoardView`).
+
+Board frame: x along the board's width, y down its height, origin at its top-left corner,
+metres; corner id i sits at ((i mod (squares_x - 1)) + 1, (i div (squares_x - 1)) + 1) squares.
+Image points are pixels with pixel centres at integers (OpenCV's convention).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from shared_schemas.calibration import BoardSpec, BoardView
+
+
+@dataclass(frozen=True)
+class BoardRules:
+    # a view with fewer corners adds six pose unknowns for little: a handful of corners can be near collinear
+    min_corners: int = 8
+    # a corner further than this share of a square from where its neighbours (two squares around, through
+    # a homography) put it was misread or belongs to another layout: lens distortion bends a 5 x 5 squares
+    # patch by a few pixels at most (smaller misreads are the fit's outliers, `server.calibration.fit`)
+    max_misfit_square: float = 0.1
+    # more misfits than this share means the markers were read on another layout (a spec that does not match)
+    max_misfit_share: float = 0.25
+    patch_squares: int = 2  # the neighbours' reach, in squares
+    # the saddle fit's window half-width and pre-blur, as shares of the white gap between a corner and the
+    # nearest marker at the view's finest scale: window + 2 sigma stays inside the gap, so no marker edge
+    # enters the fit (what biased cornerSubPix by 0.1-0.3 px on tilted views)
+    window_share: float = 0.4
+    min_window_px: int = 2
+    max_window_px: int = 20
+    saddle_iterations: int = 10
+    # corners whose markers are cut by the frame's border are not detected, yet the corner itself may be
+    # whole: predicted from their found neighbours (a local homography) and refined, one ring per round,
+    # they bring the corners of the image into the fit, where the distortion is largest
+    grow_rounds: int = 4
+    min_neighbours: int = 6
+
+
+def charuco_board(spec: BoardSpec) -> cv2.aruco.CharucoBoard:
+    """OpenCV's board for the spec (the top-left square black, OpenCV >= 4.6)."""
+    return _board(spec.squares_x, spec.squares_y, spec.square_m, spec.marker_m, spec.dictionary.value)
+
+
+@functools.cache  # the models are not hashable; their values are
+def _board(squares_x: int, squares_y: int, square_m: float, marker_m: float, dictionary: str) -> cv2.aruco.CharucoBoard:
+    aruco = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
+    return cv2.aruco.CharucoBoard((squares_x, squares_y), square_m, marker_m, aruco)
+
+
+def corner_points_m(spec: BoardSpec, corner_ids: list[int] | np.ndarray) -> np.ndarray:
+    """Board-frame points (N, 3) of ChArUco corner ids; raises ValueError for an id the board lacks."""
+    ids = np.asarray(corner_ids, dtype=int)
+    if ids.size and (ids.min() < 0 or ids.max() >= spec.inner_corners):
+        raise ValueError(
+            f"corner id {int(ids.max())} is not on a {spec.squares_x} x {spec.squares_y} board "
+            f"({spec.inner_corners} corners)"
+        )
+    return np.asarray(charuco_board(spec).getChessboardCorners(), float)[ids]
+
+
+def _grey(image: np.ndarray) -> np.ndarray:
+    if image.ndim == 2:
+        return image
+    if image.ndim == 3 and image.shape[2] in (3, 4):
+        return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
+    raise ValueError(f"an image must be grey (H, W) or colour (H, W, 3 or 4); got shape {image.shape}")
+
+
+def _grid_cells(spec: BoardSpec, ids: np.ndarray) -> np.ndarray:
+    """(column, row) of each corner id on the board's grid of inner corners."""
+    return np.column_stack([ids % (spec.squares_x - 1), ids // (spec.squares_x - 1)])
+
+
+def _within(spec: BoardSpec, corner_id: int, reach: int) -> list[int]:
+    """Corner ids within `reach` squares of `corner_id` (Chebyshev distance on the grid), itself excluded."""
+    cols, rows = spec.squares_x - 1, spec.squares_y - 1
+    col, row = corner_id % cols, corner_id // cols
+    return [
+        r * cols + c
+        for r in range(max(0, row - reach), min(rows, row + reach + 1))
+        for c in range(max(0, col - reach), min(cols, col + reach + 1))
+        if (r, c) != (row, col)
+    ]
+
+
+def _square_px(spec: BoardSpec, ids: np.ndarray, points: np.ndarray) -> float:
+    """The smallest image distance (px) between two corners one square apart: the view's finest scale."""
+    cols = spec.squares_x - 1
+    where = {int(i): k for k, i in enumerate(ids)}
+    steps = [
+        np.linalg.norm(points[k] - points[where[i + step]])
+        for i, k in where.items()
+        for step in (1, cols)
+        if (step == cols or (i + 1) % cols) and i + step in where
+    ]
+    return float(min(steps)) if steps else 0.0
+
+
+def _saddle_window(gap_px: float, rules: BoardRules) -> tuple[int, float]:
+    """The saddle fit's window half-width (px) and pre-blur sigma (px) for a view whose finest gap is `gap_px`."""
+    radius = int(np.clip(round(rules.window_share * gap_px), rules.min_window_px, rules.max_window_px))
+    return radius, max(1.0, (gap_px - radius) / 2)
+
+
+def _saddle_points(
+    smooth: np.ndarray, points: np.ndarray, radius: int, rules: BoardRules
+) -> tuple[np.ndarray, np.ndarray]:
+    """Corners refined to the saddle of the smoothed image, and which converged.
+
+    A chessboard corner is point-symmetric (two straight edges crossing, opposite quadrants alike),
+    and so is it after a Gaussian blur and under perspective (locally affine): the smoothed
+    intensity's saddle point is the corner. A quadratic a x^2 + b x y + c y^2 + d x + e y + f
+    fitted over the window gives the saddle; the window moves there and the fit repeats.
+    `smooth` is the photo blurred by `_saddle_window`'s sigma.
+    """
+    side = 2 * radius + 1
+    ys, xs = (axis.ravel() for axis in np.mgrid[-radius : radius + 1, -radius : radius + 1].astype(float))
+    weight = np.exp(-(xs**2 + ys**2) / (2 * (radius / 1.5) ** 2))  # the window's centre counts most
+    solver = np.linalg.pinv(np.column_stack([xs * xs, xs * ys, ys * ys, xs, ys, np.ones_like(xs)]) * weight[:, None])
+    refined, converged = points.astype(float).copy(), np.zeros(len(points), bool)
+    for k, start in enumerate(points):
+        centre = start.astype(float)
+        for _ in range(rules.saddle_iterations):
+            patch = cv2.getRectSubPix(smooth, (side, side), (float(centre[0]), float(centre[1])))
+            a, b, c, d, e, _ = solver @ (patch.ravel().astype(float) * weight)
+            hessian = np.array([[2 * a, b], [b, 2 * c]])
+            if np.linalg.det(hessian) >= 0:  # not a saddle: no corner here
+                break
+            step = np.linalg.solve(hessian, [-d, -e])
+            centre = centre + step
+            if np.linalg.norm(centre - start) > radius:  # wandered off
+                break
+            if np.linalg.norm(step) < 1e-4:
+                refined[k], converged[k] = centre, True
+                break
+    return refined, converged
+
+
+def _predicted(
+    spec: BoardSpec, where: dict[int, int], points: np.ndarray, corner_id: int, reach: int
+) -> np.ndarray | None:
+    """Where the known corners (`where`: id -> index into `points`) within `reach` squares put `corner_id`,
+    through their homography grid -> pixels; None with fewer than five of them."""
+    others = [where[i] for i in _within(spec, corner_id, reach) if i in where]
+    if len(others) < 5:
+        return None
+    ids = np.array([i for i in _within(spec, corner_id, reach) if i in where])
+    cells = _grid_cells(spec, ids).astype(float)
+    homography, _ = cv2.findHomography(cells, points[others], 0)
+    if homography is None:
+        return None
+    cell = _grid_cells(spec, np.array([corner_id])).astype(float).reshape(1, 1, 2)
+    return cv2.perspectiveTransform(cell, homography).ravel()
+
+
+def _grow(
+    smooth: np.ndarray,
+    spec: BoardSpec,
+    ids: np.ndarray,
+    points: np.ndarray,
+    radius: int,
+    margin_px: float,
+    rules: BoardRules,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Add the corners next to the found ones that the detector missed (their markers cut by the border)."""
+    height, width = smooth.shape
+    for _ in range(rules.grow_rounds):
+        where = {int(i): k for k, i in enumerate(ids)}
+        candidates = sorted({n for i in where for n in _within(spec, i, 1)} - set(where))
+        predicted_ids, predicted = [], []
+        for i in candidates:
+            if sum(n in where for n in _within(spec, i, rules.patch_squares)) < rules.min_neighbours:
+                continue
+            point = _predicted(spec, where, points, i, rules.patch_squares)
+            if (
+                point is not None
+                and margin_px <= point[0] <= width - 1 - margin_px
+                and (margin_px <= point[1] <= height - 1 - margin_px)
+            ):
+                predicted_ids.append(i)
+                predicted.append(point)
+        if not predicted:
+            break
+        refined, converged = _saddle_points(smooth, np.array(predicted), radius, rules)
+        if not converged.any():
+            break
+        ids = np.concatenate([ids, np.array(predicted_ids)[converged]])
+        points = np.vstack([points, refined[converged]])
+    return ids, points
+
+
+def _misfits(spec: BoardSpec, ids: np.ndarray, points: np.ndarray, rules: BoardRules) -> np.ndarray:
+    """Corners (bool mask) that their neighbours' local homography misplaces; the worst is dropped first."""
+    dropped = np.zeros(len(ids), bool)
+    while True:
+        where = {int(i): k for k, i in enumerate(ids) if not dropped[k]}
+        errors = np.zeros(len(ids))
+        for i, k in where.items():
+            point = _predicted(spec, where, points, i, rules.patch_squares)
+            if point is not None:  # with too few neighbours to judge, the corner stays
+                errors[k] = np.linalg.norm(point - points[k])
+        worst = int(np.argmax(errors))
+        if errors[worst] <= rules.max_misfit_square * _square_px(spec, ids[~dropped], points[~dropped]):
+            return dropped
+        dropped[worst] = True
+
+
+def find_board(image: np.ndarray, spec: BoardSpec, name: str, rules: BoardRules = BoardRules()) -> BoardView | None:
+    """The board's corners (sub-pixel) on a grey or colour photo (uint8); None when no board is found.
+
+    Corners their neighbours misplace are left out (`_misfits`). None also when fewer than
+    `rules.min_corners` corners are left, or when too many are misplaced: markers of the same
+    dictionary read on a board of another layout (a spec that does not match the photo).
+    """
+    grey = _grey(np.asarray(image))
+    if grey.dtype != np.uint8:
+        raise ValueError(f"an image must be 8-bit; got {grey.dtype}")
+    detector = cv2.aruco.CharucoDetector(charuco_board(spec))
+    corners, ids, _, _ = detector.detectBoard(grey)
+    if ids is None or len(ids) < rules.min_corners:
+        return None
+    ids = ids.ravel().astype(int)
+    # the detector's corners (its own cornerSubPix) are off by 0.05 px typically and 0.2 px on tilted
+    # views; the saddle fit halves the first and removes most of the second (rendered boards, docs/calibration.md)
+    detected = corners.reshape(-1, 2).astype(float)
+    gap_px = _square_px(spec, ids, detected) * (spec.square_m - spec.marker_m) / (2 * spec.square_m)
+    radius, sigma = _saddle_window(gap_px, rules)
+    smooth = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), sigma)
+    refined, converged = _saddle_points(smooth, detected, radius, rules)
+    ids, refined = ids[converged], refined[converged]
+    if len(ids) < rules.min_corners:
+        return None
+    # the window and its blur must lie inside the frame: a border replicated into it breaks the symmetry
+    ids, refined = _grow(smooth, spec, ids, refined, radius, radius + 3 * sigma + 1, rules)
+    misfits = _misfits(spec, ids, refined, rules)
+    if misfits.mean() > rules.max_misfit_share or np.sum(~misfits) < rules.min_corners:
+        return None
+    height, width = grey.shape
+    return BoardView(
+        name=name,
+        width=width,
+        height=height,
+        corner_ids=ids[~misfits].tolist(),
+        corners_px=[[float(x), float(y)] for x, y in refined[~misfits]],
+    )

@@ -1,0 +1,188 @@
+"""`lumipose calibrate board` and `lumipose calibrate camera` (issue 14).
+
+Exit codes: 0 calibrated (or the board written), 1 the set refused (the advice is printed), 2 bad input.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+EXIT_OK, EXIT_REFUSED, EXIT_BAD_INPUT = 0, 1, 2
+DICTIONARIES = (
+    "DICT_4X4_50",
+    "DICT_4X4_100",
+    "DICT_4X4_250",
+    "DICT_4X4_1000",
+    "DICT_5X5_100",
+    "DICT_5X5_250",
+    "DICT_5X5_1000",
+    "DICT_6X6_250",
+    "DICT_6X6_1000",
+)  # shared_schemas.calibration.ArucoDictionary, without importing it for every `lumipose --help`
+
+
+def add_commands(commands) -> None:
+    """Add `calibrate board` and `calibrate camera` to an argparse subparsers object."""
+    calibrate = commands.add_parser("calibrate", help="camera calibration with a ChArUco board")
+    steps = calibrate.add_subparsers(dest="step", required=True)
+    board = steps.add_parser("board", help="write a printable ChArUco board and its spec (board.json)")
+    board.add_argument("--out", type=Path, required=True, help="board.pdf (to print) or board.png (for a screen)")
+    board.add_argument("--squares", default="11x8", help="squares across x down (default 11x8: A4 landscape)")
+    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square (default 24)")
+    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default 0.6 of a square)")
+    board.add_argument("--dictionary", default="DICT_5X5_100", choices=DICTIONARIES)
+    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels (default 600)")
+    board.set_defaults(run=_run_board)
+    camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
+    camera.add_argument("photos", type=Path, nargs="+", help="PNG or JPEG photos of the board, grey or colour")
+    camera.add_argument("--board", type=Path, required=True, help="the board's spec (board.json)")
+    camera.add_argument("--device", required=True, help="the phone's profile: a bundled id or a profile JSON file")
+    camera.add_argument("--id", dest="profile_id", default=None, help="id of the calibrated profile")
+    camera.add_argument("--out", type=Path, default=None, help="write the calibrated profile here (profile.json)")
+    camera.add_argument("--json", action="store_true", help="print the CalibrationReport as JSON")
+    camera.set_defaults(run=_run_camera)
+
+
+def _fail(message: str) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def _run_board(args) -> int:
+    from pydantic import ValidationError
+
+    from server.calibration.printing import write_board
+    from shared_schemas.calibration import BoardSpec
+
+    try:
+        squares_x, squares_y = (int(n) for n in args.squares.lower().split("x"))
+    except ValueError:
+        return _fail(f"--squares must be like 11x8, got '{args.squares}'")
+    marker_mm = args.marker_mm if args.marker_mm is not None else 0.6 * args.square_mm
+    try:
+        spec = BoardSpec(
+            squares_x=squares_x,
+            squares_y=squares_y,
+            square_m=args.square_mm / 1000,
+            marker_m=marker_mm / 1000,
+            dictionary=args.dictionary,
+        )
+        printed = write_board(spec, args.out, args.dpi)
+    except ValidationError as error:
+        problem = error.errors()[0]
+        return _fail(f"{'.'.join(map(str, problem['loc'])) or 'board'}: {problem['msg']}")
+    except (ValueError, OSError) as error:
+        return _fail(str(error))
+    print(
+        f"wrote {args.out} and {args.out.with_suffix('.json')}: {printed.squares_x} x {printed.squares_y} squares "
+        f"of {printed.square_m * 1000:.3f} mm, markers {printed.marker_m * 1000:.3f} mm, {printed.dictionary.value}"
+    )
+    print(
+        "print at 100 % (no 'fit to page'), glue it flat, and measure a square: if it is not "
+        f"{printed.square_m * 1000:.2f} mm, write the measured sizes into {args.out.with_suffix('.json')}"
+    )
+    return EXIT_OK
+
+
+def _device(text: str):
+    from pydantic import ValidationError
+
+    from shared_schemas import DeviceProfile, device_profiles
+
+    if text in device_profiles():
+        return device_profiles()[text]
+    path = Path(text)
+    if not path.is_file():
+        raise ValueError(
+            f"--device '{text}' is neither a bundled profile ({', '.join(sorted(device_profiles()))}) "
+            "nor a profile file"
+        )
+    try:
+        return DeviceProfile.model_validate_json(path.read_text())
+    except (ValidationError, OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"--device {path} is not a device profile: {str(error).splitlines()[0]}") from None
+
+
+def _run_camera(args) -> int:
+    from pydantic import ValidationError
+
+    from server.calibration.photos import PhotoError, find_views
+    from server.calibration.report import CalibrationInputError, calibrate, no_board_report
+    from shared_schemas.calibration import BoardSpec
+
+    try:
+        spec = BoardSpec.model_validate_json(args.board.read_text())
+    except (OSError, UnicodeDecodeError) as error:
+        return _fail(f"cannot read --board {args.board}: {error}")
+    except ValidationError as error:
+        problem = error.errors()[0]
+        return _fail(
+            f"--board {args.board} is not a board spec: {'.'.join(map(str, problem['loc']))}: {problem['msg']}"
+        )
+    try:
+        device = _device(args.device)
+    except ValueError as error:
+        return _fail(str(error))
+    try:
+        photos = [(str(path), path.read_bytes()) for path in args.photos]
+        views, skipped = find_views(photos, spec)
+    except OSError as error:
+        return _fail(f"cannot read a photo: {error}")
+    except PhotoError as error:
+        return _fail(str(error))
+    if not views:
+        report = no_board_report(skipped)
+        print(report.model_dump_json(by_alias=True, indent=2) if args.json else format_report(report))
+        return EXIT_REFUSED
+    try:
+        report = calibrate(views, spec, device, args.profile_id)
+    except CalibrationInputError as error:
+        return _fail(str(error))
+    report = report.model_copy(update={"views": report.views + skipped})
+    if args.out is not None and report.profile is not None:
+        args.out.write_text(report.profile.model_dump_json(indent=2, exclude_none=True) + "\n")
+    if args.json:
+        print(report.model_dump_json(by_alias=True, indent=2))
+    else:
+        print(format_report(report, args.out))
+    return EXIT_OK if report.ok else EXIT_REFUSED
+
+
+def format_report(report, out: Path | None = None) -> str:
+    """The report as text: the fit, each parameter's sigma, coverage as a grid, each view."""
+    lines = []
+    profile = report.profile
+    if profile is not None and profile.intrinsics is not None:
+        p = profile.intrinsics
+        lines.append(
+            f"profile  {profile.id} at {profile.width}x{profile.height}"
+            + (f", written to {out}" if out is not None else "")
+        )
+        lines.append(f"pinhole  fx {p.fx:.2f}  fy {p.fy:.2f}  cx {p.cx:.2f}  cy {p.cy:.2f} px")
+        lines.append(
+            "distort  "
+            + "  ".join(
+                f"{n} {v:+.5f}" for n, v in zip(("k1", "k2", "p1", "p2", "k3"), profile.distortion, strict=False)
+            )
+        )
+    if report.rms_px is not None:
+        lines.append(
+            f"fit      RMS {report.rms_px:.3f} px, distortion 1-sigma up to {report.distortion_sigma_px:.3f} px"
+            f" over the frame, most tilted view {report.max_tilt_deg:.1f} deg"
+        )
+    if report.sigmas:
+        lines.append("sigma    " + "  ".join(f"{name} {value:.3g}" for name, value in report.sigmas.items()))
+    lines.append(f"coverage {100 * report.coverage:.0f} % of the image's cells (corners per cell):")
+    lines += ["  " + " ".join(f"{count:5d}" for count in row) for row in report.coverage_cells]
+    lines.append(f"{'view':>24} {'corners':>7} {'RMS px':>7} {'tilt':>6} {'dist m':>6}")
+    for view in report.views:
+        numbers = (
+            f"{view.rms_px:7.3f} {view.tilt_deg:6.1f} {view.distance_m:6.3f}"
+            if view.rms_px is not None
+            else f"{'-':>7} {'-':>6} {'-':>6}"
+        )
+        lines.append(f"{view.name[-24:]:>24} {view.corners:7d} {numbers}" + (f"  {view.note}" if view.note else ""))
+    lines.append(("ok: " if report.ok else "refused: ") + (report.message or ""))
+    lines += [f"  advice: {advice}" for advice in report.advice]
+    return "\n".join(lines)

@@ -1,0 +1,37 @@
+"""How good a calibration set is: where its corners fall, how its views are tilted, and how
+uncertain the fitted distortion remains over the frame."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from server.calibration.lens import Lens, frame_grid_px
+
+CORNER_CELLS = {"top-left": (0, 0), "top-right": (0, -1), "bottom-left": (-1, 0), "bottom-right": (-1, -1)}
+
+
+def coverage_grid(points_px: np.ndarray, width: int, height: int, long_cells: int, short_cells: int) -> np.ndarray:
+    """Corners per cell (rows, cols) of the image: `long_cells` along its longer side, rows top to bottom."""
+    cols, rows = (long_cells, short_cells) if width >= height else (short_cells, long_cells)
+    points = np.asarray(points_px, float).reshape(-1, 2)
+    col = np.clip((points[:, 0] + 0.5) * cols // width, 0, cols - 1).astype(int)
+    row = np.clip((points[:, 1] + 0.5) * rows // height, 0, rows - 1).astype(int)
+    counts = np.zeros((rows, cols), int)
+    np.add.at(counts, (row, col), 1)
+    return counts
+
+
+def tilt_deg(rotation: np.ndarray) -> float:
+    """Angle between the board's normal (its rotation's third column) and the optical axis."""
+    return float(np.degrees(np.arccos(np.clip(abs(rotation[2, 2]), 0.0, 1.0))))
+
+
+def distortion_sigma_px(lens: Lens, distortion_covariance: np.ndarray, width: int, height: int) -> float:
+    """The largest 1-sigma image shift (px) the distortion's covariance (5, 5) leaves over a grid of the frame.
+
+    The shift is linear in (k1, k2, p1, p2, k3) (`Lens.shift_jacobian`); at each grid point the
+    2x2 covariance J C J^T gives the largest sigma along any direction (its larger eigenvalue).
+    """
+    jacobian = lens.shift_jacobian(lens.rays(frame_grid_px(width, height)))
+    covariance = np.einsum("nij,jk,nlk->nil", jacobian, distortion_covariance, jacobian)
+    return float(np.sqrt(max(0.0, float(np.linalg.eigvalsh(covariance)[:, -1].max()))))
