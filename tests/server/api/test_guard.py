@@ -20,8 +20,9 @@ def api_routes():
     ]
 
 
-# POST routes that only compute an answer and store nothing: as open as a GET
-COMPUTING = {"/v1/locate", "/v1/calibrations", "/v1/calibrations/views"}
+# POST routes that only compute an answer and store nothing: as open as a GET. A survey stores its
+# map only with `"store": true`, and then asks for the key itself (tests/server/api/test_surveys_api.py).
+COMPUTING = {"/v1/locate", "/v1/calibrations", "/v1/calibrations/views", "/v1/surveys"}
 
 
 def test_every_v1_route_is_guarded_and_every_write_but_locate_needs_the_key():
