@@ -167,8 +167,9 @@ final class Prefs {
     }
 
     /**
-     * Map fetches and stored samples: retries and a long timeout, no gzip (it costs more than it
-     * saves on a LAN), frames located in the map the app draws.
+     * Map fetches and the other reads: retries and a patient timeout; stored samples and surveys go
+     * once with a long one (the client's rule); no gzip (it costs more than it saves on a LAN), frames
+     * located in the map the app draws.
      *
      * @throws IllegalArgumentException with a readable message for a bad server URL
      */

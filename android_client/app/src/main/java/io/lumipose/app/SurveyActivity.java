@@ -9,6 +9,7 @@ import android.widget.EditText;
 import android.widget.LinearLayout;
 import android.widget.TextView;
 
+import java.io.IOException;
 import java.nio.ByteBuffer;
 import java.util.List;
 import java.util.Locale;
@@ -230,6 +231,10 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
                 } catch (InterruptedException e) {
                     Thread.currentThread().interrupt();
                     return;
+                } catch (IOException e) {
+                    // sent once: the server may still have stored the map
+                    text = "No answer to the survey: " + e.getMessage() + "\nIf map '" + s.name() + "' is on the "
+                            + "server, make it active there rather than surveying again.";
                 } catch (Exception e) {
                     text = "Survey refused: " + e.getMessage();
                 }

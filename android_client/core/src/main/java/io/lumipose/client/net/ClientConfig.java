@@ -5,8 +5,14 @@ public final class ClientConfig {
     /** A live frame is stale within a second or two: wait this long for its answer, once. */
     public static final int LIVE_READ_TIMEOUT_MS = 3000;
     public static final int CONNECT_TIMEOUT_MS = 3000;
-    /** Map fetches, stored samples: worth waiting for. */
+    /** Map fetches and other reads: worth waiting for, and retried. */
     public static final int PATIENT_READ_TIMEOUT_MS = 15000;
+    /**
+     * Requests that store (a sample, a survey's map) go once and wait this long: a retry after a read
+     * timeout would store a second sample, or run a survey of minutes again behind the first, while
+     * the app reports a failure for what the server did (a survey of 200 photos takes a minute or more).
+     */
+    public static final int STORING_READ_TIMEOUT_MS = 300000;
 
     public final String baseUrl;
     /** Sent as X-API-Key when set; null for a server without a key. */
@@ -26,17 +32,21 @@ public final class ClientConfig {
     public final String mapName;
     public final int connectTimeoutMs;
     public final int readTimeoutMs;
+    /** The read timeout of the requests that store, sent once ({@link #STORING_READ_TIMEOUT_MS}). */
+    public final int storingReadTimeoutMs;
 
     public ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, RetryPolicy retry) {
-        this(baseUrl, apiKey, deviceId, gzip, false, retry, null, CONNECT_TIMEOUT_MS, PATIENT_READ_TIMEOUT_MS);
+        this(baseUrl, apiKey, deviceId, gzip, false, retry, null, CONNECT_TIMEOUT_MS, PATIENT_READ_TIMEOUT_MS,
+                STORING_READ_TIMEOUT_MS);
     }
 
     private ClientConfig(String baseUrl, String apiKey, String deviceId, boolean gzip, boolean gzipPoseWindows,
-                         RetryPolicy retry, String mapName, int connectTimeoutMs, int readTimeoutMs) {
+                         RetryPolicy retry, String mapName, int connectTimeoutMs, int readTimeoutMs,
+                         int storingReadTimeoutMs) {
         if (baseUrl == null || !(baseUrl.startsWith("http://") || baseUrl.startsWith("https://"))) {
             throw new IllegalArgumentException("server URL must start with http:// or https://, got '" + baseUrl + "'");
         }
-        if (connectTimeoutMs <= 0 || readTimeoutMs <= 0) {
+        if (connectTimeoutMs <= 0 || readTimeoutMs <= 0 || storingReadTimeoutMs <= 0) {
             throw new IllegalArgumentException("timeouts must be > 0 ms");
         }
         String trimmed = baseUrl.trim();
@@ -52,6 +62,7 @@ public final class ClientConfig {
         this.mapName = blankToNull(mapName);
         this.connectTimeoutMs = connectTimeoutMs;
         this.readTimeoutMs = readTimeoutMs;
+        this.storingReadTimeoutMs = storingReadTimeoutMs;
     }
 
     /**
@@ -61,17 +72,23 @@ public final class ClientConfig {
      */
     public static ClientConfig live(String baseUrl, String apiKey, String deviceId, String mapName) {
         return new ClientConfig(baseUrl, apiKey, deviceId, false, true, new RetryPolicy(1, 0, 1.0, 0), mapName,
-                CONNECT_TIMEOUT_MS, LIVE_READ_TIMEOUT_MS);
+                CONNECT_TIMEOUT_MS, LIVE_READ_TIMEOUT_MS, STORING_READ_TIMEOUT_MS);
     }
 
     /** The same, with frames located in the map {@code name} (null: the server's active map). */
     public ClientConfig withMap(String name) {
         return new ClientConfig(baseUrl, apiKey, deviceId, gzip, gzipPoseWindows, retry, name, connectTimeoutMs,
-                readTimeoutMs);
+                readTimeoutMs, storingReadTimeoutMs);
     }
 
     public ClientConfig withTimeouts(int connectMs, int readMs) {
-        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, gzipPoseWindows, retry, mapName, connectMs, readMs);
+        return withTimeouts(connectMs, readMs, storingReadTimeoutMs);
+    }
+
+    /** With the read timeout of the requests that store as well. */
+    public ClientConfig withTimeouts(int connectMs, int readMs, int storingReadMs) {
+        return new ClientConfig(baseUrl, apiKey, deviceId, gzip, gzipPoseWindows, retry, mapName, connectMs, readMs,
+                storingReadMs);
     }
 
     private static String blankToNull(String s) {

@@ -18,6 +18,8 @@ public final class HttpCall {
     private final byte[] body;
     private final int offset;
     private final int length;
+    /** How long to wait for the answer, ms; 0: the transport's own read timeout. */
+    public final int readTimeoutMs;
 
     public HttpCall(String method, String url, Map<String, String> headers, byte[] body) {
         this(method, url, headers, body, 0, body == null ? 0 : body.length);
@@ -25,6 +27,11 @@ public final class HttpCall {
 
     /** A call whose body is {@code length} bytes of {@code body} from {@code offset}. */
     public HttpCall(String method, String url, Map<String, String> headers, byte[] body, int offset, int length) {
+        this(method, url, headers, body, offset, length, 0);
+    }
+
+    private HttpCall(String method, String url, Map<String, String> headers, byte[] body, int offset, int length,
+                     int readTimeoutMs) {
         if (body != null && (offset < 0 || length < 0 || offset + length > body.length)) {
             throw new IllegalArgumentException("body slice [" + offset + ", " + (offset + length) + ") outside "
                     + body.length + " bytes");
@@ -35,6 +42,15 @@ public final class HttpCall {
         this.body = body;
         this.offset = offset;
         this.length = length;
+        this.readTimeoutMs = readTimeoutMs;
+    }
+
+    /** The same call, its answer awaited up to {@code ms} instead of the transport's read timeout. */
+    public HttpCall withReadTimeout(int ms) {
+        if (ms <= 0) {
+            throw new IllegalArgumentException("read timeout must be > 0 ms, got " + ms);
+        }
+        return new HttpCall(method, url, headers, body, offset, length, ms);
     }
 
     public boolean hasBody() {

@@ -19,6 +19,8 @@ import io.lumipose.client.map.RoomMap;
  * The client side of {@code lumipose serve}'s HTTP API: raw frame bytes in the body, the frame JSON
  * in the {@code X-Lumipose-Frame} header, optionally gzip-compressed; retries with back-off on
  * network errors and busy statuses; any other 4xx/5xx becomes a {@link ServerRejectedException}.
+ * Requests that store (a sample, a survey) are sent once and given a long read timeout
+ * ({@link ClientConfig#storingReadTimeoutMs}): a retry would store twice, or run a long survey again.
  */
 public final class LumiposeClient implements FrameUploader {
     private final ClientConfig config;
@@ -55,13 +57,17 @@ public final class LumiposeClient implements FrameUploader {
         return LocateResult.fromJson(reply.text());
     }
 
-    /** POST /v1/samples?label=...: stores the frame with its label (a test-bench cell, "3,-4"). */
+    /**
+     * POST /v1/samples?label=...: stores the frame with its label (a test-bench cell, "3,-4"). Sent once
+     * (see {@link #postJsonOnce}): a lost answer is an IOException, the sample perhaps stored.
+     */
     public StoredSample storeSample(String label, byte[] luma, FrameMeta meta) throws IOException,
             ServerRejectedException, InterruptedException {
         if (label == null || label.trim().isEmpty()) {
             throw new IllegalArgumentException("label must not be empty");
         }
-        HttpReply reply = call(frameCall(config.baseUrl + "/v1/samples?label=" + urlEncode(label), luma, meta), 201);
+        HttpReply reply = callOnce(frameCall(config.baseUrl + "/v1/samples?label=" + urlEncode(label), luma, meta),
+                201);
         return StoredSample.fromJson(reply.text());
     }
 
@@ -91,6 +97,20 @@ public final class LumiposeClient implements FrameUploader {
             bytes = body.toString().getBytes("UTF-8");
         }
         return call(new HttpCall(method, config.baseUrl + pathAndQuery, headers, bytes), ANY_SUCCESS).text();
+    }
+
+    /**
+     * A JSON POST that stores or computes for long (a survey with {@code store: true}): sent once, its
+     * answer awaited up to {@link ClientConfig#storingReadTimeoutMs}, since a retry after a read timeout
+     * would run it a second time while the first still runs (and store twice). A lost answer is an
+     * IOException saying it was sent once: the server may have done it.
+     */
+    public String postJsonOnce(String pathAndQuery, JSONObject body) throws IOException, ServerRejectedException,
+            InterruptedException {
+        Map<String, String> headers = baseHeaders();
+        headers.put("Content-Type", "application/json");
+        HttpCall c = new HttpCall("POST", config.baseUrl + pathAndQuery, headers, body.toString().getBytes("UTF-8"));
+        return callOnce(c, ANY_SUCCESS).text();
     }
 
     /** PUT /v1/maps/active: the server locates in map {@code name} when a frame names none. */
@@ -159,9 +179,25 @@ public final class LumiposeClient implements FrameUploader {
 
     private HttpReply call(HttpCall c, int expectedStatus) throws IOException, ServerRejectedException,
             InterruptedException {
+        return call(c, expectedStatus, config.retry.maxAttempts);
+    }
+
+    /** One attempt with the long read timeout of the requests that store. */
+    private HttpReply callOnce(HttpCall c, int expectedStatus) throws IOException, ServerRejectedException,
+            InterruptedException {
+        try {
+            return call(c.withReadTimeout(config.storingReadTimeoutMs), expectedStatus, 1);
+        } catch (IOException e) {
+            throw new IOException(e.getMessage() + " (sent once: the server may have stored it all the same)",
+                    e.getCause());
+        }
+    }
+
+    private HttpReply call(HttpCall c, int expectedStatus, int maxAttempts) throws IOException,
+            ServerRejectedException, InterruptedException {
         IOException lastError = null;
         HttpReply lastReply = null;
-        for (int attempt = 1; attempt <= config.retry.maxAttempts; attempt++) {
+        for (int attempt = 1; attempt <= maxAttempts; attempt++) {
             if (attempt > 1) {
                 sleeper.sleep(config.retry.backoffMs(attempt - 1));
             }
@@ -181,8 +217,8 @@ public final class LumiposeClient implements FrameUploader {
             }
         }
         if (lastError != null) {
-            throw new IOException("no answer from " + c.url + " after " + config.retry.maxAttempts + " attempts: "
-                    + lastError.getMessage(), lastError);
+            String tries = maxAttempts == 1 ? "" : " after " + maxAttempts + " attempts";
+            throw new IOException("no answer from " + c.url + tries + ": " + lastError.getMessage(), lastError);
         }
         throw ServerRejectedException.fromBody(lastReply.status, lastReply.text());
     }

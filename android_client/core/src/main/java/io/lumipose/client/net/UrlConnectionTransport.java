@@ -29,7 +29,7 @@ public final class UrlConnectionTransport implements HttpTransport {
         HttpURLConnection c = (HttpURLConnection) new URL(call.url).openConnection();
         try {
             c.setConnectTimeout(connectTimeoutMs);
-            c.setReadTimeout(readTimeoutMs);
+            c.setReadTimeout(call.readTimeoutMs > 0 ? call.readTimeoutMs : readTimeoutMs);
             c.setRequestMethod(call.method);
             c.setUseCaches(false);
             for (Map.Entry<String, String> h : call.headers.entrySet()) {

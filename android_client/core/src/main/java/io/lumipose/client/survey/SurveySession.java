@@ -100,7 +100,7 @@ public final class SurveySession {
     }
 
     /**
-     * Stores one photo as a sample.
+     * Stores one photo as a sample (sent once: a retry would store it twice).
      *
      * @throws IllegalArgumentException for a window: a survey photo must show every panel in view
      */
@@ -153,6 +153,7 @@ public final class SurveySession {
      * @param anchor the panel whose sketch position and yaw fix the map's frame
      * @throws ServerRejectedException when the server refuses the set (a panel unconnected to the
      *         anchor, named in the message)
+     * @throws IOException without an answer: sent once, so the map may be stored all the same
      * @throws IllegalStateException before any photo
      */
     public SurveyReport survey(String sketch, int anchor) throws IOException, ServerRejectedException,
@@ -183,7 +184,8 @@ public final class SurveySession {
         Json.put(request, "anchor", anchor);
         Json.put(request, "samples", samples);
         Json.put(request, "store", Boolean.TRUE);
-        return SurveyReport.fromJson(client.sendJson("POST", SURVEYS_PATH, request));
+        // once, with a long wait: a survey of many photos runs for minutes, and stores the map
+        return SurveyReport.fromJson(client.postJsonOnce(SURVEYS_PATH, request));
     }
 
     /**

@@ -30,8 +30,9 @@ import io.lumipose.client.testutil.Python;
 
 /**
  * The calibration screen's session against a real {@code lumipose serve}: board photos rendered
- * through a known pinhole (resources/calibration/board_photos.py, OpenCV's ChArUco board warped by
- * each pose's homography) go up as the app sends them, a blank photo is refused as having no board,
+ * through a known pinhole by the simulator (resources/calibration/board_photos.py: {@code simulator.board}'s
+ * good pose set and renderer, with blur and noise) go up as the app sends them, a blank photo is refused as
+ * having no board,
  * and the calibration must find the pinhole (fx, fy within 0.5 %, cx, cy within 2 px: at least
  * twelve of 32 views of a 640 x 480 camera) and store the profile, which the server then serves.
  */

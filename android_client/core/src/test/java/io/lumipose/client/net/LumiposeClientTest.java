@@ -149,6 +149,62 @@ class LumiposeClientTest {
         assertThrows(IllegalArgumentException.class, () -> client(t, true, "k").storeSample(" ", LUMA, META));
     }
 
+    /** A sample is stored on arrival: an answer slower than the patient timeout must not store it twice. */
+    @Test
+    void aSlowSampleAnswerIsAwaitedNotSentAgain() throws Exception {
+        long slow = ClientConfig.PATIENT_READ_TIMEOUT_MS + 20000;
+        FakeTransport t = new FakeTransport().replyAfter(slow, 201, SAMPLE);
+        assertEquals("abc", client(t, false, "k").storeSample("3,-4", LUMA, META).id);
+        assertEquals(1, t.calls.size(), "one POST");
+        assertEquals(ClientConfig.STORING_READ_TIMEOUT_MS, t.calls.get(0).readTimeoutMs);
+        assertTrue(sleeps.isEmpty());
+    }
+
+    @Test
+    void aLostSampleAnswerIsNotRetriedAndSaysItWasSentOnce() {
+        FakeTransport t = new FakeTransport().fail("connection reset").reply(201, SAMPLE);
+        IOException e = assertThrows(IOException.class, () -> client(t, false, "k").storeSample("3,-4", LUMA, META));
+        assertEquals(1, t.calls.size(), "no second POST: the first may have stored the sample");
+        assertTrue(e.getMessage().contains("sent once"), e.getMessage());
+        assertTrue(e.getMessage().contains("connection reset"), e.getMessage());
+    }
+
+    @Test
+    void aPostThatStoresGoesOnceWithTheLongWaitAndReadsStillRetry() throws Exception {
+        FakeTransport t = new FakeTransport()
+                .replyAfter(ClientConfig.STORING_READ_TIMEOUT_MS + 1, 200, "{}")
+                .fail("a").reply(200, "{\"name\": \"m\"}");
+        LumiposeClient c = client(t, false, "k");
+        IOException e = assertThrows(IOException.class, () -> c.postJsonOnce("/v1/surveys",
+                new JSONObject().put("store", true)));
+        assertEquals(1, t.calls.size(), "one POST");
+        assertTrue(e.getCause() instanceof java.net.SocketTimeoutException, String.valueOf(e.getCause()));
+        HttpCall post = t.calls.get(0);
+        assertEquals("POST", post.method);
+        assertEquals("application/json", post.headers.get("Content-Type"));
+        assertEquals("k", post.headers.get("X-API-Key"));
+        assertEquals(true, new JSONObject(new String(post.body(), java.nio.charset.StandardCharsets.UTF_8))
+                .getBoolean("store"));
+        // a GET is retried as before, with the transport's own timeout
+        assertEquals("{\"name\": \"m\"}", c.sendJson("GET", "/v1/maps/active", null));
+        assertEquals(3, t.calls.size());
+        assertEquals(0, t.calls.get(2).readTimeoutMs);
+    }
+
+    @Test
+    void theStoringWaitIsTheConfigs() throws Exception {
+        ClientConfig config = new ClientConfig("http://h", null, null, false, RetryPolicy.defaults())
+                .withTimeouts(1000, 2000, 90000);
+        assertEquals(90000, config.storingReadTimeoutMs);
+        assertEquals(90000, config.withMap("m").storingReadTimeoutMs);
+        assertEquals(ClientConfig.STORING_READ_TIMEOUT_MS,
+                ClientConfig.live("http://h", null, null, null).storingReadTimeoutMs);
+        FakeTransport t = new FakeTransport().reply(201, SAMPLE);
+        new LumiposeClient(config, t, recorder).storeSample("a", LUMA, META);
+        assertEquals(90000, t.calls.get(0).readTimeoutMs);
+        assertThrows(IllegalArgumentException.class, () -> config.withTimeouts(1000, 2000, 0));
+    }
+
     @Test
     void mapIsFetchedByName() throws Exception {
         FakeTransport t = new FakeTransport().reply(200, "{\"schema\": \"lumipose.map/1\", \"name\": \"demo\","

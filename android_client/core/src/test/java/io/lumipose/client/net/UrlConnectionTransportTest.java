@@ -60,16 +60,31 @@ class UrlConnectionTransportTest {
         server.createContext("/slow/v1/locate", exchange -> {
             slowCalls.incrementAndGet();
             exchange.getRequestBody().readAllBytes();
-            try {
-                Thread.sleep(1500);
-            } catch (InterruptedException e) {
-                Thread.currentThread().interrupt();
-            }
+            answerLate();
             exchange.sendResponseHeaders(500, -1);
             exchange.close();
         });
+        server.createContext("/slow/v1/samples", exchange -> {
+            slowCalls.incrementAndGet();
+            exchange.getRequestBody().readAllBytes();
+            answerLate();
+            byte[] body = LumiposeClientTest.SAMPLE.getBytes(StandardCharsets.UTF_8);
+            exchange.sendResponseHeaders(201, body.length);
+            try (OutputStream out = exchange.getResponseBody()) {
+                out.write(body);
+            }
+        });
         server.setExecutor(Executors.newCachedThreadPool());
         server.start();
+    }
+
+    /** A slow server: 1.5 s before it answers. */
+    private static void answerLate() {
+        try {
+            Thread.sleep(1500);
+        } catch (InterruptedException e) {
+            Thread.currentThread().interrupt();
+        }
     }
 
     @AfterEach
@@ -141,6 +156,15 @@ class UrlConnectionTransportTest {
         long start = System.nanoTime();
         assertThrows(IOException.class, () -> c.locate(new byte[4], meta(2, 2)));
         assertTrue(System.nanoTime() - start < 1_400_000_000L, "gave up at the read timeout");
+        assertEquals(1, slowCalls.get());
+    }
+
+    /** A sample is stored once even when it is answered after the client's read timeout: its call waits longer. */
+    @Test
+    void aSampleWaitsForItsSlowAnswerOnce() throws Exception {
+        ClientConfig config = new ClientConfig(url() + "/slow", null, null, false, RetryPolicy.defaults())
+                .withTimeouts(2000, 300, 5000);
+        assertEquals("abc", LumiposeClient.create(config).storeSample("3,-4", new byte[4], meta(2, 2)).id);
         assertEquals(1, slowCalls.get());
     }
 

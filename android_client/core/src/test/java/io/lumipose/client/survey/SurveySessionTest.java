@@ -107,6 +107,43 @@ class SurveySessionTest {
         assertEquals("key", active.headers.get("X-API-Key"));
     }
 
+    /**
+     * With the app's own settings (three attempts, the patient read timeout): a photo stored and a
+     * survey computed slower than that timeout are awaited, each POST sent once, and the map activated.
+     */
+    @Test
+    void slowAnswersAreAwaitedAndNothingIsSentTwice() throws Exception {
+        FakeTransport slow = new FakeTransport();
+        LumiposeClient app = new LumiposeClient(new ClientConfig("http://server:8000", "key", "phone-1", false,
+                RetryPolicy.defaults()), slow, ms -> { });
+        SurveySession s = new SurveySession(app, "office-surveyed");
+        int late = ClientConfig.PATIENT_READ_TIMEOUT_MS + 5000;
+        slow.replyAfter(late, 201, sample("s1")).replyAfter(120000, 200, report(true))
+                .reply(200, "{\"name\": \"office-surveyed\"}");
+        s.addPhoto(new byte[W * H], photo());
+        s.label(0, 17, 10, 20);
+        SurveyReport r = s.survey("office", 17);
+        assertEquals(2, slow.calls.size(), "one POST of the photo, one of the survey");
+        assertEquals("http://server:8000/v1/surveys", slow.calls.get(1).url);
+        assertTrue(r.stored);
+        s.activate(r);
+        assertEquals(3, slow.calls.size());
+    }
+
+    /** No answer at all: one POST, and the error says the map may be stored, not that the survey was refused. */
+    @Test
+    void aLostSurveyAnswerIsNotSentAgain() throws Exception {
+        FakeTransport lost = new FakeTransport();
+        LumiposeClient app = new LumiposeClient(new ClientConfig("http://server:8000", "key", "phone-1", false,
+                RetryPolicy.defaults()), lost, ms -> { });
+        SurveySession s = new SurveySession(app, "office-surveyed");
+        lost.reply(201, sample("s1")).fail("connection reset").reply(200, report(true));
+        s.addPhoto(new byte[W * H], photo());
+        java.io.IOException e = assertThrows(java.io.IOException.class, () -> s.survey("office", 17));
+        assertEquals(2, lost.calls.size(), "the survey was posted once");
+        assertTrue(e.getMessage().contains("sent once"), e.getMessage());
+    }
+
     @Test
     void anUnconnectedPanelIsTheServersRefusalNamingIt() throws Exception {
         transport.reply(201, sample("s1")).reply(422, "{\"error\": \"survey_refused\", \"field\": \"samples\", "
