@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from server.camera import ProfileTable
 from server.ingest import LumaFrame
 from server.survey.adjust import Adjusted, adjust
 from server.survey.bearing import map_bearing
@@ -74,14 +75,20 @@ def _without_outliers(
 
 
 def survey(
-    frames: list[SurveyFrame], sketch: BeaconMap, anchor: int, name: str, rules: SurveyRules = SurveyRules()
+    frames: list[SurveyFrame],
+    sketch: BeaconMap,
+    anchor: int,
+    name: str,
+    rules: SurveyRules = SurveyRules(),
+    profiles: ProfileTable | None = None,
 ) -> SurveyReport:
-    """The surveyed map of `sketch`'s panels from `frames`; raises `SurveyInputError` or `SurveyRefused`."""
+    """The surveyed map of `sketch`'s panels from `frames`; raises `SurveyInputError` or `SurveyRefused`.
+    `profiles`: the device profiles the frames were decoded with (default: the bundled ones)."""
     check_request(sketch, anchor, [(f.name, f.labels) for f in frames])
     used: list[FrameSightings] = []
     skipped: list[SkippedFrame] = []
     for frame in frames:
-        seen = frame_sightings(frame.frame, frame.name, frame.labels, sketch, rules)
+        seen = frame_sightings(frame.frame, frame.name, frame.labels, sketch, rules, profiles)
         (skipped if isinstance(seen, SkippedFrame) else used).append(seen)  # type: ignore[arg-type]
     if not used:
         first = "; ".join(f"'{s.name}': {s.why}" for s in skipped[:3])

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from server.camera import ProfileTable
 from server.geometry import beacon_rotation, camera_matrix, distortion_vector, grown_quads
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
@@ -84,11 +85,12 @@ def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str, field: 
         seen.add(label.beacon_id)
 
 
-def _gravity_sigma_deg(frame: LumaFrame, rules: SurveyRules) -> float:
+def _gravity_sigma_deg(frame: LumaFrame, profiles: ProfileTable, rules: SurveyRules) -> float:
+    """The frame's profile's gravity sigma; `profiles` is the table the frame was decoded with (a stored,
+    calibrated profile is in it, not among the bundled ones), else the rules' sigma."""
     camera = frame.meta.camera
-    if isinstance(camera, ProfileRef):
-        return device_profiles()[camera.profile].gravity_sigma_deg
-    return rules.gravity_sigma_deg
+    profile = profiles.get(camera.profile) if isinstance(camera, ProfileRef) else None
+    return rules.gravity_sigma_deg if profile is None else profile.gravity_sigma_deg
 
 
 def _labelled(frame: LumaFrame, blobs: tuple[BeaconBlob, ...], labels: list[PanelLabel], sketch: BeaconMap):
@@ -150,9 +152,15 @@ def _sighting(frame: LumaFrame, fix: Fix, beacon: Beacon, blob: BeaconBlob, rule
 
 
 def frame_sightings(
-    frame: LumaFrame, name: str, labels: list[PanelLabel], sketch: BeaconMap, rules: SurveyRules = SurveyRules()
+    frame: LumaFrame,
+    name: str,
+    labels: list[PanelLabel],
+    sketch: BeaconMap,
+    rules: SurveyRules = SurveyRules(),
+    profiles: ProfileTable | None = None,
 ) -> FrameSightings | SkippedFrame:
-    """The named, measured panels of `frame` (at least two), or why the frame is skipped."""
+    """The named, measured panels of `frame` (at least two), or why the frame is skipped; `profiles`: the
+    table the frame was decoded with (default: the bundled profiles)."""
     check_labels(labels, sketch, name)
     notes: list[str] = []
     measured: list[tuple[BeaconBlob, Beacon, Fix | Refusal]] = []
@@ -202,7 +210,7 @@ def frame_sightings(
         name=name,
         matrix=camera_matrix(frame.camera),
         gravity_camera=None if gravity is None else gravity / np.linalg.norm(gravity),
-        gravity_sigma_deg=_gravity_sigma_deg(frame, rules),
+        gravity_sigma_deg=_gravity_sigma_deg(frame, device_profiles() if profiles is None else profiles, rules),
         compass_bearing_deg=meta.compass_bearing_deg,
         sightings=tuple(sightings),
         notes=tuple(notes),

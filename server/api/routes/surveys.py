@@ -11,6 +11,7 @@ from server.api.deps import Services, ServicesDep, api_key_problem
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
 from server.api.routes import DAMAGED_RESPONSES
+from server.camera import ProfileTable
 from server.ingest import decode_frame
 from server.outcomes import FrameError
 from server.store import StoreError
@@ -34,10 +35,9 @@ def _sketch(services: Services, request: SurveyRequest) -> BeaconMap:
         raise
 
 
-def _frames(services: Services, request: SurveyRequest) -> list[SurveyFrame]:
+def _frames(services: Services, request: SurveyRequest, profiles: ProfileTable) -> list[SurveyFrame]:
     """Each sample's frame, read from the store; an unknown or unreadable one names its place in the request."""
     frames = []
-    profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
     for k, sample in enumerate(request.samples):
         field = f"samples.{k}.sample_id"
         try:
@@ -58,7 +58,8 @@ def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
     try:
         # what the request gets wrong is said before any frame is read
         check_request(sketch, request.anchor, [(s.sample_id, s.labels) for s in request.samples])
-        report = survey(_frames(services, request), sketch, request.anchor, request.name)
+        profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
+        report = survey(_frames(services, request, profiles), sketch, request.anchor, request.name, profiles=profiles)
     except SurveyInputError as error:
         raise ApiError(422, "invalid_request", error.message, error.field) from None
     except SurveyRefused as error:

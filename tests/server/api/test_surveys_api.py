@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from lumipose_client import Client, LumiposeError
+from shared_schemas import ProfileRef, device_profiles
 from shared_schemas.survey import PanelLabel, SurveyRequest, SurveySample
 from tests.conftest import API_KEY
 from tests.helpers import survey_set
@@ -53,6 +54,25 @@ def test_a_survey_of_stored_samples_gives_the_map_and_stores_it(stored, client, 
         assert refused.status == 401 and refused.body.field == "X-API-Key"
         refused = _refusal(lambda: anonymous.survey(_request(stored, anchor=7)))
         assert refused.status == 422 and refused.body.field == "anchor"
+
+
+def test_samples_naming_a_stored_profile_are_surveyed(client):
+    """A calibrated profile is stored, not bundled: the survey takes its gravity sigma from the stored table."""
+    truth, sketch, anchor, shots = survey_set()
+    # the datasheet camera the shots were rendered with, stored under an id of its own (a 0.2 deg sensor)
+    stored = device_profiles()["xiaomi-mi8-front"].model_copy(update={"id": "survey-mi8", "gravity_sigma_deg": 0.2})
+    client.put_profile(stored)
+    named = ProfileRef(profile=stored.id)
+    samples = [
+        SurveySample(
+            sample_id=client.store_sample(s.pixels.tobytes(), s.meta.model_copy(update={"camera": named})).id,
+            labels=s.labels,
+        )
+        for s in shots
+    ]
+    report = client.survey(SurveyRequest(name="office-profiled", sketch=sketch, anchor=anchor, samples=samples))
+    for beacon in truth.beacons:
+        assert np.linalg.norm(np.subtract(report.map.beacon(beacon.id).center_m, beacon.center_m)) < 0.004
 
 
 def test_unknown_samples_and_sketches_are_404_naming_the_field(stored, client):
