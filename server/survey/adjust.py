@@ -22,7 +22,8 @@ points depend on its four numbers and its frame's six only):
 
 Uncertainty: the covariance of the unknowns is (J^T J)^-1 scaled by the residuals' variance
 (their sum of squares over the degrees of freedom), so sigmas that were guessed too small or too
-large are corrected by the fit itself. A square's corners are labelled (which of its four is
+large are corrected by the fit itself; only the panels' part is formed, by the Schur complement
+over the cameras (`without_cameras_covariance`). A square's corners are labelled (which of its four is
 model corner 0) against the start's yaw before the fit, and kept.
 """
 
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
+from scipy.sparse import block_diag, csr_matrix, lil_matrix
 from scipy.spatial.transform import Rotation
 
 from server.geometry import beacon_corners_m, grown_quads, orthonormal_pair, wrap_deg
@@ -202,6 +203,26 @@ def _project(
     return pixels[..., :2] / depth[..., None]
 
 
+def without_cameras_covariance(jacobian, cameras_at: int, cameras: int) -> np.ndarray:
+    """(J^T J)^-1 of every unknown but the cameras' (in their order: the panels', then the growth's), by the
+    Schur complement over the cameras' 6 x 6 blocks.
+
+    A camera's six unknowns meet no other camera's in J^T J (each residual belongs to one frame), so its
+    camera part is block diagonal: inverting it costs F small inverses, and the dense inverse is only of
+    the panels' size, where the whole (J^T J)^-1 of hundreds of frames took seconds and gigabytes.
+    `jacobian`: (residuals, unknowns), sparse or dense; the cameras' unknowns are columns
+    [cameras_at, cameras_at + 6 cameras)."""
+    jac = csr_matrix(jacobian)
+    information = (jac.T @ jac).tocsr()
+    camera_columns = np.arange(cameras_at, cameras_at + 6 * cameras)
+    rest = np.setdiff1d(np.arange(information.shape[0]), camera_columns)
+    cameras_part = information[camera_columns][:, camera_columns]
+    blocks = [np.linalg.pinv(cameras_part[6 * f : 6 * f + 6, 6 * f : 6 * f + 6].toarray()) for f in range(cameras)]
+    cross = information[rest][:, camera_columns]
+    reduced = information[rest][:, rest].toarray() - (cross @ block_diag(blocks, format="csr") @ cross.T).toarray()
+    return np.linalg.pinv(reduced)
+
+
 def adjust(frames: list[FrameSightings], start: Start, anchor: int, rules: SurveyRules = SurveyRules()) -> Adjusted:
     """The joint fit from `start`; every panel's pose and 1-sigma, every camera, the RMS."""
     problem = _Problem(frames, start, anchor)
@@ -214,12 +235,10 @@ def adjust(frames: list[FrameSightings], start: Start, anchor: int, rules: Surve
         max_nfev=rules.max_evaluations,
     )
     centres, yaws, rotations, positions = problem.unpack(fit.x)
-    jacobian = fit.jac.toarray() if hasattr(fit.jac, "toarray") else np.asarray(fit.jac)
     dof = max(1, len(fit.fun) - len(fit.x))
     variance = float(np.sum(fit.fun**2)) / dof
-    information = jacobian.T @ jacobian
-    covariance = np.linalg.pinv(information) * variance
-    sigmas = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    covariance = without_cameras_covariance(fit.jac, problem.frame_base, len(frames)) * variance
+    sigmas = np.sqrt(np.clip(np.diag(covariance), 0.0, None))  # the panels' first, by `problem.free` order
     errors = problem.point_errors(fit.x)
     per_point = np.sum(errors**2, axis=-1)  # (N, 5)
     counts = dict.fromkeys(start.panels, 0)

@@ -7,6 +7,7 @@ the map's compass bearing (`bearing`) -> the contract's `SurveyReport`.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -75,19 +76,22 @@ def _without_outliers(
 
 
 def survey(
-    frames: list[SurveyFrame],
+    frames: Iterable[SurveyFrame],
     sketch: BeaconMap,
     anchor: int,
     name: str,
     rules: SurveyRules = SurveyRules(),
     profiles: ProfileTable | None = None,
 ) -> SurveyReport:
-    """The surveyed map of `sketch`'s panels from `frames`; raises `SurveyInputError` or `SurveyRefused`.
+    """The surveyed map of `sketch`'s panels from `frames` (read once, in order: a generator that decodes each
+    frame when asked keeps one image in memory); raises `SurveyInputError` or `SurveyRefused`.
     `profiles`: the device profiles the frames were decoded with (default: the bundled ones)."""
-    check_request(sketch, anchor, [(f.name, f.labels) for f in frames])
+    check_request(sketch, anchor, [])
     used: list[FrameSightings] = []
     skipped: list[SkippedFrame] = []
-    for frame in frames:
+    # one frame at a time: only its sightings are kept, so a caller that reads frames lazily holds one image
+    for k, frame in enumerate(frames):
+        check_labels(frame.labels, sketch, frame.name, f"samples.{k}.labels")
         seen = frame_sightings(frame.frame, frame.name, frame.labels, sketch, rules, profiles)
         (skipped if isinstance(seen, SkippedFrame) else used).append(seen)  # type: ignore[arg-type]
     if not used:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Annotated
 
 from fastapi import APIRouter, Header
@@ -35,9 +36,9 @@ def _sketch(services: Services, request: SurveyRequest) -> BeaconMap:
         raise
 
 
-def _frames(services: Services, request: SurveyRequest, profiles: ProfileTable) -> list[SurveyFrame]:
-    """Each sample's frame, read from the store; an unknown or unreadable one names its place in the request."""
-    frames = []
+def _frames(services: Services, request: SurveyRequest, profiles: ProfileTable) -> Iterator[SurveyFrame]:
+    """Each sample's frame, read from the store when the survey asks for it (one image held at a time); an
+    unknown or unreadable one names its place in the request."""
     for k, sample in enumerate(request.samples):
         field = f"samples.{k}.sample_id"
         try:
@@ -49,8 +50,7 @@ def _frames(services: Services, request: SurveyRequest, profiles: ProfileTable) 
             raise StoreError(error.code, error.message, field) from None
         except FrameError as error:
             raise ApiError(409, "damaged_sample", f"sample '{sample.sample_id}': {error.message}", field) from None
-        frames.append(SurveyFrame(sample.sample_id, frame, sample.labels))
-    return frames
+        yield SurveyFrame(sample.sample_id, frame, sample.labels)
 
 
 def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
@@ -84,5 +84,6 @@ async def post_survey(
         problem = api_key_problem(services.settings.api_key, x_api_key)
         if problem is not None:
             raise problem
-    async with services.pipeline_limiter:
+    # one survey at a time, apart from the locate pipeline's slots: a survey runs for seconds to a minute
+    async with services.survey_limiter:
         return await run_in_threadpool(_survey_now, services, request)

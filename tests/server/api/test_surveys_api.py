@@ -8,7 +8,7 @@ import pytest
 
 from lumipose_client import Client, LumiposeError
 from shared_schemas import ProfileRef, device_profiles
-from shared_schemas.survey import PanelLabel, SurveyRequest, SurveySample
+from shared_schemas.survey import MAX_SURVEY_FRAMES, PanelLabel, SurveyRequest, SurveySample
 from tests.conftest import API_KEY
 from tests.helpers import survey_set
 
@@ -98,6 +98,17 @@ def test_bad_requests_and_refused_surveys_are_422_naming_what_is_wrong(stored, c
     one_panel = [SurveySample(sample_id=i, labels=labels[:1]) for i, labels in stored[3][:2]]
     refused = _refusal(lambda: client.survey(_request(stored, samples=one_panel)))
     assert refused.status == 422 and "no frame sees two named panels" in refused.body.message
+
+
+def test_a_repeated_sample_or_too_many_are_refused_before_any_frame_is_read(stored, server_url):
+    body = _request(stored).model_dump(mode="json", by_alias=True)
+    body["samples"] = [body["samples"][0], *body["samples"][1:3], body["samples"][0]]
+    response = httpx.post(f"{server_url}/v1/surveys", json=body)
+    assert response.status_code == 422 and response.json()["field"] == "samples", response.text
+    assert "samples 0 and 3 are the same sample" in response.json()["message"]
+    body["samples"] = [{"sample_id": f"{k:032x}"} for k in range(MAX_SURVEY_FRAMES + 1)]
+    response = httpx.post(f"{server_url}/v1/surveys", json=body)
+    assert response.status_code == 422 and response.json()["field"] == "samples", response.text
 
 
 def test_a_malformed_survey_request_is_422(server_url):

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import gc
 import math
+import weakref
+from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.sparse import csr_matrix
 
 from server.geometry import (
     beacon_corners_m,
@@ -15,7 +19,7 @@ from server.geometry import (
     rotation_z,
     world_to_camera,
 )
-from server.survey.adjust import adjust
+from server.survey.adjust import adjust, without_cameras_covariance
 from server.survey.bearing import map_bearing
 from server.survey.chain import chain_start, nearest_equivalent_deg
 from server.survey.rules import SurveyInputError, SurveyRefused, SurveyRules
@@ -114,6 +118,24 @@ def test_the_fit_finds_every_panel_from_a_rough_sketch_within_its_sigmas():
     assert adjusted.rms_px < 0.1
 
 
+def test_the_panels_covariance_is_the_whole_inverses_part_without_forming_it():
+    """The Schur complement over the cameras' blocks gives the same panel (and growth) covariance as the dense
+    inverse of the whole J^T J, on a random Jacobian of the fit's pattern."""
+    rng = np.random.default_rng(4)
+    panels, cameras = 3, 6
+    jacobian = np.zeros((20 * cameras, 4 * panels + 6 * cameras + 2))
+    for f in range(cameras):
+        rows = slice(20 * f, 20 * f + 20)
+        for p in rng.choice(panels, 2, replace=False):
+            jacobian[rows, 4 * p : 4 * p + 4] = rng.normal(size=(20, 4))
+        jacobian[rows, 4 * panels + 6 * f : 4 * panels + 6 * f + 6] = rng.normal(size=(20, 6))
+        jacobian[rows, -2:] = rng.normal(size=(20, 2))
+    whole = np.linalg.inv(jacobian.T @ jacobian)
+    rest = [*range(4 * panels), jacobian.shape[1] - 2, jacobian.shape[1] - 1]
+    reduced = without_cameras_covariance(csr_matrix(jacobian), 4 * panels, cameras)
+    assert np.allclose(reduced, whole[np.ix_(rest, rest)], rtol=1e-8, atol=1e-12)
+
+
 def test_a_panel_the_frames_do_not_tie_to_the_anchor_is_refused_naming_it_and_the_frames():
     room = ROOM.model_copy(
         update={"beacons": [*ROOM.beacons, Beacon(id=4, center_m=[0.0, 1.2, 2.7], side_m=0.2, corner_radius_m=0.02)]}
@@ -167,6 +189,26 @@ def test_a_quarter_scale_office_is_surveyed_to_millimetres():
     # a 15-degree compass error over ~12 frames
     assert report.bearing_deg is not None and abs((report.bearing_deg - 30.0 + 180) % 360 - 180) < 15
     assert report.map.bearing_deg == report.bearing_deg and report.bearing_sigma_deg > 0
+
+
+def test_frames_are_read_one_at_a_time():
+    """A generator of frames is read once, and each image is let go once its sightings are taken."""
+    truth, sketch, anchor, shots = survey_set()
+    images: list[weakref.ref] = []
+
+    def frames():
+        for k, shot in enumerate(shots):
+            gc.collect()
+            # the survey's loop still holds the frame before this one; the one before that must be gone
+            assert all(image() is None for image in images[:-1]), f"frame {k}: earlier images are still held"
+            frame = survey_frame(shot, f"frame_{k}")
+            pixels = frame.frame.pixels.copy()  # the cached shot keeps its own
+            pixels.flags.writeable = False
+            images.append(weakref.ref(pixels))
+            yield replace(frame, frame=replace(frame.frame, pixels=pixels))
+
+    report = survey(frames(), sketch, anchor, "surveyed")
+    assert report.frames_used >= len(shots) - 2 and len(images) == len(shots)
 
 
 def test_frames_that_see_one_panel_are_skipped_and_a_set_without_two_is_refused():
