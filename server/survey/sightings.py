@@ -166,9 +166,11 @@ def frame_sightings(
     measured: list[tuple[BeaconBlob, Beacon, Fix | Refusal]] = []
     candidates = rules.room.candidates.for_beacons(sketch.beacons)
     found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
+    blobs = found.blobs
     if frame.meta.frame_kind is FrameKind.id:
-        room = read_room(frame, sketch, rules.pipeline, rules.room)
-        if room.problem is not None:
+        # the same blobs as the survey's own: a labelled panel's blob is then left out of its `others`
+        room = read_room(frame, sketch, rules.pipeline, rules.room, found)
+        if room.problem is not None:  # no panel named: the labels name any of the found blobs
             notes.append(f"its stripes cannot name panels ({room.problem})")
         notes += [p.note for p in room.panels if p.note is not None]
         measured += [(p.blob, p.beacon, p.fix) for p in room.panels if p.beacon is not None and p.fix is not None]
@@ -176,15 +178,13 @@ def frame_sightings(
         # a label names only a panel its stripes did not; such a panel is measured on its striped pixels
         # (not flattened without its code), which the pipeline often refuses: label pose frames instead
         labels = [label for label in labels if label.beacon_id not in striped]
-        blobs = tuple(p.blob for p in room.panels if p.beacon is None) if labels else ()
-    else:
-        blobs = found.blobs
+        if room.problem is None:
+            blobs = tuple(p.blob for p in room.panels if p.beacon is None)
     if labels:
         named, label_notes = _labelled(frame, blobs, labels, sketch)
         notes += label_notes
-        every = list(found.blobs)
         for blob, beacon in named:
-            others = [b for b in every if b is not blob]
+            others = [b for b in found.blobs if b is not blob]
             # (the fix's ID source is not reported: a survey says how it named each frame's panels)
             source = BeaconIdSource.single_beacon_map
             fix = locate_panel(frame, blob, others, beacon, source, rules.pipeline, found.levels, rules.room)

@@ -26,7 +26,8 @@ from server.survey.rules import SurveyInputError, SurveyRefused, SurveyRules
 from server.survey.run import survey
 from server.survey.sightings import FrameSightings, Sighting, frame_sightings
 from shared_schemas import Beacon, BeaconMap
-from shared_schemas.survey import PanelLabel
+from simulator.render import SensorModel, render_emitters
+from shared_schemas.survey import PanelLabel, SkippedFrame
 from tests.helpers import survey_frame, survey_set
 
 MATRIX = np.array([[980.0, 0.0, 484.5], [0.0, 980.0, 647.5], [0.0, 0.0, 1.0]])
@@ -249,3 +250,35 @@ def test_the_panels_of_an_id_frame_are_named_by_their_own_stripes():
     assert sorted((s.beacon.id, s.cut) for s in seen.sightings) == [(17, False), (42, True)]
     whole = next(s for s in seen.sightings if not s.cut)
     assert whole.grown and whole.sigmas_px[0] < seen.sightings[1].sigmas_px[0]
+
+
+def test_a_labelled_panel_of_an_id_frame_is_measured_whole():
+    """A panel whose stripes name none (a steady lamp among coded panels) is named by its label and measured
+    on its own pixels (its own blob is not among the blobs the crop paints out); on an ID frame whose stripes
+    cannot be read at all, the labels name the found blobs."""
+    from simulator.render import Emitter, beacon_outline_px
+    from tests.helpers import CAMERA
+    from tests.server.test_rooms import CUT_POSE, big_panels, room_id_frame
+
+    room = big_panels((0.62, 0.0), (-0.1, 0.0))
+    coded = room_id_frame(room)
+    steady = render_emitters(
+        [Emitter(beacon_outline_px(room.beacons[0], CAMERA, CUT_POSE), 200.0, None)],
+        *coded.pixels.shape[::-1],
+        SensorModel(background_dn=0.0, plateau_dn=200.0, psf_sigma_px=1.0, read_noise_dn=0.0),
+        np.random.default_rng(0),
+    )
+    # panel 17 steady (its blob's pixels replaced), panel 42 coded and cut by the border
+    whole = steady > 1
+    pixels = np.where(whole, np.maximum(steady, coded.pixels.min()), coded.pixels).astype(np.uint8)
+    pixels.flags.writeable = False
+    frame = replace(coded, pixels=pixels)
+    x, y = beacon_outline_px(room.beacons[0], CAMERA, CUT_POSE).mean(axis=0)
+    label = PanelLabel(beacon_id=17, x_px=float(x), y_px=float(y))
+    seen = frame_sightings(frame, "id", [label], room)
+    assert isinstance(seen, FrameSightings), seen
+    assert sorted((s.beacon.id, s.cut) for s in seen.sightings) == [(17, False), (42, True)]
+    unreadable = replace(frame, meta=frame.meta.model_copy(update={"rolling_shutter_skew_s": None}))
+    seen = frame_sightings(unreadable, "id", [label], room)
+    why = seen.why if isinstance(seen, SkippedFrame) else "; ".join(seen.notes)
+    assert "its stripes cannot name panels" in why and "is on no panel" not in why, why
