@@ -138,6 +138,9 @@ def _sighting(frame: LumaFrame, fix: Fix, beacon: Beacon, blob: BeaconBlob, rule
         sigmas = np.array([*[rules.corner_sigma_px] * 4, rules.centre_sigma_px])
         if fix.growth_px is not None:  # the sides back where the pipeline measured them
             points[:4] = grown_quads(points[:4], fix.growth_px)
+        # sides blurred unevenly were each moved in by their own growth, and one common growth put back
+        # leaves the corners (and the diagonals' crossing) off by up to `uneven_px`: weighed by it
+        sigmas = np.hypot(sigmas, fix.uneven_px)
     return Sighting(
         beacon=beacon,
         points_px=points,

@@ -6,6 +6,7 @@ import gc
 import math
 import weakref
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -282,3 +283,32 @@ def test_a_labelled_panel_of_an_id_frame_is_measured_whole():
     seen = frame_sightings(unreadable, "id", [label], room)
     why = seen.why if isinstance(seen, SkippedFrame) else "; ".join(seen.notes)
     assert "its stripes cannot name panels" in why and "is on no panel" not in why, why
+
+
+def test_corners_of_unevenly_blurred_sides_are_weighed_by_how_far_their_growths_lie_apart():
+    from server.outcomes import Fix
+    from server.survey.sightings import _sighting
+    from tests.helpers import survey_frame as shot_frame
+
+    _, sketch, _, shots = survey_set()
+    frame = shot_frame(shots[0], "frame_0").frame
+    beacon = sketch.beacons[0]
+    corners = np.array([[400.0, 500.0], [500.0, 500.0], [500.0, 600.0], [400.0, 600.0]])
+    fix = Fix(
+        np.array([0.0, 0.0, 0.0]),
+        np.eye(3),
+        beacon.id,
+        None,
+        0.1,
+        True,
+        corners.mean(axis=0),
+        corners,
+        growth_px=1.2,
+        uneven_px=0.4,
+    )
+    blob = SimpleNamespace(area_px=1e4)  # the blob is only read for its area
+    rules = SurveyRules()
+    even = _sighting(frame, replace(fix, uneven_px=0.0), beacon, blob, rules)  # type: ignore[arg-type]
+    assert np.allclose(even.sigmas_px, [rules.corner_sigma_px] * 4 + [rules.centre_sigma_px])
+    uneven = _sighting(frame, fix, beacon, blob, rules)  # type: ignore[arg-type]
+    assert np.all(uneven.sigmas_px >= 0.4) and np.all(uneven.sigmas_px < 0.41)
