@@ -120,7 +120,8 @@ def survey(
         update={
             "name": name,
             "beacons": beacons,
-            "bearing_deg": None if bearing is None else bearing.bearing_deg,
+            # the anchor keeps the sketch's frame, so the sketch's bearing still holds when no frame measured one
+            "bearing_deg": sketch.bearing_deg if bearing is None else bearing.bearing_deg,
         }
     )
     return SurveyReport(

@@ -213,6 +213,18 @@ def test_frames_are_read_one_at_a_time():
     assert report.frames_used >= len(shots) - 2 and len(images) == len(shots)
 
 
+def test_without_compass_readings_the_map_keeps_the_sketchs_bearing():
+    _, sketch, anchor, shots = survey_set()
+    frames = []
+    for k, shot in enumerate(shots):
+        frame = survey_frame(shot, f"frame_{k}")
+        meta = frame.frame.meta.model_copy(update={"compass_bearing_deg": None})
+        frames.append(replace(frame, frame=replace(frame.frame, meta=meta)))
+    report = survey(frames, sketch.model_copy(update={"bearing_deg": 30.0}), anchor, "surveyed")
+    assert report.bearing_deg is None  # none measured
+    assert report.map.bearing_deg == 30.0
+
+
 def test_frames_that_see_one_panel_are_skipped_and_a_set_without_two_is_refused():
     _, sketch, anchor, shots = survey_set()
     frames = [survey_frame(s, f"frame_{k}", s.labels[:1]) for k, s in enumerate(shots[:3])]
