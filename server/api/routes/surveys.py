@@ -12,13 +12,12 @@ from server.api.deps import Services, ServicesDep, api_key_problem
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
 from server.api.routes import DAMAGED_RESPONSES
-from server.camera import ProfileTable
 from server.ingest import decode_frame
 from server.outcomes import FrameError
 from server.store import StoreError
 from server.survey.rules import SurveyInputError, SurveyRefused
 from server.survey.run import SurveyFrame, check_request, survey
-from shared_schemas import BeaconMap
+from shared_schemas import BeaconMap, ProfileRef
 from shared_schemas.survey import SurveyReport, SurveyRequest
 
 router = APIRouter(prefix="/v1/surveys", tags=["surveys"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
@@ -36,14 +35,23 @@ def _sketch(services: Services, request: SurveyRequest) -> BeaconMap:
         raise
 
 
-def _frames(services: Services, request: SurveyRequest, profiles: ProfileTable) -> Iterator[SurveyFrame]:
+def _frames(services: Services, request: SurveyRequest) -> Iterator[SurveyFrame]:
     """Each sample's frame, read from the store when the survey asks for it (one image held at a time); an
     unknown or unreadable one names its place in the request."""
     for k, sample in enumerate(request.samples):
         field = f"samples.{k}.sample_id"
         try:
             info = services.samples.get(sample.sample_id)
-            frame = decode_frame(services.samples.frame(sample.sample_id), info.meta, profiles)
+            camera = info.meta.camera
+            named = camera.profile if isinstance(camera, ProfileRef) else None
+            table = services.profiles.table(named)  # a damaged profile the sample names raises, naming its file
+            if named is not None and named not in table:
+                message = (
+                    f"sample '{sample.sample_id}': its camera.profile '{named}' is no device profile on this server "
+                    f"(deleted since the sample was stored?); PUT /v1/profiles/{named} again"
+                )
+                raise ApiError(404, "not_found", message, field)
+            frame = decode_frame(services.samples.frame(sample.sample_id), info.meta, table)
         except StoreError as error:
             if error.code == "not_found":
                 raise ApiError(404, "not_found", f"no stored sample '{sample.sample_id}'", field) from None
@@ -59,7 +67,7 @@ def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
         # what the request gets wrong is said before any frame is read
         check_request(sketch, request.anchor, [(s.sample_id, s.labels) for s in request.samples])
         profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
-        report = survey(_frames(services, request, profiles), sketch, request.anchor, request.name, profiles=profiles)
+        report = survey(_frames(services, request), sketch, request.anchor, request.name, profiles=profiles)
     except SurveyInputError as error:
         raise ApiError(422, "invalid_request", error.message, error.field) from None
     except SurveyRefused as error:

@@ -70,9 +70,15 @@ def test_samples_naming_a_stored_profile_are_surveyed(client):
         )
         for s in shots
     ]
-    report = client.survey(SurveyRequest(name="office-profiled", sketch=sketch, anchor=anchor, samples=samples))
+    request = SurveyRequest(name="office-profiled", sketch=sketch, anchor=anchor, samples=samples)
+    report = client.survey(request)
     for beacon in truth.beacons:
         assert np.linalg.norm(np.subtract(report.map.beacon(beacon.id).center_m, beacon.center_m)) < 0.004
+    # the profile deleted since: the samples are not damaged, their profile is missing
+    client.delete_profile(stored.id)
+    refused = _refusal(lambda: client.survey(request))
+    assert (refused.status, refused.body.error, refused.body.field) == (404, "not_found", "samples.0.sample_id")
+    assert "its camera.profile 'survey-mi8' is no device profile on this server" in refused.body.message
 
 
 def test_unknown_samples_and_sketches_are_404_naming_the_field(stored, client):
