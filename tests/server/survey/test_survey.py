@@ -20,11 +20,11 @@ from server.geometry import (
     rotation_z,
     world_to_camera,
 )
-from server.survey.adjust import adjust, without_cameras_covariance
+from server.survey.adjust import Adjusted, adjust, without_cameras_covariance
 from server.survey.bearing import map_bearing
 from server.survey.chain import chain_start, nearest_equivalent_deg
 from server.survey.rules import SurveyInputError, SurveyRefused, SurveyRules
-from server.survey.run import survey
+from server.survey.run import _without_outliers, survey
 from server.survey.sightings import FrameSightings, Sighting, frame_sightings
 from shared_schemas import Beacon, BeaconMap
 from simulator.render import SensorModel, render_emitters
@@ -136,6 +136,41 @@ def test_the_panels_covariance_is_the_whole_inverses_part_without_forming_it():
     rest = [*range(4 * panels), jacobian.shape[1] - 2, jacobian.shape[1] - 1]
     reduced = without_cameras_covariance(csr_matrix(jacobian), 4 * panels, cameras)
     assert np.allclose(reduced, whole[np.ix_(rest, rest)], rtol=1e-8, atol=1e-12)
+
+
+def test_rectangles_are_fitted_with_their_half_turn_kept_as_sketched():
+    """A rectangle looks the same turned by 180 deg: the chain and the fit keep the sketch's choice (panel 3
+    sketched half a turn round), and place every panel as with squares."""
+    rectangles = [b.model_copy(update={"side_m": None, "width_m": 0.3, "height_m": 0.15}) for b in ROOM.beacons]
+    room = ROOM.model_copy(update={"beacons": rectangles})
+    frames = _frames([(1, 2), (2, 3), (1, 3), (1, 2, 3)] * 4, np.random.default_rng(5), room=room)
+    sketch = _sketch(room, 1)
+    turned = sketch.beacons[2].model_copy(update={"yaw_deg": sketch.beacons[2].yaw_deg + 180.0})
+    sketch = sketch.model_copy(update={"beacons": [*sketch.beacons[:2], turned]})
+    # a sighting carries the sketch's beacon (`server.survey.sightings`)
+    frames = [
+        replace(f, sightings=tuple(replace(s, beacon=sketch.beacon(s.beacon.id)) for s in f.sightings)) for f in frames
+    ]
+    adjusted = adjust(frames, chain_start(frames, sketch, 1), 1, SurveyRules())
+    for beacon, half_turns in zip(room.beacons[1:], (0, 1), strict=True):
+        estimate = adjusted.panels[beacon.id]
+        assert np.linalg.norm(estimate.pose.center_m - beacon.center_m) < 0.5e-3, beacon.id
+        expected = beacon.yaw_deg + 180.0 * half_turns
+        assert abs((estimate.pose.yaw_deg - expected + 180.0) % 360.0 - 180.0) < 0.02, (beacon.id, estimate.pose)
+    assert adjusted.rms_px < 0.1
+
+
+def test_sightings_far_off_after_the_first_fit_are_left_out_and_frames_left_with_one_are_skipped():
+    frames = _frames([(1, 2), (2, 3), (1, 2, 3)], np.random.default_rng(6))
+    chi = ((1.0, 1.1), (1.0, 50.0), (1.0, 1.0, 40.0))  # median 1.0: the limit is 6 (outlier_factor)
+    rms = tuple(tuple(0.05 * c for c in each) for each in chi)
+    adjusted = Adjusted(panels={}, cameras=(), rms_px=0.1, sighting_rms_px=rms, sighting_chi=chi)
+    kept, skipped = _without_outliers(frames, adjusted, SurveyRules())
+    assert [f.name for f in kept] == ["f0", "f2"] and [s.name for s in skipped] == ["f1"]
+    assert kept[0] is frames[0] or kept[0].sightings == frames[0].sightings
+    assert [s.beacon.id for s in kept[1].sightings] == [1, 2]
+    assert "left out after the first fit: beacon 3 2.00 px off" in kept[1].notes[-1]
+    assert "beacon 3 2.50 px" in skipped[0].why and "6 times the median" in skipped[0].why
 
 
 def test_a_panel_the_frames_do_not_tie_to_the_anchor_is_refused_naming_it_and_the_frames():
