@@ -14,7 +14,7 @@ from server.api.guard import GuardedRoute
 from server.api.routes import DAMAGED_RESPONSES
 from server.ingest import decode_frame
 from server.outcomes import FrameError
-from server.store import StoreError
+from server.store import StoreError, check_new_map_name
 from server.survey.rules import SurveyInputError, SurveyRefused
 from server.survey.run import SurveyFrame, check_request, survey
 from shared_schemas import BeaconMap, ProfileRef
@@ -62,6 +62,7 @@ def _frames(services: Services, request: SurveyRequest) -> Iterator[SurveyFrame]
 
 
 def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
+    check_new_map_name(request.name)  # the map is stored (or may be) under it
     sketch = _sketch(services, request)
     try:
         # what the request gets wrong is said before any frame is read

@@ -117,6 +117,13 @@ def test_a_repeated_sample_or_too_many_are_refused_before_any_frame_is_read(stor
     assert response.status_code == 422 and response.json()["field"] == "samples", response.text
 
 
+def test_a_survey_cannot_write_the_map_named_active(stored, client):
+    refused = _refusal(lambda: client.survey(_request(stored, name="active", store=True)))
+    assert (refused.status, refused.body.error, refused.body.field) == (400, "bad_name", "name")
+    assert "'active' is reserved" in refused.body.message
+    assert "active" not in {summary.name for summary in client.maps()}
+
+
 def test_a_malformed_survey_request_is_422(server_url):
     for body, field in (({"name": "x", "anchor": 1, "samples": []}, "sketch"), ({"sketch": "demo"}, "name")):
         response = httpx.post(f"{server_url}/v1/surveys", json=body)
