@@ -7,7 +7,7 @@ is measured by the one-panel pipeline on its own crop (`server.rooms.locate_pane
 
 - a square wholly in view takes the corner path; its points are the sub-pixel corners where the
   sides cross at the mid level (the pipeline's own estimate of the clipped-edge growth put back:
-  the fit measures the growth for the whole survey instead, `server.survey.adjust`) and the
+  the fit measures each panel's growth over all its frames instead, `server.survey.adjust`) and the
   intersection of the corrected corners' diagonals. The sides are measured to about 0.02 px,
   independently of the pose, and the corners of a 0.17 m panel 1.4 m away span about 230 px at
   half the Mi 8's resolution: the panel's size, which is what sets the map's scale, is then known
@@ -51,7 +51,7 @@ class Sighting:
     points_px: np.ndarray
     sigmas_px: np.ndarray  # (5,) of each point
     cut: bool  # from the outline path (cut by the border, or handed over)
-    grown: bool  # the corners lie outside the panel's outline by the survey's common clipped-edge growth
+    grown: bool  # the corners lie outside the panel's outline by the panel's clipped-edge growth (`adjust`)
     position_b: np.ndarray  # (3,) the camera's optical centre in the panel's frame
     rotation_bc: np.ndarray  # (3, 3) camera to panel frame
     area_px: float
@@ -67,6 +67,9 @@ class FrameSightings:
     compass_bearing_deg: float | None
     sightings: tuple[Sighting, ...]
     notes: tuple[str, ...]  # panels in view that were not used, and why
+    # frames that share it share the clipped-edge growth of a panel (px: it scales with the resolution and
+    # the overexposure): the full frame's size, exposure, ISO and tone curve
+    growth_group: tuple = ()
 
 
 def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str, field: str = "labels") -> None:
@@ -217,4 +220,5 @@ def frame_sightings(
         compass_bearing_deg=meta.compass_bearing_deg,
         sightings=tuple(sightings),
         notes=tuple(notes),
+        growth_group=(*meta.full_size, meta.exposure_s, meta.iso, meta.tone_curve),
     )

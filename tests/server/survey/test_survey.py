@@ -43,13 +43,15 @@ ROOM = BeaconMap(
 GROWTH_PX = 1.5
 
 
-def _sighting(beacon: Beacon, position: np.ndarray, rotation_wc: np.ndarray, rng, noise_px: float) -> Sighting:
+def _sighting(
+    beacon: Beacon, position: np.ndarray, rotation_wc: np.ndarray, rng, noise_px: float, growth_px: float = GROWTH_PX
+) -> Sighting:
     """A whole panel seen from a camera: mid-level corners (grown by GROWTH_PX) and centre with noise, and a
     start pose a little off (as a single panel's fix would give)."""
     model = np.vstack([beacon_corners_m(beacon) @ beacon_rotation(beacon).T + beacon.center_m, beacon.center_m])
     pixels = world_to_camera(model, position, rotation_wc) @ MATRIX.T
     pixels = pixels[:, :2] / pixels[:, 2:]
-    pixels[:4] = grown_quads(pixels[:4], GROWTH_PX)
+    pixels[:4] = grown_quads(pixels[:4], growth_px)
     pixels += rng.normal(0.0, noise_px, pixels.shape)
     rotation_wb = beacon_rotation(beacon)
     off = rotation_from_ypr(*rng.normal(0.0, 0.3, 3))
@@ -62,12 +64,19 @@ def _sighting(beacon: Beacon, position: np.ndarray, rotation_wc: np.ndarray, rng
         position_b=rotation_wb.T @ (position - beacon.center_m) + rng.normal(0.0, 0.01, 3),
         rotation_bc=rotation_wb.T @ off @ rotation_wc,
         area_px=1e4,
-        growth_px=GROWTH_PX + 0.2,
+        growth_px=growth_px + 0.2,
     )
 
 
-def _frames(pairs: list[tuple[int, ...]], rng, noise_px: float = 0.03, room: BeaconMap = ROOM) -> list[FrameSightings]:
-    """A frame under each group of panels (IDs), looking up at their middle with a little tilt."""
+def _frames(
+    pairs: list[tuple[int, ...]],
+    rng,
+    noise_px: float = 0.03,
+    room: BeaconMap = ROOM,
+    growths_px: dict[int, float] | None = None,
+) -> list[FrameSightings]:
+    """A frame under each group of panels (IDs), looking up at their middle with a little tilt; `growths_px`:
+    each panel's clipped-edge growth (default GROWTH_PX for all)."""
     frames = []
     for k, ids in enumerate(pairs):
         beacons = [room.beacon(i) for i in ids]
@@ -82,7 +91,10 @@ def _frames(pairs: list[tuple[int, ...]], rng, noise_px: float = 0.03, room: Bea
                 gravity_camera=gravity,
                 gravity_sigma_deg=0.05,
                 compass_bearing_deg=None,
-                sightings=tuple(_sighting(b, position, rotation, rng, noise_px) for b in beacons),
+                sightings=tuple(
+                    _sighting(b, position, rotation, rng, noise_px, (growths_px or {}).get(b.id, GROWTH_PX))
+                    for b in beacons
+                ),
                 notes=(),
             )
         )
@@ -136,6 +148,18 @@ def test_the_panels_covariance_is_the_whole_inverses_part_without_forming_it():
     rest = [*range(4 * panels), jacobian.shape[1] - 2, jacobian.shape[1] - 1]
     reduced = without_cameras_covariance(csr_matrix(jacobian), 4 * panels, cameras)
     assert np.allclose(reduced, whole[np.ix_(rest, rest)], rtol=1e-8, atol=1e-12)
+
+
+def test_panels_of_different_luminance_each_get_their_own_growth():
+    """Panels 15 % brighter or dimmer grow by different amounts (here 1.2, 1.5, 1.8 px): one growth for all
+    would shrink the bright ones and stretch the map; each panel's own is fitted."""
+    rng = np.random.default_rng(8)
+    frames = _frames([(1, 2), (2, 3), (1, 3), (1, 2, 3)] * 4, rng, growths_px={1: 1.5, 2: 1.8, 3: 1.2})
+    adjusted = adjust(frames, chain_start(frames, _sketch(ROOM, 1), 1), 1, SurveyRules())
+    for beacon in ROOM.beacons[1:]:
+        error = adjusted.panels[beacon.id].pose.center_m - beacon.center_m
+        assert np.linalg.norm(error) < 0.5e-3, (beacon.id, error)
+    assert adjusted.rms_px < 0.1
 
 
 def test_rectangles_are_fitted_with_their_half_turn_kept_as_sketched():
