@@ -162,6 +162,20 @@ def test_panels_of_different_luminance_each_get_their_own_growth():
     assert adjusted.rms_px < 0.1
 
 
+def test_frames_of_another_exposure_have_their_own_growths():
+    """The same panels at a longer exposure (or another resolution) grow further: a group of their own."""
+    rng = np.random.default_rng(9)
+    pairs = [(1, 2), (2, 3), (1, 3), (1, 2, 3)] * 3
+    short = _frames(pairs, rng, growths_px={1: 1.5, 2: 1.8, 3: 1.2})
+    long = _frames(pairs, rng, growths_px={1: 2.1, 2: 2.5, 3: 1.7})
+    frames = [replace(f, growth_group=(970, 1296, 0.001)) for f in short]
+    frames += [replace(f, name=f"long-{f.name}", growth_group=(970, 1296, 0.004)) for f in long]
+    adjusted = adjust(frames, chain_start(frames, _sketch(ROOM, 1), 1), 1, SurveyRules())
+    for beacon in ROOM.beacons[1:]:
+        error = adjusted.panels[beacon.id].pose.center_m - beacon.center_m
+        assert np.linalg.norm(error) < 0.5e-3, (beacon.id, error)
+
+
 def test_rectangles_are_fitted_with_their_half_turn_kept_as_sketched():
     """A rectangle looks the same turned by 180 deg: the chain and the fit keep the sketch's choice (panel 3
     sketched half a turn round), and place every panel as with squares."""
