@@ -18,7 +18,11 @@ def stored(server_url):
     """The quarter-scale office set stored as samples: (truth, sketch, anchor, [(sample ID, labels)])."""
     truth, sketch, anchor, shots = survey_set()
     with Client(server_url, api_key=API_KEY) as client:
-        samples = [(client.store_sample(s.pixels.tobytes(), s.meta).id, s.labels) for s in shots]
+        # labelled as the app labels survey photos, which the samples' evaluation leaves out
+        samples = [
+            (client.store_sample(s.pixels.tobytes(), s.meta, label=f"survey:office:{k}").id, s.labels)
+            for k, s in enumerate(shots)
+        ]
     return truth, sketch, anchor, samples
 
 
@@ -63,13 +67,11 @@ def test_samples_naming_a_stored_profile_are_surveyed(client):
     stored = device_profiles()["xiaomi-mi8-front"].model_copy(update={"id": "survey-mi8", "gravity_sigma_deg": 0.2})
     client.put_profile(stored)
     named = ProfileRef(profile=stored.id)
-    samples = [
-        SurveySample(
-            sample_id=client.store_sample(s.pixels.tobytes(), s.meta.model_copy(update={"camera": named})).id,
-            labels=s.labels,
-        )
-        for s in shots
-    ]
+    samples = []
+    for k, s in enumerate(shots):
+        meta = s.meta.model_copy(update={"camera": named})
+        stored_id = client.store_sample(s.pixels.tobytes(), meta, label=f"survey:office-profiled:{k}").id
+        samples.append(SurveySample(sample_id=stored_id, labels=s.labels))
     request = SurveyRequest(name="office-profiled", sketch=sketch, anchor=anchor, samples=samples)
     report = client.survey(request)
     for beacon in truth.beacons:
