@@ -27,6 +27,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from server.geometry import wrap_deg
 from server.ingest import LumaFrame
 from server.options import LocateOptions
 from server.outcomes import Refusal, located, refused
@@ -130,7 +131,7 @@ def _with_map_heading(frame: LumaFrame, beacon_map: BeaconMap) -> LumaFrame:
     meta = frame.meta
     if meta.heading_deg is not None or meta.compass_bearing_deg is None or beacon_map.bearing_deg is None:
         return frame
-    heading = (beacon_map.bearing_deg - meta.compass_bearing_deg + 180.0) % 360.0 - 180.0
+    heading = wrap_deg(beacon_map.bearing_deg - meta.compass_bearing_deg)
     return replace(frame, meta=meta.model_copy(update={"heading_deg": heading}))
 
 

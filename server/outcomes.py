@@ -61,6 +61,9 @@ class Fix:
     ambiguity_ratio: float | None = None
     covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame, from the fit
     growth_px: float | None = None  # how far the panel's mid-level contour lies outside its outline
+    # how far the sides' own growths lie from `growth_px` when their blur differs (motion; px, 0 when even):
+    # each side was moved in by its own, so `growth_px` put back leaves the corners off by up to this much
+    uneven_px: float = 0.0
     from_outline: bool = False  # the outline fit's: its corners are projected from the pose, not measured
     warnings: tuple[str, ...] = ()
     timing_ms: Mapping[str, float] = field(default_factory=dict)

@@ -251,6 +251,7 @@ def locate_beacon(
         ambiguity_ratio=pose.ambiguity_ratio,
         covariance_m2=pose.covariance_m2,
         growth_px=-edges.edge_shift_px if edges is not None and edges.edge_shift_px else None,
+        uneven_px=edges.uneven_px if edges is not None else 0.0,
         warnings=tuple(warnings),
         timing_ms=timer.total(),
     )

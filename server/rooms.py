@@ -224,8 +224,10 @@ def read_room(
     beacon_map: BeaconMap,
     options: PipelineOptions = PipelineOptions(),
     rules: RoomRules = RoomRules(),
+    found: Candidates | None = None,
 ) -> RoomReading:
-    """Every panel of an ID frame of a multi-beacon map: named by its own stripes, and located.
+    """Every panel of an ID frame of a multi-beacon map: named by its own stripes, and located; `found`: the
+    frame's blobs (by `rules.candidates.for_beacons(beacon_map.beacons)`) when the caller has them already.
 
     Blobs are judged by the looks of the map's panels (`CandidateRules.for_beacons`). A panel
     cut by the frame border is named like a whole one, from the rows still in view (the stripes
@@ -237,7 +239,7 @@ def read_room(
     threshold would cut a striped panel into bars.
     """
     candidates = rules.candidates.for_beacons(beacon_map.beacons)
-    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
+    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta)) if found is None else found
     reading = read_id_frame(frame, candidates, rules.stripes, found)
     if reading.problem is not None:
         return RoomReading((), len(found.blobs), reading.problem)

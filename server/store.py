@@ -247,6 +247,18 @@ def _check_name(name: str, what: str = "map name", field: str = "name") -> str:
     return name
 
 
+# /v1/maps/active is the active map's name, so a map stored as 'active' could never be read by its name
+RESERVED_MAP_NAMES = frozenset({"active"})
+
+
+def check_new_map_name(name: str, field: str = "name") -> str:
+    """A name a map may be stored under: the pattern's, and not a reserved one (`bad_name`)."""
+    _check_name(name, field=field)
+    if name in RESERVED_MAP_NAMES:
+        raise StoreError("bad_name", f"'{name}' is reserved (GET /v1/maps/{name} names the active map)", field=field)
+    return name
+
+
 @dataclass(frozen=True)
 class _JsonFolder(Generic[Model]):
     """A folder of the data folder holding NAME.json files, one `model` each: read through a cache
@@ -436,7 +448,7 @@ class MapStore:
         raise StoreError("not_found", f"no map named '{name}'", field="name")
 
     def put(self, name: str, beacon_map: BeaconMap) -> BeaconMap:
-        if beacon_map.name != _check_name(name):
+        if beacon_map.name != check_new_map_name(name):
             raise StoreError(
                 "name_mismatch", f"the map's name '{beacon_map.name}' differs from '{name}' in the URL", field="name"
             )

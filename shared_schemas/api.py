@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from datetime import datetime
+from typing import Final
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -95,6 +96,15 @@ class Evaluation(BaseModel):
     min_mm: float | None = None
     max_mm: float | None = None
     rows: list[EvaluationRow]
+
+
+# The label of a sample stored to be surveyed from (the app's survey: `survey:<map name>:<n>`): a photo of
+# several panels from anywhere, with no truth of its own, which the evaluation leaves out
+SURVEY_LABEL_PREFIX: Final = "survey:"
+
+
+def is_survey_label(label: str | None) -> bool:
+    return label is not None and label.startswith(SURVEY_LABEL_PREFIX)
 
 
 def cell_truth_m(label: str | None, cell_m: float, height_m: float = 0.0) -> list[float] | None:

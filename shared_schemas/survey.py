@@ -8,14 +8,16 @@ from __future__ import annotations
 
 from typing import Final, Literal
 
-from pydantic import ConfigDict, Field
+from pydantic import ConfigDict, Field, field_validator
 
 from shared_schemas.api import NAME_PATTERN
 from shared_schemas.models import BeaconMap, PositionM, Strict, Vec3
 
 SURVEY_SCHEMA: Final = "lumipose.survey/1"
 SURVEY_REPORT_SCHEMA: Final = "lumipose.survey-report/1"
-MAX_SURVEY_FRAMES: Final = 1000
+# A survey of a room takes tens of frames; the fit's cost grows with them (and a request runs for minutes past
+# a few hundred), so the cap leaves room for a large room without letting one request hold the server
+MAX_SURVEY_FRAMES: Final = 200
 
 
 class PanelLabel(Strict):
@@ -47,6 +49,20 @@ class SurveyRequest(Strict):
     store: bool = Field(default=False, description="store the surveyed map under `name` (needs write access)")
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
+
+    @field_validator("samples")
+    @classmethod
+    def _each_sample_once(cls, samples: list[SurveySample]) -> list[SurveySample]:
+        # a repeated frame would count its panels twice and shrink their sigmas by the square root of the repeats
+        first: dict[str, int] = {}
+        for k, sample in enumerate(samples):
+            if sample.sample_id in first:
+                raise ValueError(
+                    f"samples {first[sample.sample_id]} and {k} are the same sample '{sample.sample_id}': "
+                    f"name each sample once"
+                )
+            first[sample.sample_id] = k
+        return samples
 
 
 class SurveyedBeacon(Strict):

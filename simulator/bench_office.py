@@ -59,6 +59,7 @@ class OfficeConfig:
     id_interval_s: float = id_frame_interval_s()  # the app's burst: 4 frames a quarter message apart
     max_captures: int | None = None
     seed: int = 1
+    panel_yaws_deg: tuple[float, ...] | None = None  # each scene panel's yaw (a surveyed room's); None: the scene's
 
 
 def office_scenes(config: OfficeConfig) -> tuple[Scene, Scene]:
@@ -67,6 +68,10 @@ def office_scenes(config: OfficeConfig) -> tuple[Scene, Scene]:
     scene = find_scene(config.scene)
     rng = np.random.default_rng([config.seed, 99])
     beacons = [b.model_copy(update={"vlc_phase_s": float(rng.uniform(0, 1))}) for b in scene.beacons]
+    if config.panel_yaws_deg is not None:
+        if len(config.panel_yaws_deg) != len(beacons):
+            raise ValueError(f"panel_yaws_deg: {len(config.panel_yaws_deg)} yaws for {len(beacons)} panels")
+        beacons = [b.model_copy(update={"yaw_deg": y}) for b, y in zip(beacons, config.panel_yaws_deg, strict=True)]
     updates: dict = {"beacons": beacons}
     if config.pose_exposure_s is not None:
         updates["sensor"] = scene.sensor.model_copy(update={"exposure_s": config.pose_exposure_s})

@@ -41,6 +41,9 @@ class SurveyBenchConfig:
     sketch_yaw_error_deg: float = 5.0
     walk: str | None = "zigzag"  # None: no walk
     walk_limit: int | None = None  # captures of the walk
+    # the panels' luminances spread evenly over +-this share of the scene's (real panels differ by 10-20 %);
+    # the same frames otherwise. The walk keeps the scene's panels
+    luminance_spread: float = 0.0
 
 
 def survey_shots(config: SurveyBenchConfig):
@@ -48,6 +51,14 @@ def survey_shots(config: SurveyBenchConfig):
     scene = find_scene(SCENES[config.panels])
     if config.scale is not None:
         scene = scene.model_copy(update={"camera": scene.camera.model_copy(update={"scale": config.scale})})
+    if config.luminance_spread:
+        factors = 1.0 + np.linspace(-config.luminance_spread, config.luminance_spread, len(scene.beacons))
+        factors = np.random.default_rng([config.seed, config.panels, 7]).permutation(factors)
+        beacons = [
+            b.model_copy(update={"luminance_nits": b.luminance_nits * f})
+            for b, f in zip(scene.beacons, factors, strict=True)
+        ]
+        scene = scene.model_copy(update={"beacons": beacons})
     rng = np.random.default_rng([config.seed, config.panels])
     shots = render_survey(scene, survey_poses(scene, config.frames, rng), rng)
     truth = scene.beacon_map()
@@ -89,6 +100,7 @@ def run_survey_bench(config: SurveyBenchConfig, fixtures: Path | None = None) ->
     result = {
         "config": asdict(config),
         "scene": scene.name,
+        "panel_luminance_nits": {b.id: b.luminance_nits for b in scene.beacons},
         "frames": len(frames),
         "frames_used": report.frames_used,
         "skipped": [s.model_dump() for s in report.skipped],

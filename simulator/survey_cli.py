@@ -16,6 +16,8 @@ def add_survey_bench(benches) -> None:
     bench.add_argument("--seed", type=int, default=1)
     bench.add_argument("--walk", choices=["zigzag", "spiral", "none"], default="zigzag",
                        help="the office walk positioned with the surveyed and the true map (none: skip)")
+    bench.add_argument("--luminance-spread", type=float, default=0.0,
+                       help="panels' luminances spread evenly over +- this share (0.15: +-15 %%); the walk keeps the scene's")
     bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
     bench.add_argument("--fixtures", type=Path, default=None,
                        help="also write each office's frames, labels.json and sketch.json here (for `lumipose survey`)")
@@ -28,6 +30,8 @@ def _fmt(value) -> str:
 
 
 def _print(report: dict) -> None:
+    luminances = ", ".join(f"{k} {v:.0f}" for k, v in report["panel_luminance_nits"].items())
+    print(f"panel luminances (cd/m2): {luminances}")
     print(f"{report['scene']}: {report['frames_used']} of {report['frames']} frames used, "
           f"RMS {report['rms_px']:.3f} px, "
           f"survey {report['survey_s']:.1f} s")
@@ -63,7 +67,8 @@ def _run_survey_bench(args) -> int:
     from simulator.bench_survey import SurveyBenchConfig, run_survey_bench
 
     base = SurveyBenchConfig(frames=args.frames, scale=args.scale, seed=args.seed,
-                             walk=None if args.walk == "none" else args.walk, walk_limit=args.walk_limit)
+                             walk=None if args.walk == "none" else args.walk, walk_limit=args.walk_limit,
+                             luminance_spread=args.luminance_spread)
     reports = []
     for panels in args.panels:
         reports.append(run_survey_bench(replace(base, panels=panels), args.fixtures))

@@ -48,6 +48,7 @@ class Services:
     options: LocateOptions  # from the settings; a request's query refines its pipeline part
     devices: Devices  # per-process: see docs/deployment.md
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
+    survey_limiter: anyio.CapacityLimiter  # surveys (seconds to a minute each): one at a time
     frame_slots: FrameSlots  # frame uploads held at once (server.api.guard)
 
 

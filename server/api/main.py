@@ -34,6 +34,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         options=settings.locate_options(),
         devices=Devices(settings.device_rules()),
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
+        survey_limiter=anyio.CapacityLimiter(1),
         frame_slots=FrameSlots(settings.max_frames_in_flight),
     )
     install_error_handlers(app)

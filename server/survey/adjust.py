@@ -4,11 +4,12 @@ Unknowns: each panel's centre (x, y, z) and yaw, except the anchor's (its sketch
 fix the map's frame); each frame's camera pose (rotation vector of `rotation_wc`, optical
 centre). Panels hang level on the ceiling: their tilt is not an unknown (a panel's own tilt of a
 few tenths of a degree would move its corners by well under a tenth of a millimetre). And the
-clipped-edge growth of the whole panels' mid-level corners (`server.survey.sightings`): one for
-the survey (one exposure, one panel luminance, one lens), D0 + D2 r^2 with r the panel's distance
-from the principal point in focal lengths (the lens vignettes, so the overexposure and the growth
-fall towards the corners). The panels' sizes set the map's scale, and the frames' different
-distances tell the growth from it.
+clipped-edge growth of the whole panels' mid-level corners (`server.survey.sightings`): D0 + D2 r^2
+with r the panel's distance from the principal point in focal lengths (the lens vignettes, so the
+overexposure and the growth fall towards the corners); D0 for each panel (real panels differ in
+luminance by 10-20 %, and the growth with it), both per group of frames of one size and exposure
+(`FrameSightings.growth_group`: the growth in px scales with both). The panels' sizes set the map's
+scale, and a panel's frames at different distances tell its growth from it.
 
 Residuals (`scipy.optimize.least_squares`, a sparse Jacobian through `jac_sparsity`: a panel's
 points depend on its four numbers and its frame's six only):
@@ -22,7 +23,8 @@ points depend on its four numbers and its frame's six only):
 
 Uncertainty: the covariance of the unknowns is (J^T J)^-1 scaled by the residuals' variance
 (their sum of squares over the degrees of freedom), so sigmas that were guessed too small or too
-large are corrected by the fit itself. A square's corners are labelled (which of its four is
+large are corrected by the fit itself; only the panels' part is formed, by the Schur complement
+over the cameras (`without_cameras_covariance`). A square's corners are labelled (which of its four is
 model corner 0) against the start's yaw before the fit, and kept.
 """
 
@@ -33,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
+from scipy.sparse import block_diag, csr_matrix, lil_matrix
 from scipy.spatial.transform import Rotation
 
 from server.geometry import beacon_corners_m, grown_quads, orthonormal_pair, wrap_deg
@@ -44,7 +46,6 @@ from server.survey.sightings import FrameSightings, Sighting
 from shared_schemas import Beacon
 
 DOWN = np.array([0.0, 0.0, -1.0])
-GROWTH_UNKNOWNS = 2  # D0, D2: the clipped-edge growth at the image's centre and its fall with r^2
 
 
 @dataclass(frozen=True)
@@ -86,10 +87,28 @@ class _Problem:
         self.sigma = np.array([s.sigmas_px for _, s in sightings])  # (N, 5)
         self.grown = np.array([s.grown for _, s in sightings], bool)
         self.observed = np.array([s.points_px for _, s in sightings])  # (N, 5, 2)
-        growths = [s.growth_px for _, s in sightings if s.grown and s.growth_px is not None]
-        self.growth_start_px = float(np.median(growths)) if growths else HELD_GROWTH_PX
+        # each panel's own growth (D0) per group of frames that share size and exposure; the fall with r^2
+        # (D2) per group: growth = D0 + D2 r^2
+        groups = list(dict.fromkeys(frame.growth_group for frame in frames))
+        keys = list(dict.fromkeys((s.beacon.id, frames[f].growth_group) for f, s in sightings if s.grown))
+        self.growth_keys = keys
+        self.groups = len(groups)
+        key_index = {key: j for j, key in enumerate(keys)}
+        self.growth_of = np.array(
+            [key_index.get((s.beacon.id, frames[f].growth_group), -1) for f, s in sightings], int
+        )  # (N,) D0's index, -1 for an outline fit's points
+        self.fall_of = np.array([groups.index(frames[f].growth_group) for f, _ in sightings], int)  # (N,)
+        measured: dict[tuple, list[float]] = {}
+        for (_, s), j in zip(sightings, self.growth_of, strict=True):
+            if j >= 0 and s.growth_px is not None:
+                measured.setdefault(keys[j], []).append(s.growth_px)
+        every = [g for values in measured.values() for g in values]
+        fallback = float(np.median(every)) if every else HELD_GROWTH_PX
+        self.growth_start_px = [float(np.median(measured[key])) if key in measured else fallback for key in keys]
+        self.growth_base = self.frame_base + 6 * len(frames)
+        self.fall_base = self.growth_base + len(keys)
         # the growth falls towards the image's corners, where the lens vignettes (less overexposure):
-        # growth = D0 + D2 r^2, r the panel's distance from the principal point in focal lengths
+        # r is the panel's distance from the principal point in focal lengths
         centres = self.observed[:, 4]
         principal = np.array([[f.matrix[0, 2], f.matrix[1, 2]] for f in frames])[self.frame_of]
         focal = np.array([f.matrix[0, 0] for f in frames])[self.frame_of]
@@ -104,13 +123,13 @@ class _Problem:
     def x0(self) -> np.ndarray:
         panels = [[*self.start.panels[k].center_m, math.radians(self.start.panels[k].yaw_deg)] for k in self.free]
         cameras = [[*Rotation.from_matrix(c.rotation_wc).as_rotvec(), *c.position_m] for c in self.start.cameras]
-        return np.concatenate([np.ravel(panels), np.ravel(cameras), [self.growth_start_px, 0.0]])
+        return np.concatenate([np.ravel(panels), np.ravel(cameras), self.growth_start_px, np.zeros(self.groups)])
 
     def unpack(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(panel centres (P, 3), yaws (P,) rad by `self.free` order, rotations_wc (F, 3, 3), positions (F, 3));
-        the growth's two (D0, D2) are the last unknowns."""
+        the growths (D0 per `growth_keys`, then D2 per group) are the last unknowns."""
         panels = x[: self.frame_base].reshape(-1, 4)
-        cameras = x[self.frame_base : -GROWTH_UNKNOWNS].reshape(-1, 6)
+        cameras = x[self.frame_base : self.growth_base].reshape(-1, 6)
         return panels[:, :3], panels[:, 3], Rotation.from_rotvec(cameras[:, :3]).as_matrix(), cameras[:, 3:]
 
     def sighting_panels(self, centres: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -126,7 +145,8 @@ class _Problem:
         c, y = self.sighting_panels(centres, yaws)
         f = self.frame_of
         projected = _project(self.model, c, y, rotations[f], positions[f], self.matrix[f])
-        growth = x[-2] + x[-1] * self.radius2[self.grown]
+        growth = x[self.growth_base + self.growth_of[self.grown]]
+        growth = growth + x[self.fall_base + self.fall_of[self.grown]] * self.radius2[self.grown]
         projected[self.grown, :4] = grown_quads(projected[self.grown, :4], growth)
         return projected - self.observed
 
@@ -142,16 +162,16 @@ class _Problem:
     def sparsity(self) -> lil_matrix:
         n_points = 10 * len(self.frame_of)
         rows = n_points + 2 * len(self.gravity_frames)
-        growth = self.frame_base + 6 * len(self.frames)
-        pattern = lil_matrix((rows, growth + GROWTH_UNKNOWNS), dtype=int)
+        pattern = lil_matrix((rows, self.fall_base + self.groups), dtype=int)
         for k, (panel, frame) in enumerate(zip(self.panel_ids, self.frame_of, strict=True)):
             block = slice(10 * k, 10 * k + 10)
             if panel != self.anchor:
                 pattern[block, self.column[panel] : self.column[panel] + 4] = 1
             start = self.frame_base + 6 * frame
             pattern[block, start : start + 6] = 1
-            if self.grown[k]:
-                pattern[10 * k : 10 * k + 8, growth : growth + GROWTH_UNKNOWNS] = 1  # the corners, not the centre
+            if self.grown[k]:  # the corners, not the centre
+                pattern[10 * k : 10 * k + 8, self.growth_base + self.growth_of[k]] = 1
+                pattern[10 * k : 10 * k + 8, self.fall_base + self.fall_of[k]] = 1
         for k, frame in enumerate(self.gravity_frames):
             start = self.frame_base + 6 * frame
             pattern[n_points + 2 * k : n_points + 2 * k + 2, start : start + 3] = 1
@@ -202,6 +222,26 @@ def _project(
     return pixels[..., :2] / depth[..., None]
 
 
+def without_cameras_covariance(jacobian, cameras_at: int, cameras: int) -> np.ndarray:
+    """(J^T J)^-1 of every unknown but the cameras' (in their order: the panels', then the growth's), by the
+    Schur complement over the cameras' 6 x 6 blocks.
+
+    A camera's six unknowns meet no other camera's in J^T J (each residual belongs to one frame), so its
+    camera part is block diagonal: inverting it costs F small inverses, and the dense inverse is only of
+    the panels' size, where the whole (J^T J)^-1 of hundreds of frames took seconds and gigabytes.
+    `jacobian`: (residuals, unknowns), sparse or dense; the cameras' unknowns are columns
+    [cameras_at, cameras_at + 6 cameras)."""
+    jac = csr_matrix(jacobian)
+    information = (jac.T @ jac).tocsr()
+    camera_columns = np.arange(cameras_at, cameras_at + 6 * cameras)
+    rest = np.setdiff1d(np.arange(information.shape[0]), camera_columns)
+    cameras_part = information[camera_columns][:, camera_columns]
+    blocks = [np.linalg.pinv(cameras_part[6 * f : 6 * f + 6, 6 * f : 6 * f + 6].toarray()) for f in range(cameras)]
+    cross = information[rest][:, camera_columns]
+    reduced = information[rest][:, rest].toarray() - (cross @ block_diag(blocks, format="csr") @ cross.T).toarray()
+    return np.linalg.pinv(reduced)
+
+
 def adjust(frames: list[FrameSightings], start: Start, anchor: int, rules: SurveyRules = SurveyRules()) -> Adjusted:
     """The joint fit from `start`; every panel's pose and 1-sigma, every camera, the RMS."""
     problem = _Problem(frames, start, anchor)
@@ -214,12 +254,10 @@ def adjust(frames: list[FrameSightings], start: Start, anchor: int, rules: Surve
         max_nfev=rules.max_evaluations,
     )
     centres, yaws, rotations, positions = problem.unpack(fit.x)
-    jacobian = fit.jac.toarray() if hasattr(fit.jac, "toarray") else np.asarray(fit.jac)
     dof = max(1, len(fit.fun) - len(fit.x))
     variance = float(np.sum(fit.fun**2)) / dof
-    information = jacobian.T @ jacobian
-    covariance = np.linalg.pinv(information) * variance
-    sigmas = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    covariance = without_cameras_covariance(fit.jac, problem.frame_base, len(frames)) * variance
+    sigmas = np.sqrt(np.clip(np.diag(covariance), 0.0, None))  # the panels' first, by `problem.free` order
     errors = problem.point_errors(fit.x)
     per_point = np.sum(errors**2, axis=-1)  # (N, 5)
     counts = dict.fromkeys(start.panels, 0)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from server.geometry import rotation_z, wrap_deg
+from server.geometry import rotation_z, wrap_deg, ypr_from_rotation
 from server.survey.rules import SurveyRefused
 from server.survey.sightings import FrameSightings, Sighting
 from shared_schemas import Beacon, BeaconMap
@@ -56,10 +56,6 @@ def nearest_equivalent_deg(yaw_deg: float, reference_deg: float, step_deg: float
     """`yaw_deg` plus the multiple of `step_deg` that brings it nearest `reference_deg`, in (-180, 180]."""
     turns = round((reference_deg - yaw_deg) / step_deg)
     return wrap_deg(yaw_deg + turns * step_deg)
-
-
-def _yaw_deg(rotation: np.ndarray) -> float:
-    return math.degrees(math.atan2(rotation[1, 0], rotation[0, 0]))
 
 
 def _centre_in_camera(sighting: Sighting) -> np.ndarray:
@@ -96,7 +92,7 @@ def _pose_frame(frame: FrameSightings, placed: dict[int, PanelPose], sketch: Bea
 
 def _place(sighting: Sighting, camera: CameraPose) -> PanelPose:
     center = camera.position_m + camera.rotation_wc @ _centre_in_camera(sighting)
-    yaw = _yaw_deg(camera.rotation_wc @ sighting.rotation_bc.T)
+    yaw = ypr_from_rotation(camera.rotation_wc @ sighting.rotation_bc.T)[0]
     return PanelPose(center, nearest_equivalent_deg(yaw, sighting.beacon.yaw_deg, symmetry_deg(sighting.beacon)))
 
 

@@ -54,8 +54,9 @@ class SurveyRules:
     outline_sigma_px: float = 1.0
     # The phone's gravity sensor, when the frame's profile gives none (docs/contract.md)
     gravity_sigma_deg: float = 0.1
-    # Residuals of one panel on one frame above this many times the fit's RMS (after a first fit)
-    # mark a wrong label or a smeared panel: the sighting is left out and the fit repeated
+    # A panel on one frame whose points' RMS over their sigmas (after a first fit) is above this many
+    # times the median of all sightings' marks a wrong label or a smeared panel: the sighting is left
+    # out and the fit repeated (`run._without_outliers`)
     outlier_factor: float = 6.0
     max_evaluations: int = 200
     pipeline: PipelineOptions = PipelineOptions(blobs=SURVEY_BLOBS)

@@ -7,10 +7,12 @@ the map's compass bearing (`bearing`) -> the contract's `SurveyReport`.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from server.camera import ProfileTable
 from server.ingest import LumaFrame
 from server.survey.adjust import Adjusted, adjust
 from server.survey.bearing import map_bearing
@@ -74,14 +76,23 @@ def _without_outliers(
 
 
 def survey(
-    frames: list[SurveyFrame], sketch: BeaconMap, anchor: int, name: str, rules: SurveyRules = SurveyRules()
+    frames: Iterable[SurveyFrame],
+    sketch: BeaconMap,
+    anchor: int,
+    name: str,
+    rules: SurveyRules = SurveyRules(),
+    profiles: ProfileTable | None = None,
 ) -> SurveyReport:
-    """The surveyed map of `sketch`'s panels from `frames`; raises `SurveyInputError` or `SurveyRefused`."""
-    check_request(sketch, anchor, [(f.name, f.labels) for f in frames])
+    """The surveyed map of `sketch`'s panels from `frames` (read once, in order: a generator that decodes each
+    frame when asked keeps one image in memory); raises `SurveyInputError` or `SurveyRefused`.
+    `profiles`: the device profiles the frames were decoded with (default: the bundled ones)."""
+    check_request(sketch, anchor, [])
     used: list[FrameSightings] = []
     skipped: list[SkippedFrame] = []
-    for frame in frames:
-        seen = frame_sightings(frame.frame, frame.name, frame.labels, sketch, rules)
+    # one frame at a time: only its sightings are kept, so a caller that reads frames lazily holds one image
+    for k, frame in enumerate(frames):
+        check_labels(frame.labels, sketch, frame.name, f"samples.{k}.labels")
+        seen = frame_sightings(frame.frame, frame.name, frame.labels, sketch, rules, profiles)
         (skipped if isinstance(seen, SkippedFrame) else used).append(seen)  # type: ignore[arg-type]
     if not used:
         first = "; ".join(f"'{s.name}': {s.why}" for s in skipped[:3])
@@ -109,7 +120,8 @@ def survey(
         update={
             "name": name,
             "beacons": beacons,
-            "bearing_deg": None if bearing is None else bearing.bearing_deg,
+            # the anchor keeps the sketch's frame, so the sketch's bearing still holds when no frame measured one
+            "bearing_deg": sketch.bearing_deg if bearing is None else bearing.bearing_deg,
         }
     )
     return SurveyReport(

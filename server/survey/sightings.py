@@ -7,7 +7,7 @@ is measured by the one-panel pipeline on its own crop (`server.rooms.locate_pane
 
 - a square wholly in view takes the corner path; its points are the sub-pixel corners where the
   sides cross at the mid level (the pipeline's own estimate of the clipped-edge growth put back:
-  the fit measures the growth for the whole survey instead, `server.survey.adjust`) and the
+  the fit measures each panel's growth over all its frames instead, `server.survey.adjust`) and the
   intersection of the corrected corners' diagonals. The sides are measured to about 0.02 px,
   independently of the pose, and the corners of a 0.17 m panel 1.4 m away span about 230 px at
   half the Mi 8's resolution: the panel's size, which is what sets the map's scale, is then known
@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from server.camera import ProfileTable
 from server.geometry import beacon_rotation, camera_matrix, distortion_vector, grown_quads
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
@@ -50,7 +51,7 @@ class Sighting:
     points_px: np.ndarray
     sigmas_px: np.ndarray  # (5,) of each point
     cut: bool  # from the outline path (cut by the border, or handed over)
-    grown: bool  # the corners lie outside the panel's outline by the survey's common clipped-edge growth
+    grown: bool  # the corners lie outside the panel's outline by the panel's clipped-edge growth (`adjust`)
     position_b: np.ndarray  # (3,) the camera's optical centre in the panel's frame
     rotation_bc: np.ndarray  # (3, 3) camera to panel frame
     area_px: float
@@ -66,6 +67,9 @@ class FrameSightings:
     compass_bearing_deg: float | None
     sightings: tuple[Sighting, ...]
     notes: tuple[str, ...]  # panels in view that were not used, and why
+    # frames that share it share the clipped-edge growth of a panel (px: it scales with the resolution and
+    # the overexposure): the full frame's size, exposure, ISO and tone curve
+    growth_group: tuple = ()
 
 
 def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str, field: str = "labels") -> None:
@@ -84,11 +88,12 @@ def check_labels(labels: list[PanelLabel], sketch: BeaconMap, name: str, field: 
         seen.add(label.beacon_id)
 
 
-def _gravity_sigma_deg(frame: LumaFrame, rules: SurveyRules) -> float:
+def _gravity_sigma_deg(frame: LumaFrame, profiles: ProfileTable, rules: SurveyRules) -> float:
+    """The frame's profile's gravity sigma; `profiles` is the table the frame was decoded with (a stored,
+    calibrated profile is in it, not among the bundled ones), else the rules' sigma."""
     camera = frame.meta.camera
-    if isinstance(camera, ProfileRef):
-        return device_profiles()[camera.profile].gravity_sigma_deg
-    return rules.gravity_sigma_deg
+    profile = profiles.get(camera.profile) if isinstance(camera, ProfileRef) else None
+    return rules.gravity_sigma_deg if profile is None else profile.gravity_sigma_deg
 
 
 def _labelled(frame: LumaFrame, blobs: tuple[BeaconBlob, ...], labels: list[PanelLabel], sketch: BeaconMap):
@@ -136,6 +141,9 @@ def _sighting(frame: LumaFrame, fix: Fix, beacon: Beacon, blob: BeaconBlob, rule
         sigmas = np.array([*[rules.corner_sigma_px] * 4, rules.centre_sigma_px])
         if fix.growth_px is not None:  # the sides back where the pipeline measured them
             points[:4] = grown_quads(points[:4], fix.growth_px)
+        # sides blurred unevenly were each moved in by their own growth, and one common growth put back
+        # leaves the corners (and the diagonals' crossing) off by up to `uneven_px`: weighed by it
+        sigmas = np.hypot(sigmas, fix.uneven_px)
     return Sighting(
         beacon=beacon,
         points_px=points,
@@ -150,17 +158,25 @@ def _sighting(frame: LumaFrame, fix: Fix, beacon: Beacon, blob: BeaconBlob, rule
 
 
 def frame_sightings(
-    frame: LumaFrame, name: str, labels: list[PanelLabel], sketch: BeaconMap, rules: SurveyRules = SurveyRules()
+    frame: LumaFrame,
+    name: str,
+    labels: list[PanelLabel],
+    sketch: BeaconMap,
+    rules: SurveyRules = SurveyRules(),
+    profiles: ProfileTable | None = None,
 ) -> FrameSightings | SkippedFrame:
-    """The named, measured panels of `frame` (at least two), or why the frame is skipped."""
+    """The named, measured panels of `frame` (at least two), or why the frame is skipped; `profiles`: the
+    table the frame was decoded with (default: the bundled profiles)."""
     check_labels(labels, sketch, name)
     notes: list[str] = []
     measured: list[tuple[BeaconBlob, Beacon, Fix | Refusal]] = []
     candidates = rules.room.candidates.for_beacons(sketch.beacons)
     found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
+    blobs = found.blobs
     if frame.meta.frame_kind is FrameKind.id:
-        room = read_room(frame, sketch, rules.pipeline, rules.room)
-        if room.problem is not None:
+        # the same blobs as the survey's own: a labelled panel's blob is then left out of its `others`
+        room = read_room(frame, sketch, rules.pipeline, rules.room, found)
+        if room.problem is not None:  # no panel named: the labels name any of the found blobs
             notes.append(f"its stripes cannot name panels ({room.problem})")
         notes += [p.note for p in room.panels if p.note is not None]
         measured += [(p.blob, p.beacon, p.fix) for p in room.panels if p.beacon is not None and p.fix is not None]
@@ -168,15 +184,13 @@ def frame_sightings(
         # a label names only a panel its stripes did not; such a panel is measured on its striped pixels
         # (not flattened without its code), which the pipeline often refuses: label pose frames instead
         labels = [label for label in labels if label.beacon_id not in striped]
-        blobs = tuple(p.blob for p in room.panels if p.beacon is None) if labels else ()
-    else:
-        blobs = found.blobs
+        if room.problem is None:
+            blobs = tuple(p.blob for p in room.panels if p.beacon is None)
     if labels:
         named, label_notes = _labelled(frame, blobs, labels, sketch)
         notes += label_notes
-        every = list(found.blobs)
         for blob, beacon in named:
-            others = [b for b in every if b is not blob]
+            others = [b for b in found.blobs if b is not blob]
             # (the fix's ID source is not reported: a survey says how it named each frame's panels)
             source = BeaconIdSource.single_beacon_map
             fix = locate_panel(frame, blob, others, beacon, source, rules.pipeline, found.levels, rules.room)
@@ -202,8 +216,9 @@ def frame_sightings(
         name=name,
         matrix=camera_matrix(frame.camera),
         gravity_camera=None if gravity is None else gravity / np.linalg.norm(gravity),
-        gravity_sigma_deg=_gravity_sigma_deg(frame, rules),
+        gravity_sigma_deg=_gravity_sigma_deg(frame, device_profiles() if profiles is None else profiles, rules),
         compass_bearing_deg=meta.compass_bearing_deg,
         sightings=tuple(sightings),
         notes=tuple(notes),
+        growth_group=(*meta.full_size, meta.exposure_s, meta.iso, meta.tone_curve),
     )

@@ -12,6 +12,8 @@ from dataclasses import replace
 import numpy as np
 
 from server.locator import locate
+from server.outcomes import Fix
+from server.pipeline import locate_beacon
 from server.vision.subpixel import side_growths, uneven_blur
 from simulator.benchmarks import AccuracyConfig, accuracy_frame, bench_motion, position_seen_m
 from simulator.chain import ChainSpec
@@ -71,3 +73,13 @@ def test_corners_that_overrule_the_gravity_sensor_by_far_give_way_to_it():
     assert result.ok, result.message
     assert any("from the gravity sensor's reading" in w for w in result.warnings), result.warnings
     assert error_mm < 15.0
+
+
+def test_the_fix_carries_how_far_the_sides_own_growths_lie_apart():
+    """The survey weighs a panel's corners by it (`server.survey.sightings`)."""
+    for motion, moved in ((MotionSpec.walking(), True), (MotionSpec(), False)):
+        config = replace(AccuracyConfig(distance_m=1.0, frames=40, scale=0.25, seed=1), chain=ChainSpec(motion=motion))
+        frame, beacon_map, _ = accuracy_frame(config, 4)
+        fix = locate_beacon(frame, beacon_map.beacons[0])
+        assert isinstance(fix, Fix), fix
+        assert (fix.uneven_px > 0.05) if moved else (fix.uneven_px == 0.0), fix.uneven_px

@@ -18,7 +18,7 @@ from server.evaluation import evaluate
 from server.outcomes import FrameError
 from server.store import StoreError
 from shared_schemas import LocateResult
-from shared_schemas.api import Evaluation, SampleInfo, SampleList
+from shared_schemas.api import Evaluation, SampleInfo, SampleList, is_survey_label
 
 router = APIRouter(prefix="/v1/samples", tags=["samples"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
@@ -76,6 +76,8 @@ async def evaluate_samples(
     await run_in_threadpool(services.maps.get, name)
     located: list[tuple[SampleInfo, LocateResult | str]] = []
     for sample in await run_in_threadpool(services.samples.all):
+        if is_survey_label(sample.label):  # survey photos: no truth, and not what a phone sees when it locates
+            continue
         try:
             data = await run_in_threadpool(services.samples.frame, sample.id)
         except StoreError:

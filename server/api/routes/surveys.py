@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Annotated
 
 from fastapi import APIRouter, Header
@@ -13,10 +14,10 @@ from server.api.guard import GuardedRoute
 from server.api.routes import DAMAGED_RESPONSES
 from server.ingest import decode_frame
 from server.outcomes import FrameError
-from server.store import StoreError
+from server.store import StoreError, check_new_map_name
 from server.survey.rules import SurveyInputError, SurveyRefused
 from server.survey.run import SurveyFrame, check_request, survey
-from shared_schemas import BeaconMap
+from shared_schemas import BeaconMap, ProfileRef
 from shared_schemas.survey import SurveyReport, SurveyRequest
 
 router = APIRouter(prefix="/v1/surveys", tags=["surveys"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
@@ -34,31 +35,40 @@ def _sketch(services: Services, request: SurveyRequest) -> BeaconMap:
         raise
 
 
-def _frames(services: Services, request: SurveyRequest) -> list[SurveyFrame]:
-    """Each sample's frame, read from the store; an unknown or unreadable one names its place in the request."""
-    frames = []
-    profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
+def _frames(services: Services, request: SurveyRequest) -> Iterator[SurveyFrame]:
+    """Each sample's frame, read from the store when the survey asks for it (one image held at a time); an
+    unknown or unreadable one names its place in the request."""
     for k, sample in enumerate(request.samples):
         field = f"samples.{k}.sample_id"
         try:
             info = services.samples.get(sample.sample_id)
-            frame = decode_frame(services.samples.frame(sample.sample_id), info.meta, profiles)
+            camera = info.meta.camera
+            named = camera.profile if isinstance(camera, ProfileRef) else None
+            table = services.profiles.table(named)  # a damaged profile the sample names raises, naming its file
+            if named is not None and named not in table:
+                message = (
+                    f"sample '{sample.sample_id}': its camera.profile '{named}' is no device profile on this server "
+                    f"(deleted since the sample was stored?); PUT /v1/profiles/{named} again"
+                )
+                raise ApiError(404, "not_found", message, field)
+            frame = decode_frame(services.samples.frame(sample.sample_id), info.meta, table)
         except StoreError as error:
             if error.code == "not_found":
                 raise ApiError(404, "not_found", f"no stored sample '{sample.sample_id}'", field) from None
             raise StoreError(error.code, error.message, field) from None
         except FrameError as error:
             raise ApiError(409, "damaged_sample", f"sample '{sample.sample_id}': {error.message}", field) from None
-        frames.append(SurveyFrame(sample.sample_id, frame, sample.labels))
-    return frames
+        yield SurveyFrame(sample.sample_id, frame, sample.labels)
 
 
 def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
+    check_new_map_name(request.name)  # the map is stored (or may be) under it
     sketch = _sketch(services, request)
     try:
         # what the request gets wrong is said before any frame is read
         check_request(sketch, request.anchor, [(s.sample_id, s.labels) for s in request.samples])
-        report = survey(_frames(services, request), sketch, request.anchor, request.name)
+        profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
+        report = survey(_frames(services, request), sketch, request.anchor, request.name, profiles=profiles)
     except SurveyInputError as error:
         raise ApiError(422, "invalid_request", error.message, error.field) from None
     except SurveyRefused as error:
@@ -83,5 +93,6 @@ async def post_survey(
         problem = api_key_problem(services.settings.api_key, x_api_key)
         if problem is not None:
             raise problem
-    async with services.pipeline_limiter:
+    # one survey at a time, apart from the locate pipeline's slots: a survey runs for seconds to a minute
+    async with services.survey_limiter:
         return await run_in_threadpool(_survey_now, services, request)

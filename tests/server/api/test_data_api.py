@@ -60,6 +60,7 @@ def test_samples_store_list_fetch_evaluate_delete(client, fixture_frame):
     truthless = meta.model_copy(update={"ground_truth": None})
     stored = client.store_sample(data, meta, label="3,-2", device="phone-1")
     labelled = client.store_sample(data, truthless, label="3,-2")
+    surveyed = client.store_sample(data, truthless, label="survey:office:0")  # left out of the evaluation
     assert stored.result.ok and stored.label == "3,-2" and stored.device == "phone-1"
     ids = [sample.id for sample in client.samples().samples]
     assert stored.id in ids and labelled.id in ids
@@ -72,6 +73,8 @@ def test_samples_store_list_fetch_evaluate_delete(client, fixture_frame):
     assert rows[labelled.id].truth_m == cell_truth_m("3,-2", 0.05) == pytest.approx([0.15, -0.1, 0.0])
     assert rows[labelled.id].error_2d_mm < 2.0  # the fixture was rendered at that grid cell
     assert evaluation.coverage == 1.0 and evaluation.max_mm < 2.0
+    assert surveyed.id not in rows and surveyed.id in [sample.id for sample in client.samples().samples]
+    client.delete_sample(surveyed.id)
 
     client.delete_sample(stored.id)
     assert _refusal(lambda: client.sample(stored.id)).status == 404
