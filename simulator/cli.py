@@ -144,8 +144,9 @@ def add_commands(commands) -> None:
     calibration.add_argument("--views", type=int, default=20, help="photos per set")
     calibration.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
     calibration.add_argument("--seed", type=int, default=1)
-    calibration.add_argument("--lens", choices=["phone", "bench-real"], default="phone",
-                             help="phone: a phone-like Mi 8 front lens; bench-real: `bench bench-real`'s lens")
+    calibration.add_argument("--lens", choices=["phone", "phone-k3", "bench-real"], default="phone",
+                             help="phone: a phone-like Mi 8 front lens (k3 0); phone-k3: the same with k3 0.002; "
+                                  "bench-real: `bench bench-real`'s lens")
     calibration.add_argument("--no-poor-sets", action="store_true", help="skip the frontal and corner-only sets")
     calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
     calibration.add_argument("--json", action="store_true")
