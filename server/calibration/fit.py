@@ -152,34 +152,42 @@ def drop_test_p(reduced_sum: float, full_sum: float, dropped: int, dof: int) -> 
     return float(stats.f.sf(f, dropped, dof))
 
 
+def _select_terms(
+    objects, measured, masks, size, rules: FitRules
+) -> tuple[_Solution, tuple[str, ...], tuple[tuple[str, float], ...]]:
+    """The fit with only the optional distortion terms the views support; the terms fixed at 0 and each p-value."""
+    observations = 2 * int(sum(m.sum() for m in masks))
+    flags, p_values = 0, []
+    fixed: tuple[str, ...] = ()
+    solution = _solve(objects, measured, masks, size, rules, flags)
+    for group in rules.optional_terms:
+        parameters = PARAMETERS - len(fixed) + POSE_PARAMETERS * len(objects)
+        reduced = _solve(objects, measured, masks, size, rules, flags | _TERM_FLAGS[group])
+        p = drop_test_p(reduced.residual_sum, solution.residual_sum, len(group), max(1, observations - parameters))
+        p_values.append(("+".join(group), p))
+        if p > rules.significance:
+            flags, solution, fixed = flags | _TERM_FLAGS[group], reduced, fixed + group
+    return solution, fixed, tuple(p_values)
+
+
 def fit_views(views: list[BoardView], spec: BoardSpec, rules: FitRules = FitRules()) -> Fit:
     """Fit the lens to views of one size (at least 3, each with 4 or more corners); raises cv2.error if OpenCV fails."""
     size = (views[0].width, views[0].height)
     objects = [corner_points_m(spec, view.corner_ids).astype(np.float32) for view in views]
     measured = [np.asarray(view.corners_px, np.float32) for view in views]
     masks = _outlier_masks(objects, measured, size, rules)
-    observations = 2 * int(sum(m.sum() for m in masks))
-    flags, fixed, p_values = 0, [], []
-    solution = _solve(objects, measured, masks, size, rules, flags)
-    for group in rules.optional_terms:
-        free = PARAMETERS - len(fixed) + POSE_PARAMETERS * len(views)
-        reduced = _solve(objects, measured, masks, size, rules, flags | _TERM_FLAGS[group])
-        p = drop_test_p(reduced.residual_sum, solution.residual_sum, len(group), max(1, observations - free))
-        p_values.append(("+".join(group), p))
-        if p > rules.significance:
-            flags, solution = flags | _TERM_FLAGS[group], reduced
-            fixed += group
+    solution, fixed, p_values = _select_terms(objects, measured, masks, size, rules)
     lens = solution.lens
     objects64 = [o.astype(float) for o in objects]
     poses, residuals = [], []
-    for o, p, r, t, mask in zip(objects64, measured, solution.rvecs, solution.tvecs, masks, strict=True):
+    for o, m, r, t, mask in zip(objects64, measured, solution.rvecs, solution.tvecs, masks, strict=True):
         reprojected = cv2.projectPoints(o[mask], r, t, lens.matrix, lens.coefficients)[0].reshape(-1, 2)
-        residuals.append(p[mask] - reprojected)
+        residuals.append(m[mask] - reprojected)
         poses.append(ViewPose(cv2.Rodrigues(r)[0], np.asarray(t, float).ravel(), residuals[-1], mask))
     stacked = np.concatenate(residuals)
     normal = _normal_matrix(lens, objects64, solution.rvecs, solution.tvecs, masks)
     # a fixed term is no parameter: its row and column leave the normal matrix, its covariance is 0
-    free = np.setdiff1d(np.arange(normal.shape[0]), [_TERM_COLUMNS[name] for name in fixed])
+    free = np.setdiff1d(np.arange(normal.shape[0]), [_TERM_COLUMNS[name] for name in fixed]).astype(int)
     dof = max(1, stacked.size - free.size)
     variance = float(np.sum(stacked**2)) / dof
     covariance = np.zeros((PARAMETERS, PARAMETERS))
@@ -194,6 +202,6 @@ def fit_views(views: list[BoardView], spec: BoardSpec, rules: FitRules = FitRule
         opencv_sigmas=solution.sigmas,
         poses=poses,
         dropped=int(sum((~m).sum() for m in masks)),
-        fixed=tuple(fixed),
-        term_p_values=tuple(p_values),
+        fixed=fixed,
+        term_p_values=p_values,
     )
