@@ -26,8 +26,12 @@ def test_a_good_set_calibrates_near_the_truth():
     p = profile.intrinsics
     assert p.views == len(views) and p.rms_px == pytest.approx(report.rms_px)
     # 640 x 480 and 12 views: far looser than the full-size bench's targets, and within 3 sigma
-    for name, fitted, true in (("fx", p.fx, LENS.fx), ("fy", p.fy, LENS.fy), ("cx", p.cx, LENS.cx),
-                               ("cy", p.cy, LENS.cy)):
+    for name, fitted, true in (
+        ("fx", p.fx, LENS.fx),
+        ("fy", p.fy, LENS.fy),
+        ("cx", p.cx, LENS.cx),
+        ("cy", p.cy, LENS.cy),
+    ):
         assert abs(fitted - true) < max(3 * report.sigmas[name], 0.2), (name, fitted, true, report.sigmas[name])
     fitted = Lens(p.fx, p.fy, p.cx, p.cy, tuple(profile.distortion))
     assert distortion_difference_px(LENS, fitted, WIDTH, HEIGHT) < 0.3
@@ -77,8 +81,9 @@ def test_views_from_another_board_are_bad_input():
 
 def test_a_view_with_too_few_corners_is_listed_with_a_note():
     views = list(view_set(PoseSet.good))
-    views[0] = views[0].model_copy(update={"corner_ids": views[0].corner_ids[:3],
-                                           "corners_px": views[0].corners_px[:3]})
+    views[0] = views[0].model_copy(
+        update={"corner_ids": views[0].corner_ids[:3], "corners_px": views[0].corners_px[:3]}
+    )
     report = calibrate(views, BOARD, DEVICE)
     note = next(v for v in report.views if v.name == views[0].name)
     assert note.rms_px is None and "too few corners (3" in note.note
@@ -113,14 +118,26 @@ def test_the_report_names_the_fixed_terms_and_where_the_distortion_is_least_shar
     assert report.distortion_sigma_px > CalibrationRules().sharp_distortion_sigma_px
     assert f"the distortion is uncertain by up to {report.distortion_sigma_px:.2f} px at the " in report.message
     assert "more photos with the board reaching into it would sharpen it" in report.message
-    strict = calibrate(list(view_set(PoseSet.good)), BOARD, DEVICE, rules=CalibrationRules(max_distortion_sigma_px=0.01))
+    strict = calibrate(
+        list(view_set(PoseSet.good)), BOARD, DEVICE, rules=CalibrationRules(max_distortion_sigma_px=0.01)
+    )
     assert not strict.ok and strict.profile is None
-    assert any(a.startswith("more photos with the board reaching into the ") and "corner of the image" in a
-               for a in strict.advice), strict.advice
+    assert any(
+        a.startswith("more photos with the board reaching into the ") and "corner of the image" in a
+        for a in strict.advice
+    ), strict.advice
 
 
-@pytest.mark.parametrize(("point", "words"), [((10, 10), "the top-left corner"), ((630, 470), "the bottom-right corner"),
-                                              ((320, 5), "the top edge"), ((5, 240), "the left edge"),
-                                              ((320, 240), "the centre"), ((639, 0), "the top-right corner")])
+@pytest.mark.parametrize(
+    ("point", "words"),
+    [
+        ((10, 10), "the top-left corner"),
+        ((630, 470), "the bottom-right corner"),
+        ((320, 5), "the top edge"),
+        ((5, 240), "the left edge"),
+        ((320, 240), "the centre"),
+        ((639, 0), "the top-right corner"),
+    ],
+)
 def test_image_parts_in_words(point, words):
     assert image_part(np.array(point, float), 640, 480) == words

@@ -26,8 +26,11 @@ def _views(lens: Lens, seed: int, count: int = 15) -> list[BoardView]:
     for k, pose in enumerate(board_poses(BOARD, lens, WIDTH, HEIGHT, count, rng, PoseSet.good, RULES)):
         pixels = lens.project(corners @ pose.rotation.T + pose.translation) + rng.normal(0, NOISE_PX, (len(corners), 2))
         inside = np.flatnonzero((pixels >= 0).all(axis=1) & (pixels[:, 0] <= WIDTH - 1) & (pixels[:, 1] <= HEIGHT - 1))
-        views.append(BoardView(name=f"v{k}", width=WIDTH, height=HEIGHT, corner_ids=inside.tolist(),
-                               corners_px=pixels[inside].tolist()))
+        views.append(
+            BoardView(
+                name=f"v{k}", width=WIDTH, height=HEIGHT, corner_ids=inside.tolist(), corners_px=pixels[inside].tolist()
+            )
+        )
     return views
 
 
