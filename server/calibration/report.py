@@ -135,7 +135,7 @@ def _message(rules: CalibrationRules, used: int, fit: Fit, advice: list[str], si
         )
     if sigma > rules.sharp_distortion_sigma_px:
         parts.append(
-            f"the distortion is uncertain by up to {sigma:.2f} px at {where} of the image (a sharp calibration: under "
+            f"the distortion is uncertain by up to {sigma:.3f} px at {where} of the image (a sharp calibration: under "
             f"{rules.sharp_distortion_sigma_px:g} px): more photos with the board reaching into it would sharpen it"
         )
     return "; ".join(parts)

@@ -116,7 +116,7 @@ def test_the_report_names_the_fixed_terms_and_where_the_distortion_is_least_shar
     assert "k3 fixed at 0 (the views do not support it" in report.message
     # 640 x 480 leaves the distortion less sharp than the 0.05 px of a full-size set: the message says where
     assert report.distortion_sigma_px > CalibrationRules().sharp_distortion_sigma_px
-    assert f"the distortion is uncertain by up to {report.distortion_sigma_px:.2f} px at the " in report.message
+    assert f"the distortion is uncertain by up to {report.distortion_sigma_px:.3f} px at the " in report.message
     assert "more photos with the board reaching into it would sharpen it" in report.message
     strict = calibrate(
         list(view_set(PoseSet.good)), BOARD, DEVICE, rules=CalibrationRules(max_distortion_sigma_px=0.01)
