@@ -136,6 +136,10 @@ class CalibrationReport(Strict):
     distortion_sigma_px: float | None = Field(
         default=None, ge=0, description="the largest 1-sigma of the distortion's image shift over the whole frame"
     )
+    fixed_terms: list[Literal["k3", "p1", "p2"]] = Field(
+        default_factory=list,
+        description="distortion terms the views did not support (an F-test on the residuals), fixed at 0",
+    )
     coverage: float = Field(ge=0, le=1, description="share of the image's cells (`coverage_cells`) holding a corner")
     coverage_cells: list[list[int]] = Field(
         default_factory=list, description="corners seen per cell, rows of the image top to bottom"

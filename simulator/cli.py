@@ -144,8 +144,12 @@ def add_commands(commands) -> None:
     calibration.add_argument("--views", type=int, default=20, help="photos per set")
     calibration.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
     calibration.add_argument("--seed", type=int, default=1)
-    calibration.add_argument("--lens", choices=["phone", "bench-real"], default="phone",
-                             help="phone: a phone-like Mi 8 front lens; bench-real: `bench bench-real`'s lens")
+    calibration.add_argument("--lens", choices=["phone", "phone-k3", "bench-real"], default="phone",
+                             help="phone: a phone-like Mi 8 front lens (k3 0); phone-k3: the same with k3 0.002; "
+                                  "bench-real: `bench bench-real`'s lens")
+    calibration.add_argument("--corner-views", type=int, default=None,
+                             help="views of the good set reaching into the image's corners, the rest spread "
+                                  "(default 12: three per corner)")
     calibration.add_argument("--no-poor-sets", action="store_true", help="skip the frontal and corner-only sets")
     calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
     calibration.add_argument("--json", action="store_true")
@@ -368,12 +372,15 @@ def _run_grid_bench(args) -> int:
 
 
 def _run_calibration_bench(args) -> int:
-    from simulator.bench_calibration import bench_calibration, format_calibration
+    from simulator.bench_calibration import CORNER_VIEWS, bench_calibration, format_calibration
 
-    if args.views < 3 or args.scale <= 0:
-        print("error: --views must be at least 3 and --scale positive", file=sys.stderr)
+    corner_views = CORNER_VIEWS if args.corner_views is None else args.corner_views
+    if args.views < 3 or args.scale <= 0 or not 0 <= corner_views <= args.views:
+        print("error: --views must be at least 3, --scale positive and --corner-views within 0..views",
+              file=sys.stderr)
         return 2
-    result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets)
+    result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets,
+                               corner_views=corner_views)
     profile = result["report"]["profile"]
     if args.out is not None:
         if profile is None:

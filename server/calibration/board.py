@@ -34,6 +34,12 @@ class BoardRules:
     min_window_px: int = 2
     max_window_px: int = 20
     saddle_iterations: int = 10
+    # the saddle fit has converged when its step is below this, far below the corners' noise (~0.02 px), or
+    # below 4 float32 steps at the corner's coordinates if that is more: getRectSubPix takes the window's centre
+    # in float32 (2.4e-4 px apart beyond x or y = 2048, 4.9e-4 beyond 4096), so a smaller step is never taken
+    # there and the fit dithers; a 1e-4 px tolerance dropped most corners in the lower half of a full-size
+    # portrait photo (docs/calibration.md)
+    saddle_tolerance_px: float = 1e-3
     # corners whose markers are cut by the frame's border are not detected, yet the corner itself may be
     # whole: predicted from their found neighbours (a local homography) and refined, one ring per round,
     # they bring the corners of the image into the fit, where the distortion is largest
@@ -125,6 +131,7 @@ def _saddle_points(
     refined, converged = points.astype(float).copy(), np.zeros(len(points), bool)
     for k, start in enumerate(points):
         centre = start.astype(float)
+        tolerance = max(rules.saddle_tolerance_px, 4 * float(np.spacing(np.float32(np.abs(centre).max()))))
         for _ in range(rules.saddle_iterations):
             patch = cv2.getRectSubPix(smooth, (side, side), (float(centre[0]), float(centre[1])))
             a, b, c, d, e, _ = solver @ (patch.ravel().astype(float) * weight)
@@ -135,7 +142,7 @@ def _saddle_points(
             centre = centre + step
             if np.linalg.norm(centre - start) > radius:  # wandered off
                 break
-            if np.linalg.norm(step) < 1e-4:
+            if np.linalg.norm(step) < tolerance:
                 refined[k], converged[k] = centre, True
                 break
     return refined, converged

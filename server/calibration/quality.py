@@ -26,12 +26,27 @@ def tilt_deg(rotation: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip(abs(rotation[2, 2]), 0.0, 1.0))))
 
 
-def distortion_sigma_px(lens: Lens, distortion_covariance: np.ndarray, width: int, height: int) -> float:
-    """The largest 1-sigma image shift (px) the distortion's covariance (5, 5) leaves over a grid of the frame.
+def distortion_sigma_px(
+    lens: Lens, distortion_covariance: np.ndarray, width: int, height: int
+) -> tuple[float, np.ndarray]:
+    """The largest 1-sigma image shift (px) the distortion's covariance (5, 5) leaves over a grid of the frame,
+    and the grid point (x, y px) where it is largest.
 
     The shift is linear in (k1, k2, p1, p2, k3) (`Lens.shift_jacobian`); at each grid point the
     2x2 covariance J C J^T gives the largest sigma along any direction (its larger eigenvalue).
     """
-    jacobian = lens.shift_jacobian(lens.rays(frame_grid_px(width, height)))
+    grid = frame_grid_px(width, height)
+    jacobian = lens.shift_jacobian(lens.rays(grid))
     covariance = np.einsum("nij,jk,nlk->nil", jacobian, distortion_covariance, jacobian)
-    return float(np.sqrt(max(0.0, float(np.linalg.eigvalsh(covariance)[:, -1].max()))))
+    largest = np.linalg.eigvalsh(covariance)[:, -1]
+    worst = int(np.argmax(largest))
+    return float(np.sqrt(max(0.0, float(largest[worst])))), grid[worst]
+
+
+def image_part(point_px: np.ndarray, width: int, height: int) -> str:
+    """Where a point lies, in words: "the top-left corner", "the left edge", "the centre" (thirds of the image)."""
+    column = ("left", "", "right")[min(2, int(3 * point_px[0] // width))]
+    row = ("top", "", "bottom")[min(2, int(3 * point_px[1] // height))]
+    if row and column:
+        return f"the {row}-{column} corner"
+    return f"the {row or column} edge" if row or column else "the centre"

@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from server.calibration.board import charuco_board, corner_points_m, find_board
+from server.calibration.board import BoardRules, _saddle_points, charuco_board, corner_points_m, find_board
 from shared_schemas.calibration import BoardSpec
 from simulator.board import PoseSet
 from tests.calibration_photos import BOARD, HEIGHT, LENS, WIDTH, photo_set
@@ -61,3 +61,22 @@ def test_bad_images_are_named():
         find_board(np.zeros((10, 10), np.float32), BOARD, "f")
     with pytest.raises(ValueError, match="grey"):
         find_board(np.zeros((10, 10, 2), np.uint8), BOARD, "two channels")
+
+
+@pytest.mark.parametrize("x", [80.0, 4100.0])
+def test_the_saddle_fit_converges_far_from_the_origin(x):
+    # getRectSubPix takes the window's centre in float32, 4.9e-4 px apart beyond 4096: a convergence tolerance
+    # below that never converged there (most corners of a full-size photo's lower half were lost)
+    rng = np.random.default_rng(1)
+    height, width = 161, int(x) + 200
+    ys, xs = np.mgrid[0:height, 0:width].astype(float)
+    for _ in range(5):
+        corner = np.array([x, 80.0]) + rng.uniform(-0.5, 0.5, 2)
+        u = (xs - corner[0]) * np.cos(0.3) + (ys - corner[1]) * np.sin(0.3)
+        v = -(xs - corner[0]) * np.sin(0.3) + (ys - corner[1]) * np.cos(0.3)
+        sharp = cv2.GaussianBlur(np.where(u * v > 0, 200.0, 30.0), (0, 0), 1.0)
+        photo = np.clip(sharp + rng.normal(0, 2, sharp.shape), 0, 255).astype(np.uint8)
+        # a board held close: the largest window (BoardRules.max_window_px 20) and its blur
+        smooth = cv2.GaussianBlur(photo.astype(np.float32), (0, 0), 13.0)
+        refined, converged = _saddle_points(smooth, np.array([corner + [1.0, -0.7]]), 18, BoardRules())
+        assert converged[0] and np.linalg.norm(refined[0] - corner) < 0.05

@@ -6,7 +6,8 @@ import pytest
 
 from server.calibration.fit import fit_views
 from server.calibration.lens import Lens, distortion_difference_px
-from server.calibration.report import CalibrationInputError, calibrate
+from server.calibration.quality import image_part
+from server.calibration.report import CalibrationInputError, CalibrationRules, calibrate
 from shared_schemas import device_profiles
 from simulator.board import PoseSet
 from tests.calibration_photos import BOARD, HEIGHT, LENS, WIDTH, view_set
@@ -25,8 +26,12 @@ def test_a_good_set_calibrates_near_the_truth():
     p = profile.intrinsics
     assert p.views == len(views) and p.rms_px == pytest.approx(report.rms_px)
     # 640 x 480 and 12 views: far looser than the full-size bench's targets, and within 3 sigma
-    for name, fitted, true in (("fx", p.fx, LENS.fx), ("fy", p.fy, LENS.fy), ("cx", p.cx, LENS.cx),
-                               ("cy", p.cy, LENS.cy)):
+    for name, fitted, true in (
+        ("fx", p.fx, LENS.fx),
+        ("fy", p.fy, LENS.fy),
+        ("cx", p.cx, LENS.cx),
+        ("cy", p.cy, LENS.cy),
+    ):
         assert abs(fitted - true) < max(3 * report.sigmas[name], 0.2), (name, fitted, true, report.sigmas[name])
     fitted = Lens(p.fx, p.fy, p.cx, p.cy, tuple(profile.distortion))
     assert distortion_difference_px(LENS, fitted, WIDTH, HEIGHT) < 0.3
@@ -76,8 +81,9 @@ def test_views_from_another_board_are_bad_input():
 
 def test_a_view_with_too_few_corners_is_listed_with_a_note():
     views = list(view_set(PoseSet.good))
-    views[0] = views[0].model_copy(update={"corner_ids": views[0].corner_ids[:3],
-                                           "corners_px": views[0].corners_px[:3]})
+    views[0] = views[0].model_copy(
+        update={"corner_ids": views[0].corner_ids[:3], "corners_px": views[0].corners_px[:3]}
+    )
     report = calibrate(views, BOARD, DEVICE)
     note = next(v for v in report.views if v.name == views[0].name)
     assert note.rms_px is None and "too few corners (3" in note.note
@@ -101,3 +107,37 @@ def test_the_distortion_difference_is_zero_for_one_lens_and_sees_a_change():
     other = Lens(LENS.fx, LENS.fy, LENS.cx, LENS.cy, (0.061, -0.03, 5e-4, -4e-4, 0.0))
     # k1 + 0.001 moves a point at normalised radius r by fx r^3 / 1000: the corner's r is ~0.7
     assert 0.1 < distortion_difference_px(LENS, other, WIDTH, HEIGHT) < 0.3
+
+
+def test_the_report_names_the_fixed_terms_and_where_the_distortion_is_least_sharp():
+    report = calibrate(list(view_set(PoseSet.good)), BOARD, DEVICE)
+    # the tests' lens has k3 = 0, and 12 small views do not support one
+    assert report.ok and "k3" in report.fixed_terms and report.profile.distortion[4] == 0 and report.sigmas["k3"] == 0
+    assert "k3 fixed at 0 (the views do not support it" in report.message
+    # 640 x 480 leaves the distortion less sharp than the 0.05 px of a full-size set: the message says where
+    assert report.distortion_sigma_px > CalibrationRules().sharp_distortion_sigma_px
+    assert f"the distortion is uncertain by up to {report.distortion_sigma_px:.3f} px at the " in report.message
+    assert "more photos with the board reaching into it would sharpen it" in report.message
+    strict = calibrate(
+        list(view_set(PoseSet.good)), BOARD, DEVICE, rules=CalibrationRules(max_distortion_sigma_px=0.01)
+    )
+    assert not strict.ok and strict.profile is None
+    assert any(
+        a.startswith("more photos with the board reaching into the ") and "corner of the image" in a
+        for a in strict.advice
+    ), strict.advice
+
+
+@pytest.mark.parametrize(
+    ("point", "words"),
+    [
+        ((10, 10), "the top-left corner"),
+        ((630, 470), "the bottom-right corner"),
+        ((320, 5), "the top edge"),
+        ((5, 240), "the left edge"),
+        ((320, 240), "the centre"),
+        ((639, 0), "the top-right corner"),
+    ],
+)
+def test_image_parts_in_words(point, words):
+    assert image_part(np.array(point, float), 640, 480) == words
