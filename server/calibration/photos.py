@@ -28,7 +28,9 @@ def photo_size(data: bytes, name: str) -> tuple[int, int]:
     try:
         with Image.open(io.BytesIO(data)) as image:
             kind, size = image.format, image.size
-    except (UnidentifiedImageError, OSError, ValueError) as error:
+    except UnidentifiedImageError:  # its message names the in-memory buffer, not the photo
+        raise PhotoError(f"'{name}' is not a readable PNG or JPEG photo (not an image file)") from None
+    except (OSError, ValueError) as error:
         raise PhotoError(f"'{name}' is not a readable PNG or JPEG photo ({error})") from None
     if kind not in ("PNG", "JPEG"):
         raise PhotoError(f"'{name}' is a {kind} image; give PNG or JPEG photos")

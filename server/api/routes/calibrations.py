@@ -16,7 +16,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 
-from server.api.deps import ServicesDep
+from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
 from server.api.params import FRAME_REQUEST_BODY, PhotosBodyDep, UploadDep
@@ -24,7 +24,7 @@ from server.calibration.board import find_board
 from server.calibration.photos import PhotoError, find_views
 from server.calibration.report import CalibrationInputError, calibrate, no_board_report
 from server.ingest import decode_luma
-from shared_schemas import DeviceProfile, device_profiles
+from shared_schemas import DeviceProfile
 from shared_schemas.calibration import MAX_VIEWS, BoardSpec, BoardView, CalibrationReport, CalibrationRequest
 
 BOARD_HEADER = "X-Lumipose-Board"
@@ -86,7 +86,8 @@ def _board(text: str | None, field: str) -> BoardSpec:
         raise ApiError(422, "invalid_request", f"{field}: not valid JSON: {error}", field=field) from None
 
 
-def _device(value: str | DeviceProfile) -> DeviceProfile:
+def _device(value: str | DeviceProfile, profiles: dict[str, DeviceProfile]) -> DeviceProfile:
+    """The datasheet base of a calibration: the profile given, or one the service knows (bundled or stored)."""
     if isinstance(value, DeviceProfile):
         return value
     if value.lstrip().startswith("{"):
@@ -94,11 +95,16 @@ def _device(value: str | DeviceProfile) -> DeviceProfile:
             return DeviceProfile.model_validate_json(value)
         except ValidationError as error:
             raise _invalid("device", error) from None
-    profile = device_profiles().get(value)
+    profile = profiles.get(value)
     if profile is None:
-        known = ", ".join(sorted(device_profiles()))
+        known = ", ".join(sorted(profiles))
         raise ApiError(422, "invalid_request", f"device: no device profile '{value}'; known: {known}", field="device")
     return profile
+
+
+async def _profiles(services: Services) -> dict[str, DeviceProfile]:
+    """Bundled and stored profiles (the data folder is read off the event loop)."""
+    return await run_in_threadpool(services.profiles.table)
 
 
 @router.post("/views", response_model=BoardView, openapi_extra=FRAME_REQUEST_BODY)
@@ -168,7 +174,7 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
             calibration = CalibrationRequest.model_validate_json(body)
         except ValidationError as error:
             raise _invalid("body", error) from None
-        spec, device = calibration.board, _device(calibration.device)
+        spec, device = calibration.board, _device(calibration.device, await _profiles(services))
         work = partial(calibrate, calibration.views, spec, device, calibration.profile_id)
     elif content_type == MULTIPART:
         board, device_text, profile_id, photos = await _multipart(request, body)
@@ -182,7 +188,7 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
                 PROFILE_ID.validate_python(profile_id)
             except ValidationError as error:
                 raise _invalid("profile_id", error) from None
-        work = partial(_calibrate_photos, photos, spec, _device(device_text), profile_id)
+        work = partial(_calibrate_photos, photos, spec, _device(device_text, await _profiles(services)), profile_id)
     else:
         raise ApiError(
             415,

@@ -136,3 +136,15 @@ def test_a_body_over_the_upload_limit_is_413_before_it_is_read(server_url):
     response = httpx.post(f"{server_url}/v1/calibrations", content=big,
                           headers={"Content-Type": "multipart/form-data; boundary=x"}, timeout=30)
     assert response.status_code == 413 and response.json()["error"] == "too_large"
+
+
+def test_a_stored_profile_is_a_calibrations_device(client):
+    """`device` may name a stored profile (a phone the service learnt earlier), not only a bundled one;
+    an unknown id is a 422 listing the known ones, stored ones included."""
+    base = client.profile("xiaomi-mi8-front").model_copy(update={"id": "lab-phone", "name": "the lab's phone"})
+    client.put_profile(base)
+    request = CalibrationRequest(board=BOARD, views=list(view_set(PoseSet.good)), device="lab-phone")
+    report = client.calibrate(request)
+    assert report.ok and report.profile.id == "lab-phone-calibrated" and report.profile.name == "the lab's phone"
+    unknown = _refusal(lambda: client.calibrate(request.model_copy(update={"device": "no-such-phone"})))
+    assert unknown.status == 422 and unknown.body.field == "device" and "lab-phone" in unknown.body.message
