@@ -140,7 +140,9 @@ class CalibrationReport(Strict):
         default_factory=list,
         description="distortion terms the views did not support (an F-test on the residuals), fixed at 0",
     )
-    coverage: float = Field(ge=0, le=1, description="share of the image's cells (`coverage_cells`) holding a corner")
+    coverage: float = Field(
+        ge=0, le=1, description="share of the image's cells (`coverage_cells`) holding 3 corners or more"
+    )
     coverage_cells: list[list[int]] = Field(
         default_factory=list, description="corners seen per cell, rows of the image top to bottom"
     )
