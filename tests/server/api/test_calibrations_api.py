@@ -143,8 +143,11 @@ def test_a_stored_profile_is_a_calibrations_device(client):
     an unknown id is a 422 listing the known ones, stored ones included."""
     base = client.profile("xiaomi-mi8-front").model_copy(update={"id": "lab-phone", "name": "the lab's phone"})
     client.put_profile(base)
-    request = CalibrationRequest(board=BOARD, views=list(view_set(PoseSet.good)), device="lab-phone")
-    report = client.calibrate(request)
-    assert report.ok and report.profile.id == "lab-phone-calibrated" and report.profile.name == "the lab's phone"
-    unknown = _refusal(lambda: client.calibrate(request.model_copy(update={"device": "no-such-phone"})))
-    assert unknown.status == 422 and unknown.body.field == "device" and "lab-phone" in unknown.body.message
+    try:
+        request = CalibrationRequest(board=BOARD, views=list(view_set(PoseSet.good)), device="lab-phone")
+        report = client.calibrate(request)
+        assert report.ok and report.profile.id == "lab-phone-calibrated" and report.profile.name == "the lab's phone"
+        unknown = _refusal(lambda: client.calibrate(request.model_copy(update={"device": "no-such-phone"})))
+        assert unknown.status == 422 and unknown.body.field == "device" and "lab-phone" in unknown.body.message
+    finally:
+        client.delete_profile("lab-phone")  # the server is the session's: other tests list its profiles
