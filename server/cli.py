@@ -1,4 +1,5 @@
-"""The server's commands of `lumipose`: `locate`, `fov`, `serve` and `survey` (`server.survey.cli`).
+"""The server's commands of `lumipose`: `locate` (`server.locate_cli`), `fov`, `serve` and `survey`
+(`server.survey.cli`).
 
 `lumipose_cli.main` joins them with the client's and the simulator's commands into the one
 `lumipose` command (`python -m lumipose_cli` without the console script).
@@ -12,97 +13,8 @@ import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH, device_profiles
-
-EXIT_FIX, EXIT_NO_FIX, EXIT_BAD_INPUT = 0, 1, 2
-
-
-def _add_locate(commands) -> None:
-    parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
-    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
-    parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
-    parser.add_argument(
-        "--profile",
-        type=Path,
-        action="append",
-        default=[],
-        help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
-    )
-    parser.add_argument("--json", action="store_true", help="print the contract's result as JSON")
-    parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
-    parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
-    parser.add_argument(
-        "--gravity",
-        choices=["auto", "always", "never"],
-        default="auto",
-        help="use the frame's gravity vector (default: where it helps)",
-    )
-    parser.set_defaults(run=_run_locate)
-
-
-def _run_locate(args) -> int:
-    from server.camera import profile_table
-    from server.ingest import read_fixture
-    from server.locator import locate
-    from server.options import LocateOptions
-    from server.outcomes import FrameError
-    from server.pipeline import CornerMethod, PipelineOptions
-    from server.pose.solve import GravityMode
-    from shared_schemas import DeviceProfile, load_map
-
-    given = []
-    for path in args.profile:
-        try:
-            given.append(DeviceProfile.model_validate_json(path.read_bytes()))
-        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            print(f"error: cannot read the device profile {path}: {error}", file=sys.stderr)
-            return EXIT_BAD_INPUT
-    try:
-        profiles = profile_table(given)
-    except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    try:
-        frame = read_fixture(args.frame, profiles)
-        beacon_map = load_map(args.map)
-    except FrameError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except (OSError, ValueError) as error:
-        print(f"error: cannot read map {args.map}: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    options = PipelineOptions(
-        corner_method=CornerMethod.square if args.square_corners else CornerMethod.rounded,
-        subpixel=not args.no_subpixel,
-        gravity_mode=GravityMode(args.gravity),
-    )
-    result = locate(frame, beacon_map, LocateOptions(pipeline=options))
-    if args.json:
-        print(result.model_dump_json(by_alias=True, indent=2))
-    elif result.ok:
-        assert result.position_m is not None and result.yaw_pitch_roll_deg is not None  # outcomes.located sets both
-        x, y, z = result.position_m
-        yaw, pitch, roll = result.yaw_pitch_roll_deg
-        print(f"position  x={x:+.4f} m  y={y:+.4f} m  z={z:+.4f} m   (beacon {result.beacon_id})")
-        print(
-            f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
-            f"   gravity prior {'used' if result.gravity_used else 'not used'}"
-        )
-        print(
-            f"quality   reprojection {result.reprojection_error_px:.3f} px, "
-            f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms"
-        )
-        truth = frame.meta.ground_truth
-        if truth is not None:
-            dx, dy, dz = (a - b for a, b in zip((x, y, z), truth.position_m, strict=True))
-            print(
-                f"truth     error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.2f} mm, 3D "
-                f"{1000 * (dx * dx + dy * dy + dz * dz) ** 0.5:.2f} mm"
-            )
-        for warning in result.warnings:
-            print(f"warning   {warning}")
-    else:
-        print(f"no fix: {result.reason}: {result.message}")
-    return EXIT_FIX if result.ok else EXIT_NO_FIX
+from shared_schemas.cli import EXIT_BAD_INPUT
+from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 
 def _add_fov(commands) -> None:
@@ -222,9 +134,10 @@ def _startup_map_name(settings) -> str:
 
 def add_commands(commands) -> None:
     """Add `locate`, `fov`, `serve` and `survey` to an argparse subparsers object."""
+    from server.locate_cli import add_locate_command
     from server.survey.cli import add_survey_command
 
-    _add_locate(commands)
+    add_locate_command(commands)
     _add_fov(commands)
     _add_serve(commands)
     add_survey_command(commands)

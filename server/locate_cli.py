@@ -1,0 +1,129 @@
+"""`lumipose locate FRAME`: the camera's position and attitude from one recorded frame, on this machine.
+
+Each step is its own function (inputs, options, printing) so the command's flags stay readable.
+Exit codes: 0 a fix, 1 no fix (the reason is printed), 2 bad input (`shared_schemas.cli`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from shared_schemas import DEMO_MAP_PATH
+from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
+
+
+def add_locate_command(commands) -> None:
+    parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
+    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
+    parser.add_argument(
+        "--profile",
+        type=Path,
+        action="append",
+        default=[],
+        help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
+    )
+    parser.add_argument("--json", action="store_true", help="print the contract's result (or error) as JSON")
+    parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
+    parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
+    parser.add_argument(
+        "--gravity",
+        choices=["auto", "always", "never"],
+        default="auto",
+        help="use the frame's gravity vector (default: where it helps)",
+    )
+    parser.set_defaults(run=run_locate)
+
+
+def run_locate(args) -> int:
+    from server.locator import locate
+    from server.options import LocateOptions
+
+    try:
+        profiles = read_profiles(args.profile)
+        beacon_map = read_map(args.map)
+        frame = read_frame(args.frame, profiles)
+    except BadInput as problem:
+        return report_bad_input(problem, as_json=args.json)
+    result = locate(frame, beacon_map, LocateOptions(pipeline=pipeline_options(args)))
+    print_result(result, frame, as_json=args.json)
+    return EXIT_OK if result.ok else EXIT_NO_FIX
+
+
+def read_profiles(paths: list[Path]):
+    """The bundled device profiles and those in `paths` (calibrated ones), by id."""
+    from server.camera import profile_table
+    from shared_schemas import DeviceProfile
+
+    given = []
+    for path in paths:
+        try:
+            given.append(DeviceProfile.model_validate_json(path.read_bytes()))
+        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+            raise BadInput(f"cannot read the device profile {path}: {error}", field="profile") from None
+    try:
+        return profile_table(given)
+    except ValueError as error:
+        raise BadInput(str(error), field="profile") from None
+
+
+def read_map(path: Path):
+    from shared_schemas import load_map
+
+    try:
+        return load_map(path)
+    except (OSError, ValueError) as error:
+        raise BadInput(f"cannot read map {path}: {error}", field="map") from None
+
+
+def read_frame(path: Path, profiles):
+    from server.ingest import read_fixture
+    from server.outcomes import FrameError
+
+    try:
+        return read_fixture(path, profiles)
+    except FrameError as error:
+        raise BadInput(error.message, field=error.field, error="bad_frame") from None
+
+
+def pipeline_options(args):
+    from server.pipeline import CornerMethod, PipelineOptions
+    from server.pose.solve import GravityMode
+
+    return PipelineOptions(
+        corner_method=CornerMethod.square if args.square_corners else CornerMethod.rounded,
+        subpixel=not args.no_subpixel,
+        gravity_mode=GravityMode(args.gravity),
+    )
+
+
+def print_result(result, frame, as_json: bool) -> None:
+    """The contract's LocateResult as JSON, or a few lines for people (with the error against the
+    frame's ground truth when it has one)."""
+    if as_json:
+        print(result.model_dump_json(by_alias=True, indent=2))
+        return
+    if not result.ok:
+        print(f"no fix: {result.reason}: {result.message}")
+        return
+    assert result.position_m is not None and result.yaw_pitch_roll_deg is not None  # outcomes.located sets both
+    x, y, z = result.position_m
+    yaw, pitch, roll = result.yaw_pitch_roll_deg
+    print(f"position  x={x:+.4f} m  y={y:+.4f} m  z={z:+.4f} m   (beacon {result.beacon_id})")
+    print(
+        f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
+        f"   gravity prior {'used' if result.gravity_used else 'not used'}"
+    )
+    print(
+        f"quality   reprojection {result.reprojection_error_px:.3f} px, "
+        f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms"
+    )
+    truth = frame.meta.ground_truth
+    if truth is not None:
+        dx, dy, dz = (a - b for a, b in zip((x, y, z), truth.position_m, strict=True))
+        print(
+            f"truth     error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.2f} mm, 3D "
+            f"{1000 * (dx * dx + dy * dy + dz * dz) ** 0.5:.2f} mm"
+        )
+    for warning in result.warnings:
+        print(f"warning   {warning}")
