@@ -45,7 +45,7 @@ CALIBRATION_REQUEST_BODY: dict[str, Any] = {
         "required": True,
         "description": "Views found on the photos (CalibrationRequest, JSON), or the photos themselves: multipart "
         "with a 'board' field (board spec JSON), a 'device' field (a profile id or profile JSON), an optional "
-        "'profile_id' field and one 'photos' file per photo (PNG or JPEG).",
+        "'profile_id' field and one 'photos' file per photo (PNG, JPEG or HEIC).",
         "content": {
             JSON: {"schema": {"$ref": "#/components/schemas/CalibrationRequest"}},
             MULTIPART: {

@@ -7,7 +7,9 @@ import pytest
 from PIL import Image
 
 from server.calibration.board import find_board
-from server.calibration.photos import PhotoError, find_views, photo_size, read_photo
+from server.calibration.photos import find_views
+from server.photos import PhotoError, photo_size
+from server.photos import read_grey as read_photo
 from simulator.board import PoseSet
 from tests.calibration_photos import BOARD, encoded, photo_set
 
@@ -23,9 +25,9 @@ def test_png_and_jpeg_grey_or_colour_read_as_grey():
 def test_other_formats_and_damaged_files_are_named():
     buffer = io.BytesIO()
     Image.new("L", (8, 8)).save(buffer, "GIF")
-    with pytest.raises(PhotoError, match="'g.gif' is a GIF image; give PNG or JPEG"):
+    with pytest.raises(PhotoError, match="'g.gif' is a GIF image; give a JPEG, PNG or HEIC"):
         photo_size(buffer.getvalue(), "g.gif")
-    with pytest.raises(PhotoError, match="'x.png' is not a readable PNG or JPEG"):
+    with pytest.raises(PhotoError, match="'x.png' is not a readable JPEG, PNG or HEIC"):
         read_photo(b"\x89PNG\r\n\x1a\n garbage", "x.png")
     truncated = encoded(photo_set(PoseSet.good)[0][0])[:2000]
     with pytest.raises(PhotoError, match="'t.png'"):

@@ -1,0 +1,176 @@
+"""Phone photos (JPEG, PNG, HEIC) to an 8-bit luma plane and the EXIF facts the camera model needs.
+
+Luma is taken as the camera made it: a JPEG's own stored Y channel (libjpeg decodes straight to
+grey, no RGB round trip), and for RGB sources the BT.601 luma of the encoded (gamma) values, as
+JPEG and Camera2 compute it. Sizes are checked from the header before anything is decoded (a
+small file may declare 20000 x 20000 pixels). Pixels stay in the stored orientation; `turn_upright`
+applies the EXIF orientation when the caller's camera model needs the displayed one.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+MAX_PHOTO_PIXELS = 100_000_000  # as a frame (server.ingest.MAX_PIXELS): a 50 MP phone photo fits twice
+PHOTO_KINDS = ("JPEG", "PNG", "HEIF")
+PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".heic", ".heif")
+
+try:  # HEIC is optional: without pillow-heif it is refused by name
+    from pillow_heif import register_heif_opener
+
+    register_heif_opener()
+    HEIC_READABLE = True
+except ImportError:  # pragma: no cover - the project depends on it
+    HEIC_READABLE = False
+
+# EXIF tags (the TIFF/EXIF 2.3 numbers); the Exif sub-IFD holds the shot's settings.
+_MAKE, _MODEL, _ORIENTATION, _EXIF_IFD = 0x010F, 0x0110, 0x0112, 0x8769
+_EXPOSURE_TIME, _ISO, _FOCAL_LENGTH, _FOCAL_35MM = 0x829A, 0x8827, 0x920A, 0xA405
+
+
+class PhotoError(ValueError):
+    """A photo that cannot be used; the message names it and what is wrong."""
+
+
+@dataclass(frozen=True)
+class PhotoExif:
+    """What a photo's EXIF says about its camera; None where it says nothing (or nonsense)."""
+
+    make: str | None = None
+    model: str | None = None
+    focal_length_mm: float | None = None
+    focal_35mm_mm: float | None = None
+    orientation: int = 1  # EXIF 1-8; 5-8 mean the stored image is turned a quarter against the display
+    exposure_s: float | None = None
+    iso: float | None = None
+
+    @property
+    def turned(self) -> bool:
+        """The displayed image is the stored one turned by a quarter (width and height swap)."""
+        return self.orientation in (5, 6, 7, 8)
+
+
+@dataclass(frozen=True)
+class Photo:
+    pixels: np.ndarray  # (height, width) uint8 luma in the stored orientation, read-only
+    exif: PhotoExif
+    kind: str  # "JPEG", "PNG" or "HEIF"
+
+
+def _open(data: bytes, name: str) -> Image.Image:
+    try:
+        image = Image.open(io.BytesIO(data))
+    except UnidentifiedImageError:  # its message names the in-memory buffer, not the photo
+        raise PhotoError(f"'{name}' is not a readable JPEG, PNG or HEIC photo (not an image file)") from None
+    except (OSError, ValueError) as error:
+        raise PhotoError(f"'{name}' is not a readable JPEG, PNG or HEIC photo ({error})") from None
+    if image.format not in PHOTO_KINDS:
+        raise PhotoError(f"'{name}' is a {image.format} image; give a JPEG, PNG or HEIC photo")
+    return image
+
+
+def _refuse_heic_unreadable(data: bytes, name: str) -> None:
+    if not HEIC_READABLE and data[4:12] in (b"ftypheic", b"ftypheix", b"ftypmif1", b"ftyphevc"):
+        raise PhotoError(f"'{name}' is HEIC, which needs the pillow-heif package (pip install pillow-heif)")
+
+
+def photo_size(data: bytes, name: str) -> tuple[int, int]:
+    """(width, height) from the photo's header, without decoding it; PhotoError when it is no photo."""
+    _refuse_heic_unreadable(data, name)
+    with _open(data, name) as image:
+        return image.size
+
+
+def _check_size(size: tuple[int, int], name: str, max_pixels: int) -> None:
+    width, height = size
+    if width * height > max_pixels:
+        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than {max_pixels // 1_000_000} megapixels")
+
+
+def _luma(image: Image.Image) -> Image.Image:
+    if image.format == "JPEG":
+        image.draft("L", image.size)  # libjpeg hands out the stored Y channel itself
+    if image.mode in ("I;16", "I;16B", "I", "F"):
+        raise PhotoError(f"{image.mode} images are not 8-bit; give an 8-bit photo")
+    # Pillow's L conversion is ITU-R BT.601 (299, 587, 114) on the encoded values; alpha is dropped.
+    return image if image.mode == "L" else image.convert("RGB").convert("L")
+
+
+def _positive(value: object) -> float | None:
+    try:
+        number = float(value)  # type: ignore[arg-type]  # EXIF rationals, ints or junk
+    except (TypeError, ValueError, ZeroDivisionError):
+        return None
+    return number if np.isfinite(number) and number > 0 else None
+
+
+def _text(value: object) -> str | None:
+    text = value.decode("ascii", "replace") if isinstance(value, bytes) else value
+    return text.strip("\x00 ").strip() or None if isinstance(text, str) else None
+
+
+def read_exif(image: Image.Image) -> PhotoExif:
+    """The camera facts of `image`'s EXIF (empty when it has none)."""
+    tags = image.getexif()
+    shot = tags.get_ifd(_EXIF_IFD)
+    orientation = tags.get(_ORIENTATION, 1)
+    iso = shot.get(_ISO)
+    return PhotoExif(
+        make=_text(tags.get(_MAKE)),
+        model=_text(tags.get(_MODEL)),
+        focal_length_mm=_positive(shot.get(_FOCAL_LENGTH)),
+        focal_35mm_mm=_positive(shot.get(_FOCAL_35MM)),
+        orientation=orientation if isinstance(orientation, int) and 1 <= orientation <= 8 else 1,
+        exposure_s=_positive(shot.get(_EXPOSURE_TIME)),
+        iso=_positive(iso[0] if isinstance(iso, tuple) and iso else iso),
+    )
+
+
+def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Photo:
+    """The photo's luma (stored orientation) and EXIF; PhotoError names what is wrong."""
+    _refuse_heic_unreadable(data, name)
+    with _open(data, name) as image:
+        _check_size(image.size, name, max_pixels)
+        kind, size = image.format or "", image.size
+        try:  # a PNG's EXIF may follow its pixels: reading it can meet the damage too
+            exif = read_exif(image)
+            luma = _luma(image)
+            luma.load()
+            pixels = np.asarray(luma, dtype=np.uint8)
+        except (OSError, ValueError, SyntaxError) as error:
+            raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated: {error})") from None
+    if pixels.shape != (size[1], size[0]):
+        raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
+    pixels.flags.writeable = False
+    return Photo(pixels=pixels, exif=exif, kind=kind)
+
+
+def read_grey(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> np.ndarray:
+    """The photo as an 8-bit grey image (height, width), stored orientation; PhotoError names what is wrong."""
+    return read_photo(data, name, max_pixels).pixels
+
+
+# EXIF orientation -> the turn that shows the stored image upright (EXIF 2.3, tag 0x0112)
+_UPRIGHT = {
+    2: Image.Transpose.FLIP_LEFT_RIGHT,
+    3: Image.Transpose.ROTATE_180,
+    4: Image.Transpose.FLIP_TOP_BOTTOM,
+    5: Image.Transpose.TRANSPOSE,
+    6: Image.Transpose.ROTATE_270,
+    7: Image.Transpose.TRANSVERSE,
+    8: Image.Transpose.ROTATE_90,
+}
+
+
+def turn_upright(pixels: np.ndarray, orientation: int) -> np.ndarray:
+    """`pixels` as displayed under EXIF `orientation` (the stored image turned and/or mirrored)."""
+    turn = _UPRIGHT.get(orientation)
+    if turn is None:
+        return pixels
+    turned = np.asarray(Image.fromarray(np.ascontiguousarray(pixels)).transpose(turn))
+    turned.flags.writeable = False
+    return turned
