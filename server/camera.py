@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 from pydantic import ValidationError
 
 from server.outcomes import FrameError
+from server.photos import PhotoExif
 from shared_schemas import CameraIntrinsics, DeviceProfile, FrameMeta, ProfileRef, device_profiles
 
 
@@ -92,3 +96,145 @@ def _profile_camera(ref: ProfileRef, meta: FrameMeta, profiles: ProfileTable) ->
             f"contract's range: {'.'.join(map(str, problem['loc']))}: {problem['msg']}",
             field="width",
         ) from None
+
+
+# How sure a photo's intrinsics are: the relative (1-sigma) error of the focal length in pixels, which
+# is the relative error of the fix's distance (an error of focal_sigma_rel x distance along the ray).
+# - calibrated profile: a board calibration's fx is good to a few 1e-4 (docs/calibration.md);
+# - datasheet profile: the nominal focal length and pixel pitch are rounded and vary unit to unit, ~1-2 %;
+# - EXIF 35 mm equivalent: an integer (26 mm +- 0.5 mm is +-1.9 %, 1.1 % as a sigma), focus breathing
+#   (~2 %) and makers' diagonal conventions (~2 %) together ~4 %.
+FOCAL_SIGMA_CALIBRATED = 0.0005
+FOCAL_SIGMA_DATASHEET = 0.015
+FOCAL_SIGMA_EXIF_35MM = 0.04
+FULL_FRAME_DIAGONAL_MM = 43.2666  # of a 36 x 24 mm frame: the 35 mm equivalent's diagonal rule
+PORTRAIT_ORIENTATION = 6  # a phone's stored landscape image shown upright (rear camera, held upright)
+
+
+@dataclass(frozen=True)
+class PhotoCamera:
+    """The intrinsics chosen for a photo, where they came from and how sure they are."""
+
+    intrinsics: CameraIntrinsics
+    source: str  # "camera" (given), "profile", "exif_profile" or "exif_35mm"
+    detail: str  # for people: which profile, which EXIF values
+    focal_sigma_rel: float | None  # None: as given, unknown
+    turn: int = 1  # the EXIF orientation to apply to the stored pixels first (1: none)
+
+
+def _words(text: str) -> str:
+    return "".join(ch for ch in text.lower() if ch.isalnum())
+
+
+def profile_for_exif(exif: PhotoExif, profiles: ProfileTable) -> DeviceProfile | None:
+    """The profile whose name is the photo's make and model (for example 'Xiaomi' 'MI 8' -> 'Xiaomi Mi 8 rear
+    camera'); of a phone's several cameras, the one whose focal length is nearest the EXIF one, else the rear."""
+    if not exif.model:
+        return None
+    make = _words(exif.make or "")
+    model = _words(exif.model)
+    device = model if model.startswith(make) else make + model
+    matches = [p for p in profiles.values() if _words(p.name).startswith(device)]
+    if not matches:
+        return None
+    focal_mm = exif.focal_length_mm
+    if focal_mm is not None:
+        return min(matches, key=lambda p: abs(p.focal_length_m * 1000 - focal_mm))
+    return min(matches, key=lambda p: (p.facing != "rear", p.id))
+
+
+def _profile_photo_camera(profile: DeviceProfile, size: tuple[int, int], exif: PhotoExif, source: str) -> PhotoCamera:
+    width, height = size
+    turn = 1
+    if (width > height) != (profile.width > profile.height):  # the profile is upright, the photo stored turned
+        turn = exif.orientation if exif.turned else PORTRAIT_ORIENTATION
+        width, height = height, width
+    try:
+        intrinsics = intrinsics_from_profile(profile, width, height)
+    except ValidationError as error:
+        problem = error.errors()[0]
+        raise FrameError(
+            f"photo {width}x{height} scales profile '{profile.id}' ({profile.width}x{profile.height}) out of the "
+            f"contract's range: {'.'.join(map(str, problem['loc']))}: {problem['msg']}",
+            field="profile",
+        ) from None
+    calibrated = profile.intrinsics is not None
+    sigma = FOCAL_SIGMA_CALIBRATED if calibrated else FOCAL_SIGMA_DATASHEET
+    turned = f", turned upright (EXIF orientation {turn})" if turn != 1 else ""
+    kind = "calibrated" if calibrated else "datasheet"
+    return PhotoCamera(intrinsics, source, f"{kind} profile '{profile.id}'{turned}", sigma, turn)
+
+
+def photo_camera(
+    exif: PhotoExif,
+    size: tuple[int, int],
+    profiles: ProfileTable,
+    camera: CameraIntrinsics | None = None,
+    profile: DeviceProfile | None = None,
+) -> PhotoCamera:
+    """The intrinsics of a photo of `size` (stored width, height): `camera` as given > `profile` > the profile
+    EXIF make and model name > EXIF's 35 mm equivalent focal length (diagonal rule, principal point at the
+    centre); FrameError asking for --profile or --camera when there is nothing to go on."""
+    width, height = size
+    if camera is not None:
+        return PhotoCamera(camera, "camera", "given intrinsics", None)
+    if profile is not None:
+        return _profile_photo_camera(profile, size, exif, "profile")
+    matched = profile_for_exif(exif, profiles)
+    if matched is not None:
+        chosen = _profile_photo_camera(matched, size, exif, "exif_profile")
+        return replace(chosen, detail=f"EXIF '{exif.make} {exif.model}' -> {chosen.detail}")
+    if exif.focal_35mm_mm is not None:
+        focal_px = exif.focal_35mm_mm / FULL_FRAME_DIAGONAL_MM * math.hypot(width, height)
+        intrinsics = CameraIntrinsics(fx=focal_px, fy=focal_px, cx=(width - 1) / 2, cy=(height - 1) / 2)
+        detail = f"EXIF 35 mm equivalent focal length {exif.focal_35mm_mm:g} mm, principal point at the centre"
+        return PhotoCamera(intrinsics, "exif_35mm", detail, FOCAL_SIGMA_EXIF_35MM)
+    seen = f"EXIF make/model '{exif.make} {exif.model}' matches no profile" if exif.model else "no EXIF camera"
+    raise FrameError(
+        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass --profile NAME|FILE "
+        f"(known: {', '.join(sorted(profiles))}) or --camera fx,fy,cx,cy",
+        field="camera",
+    )
+
+
+def resolve_profile_args(values: Iterable[str]) -> tuple[dict[str, DeviceProfile], DeviceProfile | None]:
+    """`--profile NAME|FILE` as every command reads it: a path that exists is a profile file (registered, so a
+    frame's camera.profile may name it), anything else a known id. Returns the table (bundled and files) and the
+    last profile given (the one a photo uses), or ValueError naming the bad value."""
+    values = list(values)
+    given = []
+    for value in values:
+        path = Path(value)
+        if not path.is_file():
+            continue
+        try:
+            given.append(DeviceProfile.model_validate_json(path.read_bytes()))
+        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+            raise ValueError(f"cannot read the device profile {path}: {error}") from None
+    table = profile_table(given)
+    chosen = None
+    for value in values:
+        if Path(value).is_file():
+            chosen = given.pop(0)
+        elif value in table:
+            chosen = table[value]
+        else:
+            known = ", ".join(sorted(table))
+            raise ValueError(f"--profile '{value}' is neither a file nor a known profile; known: {known}")
+    return table, chosen
+
+
+def parse_camera_arg(text: str) -> CameraIntrinsics:
+    """`--camera fx,fy,cx,cy[,k1,k2,p1,p2,k3]` (pixels of the stored photo); ValueError names the fault."""
+    try:
+        numbers = [float(part) for part in text.split(",")]
+    except ValueError:
+        raise ValueError(f"--camera '{text}' is not comma-separated numbers fx,fy,cx,cy[,k1,k2,p1,p2,k3]") from None
+    if len(numbers) not in (4, 5, 6, 7, 8, 9):
+        raise ValueError(f"--camera takes 4 to 9 numbers (fx,fy,cx,cy[,k1,k2,p1,p2,k3]), got {len(numbers)}")
+    fx, fy, cx, cy, *distortion = numbers
+    try:
+        return CameraIntrinsics(fx=fx, fy=fy, cx=cx, cy=cy, distortion=distortion)
+    except ValidationError as error:
+        problem = error.errors()[0]
+        raise ValueError(f"--camera: {'.'.join(map(str, problem['loc']))}: {problem['msg']}") from None

@@ -1,4 +1,4 @@
-"""Frame ingest: raw Camera2 luma bytes (Y8 / NV21 / I420 with row stride) or 8-bit PNG.
+"""Frame ingest: raw Camera2 luma bytes (Y8 / NV21 / I420 with row stride), 8-bit PNG, or a phone photo.
 
 Every inconsistency is a `FrameError` naming the field and what is wrong; raw frames are
 never copied (the pixels are a strided view of the bytes).
@@ -15,10 +15,12 @@ import numpy as np
 import pydantic_core
 from pydantic import ValidationError
 
-from server.camera import ProfileTable, resolve_camera
+from server.camera import PhotoCamera, ProfileTable, photo_camera, resolve_camera
 from server.outcomes import FrameError
-from shared_schemas import CameraIntrinsics, FrameFormat, FrameMeta
+from server.photos import PHOTO_SUFFIXES, PhotoError, read_photo, turn_upright
+from shared_schemas import CameraIntrinsics, DeviceProfile, FrameFormat, FrameMeta, device_profiles
 from shared_schemas.fixture_files import PNG_SIGNATURE, read_fixture_files
+from shared_schemas.models import MAX_EXPOSURE_S, MAX_ISO, MIN_EXPOSURE_S, MIN_ISO
 
 MAX_PIXELS = 100_000_000
 
@@ -124,3 +126,60 @@ def read_fixture(path: Path | str, profiles: ProfileTable | None = None) -> Luma
     except FileNotFoundError as error:
         raise FrameError(str(error)) from None
     return decode_frame(data, meta, profiles)
+
+
+def _within(value: float | None, low: float, high: float) -> float | None:
+    return value if value is not None and low <= value <= high else None
+
+
+def decode_photo(
+    data: bytes,
+    name: str,
+    profiles: ProfileTable | None = None,
+    camera: CameraIntrinsics | None = None,
+    profile: DeviceProfile | None = None,
+) -> tuple[LumaFrame, PhotoCamera]:
+    """A phone photo (JPEG, PNG, HEIC) as a frame: its luma, EXIF exposure and ISO, and the intrinsics
+    `server.camera.photo_camera` chooses (turned upright first when the chosen profile is)."""
+    try:
+        photo = read_photo(data, name, MAX_PIXELS)
+    except PhotoError as error:
+        raise FrameError(str(error), field="frame") from None
+    height, width = photo.pixels.shape
+    table = device_profiles() if profiles is None else profiles
+    chosen = photo_camera(photo.exif, (width, height), table, camera, profile)
+    pixels = turn_upright(photo.pixels, chosen.turn)
+    height, width = pixels.shape
+    try:
+        meta = FrameMeta(
+            width=width,
+            height=height,
+            format=FrameFormat.y8,
+            camera=chosen.intrinsics,
+            exposure_s=_within(photo.exif.exposure_s, MIN_EXPOSURE_S, MAX_EXPOSURE_S),
+            iso=_within(photo.exif.iso, MIN_ISO, MAX_ISO),
+        )
+    except ValidationError as error:  # for example --camera's principal point far outside the photo
+        problem = error.errors()[0]
+        raise FrameError(f"camera: {problem['msg']}", field="camera") from None
+    return LumaFrame(pixels=pixels, meta=meta, camera=chosen.intrinsics), chosen
+
+
+def is_photo(path: Path) -> bool:
+    """A JPEG or HEIC file, or a PNG with no frame JSON beside it (a recorded PNG frame has one)."""
+    suffix = path.suffix.lower()
+    return suffix in PHOTO_SUFFIXES and not (suffix == ".png" and path.with_suffix(".json").exists())
+
+
+def read_photo_file(
+    path: Path,
+    profiles: ProfileTable | None = None,
+    camera: CameraIntrinsics | None = None,
+    profile: DeviceProfile | None = None,
+) -> tuple[LumaFrame, PhotoCamera]:
+    """`decode_photo` of a file."""
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise FrameError(f"cannot read {path}: {error.strerror}", field="frame") from None
+    return decode_photo(data, path.name, profiles, camera, profile)

@@ -14,14 +14,22 @@ from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
 
 def add_locate_command(commands) -> None:
     parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
-    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    parser.add_argument(
+        "frame", type=Path, help="a recorded frame (NAME.json beside NAME.y/.yuv/.png) or a photo (JPEG, PNG, HEIC)"
+    )
     parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
     parser.add_argument(
         "--profile",
-        type=Path,
         action="append",
         default=[],
-        help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
+        metavar="NAME|FILE",
+        help="a device profile id or file (a file is registered, so a frame's camera.profile may name it); "
+        "a photo uses the last one given; repeatable (default: none; a photo's EXIF make and model pick one)",
+    )
+    parser.add_argument(
+        "--camera",
+        metavar="FX,FY,CX,CY[,K1,K2,P1,P2,K3]",
+        help="a photo's intrinsics in pixels of the stored image; wins over --profile and EXIF (default: none)",
     )
     parser.add_argument("--json", action="store_true", help="print the contract's result (or error) as JSON")
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
@@ -40,29 +48,22 @@ def run_locate(args) -> int:
     from server.options import LocateOptions
 
     try:
-        profiles = read_profiles(args.profile)
+        profiles, profile = read_profiles(args.profile)
         beacon_map = read_map(args.map)
-        frame = read_frame(args.frame, profiles)
+        frame, camera_used = read_frame(args.frame, profiles, profile, args.camera)
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
     result = locate(frame, beacon_map, LocateOptions(pipeline=pipeline_options(args)))
-    print_result(result, frame, as_json=args.json)
+    print_result(result, frame, as_json=args.json, camera_used=camera_used, beacon_map=beacon_map)
     return EXIT_OK if result.ok else EXIT_NO_FIX
 
 
-def read_profiles(paths: list[Path]):
-    """The bundled device profiles and those in `paths` (calibrated ones), by id."""
-    from server.camera import profile_table
-    from shared_schemas import DeviceProfile
+def read_profiles(values: list[str]):
+    """The device profiles a frame may name (bundled and `--profile` files) and the last one given, if any."""
+    from server.camera import resolve_profile_args
 
-    given = []
-    for path in paths:
-        try:
-            given.append(DeviceProfile.model_validate_json(path.read_bytes()))
-        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            raise BadInput(f"cannot read the device profile {path}: {error}", field="profile") from None
     try:
-        return profile_table(given)
+        return resolve_profile_args(values)
     except ValueError as error:
         raise BadInput(str(error), field="profile") from None
 
@@ -76,12 +77,23 @@ def read_map(path: Path):
         raise BadInput(f"cannot read map {path}: {error}", field="map") from None
 
 
-def read_frame(path: Path, profiles):
-    from server.ingest import read_fixture
+def read_frame(path: Path, profiles, profile=None, camera_text: str | None = None):
+    """The frame and, for a photo, the intrinsics chosen for it (`server.camera.PhotoCamera`; None for a
+    recorded frame, whose JSON names its camera)."""
+    from server.camera import parse_camera_arg
+    from server.ingest import is_photo, read_fixture, read_photo_file
     from server.outcomes import FrameError
 
     try:
-        return read_fixture(path, profiles)
+        camera = None if camera_text is None else parse_camera_arg(camera_text)
+    except ValueError as error:
+        raise BadInput(str(error), field="camera") from None
+    try:
+        if is_photo(path):
+            return read_photo_file(path, profiles, camera, profile)
+        if camera is not None:
+            raise BadInput("--camera is for photos; a recorded frame's JSON names its camera", field="camera")
+        return read_fixture(path, profiles), None
     except FrameError as error:
         raise BadInput(error.message, field=error.field, error="bad_frame") from None
 
@@ -97,12 +109,14 @@ def pipeline_options(args):
     )
 
 
-def print_result(result, frame, as_json: bool) -> None:
+def print_result(result, frame, as_json: bool, camera_used=None, beacon_map=None) -> None:
     """The contract's LocateResult as JSON, or a few lines for people (with the error against the
-    frame's ground truth when it has one)."""
+    frame's ground truth when it has one, and for a photo the intrinsics used and how sure they are)."""
     if as_json:
         print(result.model_dump_json(by_alias=True, indent=2))
         return
+    if camera_used is not None:
+        print_camera_used(camera_used, result, beacon_map)
     if not result.ok:
         print(f"no fix: {result.reason}: {result.message}")
         return
@@ -127,3 +141,20 @@ def print_result(result, frame, as_json: bool) -> None:
         )
     for warning in result.warnings:
         print(f"warning   {warning}")
+
+
+def print_camera_used(camera_used, result, beacon_map) -> None:
+    """Which intrinsics a photo was located with, and what their focal uncertainty means at the fix's distance
+    (a relative focal error scales the distance along the ray by as much)."""
+    k = camera_used.intrinsics
+    print(f"camera    fx={k.fx:.1f} fy={k.fy:.1f} cx={k.cx:.1f} cy={k.cy:.1f} px from {camera_used.detail}")
+    sigma = camera_used.focal_sigma_rel
+    if sigma is None:
+        print("          focal uncertainty unknown (intrinsics as given)")
+        return
+    line = f"          focal uncertainty {100 * sigma:.2g} %"
+    beacon = next((b for b in beacon_map.beacons if b.id == result.beacon_id), None) if beacon_map else None
+    if result.position_m is not None and beacon is not None:
+        distance_m = sum((a - b) ** 2 for a, b in zip(result.position_m, beacon.center_m, strict=True)) ** 0.5
+        line += f", about {1000 * sigma * distance_m:.1f} mm along the ray at this fix's {distance_m:.2f} m"
+    print(line)

@@ -64,6 +64,8 @@ class Photo:
 def _open(data: bytes, name: str) -> Image.Image:
     try:
         image = Image.open(io.BytesIO(data))
+    except Image.DecompressionBombError as error:  # Pillow's own limit, far above ours, refused from the header
+        raise PhotoError(f"'{name}' has more than {MAX_PHOTO_PIXELS // 1_000_000} megapixels ({error})") from None
     except UnidentifiedImageError:  # its message names the in-memory buffer, not the photo
         raise PhotoError(f"'{name}' is not a readable JPEG, PNG or HEIC photo (not an image file)") from None
     except (OSError, ValueError) as error:
