@@ -30,9 +30,15 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     client.add_argument("--api-key", default=os.environ.get("LUMIPOSE_API_KEY"), help="default $LUMIPOSE_API_KEY")
     actions = client.add_subparsers(dest="client_command", required=True)
 
-    locate = actions.add_parser("locate", help="locate one recorded frame")
-    locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    locate = actions.add_parser("locate", help="locate one recorded frame or phone photo")
+    locate.add_argument(
+        "frame", type=Path, help="a recorded frame (NAME.json beside NAME.y/.yuv/.png) or a photo (JPEG, PNG, HEIC)"
+    )
     locate.add_argument("--map", help="map name (default: the active map)")
+    locate.add_argument(
+        "--profile", help="a photo's device profile id, bundled or stored on the service (default: from its EXIF)"
+    )
+    locate.add_argument("--camera", metavar="FX,FY,CX,CY[,K1,...]", help="a photo's intrinsics, pixels (default: none)")
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
     locate.set_defaults(client_run=_locate)
 
@@ -98,7 +104,25 @@ def _print(model) -> None:
     print(model.model_dump_json(by_alias=True, indent=2))
 
 
+PHOTO_TYPES = {".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".png": "image/png", ".heic": "image/heic"}
+
+
+def _photo_type(path: Path) -> str | None:
+    """The Content-Type of a photo: a JPEG or HEIC, or a PNG with no frame JSON beside it (a recorded frame)."""
+    suffix = path.suffix.lower()
+    if suffix == ".png" and path.with_suffix(".json").exists():
+        return None
+    return PHOTO_TYPES.get(suffix)
+
+
 def _locate(client: Client, args) -> int:
+    content_type = _photo_type(args.frame)
+    if content_type is not None:
+        result = client.locate_photo(
+            args.frame.read_bytes(), content_type, map=args.map, profile=args.profile, camera=args.camera
+        )
+        _print(result)
+        return 0 if result.ok else 1
     result = client.locate_fixture(
         args.frame, map=args.map, compress=None if args.compress == "none" else args.compress
     )

@@ -178,6 +178,30 @@ class _Endpoints:
         meta, data = read_fixture_files(path)
         return self.locate(data, meta, **options)
 
+    def locate_photo(
+        self,
+        data: bytes,
+        content_type: str = "image/jpeg",
+        *,
+        map: str | None = None,
+        profile: str | None = None,
+        camera: str | None = None,
+        beacon_id: int | None = None,
+    ):
+        """Locate the camera of a phone photo (image/jpeg, image/png or image/heic) sent without frame JSON;
+        its camera is the `profile` id (bundled or stored), `camera` 'fx,fy,cx,cy[,k1,...]', or the photo's EXIF."""
+        params = {"map": map, "profile": profile, "camera": camera, "beacon_id": beacon_id}
+        return self._run(
+            _Call(
+                "POST",
+                "/v1/locate",
+                _model(LocateResult),
+                params=params,
+                headers={"Content-Type": content_type},
+                content=bytes(data),
+            )
+        )
+
     def maps(self):
         return self._run(_Call("GET", "/v1/maps", _models(MapSummary)))
 

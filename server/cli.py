@@ -19,7 +19,12 @@ from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 def _add_fov(commands) -> None:
     parser = commands.add_parser("fov", help="the paper's FOV and test grid (equations 1-7)")
-    parser.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    parser.add_argument(
+        "--profile",
+        default="xiaomi-mi8-front",
+        metavar="NAME|FILE",
+        help=f"a device profile id ({', '.join(sorted(device_profiles()))}) or file (default: %(default)s)",
+    )
     parser.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
     parser.add_argument("--cell", type=float, default=0.05, help="grid cell side, metres")
     parser.add_argument("--beacon-side", type=float, default=0.174, help="metres")
@@ -30,10 +35,13 @@ def _add_fov(commands) -> None:
 def _run_fov(args) -> int:
     from dataclasses import asdict
 
+    from server.camera import resolve_profile_args
     from server.fov import fov_grid
 
     try:
-        grid = fov_grid(device_profiles()[args.profile], args.distance, args.cell, args.beacon_side)
+        _, profile = resolve_profile_args([args.profile])
+        assert profile is not None  # one value given, so one profile chosen
+        grid = fov_grid(profile, args.distance, args.cell, args.beacon_side)
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT

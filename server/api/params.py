@@ -6,9 +6,11 @@ from dataclasses import dataclass, replace
 from typing import Annotated
 
 from fastapi import Depends, Header, Query, Request
+from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep
-from server.api.upload import FRAME_HEADER, FrameUpload, receive_body, receive_frame
+from server.api.errors import ApiError
+from server.api.upload import FRAME_HEADER, FrameUpload, PhotoUpload, receive_body, receive_frame
 from server.options import LocateOptions
 from server.pipeline import CornerMethod
 from server.pose.solve import GravityMode
@@ -17,11 +19,14 @@ FRAME_REQUEST_BODY = {
     "requestBody": {
         "required": True,
         "description": f"The frame bytes as the contract's fixture file holds them, with the frame JSON in the "
-        f"{FRAME_HEADER} header; or multipart with 'meta' and 'frame' parts. "
+        f"{FRAME_HEADER} header; or multipart with 'meta' and 'frame' parts; or a photo (JPEG, PNG, HEIC) "
+        "without frame JSON, its camera from the 'profile' or 'camera' query parameter or its EXIF. "
         "Content-Encoding gzip or zstd is accepted.",
         "content": {
             "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
             "image/png": {"schema": {"type": "string", "format": "binary"}},
+            "image/jpeg": {"schema": {"type": "string", "format": "binary"}},
+            "image/heic": {"schema": {"type": "string", "format": "binary"}},
             "multipart/form-data": {
                 "schema": {
                     "type": "object",
@@ -43,6 +48,13 @@ DeviceHeader = Annotated[
 MapQuery = Annotated[str | None, Query(description="map name; default: the active map")]
 BeaconQuery = Annotated[int | None, Query(ge=0, le=255, description="the beacon in view, when known otherwise")]
 GravityQuery = Annotated[GravityMode, Query(description="use the frame's gravity vector")]
+ProfileQuery = Annotated[
+    str | None, Query(max_length=128, description="a photo's device profile id (bundled or stored); default: EXIF")
+]
+CameraQuery = Annotated[
+    str | None,
+    Query(max_length=400, description="a photo's intrinsics fx,fy,cx,cy[,k1,k2,p1,p2,k3]; wins over profile"),
+]
 CornersQuery = Annotated[CornerMethod, Query(description="corner method: rounded (default) or the paper's square")]
 
 
@@ -65,9 +77,40 @@ def _locate_query(
     return LocateQuery(replace(options, pipeline=pipeline), beacon_id)
 
 
-async def frame_upload(request: Request, services: ServicesDep, frame_json: FrameHeader = None) -> FrameUpload:
+async def frame_upload(
+    request: Request,
+    services: ServicesDep,
+    frame_json: FrameHeader = None,
+    profile: ProfileQuery = None,
+    camera: CameraQuery = None,
+) -> FrameUpload:
     settings = services.settings
-    return await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
+    upload = await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
+    if isinstance(upload, PhotoUpload):
+        return await run_in_threadpool(_photo_frame, services, upload, profile, camera)
+    return upload
+
+
+def _photo_frame(services, upload: PhotoUpload, profile_id: str | None, camera_text: str | None) -> FrameUpload:
+    """A photo as a Y8 frame with the intrinsics `server.camera.photo_camera` chooses (as `lumipose locate PHOTO`)."""
+    from server.camera import parse_camera_arg
+    from server.ingest import decode_photo
+
+    try:
+        camera = None if camera_text is None else parse_camera_arg(camera_text)
+    except ValueError as error:
+        raise ApiError(400, "bad_frame", str(error), field="camera") from None
+    profiles = services.profiles.table(profile_id)
+    if profile_id is not None and profile_id not in profiles:
+        raise ApiError(
+            404,
+            "not_found",
+            f"unknown device profile '{profile_id}'; known: {', '.join(sorted(profiles))}",
+            field="profile",
+        )
+    profile = None if profile_id is None else profiles[profile_id]
+    frame, _ = decode_photo(bytes(upload.data), "the photo", profiles, camera, profile)
+    return FrameUpload(meta=frame.meta, data=frame.pixels.tobytes())
 
 
 async def photos_body(request: Request, services: ServicesDep) -> bytes:

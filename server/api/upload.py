@@ -21,6 +21,8 @@ from shared_schemas import FrameFormat, FrameMeta
 
 FRAME_HEADER = "X-Lumipose-Frame"
 RAW_TYPES = ("application/octet-stream", "image/png")
+# A phone photo: no frame JSON, the camera from a profile or intrinsics in the query, or the photo's EXIF.
+PHOTO_TYPES = ("image/jpeg", "image/png", "image/heic", "image/heif")
 MULTIPART = "multipart/form-data"
 ZSTD_PIECE = 4096
 
@@ -29,6 +31,14 @@ ZSTD_PIECE = 4096
 class FrameUpload:
     meta: FrameMeta
     data: bytes | bytearray  # uncompressed frame bytes as the contract's fixture file holds them
+
+
+@dataclass(frozen=True)
+class PhotoUpload:
+    """A photo (JPEG, PNG or HEIC) sent without frame JSON: decoded by `server.api.params.frame_upload`,
+    which knows the service's profiles."""
+
+    data: bytes | bytearray
 
 
 def too_large(limit: int) -> ApiError:
@@ -111,7 +121,9 @@ def _decompress(body: bytes | bytearray, encoding: str, limit: int) -> bytes | b
     return data
 
 
-async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[str, bytes]:
+async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[str | None, bytes]:
+    """The 'meta' text (None for a photo part, which needs none) and the 'frame' bytes."""
+
     async def stream():
         yield body
 
@@ -122,11 +134,18 @@ async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[s
             400, "bad_multipart", f"the multipart body cannot be read: {error.message}", field="body"
         ) from None
     meta, frame = form.get("meta"), form.get("frame")
+    photo = isinstance(frame, UploadFile) and (frame.content_type or "").lower() in PHOTO_TYPES
+    if meta is None and photo:
+        assert isinstance(frame, UploadFile)
+        data = await frame.read()
+        await form.close()
+        return None, data
     if meta is None or frame is None:
         raise ApiError(
             400,
             "bad_multipart",
-            "a multipart upload needs a 'meta' part (frame JSON) and a 'frame' part (bytes)",
+            "a multipart upload needs a 'meta' part (frame JSON) and a 'frame' part (bytes), or only a 'frame' "
+            f"part of type {', '.join(PHOTO_TYPES)} (a photo)",
             field="meta" if meta is None else "frame",
         )
     meta_text = (await meta.read()).decode("utf-8", "replace") if isinstance(meta, UploadFile) else meta
@@ -135,21 +154,29 @@ async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[s
     return meta_text, frame_bytes
 
 
-async def receive_frame(request: Request, frame_header: str | None, limit: int, timeout_s: float) -> FrameUpload:
-    """The frame of a locate or sample request; raises `ApiError` or `FrameError` on bad input."""
+async def receive_frame(
+    request: Request, frame_header: str | None, limit: int, timeout_s: float
+) -> FrameUpload | PhotoUpload:
+    """The frame of a locate or sample request, or a photo without frame JSON; raises `ApiError` or
+    `FrameError` on bad input."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    if content_type not in (*RAW_TYPES, MULTIPART):
+    if content_type not in (*RAW_TYPES, *PHOTO_TYPES, MULTIPART):
         raise ApiError(
             415,
             "unsupported_media_type",
             f"Content-Type '{content_type or '(none)'}' is not accepted; send "
-            f"{', '.join(RAW_TYPES)} with the {FRAME_HEADER} header, or {MULTIPART}",
+            f"{', '.join(RAW_TYPES)} with the {FRAME_HEADER} header, {MULTIPART}, or a photo "
+            f"({', '.join(PHOTO_TYPES)})",
             field="Content-Type",
         )
     body = await receive_body(request, limit, timeout_s)
     body = _decompress(body, request.headers.get("content-encoding", "").strip().lower(), limit)
     if content_type == MULTIPART:
         meta_text, data = await _multipart_parts(request, body)
+        if meta_text is None:
+            return PhotoUpload(data)
+    elif content_type in PHOTO_TYPES and not frame_header:
+        return PhotoUpload(body)
     elif frame_header:
         meta_text, data = frame_header, body
     else:

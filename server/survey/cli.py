@@ -24,6 +24,14 @@ def add_survey_command(commands) -> None:
     parser.add_argument("--out", type=Path, required=True, help="where to write the surveyed map")
     parser.add_argument("--labels", type=Path, help="JSON: a frame's file name -> list of PanelLabel")
     parser.add_argument("--name", help="the surveyed map's name (default: the --out file's stem)")
+    parser.add_argument(
+        "--profile",
+        action="append",
+        default=[],
+        metavar="NAME|FILE",
+        help="a device profile id or file (a file is registered, so a frame's camera.profile may name it); "
+        "photos among the frames use the last one given; repeatable (default: none)",
+    )
     parser.add_argument("--json", action="store_true", help="print the contract's SurveyReport as JSON")
     parser.set_defaults(run=run_survey_command)
 
@@ -73,7 +81,8 @@ def _print_report(report, out: Path) -> None:
 def run_survey_command(args) -> int:
     from pydantic import ValidationError
 
-    from server.ingest import read_fixture
+    from server.camera import resolve_profile_args
+    from server.ingest import is_photo, read_fixture, read_photo_file
     from server.outcomes import FrameError
     from server.survey.rules import SurveyInputError, SurveyRefused
     from server.survey.run import SurveyFrame, survey
@@ -94,15 +103,23 @@ def run_survey_command(args) -> int:
     except (OSError, ValueError, ValidationError) as error:
         print(f"error: cannot read labels {args.labels}: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    try:
+        profiles, profile = resolve_profile_args(args.profile)
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     frames = []
     for path, frame_labels in zip(args.frames, labels, strict=True):
         try:
-            frames.append(SurveyFrame(str(path), read_fixture(path), frame_labels))
+            frame = (
+                read_photo_file(path, profiles, None, profile)[0] if is_photo(path) else read_fixture(path, profiles)
+            )
+            frames.append(SurveyFrame(str(path), frame, frame_labels))
         except FrameError as error:
             print(f"error: frame {path}: {error}", file=sys.stderr)
             return EXIT_BAD_INPUT
     try:
-        report = survey(frames, sketch, args.anchor, name)
+        report = survey(frames, sketch, args.anchor, name, profiles=profiles)
     except SurveyInputError as error:
         print(f"error: {error.message}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -6,6 +6,7 @@ import json
 import struct
 import zlib
 
+import httpx
 import numpy as np
 import pytest
 from PIL import Image
@@ -14,14 +15,14 @@ from lumipose_cli.main import main
 from server.camera import FOCAL_SIGMA_EXIF_35MM, FULL_FRAME_DIAGONAL_MM, intrinsics_from_profile
 from server.geometry import rotation_from_ypr
 from server.photos import HEIC_READABLE, read_photo, turn_upright
-from shared_schemas import Beacon, BeaconMap, device_profiles
+from shared_schemas import DEMO_MAP_PATH, BeaconMap, device_profiles, load_map
 from simulator.render import CameraPose, SensorModel, render_frame
 
 REAR = device_profiles()["xiaomi-mi8-rear"]
 WIDTH, HEIGHT = 378, 504  # the rear camera's upright 3024 x 4032 at 1/8
 CAMERA = intrinsics_from_profile(REAR, WIDTH, HEIGHT)
-PANEL = Beacon(id=7, center_m=[0.0, 0.0, 0.8], side_m=0.3, corner_radius_m=0.03)
-TRUTH = np.array([0.04, -0.03, 0.0])
+PANEL = load_map(DEMO_MAP_PATH).beacons[0]  # the service's active map by default: nothing to store or clean up
+TRUTH = np.array([0.04, -0.03, 0.4])
 DISTANCE_M = float(np.linalg.norm(np.array(PANEL.center_m) - TRUTH))
 
 
@@ -158,3 +159,43 @@ def test_bad_photos_exit_2_with_the_contract_error(tmp_path, capsys, room):
     assert code == 2 and "more than 100 megapixels" in error["message"]
     code, error = locate(capsys, bare, room, "--profile", "no-such-phone")
     assert code == 2 and error["field"] == "profile" and "xiaomi-mi8-rear" in error["message"]
+
+
+def test_fov_takes_a_profile_name_or_file(capsys):
+    assert main(["fov", "--profile", "xiaomi-mi8-rear"]) == 0
+    by_name = capsys.readouterr().out
+    assert main(["fov", "--profile", "shared_schemas/profiles/xiaomi-mi8-rear.json"]) == 2  # the bundled id is taken
+    assert "has a bundled profile's id" in capsys.readouterr().err
+    assert main(["fov", "--profile", "no-such-phone"]) == 2
+    assert "known: xiaomi-mi8-front, xiaomi-mi8-rear" in capsys.readouterr().err
+    assert "sensor" in by_name
+
+
+def test_photo_over_http_with_a_profile_name(server_url, capsys, tmp_path):
+    photo = tmp_path / "photo.jpg"
+    photo.write_bytes(jpeg(upright_frame()))  # no EXIF camera: the profile comes from the query
+    assert main(["client", "--url", server_url, "locate", str(photo), "--profile", "xiaomi-mi8-rear"]) == 0
+    assert_near_truth(json.loads(capsys.readouterr().out), 0.005)
+    exif = tmp_path / "exif.jpg"
+    exif.write_bytes(jpeg(np.ascontiguousarray(np.rot90(upright_frame())), make="Xiaomi", model="MI 8", orientation=6))
+    assert main(["client", "--url", server_url, "locate", str(exif)]) == 0
+    assert_near_truth(json.loads(capsys.readouterr().out), 0.005)
+    assert main(["client", "--url", server_url, "locate", str(photo)]) == 2
+    assert "--profile" in capsys.readouterr().err
+    truncated = tmp_path / "truncated.jpg"
+    truncated.write_bytes(photo.read_bytes()[:2000])
+    assert main(["client", "--url", server_url, "locate", str(truncated), "--profile", "xiaomi-mi8-rear"]) == 2
+    assert "damaged or truncated" in capsys.readouterr().err
+    with httpx.Client(base_url=server_url) as http:
+        response = http.post(
+            "/v1/locate", params={"profile": "xiaomi-mi8-rear"}, content=truncated.read_bytes(),
+            headers={"Content-Type": "image/jpeg"},
+        )
+        assert response.status_code == 400 and response.json()["error"] == "bad_frame"
+        assert "damaged or truncated" in response.json()["message"]
+        files = {"frame": ("photo.jpg", photo.read_bytes(), "image/jpeg")}
+        response = http.post("/v1/locate", params={"profile": "xiaomi-mi8-rear"}, files=files)
+        assert response.status_code == 200 and response.json()["ok"], response.text
+        response = http.post("/v1/locate", params={"profile": "nope"}, content=photo.read_bytes(),
+                             headers={"Content-Type": "image/jpeg"})
+        assert response.status_code == 404 and response.json()["field"] == "profile"
