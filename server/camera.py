@@ -11,7 +11,15 @@ from pydantic import ValidationError
 
 from server.outcomes import FrameError
 from server.photos import PhotoExif
-from shared_schemas import CameraIntrinsics, DeviceProfile, FrameMeta, ProfileRef, device_profiles
+from shared_schemas import (
+    CameraIntrinsics,
+    CameraSource,
+    CameraUsed,
+    DeviceProfile,
+    FrameMeta,
+    ProfileRef,
+    device_profiles,
+)
 
 
 def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> CameraIntrinsics:
@@ -116,10 +124,46 @@ class PhotoCamera:
     """The intrinsics chosen for a photo, where they came from and how sure they are."""
 
     intrinsics: CameraIntrinsics
-    source: str  # "camera" (given), "profile", "exif_profile" or "exif_35mm"
+    source: CameraSource
     detail: str  # for people: which profile, which EXIF values
     focal_sigma_rel: float | None  # None: as given, unknown
     turn: int = 1  # the EXIF orientation to apply to the stored pixels first (1: none)
+    profile: str | None = None
+
+    def used(self) -> CameraUsed:
+        return camera_used(self.intrinsics, self.source, self.focal_sigma_rel, self.detail, self.profile)
+
+
+def camera_used(
+    camera: CameraIntrinsics, source: CameraSource, sigma: float | None, detail: str, profile: str | None = None
+) -> CameraUsed:
+    """The contract's statement of a fix's intrinsics (LocateResult.camera_used)."""
+    return CameraUsed(
+        fx=camera.fx,
+        fy=camera.fy,
+        cx=camera.cx,
+        cy=camera.cy,
+        source=source,
+        profile=profile,
+        focal_sigma_rel=sigma,
+        detail=detail,
+    )
+
+
+def profile_sigma(profile: DeviceProfile) -> float:
+    """A profile's relative focal uncertainty: calibrated or datasheet (see FOCAL_SIGMA_*)."""
+    return FOCAL_SIGMA_CALIBRATED if profile.intrinsics is not None else FOCAL_SIGMA_DATASHEET
+
+
+def frame_camera_used(meta: FrameMeta, camera: CameraIntrinsics, profiles: ProfileTable | None) -> CameraUsed:
+    """`camera_used` of a recorded frame: its own intrinsics (uncertainty unknown) or the profile it names."""
+    ref = meta.camera
+    if not isinstance(ref, ProfileRef):
+        return camera_used(camera, CameraSource.frame, None, "the frame's intrinsics")
+    profile = (device_profiles() if profiles is None else profiles)[ref.profile]  # resolve_camera found it
+    kind = "calibrated" if profile.intrinsics is not None else "datasheet"
+    detail = f"{kind} profile '{profile.id}' named by the frame"
+    return camera_used(camera, CameraSource.profile, profile_sigma(profile), detail, profile.id)
 
 
 def _words(text: str) -> str:
@@ -143,7 +187,9 @@ def profile_for_exif(exif: PhotoExif, profiles: ProfileTable) -> DeviceProfile |
     return min(matches, key=lambda p: (p.facing != "rear", p.id))
 
 
-def _profile_photo_camera(profile: DeviceProfile, size: tuple[int, int], exif: PhotoExif, source: str) -> PhotoCamera:
+def _profile_photo_camera(
+    profile: DeviceProfile, size: tuple[int, int], exif: PhotoExif, source: CameraSource
+) -> PhotoCamera:
     width, height = size
     turn = 1
     if (width > height) != (profile.width > profile.height):  # the profile is upright, the photo stored turned
@@ -158,11 +204,10 @@ def _profile_photo_camera(profile: DeviceProfile, size: tuple[int, int], exif: P
             f"contract's range: {'.'.join(map(str, problem['loc']))}: {problem['msg']}",
             field="profile",
         ) from None
-    calibrated = profile.intrinsics is not None
-    sigma = FOCAL_SIGMA_CALIBRATED if calibrated else FOCAL_SIGMA_DATASHEET
     turned = f", turned upright (EXIF orientation {turn})" if turn != 1 else ""
-    kind = "calibrated" if calibrated else "datasheet"
-    return PhotoCamera(intrinsics, source, f"{kind} profile '{profile.id}'{turned}", sigma, turn)
+    kind = "calibrated" if profile.intrinsics is not None else "datasheet"
+    detail = f"{kind} profile '{profile.id}'{turned}"
+    return PhotoCamera(intrinsics, source, detail, profile_sigma(profile), turn, profile.id)
 
 
 def photo_camera(
@@ -177,18 +222,18 @@ def photo_camera(
     centre); FrameError asking for --profile or --camera when there is nothing to go on."""
     width, height = size
     if camera is not None:
-        return PhotoCamera(camera, "camera", "given intrinsics", None)
+        return PhotoCamera(camera, CameraSource.camera, "given intrinsics", None)
     if profile is not None:
-        return _profile_photo_camera(profile, size, exif, "profile")
+        return _profile_photo_camera(profile, size, exif, CameraSource.profile)
     matched = profile_for_exif(exif, profiles)
     if matched is not None:
-        chosen = _profile_photo_camera(matched, size, exif, "exif_profile")
+        chosen = _profile_photo_camera(matched, size, exif, CameraSource.exif_profile)
         return replace(chosen, detail=f"EXIF '{exif.make} {exif.model}' -> {chosen.detail}")
     if exif.focal_35mm_mm is not None:
         focal_px = exif.focal_35mm_mm / FULL_FRAME_DIAGONAL_MM * math.hypot(width, height)
         intrinsics = CameraIntrinsics(fx=focal_px, fy=focal_px, cx=(width - 1) / 2, cy=(height - 1) / 2)
         detail = f"EXIF 35 mm equivalent focal length {exif.focal_35mm_mm:g} mm, principal point at the centre"
-        return PhotoCamera(intrinsics, "exif_35mm", detail, FOCAL_SIGMA_EXIF_35MM)
+        return PhotoCamera(intrinsics, CameraSource.exif_35mm, detail, FOCAL_SIGMA_EXIF_35MM)
     seen = f"EXIF make/model '{exif.make} {exif.model}' matches no profile" if exif.model else "no EXIF camera"
     raise FrameError(
         f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass --profile NAME|FILE "

@@ -15,10 +15,10 @@ import numpy as np
 import pydantic_core
 from pydantic import ValidationError
 
-from server.camera import PhotoCamera, ProfileTable, photo_camera, resolve_camera
+from server.camera import PhotoCamera, ProfileTable, frame_camera_used, photo_camera, resolve_camera
 from server.outcomes import FrameError
 from server.photos import PHOTO_SUFFIXES, PhotoError, read_photo, turn_upright
-from shared_schemas import CameraIntrinsics, DeviceProfile, FrameFormat, FrameMeta, device_profiles
+from shared_schemas import CameraIntrinsics, CameraUsed, DeviceProfile, FrameFormat, FrameMeta, device_profiles
 from shared_schemas.fixture_files import PNG_SIGNATURE, read_fixture_files
 from shared_schemas.models import MAX_EXPOSURE_S, MAX_ISO, MIN_EXPOSURE_S, MIN_ISO
 
@@ -30,6 +30,7 @@ class LumaFrame:
     pixels: np.ndarray  # (height, width) uint8, read-only
     meta: FrameMeta
     camera: CameraIntrinsics
+    camera_used: CameraUsed | None = None  # where `camera` came from and how sure (LocateResult.camera_used)
 
 
 def parse_meta(text: str | bytes | dict) -> FrameMeta:
@@ -115,7 +116,9 @@ def decode_luma(data: bytes | memoryview, meta: FrameMeta) -> np.ndarray:
 def decode_frame(data: bytes | memoryview, meta: FrameMeta, profiles: ProfileTable | None = None) -> LumaFrame:
     """The luma plane of `data` as described by `meta`, with its camera; `profiles`: what `camera.profile`
     may name (default: the bundled profiles)."""
-    return LumaFrame(pixels=decode_luma(data, meta), meta=meta, camera=resolve_camera(meta, profiles))
+    camera = resolve_camera(meta, profiles)
+    used = frame_camera_used(meta, camera, profiles)
+    return LumaFrame(pixels=decode_luma(data, meta), meta=meta, camera=camera, camera_used=used)
 
 
 def read_fixture(path: Path | str, profiles: ProfileTable | None = None) -> LumaFrame:
@@ -162,7 +165,7 @@ def decode_photo(
     except ValidationError as error:  # for example --camera's principal point far outside the photo
         problem = error.errors()[0]
         raise FrameError(f"camera: {problem['msg']}", field="camera") from None
-    return LumaFrame(pixels=pixels, meta=meta, camera=chosen.intrinsics), chosen
+    return LumaFrame(pixels=pixels, meta=meta, camera=chosen.intrinsics, camera_used=chosen.used()), chosen
 
 
 def is_photo(path: Path) -> bool:

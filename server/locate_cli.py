@@ -50,11 +50,11 @@ def run_locate(args) -> int:
     try:
         profiles, profile = read_profiles(args.profile)
         beacon_map = read_map(args.map)
-        frame, camera_used = read_frame(args.frame, profiles, profile, args.camera)
+        frame = read_frame(args.frame, profiles, profile, args.camera)
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
     result = locate(frame, beacon_map, LocateOptions(pipeline=pipeline_options(args)))
-    print_result(result, frame, as_json=args.json, camera_used=camera_used, beacon_map=beacon_map)
+    print_result(result, frame, as_json=args.json, beacon_map=beacon_map)
     return EXIT_OK if result.ok else EXIT_NO_FIX
 
 
@@ -78,8 +78,7 @@ def read_map(path: Path):
 
 
 def read_frame(path: Path, profiles, profile=None, camera_text: str | None = None):
-    """The frame and, for a photo, the intrinsics chosen for it (`server.camera.PhotoCamera`; None for a
-    recorded frame, whose JSON names its camera)."""
+    """A recorded frame (its JSON names its camera) or a photo (`--camera` > `profile` > EXIF)."""
     from server.camera import parse_camera_arg
     from server.ingest import is_photo, read_fixture, read_photo_file
     from server.outcomes import FrameError
@@ -90,10 +89,10 @@ def read_frame(path: Path, profiles, profile=None, camera_text: str | None = Non
         raise BadInput(str(error), field="camera") from None
     try:
         if is_photo(path):
-            return read_photo_file(path, profiles, camera, profile)
+            return read_photo_file(path, profiles, camera, profile)[0]
         if camera is not None:
             raise BadInput("--camera is for photos; a recorded frame's JSON names its camera", field="camera")
-        return read_fixture(path, profiles), None
+        return read_fixture(path, profiles)
     except FrameError as error:
         raise BadInput(error.message, field=error.field, error="bad_frame") from None
 
@@ -109,14 +108,14 @@ def pipeline_options(args):
     )
 
 
-def print_result(result, frame, as_json: bool, camera_used=None, beacon_map=None) -> None:
+def print_result(result, frame, as_json: bool, beacon_map=None) -> None:
     """The contract's LocateResult as JSON, or a few lines for people (with the error against the
-    frame's ground truth when it has one, and for a photo the intrinsics used and how sure they are)."""
+    frame's ground truth when it has one, and the intrinsics used and how sure they are)."""
     if as_json:
         print(result.model_dump_json(by_alias=True, indent=2))
         return
-    if camera_used is not None:
-        print_camera_used(camera_used, result, beacon_map)
+    if frame.camera_used is not None:
+        print_camera_used(frame.camera_used, result, beacon_map)
     if not result.ok:
         print(f"no fix: {result.reason}: {result.message}")
         return
@@ -146,11 +145,11 @@ def print_result(result, frame, as_json: bool, camera_used=None, beacon_map=None
 def print_camera_used(camera_used, result, beacon_map) -> None:
     """Which intrinsics a photo was located with, and what their focal uncertainty means at the fix's distance
     (a relative focal error scales the distance along the ray by as much)."""
-    k = camera_used.intrinsics
-    print(f"camera    fx={k.fx:.1f} fy={k.fy:.1f} cx={k.cx:.1f} cy={k.cy:.1f} px from {camera_used.detail}")
+    k = camera_used
+    print(f"camera    fx={k.fx:.1f} fy={k.fy:.1f} cx={k.cx:.1f} cy={k.cy:.1f} px from {k.detail}")
     sigma = camera_used.focal_sigma_rel
     if sigma is None:
-        print("          focal uncertainty unknown (intrinsics as given)")
+        print("          focal uncertainty unknown (intrinsics as given, not checked here)")
         return
     line = f"          focal uncertainty {100 * sigma:.2g} %"
     beacon = next((b for b in beacon_map.beacons if b.id == result.beacon_id), None) if beacon_map else None

@@ -61,7 +61,9 @@ def locate(
     the sender and the sessions of this process, for maps of several beacons.
     """
     try:
-        return _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
+        result = _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
+        # every fix says which intrinsics it rests on (a photo's may be a rough EXIF guess)
+        return result.model_copy(update={"camera_used": frame.camera_used}) if result.ok else result
     except NUMERICAL_ERRORS as error:
         where = _where(error)
         LOG.warning("numerical failure in %s on map '%s': %r", where, beacon_map.name, error, exc_info=True)

@@ -514,6 +514,29 @@ class VlcReading(Strict):
     candidates: int = Field(ge=1, description="number of IDs considered (the map's, or all 256)")
 
 
+class CameraSource(StrEnum):
+    frame = "frame"  # the frame JSON's own intrinsics
+    camera = "camera"  # intrinsics given with the request (--camera, the camera query parameter)
+    profile = "profile"  # a device profile named by the frame, --profile or the profile query parameter
+    exif_profile = "exif_profile"  # the profile whose name is the photo's EXIF make and model
+    exif_35mm = "exif_35mm"  # the photo's EXIF 35 mm equivalent focal length, principal point at the centre
+
+
+class CameraUsed(Strict):
+    """The intrinsics a fix was computed with, where they came from and how sure they are."""
+
+    fx: float = Field(ge=MIN_FOCAL_PX, le=MAX_FOCAL_PX, description="focal length along x, pixels of the frame")
+    fy: float = Field(ge=MIN_FOCAL_PX, le=MAX_FOCAL_PX, description="focal length along y, pixels of the frame")
+    cx: float = Field(ge=MIN_PRINCIPAL_PX, le=MAX_PRINCIPAL_PX, description="principal point x, pixels")
+    cy: float = Field(ge=MIN_PRINCIPAL_PX, le=MAX_PRINCIPAL_PX, description="principal point y, pixels")
+    source: CameraSource
+    profile: str | None = Field(default=None, description="the device profile's id, when one was used")
+    focal_sigma_rel: float | None = Field(
+        default=None, ge=0, le=1, description="relative 1-sigma error of fx, fy; null: unknown (given intrinsics)"
+    )
+    detail: str = Field(description="for people: which profile, which EXIF values, any turn")
+
+
 class TrackState(Strict):
     """A device's motion-filtered track at this frame; the fix itself stays in position_m."""
 
@@ -554,6 +577,7 @@ class LocateResult(Strict):
     warnings: list[str] = Field(default_factory=list)
     timing_ms: dict[str, float] = Field(default_factory=dict)
     vlc: VlcReading | None = Field(default=None, description="the ID read by VLC for this fix, when one was read")
+    camera_used: CameraUsed | None = Field(default=None, description="the intrinsics of this fix and how sure")
     beacons_in_view: int | None = Field(default=None, ge=0, description="beacon-shaped blobs seen in the frame")
     track: TrackState | None = None
 

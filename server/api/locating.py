@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from starlette.concurrency import run_in_threadpool
 
@@ -29,8 +29,11 @@ def _locate_now(
     query: LocateQuery,
     device: str | None,
 ) -> LocateResult:
+    frame = decode_frame(upload.data, upload.meta, profiles)
+    if upload.camera_used is not None:  # a photo: its intrinsics' source, not "the frame's"
+        frame = replace(frame, camera_used=upload.camera_used)
     return locate(
-        decode_frame(upload.data, upload.meta, profiles),
+        frame,
         beacon_map,
         query.options,
         beacon_id=query.beacon_id,

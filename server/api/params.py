@@ -110,7 +110,7 @@ def _photo_frame(services, upload: PhotoUpload, profile_id: str | None, camera_t
         )
     profile = None if profile_id is None else profiles[profile_id]
     frame, _ = decode_photo(bytes(upload.data), "the photo", profiles, camera, profile)
-    return FrameUpload(meta=frame.meta, data=frame.pixels.tobytes())
+    return FrameUpload(meta=frame.meta, data=frame.pixels.tobytes(), camera_used=frame.camera_used)
 
 
 async def photos_body(request: Request, services: ServicesDep) -> bytes:

@@ -17,7 +17,7 @@ from starlette.requests import ClientDisconnect, Request
 
 from server.api.errors import ApiError
 from server.ingest import parse_meta
-from shared_schemas import FrameFormat, FrameMeta
+from shared_schemas import CameraUsed, FrameFormat, FrameMeta
 
 FRAME_HEADER = "X-Lumipose-Frame"
 RAW_TYPES = ("application/octet-stream", "image/png")
@@ -31,6 +31,7 @@ ZSTD_PIECE = 4096
 class FrameUpload:
     meta: FrameMeta
     data: bytes | bytearray  # uncompressed frame bytes as the contract's fixture file holds them
+    camera_used: CameraUsed | None = None  # a photo's chosen intrinsics (else the frame JSON's camera says)
 
 
 @dataclass(frozen=True)

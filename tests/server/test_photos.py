@@ -88,6 +88,9 @@ def test_exif_make_and_model_pick_the_profile_in_either_stored_orientation(tmp_p
     code, result = locate(capsys, photo, room)
     assert code == 0
     assert_near_truth(result, 0.005)  # the datasheet profile is the render's camera
+    used = result["camera_used"]
+    assert (used["source"], used["profile"], used["focal_sigma_rel"]) == ("exif_profile", "xiaomi-mi8-rear", 0.015)
+    assert used["fx"] == pytest.approx(CAMERA.fx) and used["cx"] == pytest.approx(CAMERA.cx)
     assert main(["locate", str(photo), "--map", str(room)]) == 0
     out = capsys.readouterr().out
     assert "EXIF 'Xiaomi MI 8' -> datasheet profile 'xiaomi-mi8-rear'" in out and "focal uncertainty 1.5 %" in out
@@ -100,6 +103,8 @@ def test_only_the_35mm_equivalent_gives_a_rougher_camera(tmp_path, capsys, room)
     code, result = locate(capsys, photo, room)
     assert code == 0
     assert_near_truth(result, 3 * FOCAL_SIGMA_EXIF_35MM * DISTANCE_M)
+    assert result["camera_used"]["source"] == "exif_35mm"
+    assert result["camera_used"]["focal_sigma_rel"] == FOCAL_SIGMA_EXIF_35MM
     assert main(["locate", str(photo), "--map", str(room)]) == 0
     assert f"EXIF 35 mm equivalent focal length {focal_35mm} mm" in capsys.readouterr().out
 
@@ -111,6 +116,7 @@ def test_camera_flag_wins_and_a_png_needs_no_json(tmp_path, capsys, room):
     code, result = locate(capsys, photo, room, "--camera", flag, "--profile", "xiaomi-mi8-front")
     assert code == 0
     assert_near_truth(result, 0.005)
+    assert result["camera_used"]["source"] == "camera" and result["camera_used"]["focal_sigma_rel"] is None
     code, result = locate(capsys, photo, room, "--profile", "xiaomi-mi8-rear")
     assert code == 0
     assert_near_truth(result, 0.005)
@@ -179,7 +185,9 @@ def test_photo_over_http_with_a_profile_name(server_url, capsys, tmp_path):
     exif = tmp_path / "exif.jpg"
     exif.write_bytes(jpeg(np.ascontiguousarray(np.rot90(upright_frame())), make="Xiaomi", model="MI 8", orientation=6))
     assert main(["client", "--url", server_url, "locate", str(exif)]) == 0
-    assert_near_truth(json.loads(capsys.readouterr().out), 0.005)
+    result = json.loads(capsys.readouterr().out)
+    assert_near_truth(result, 0.005)
+    assert result["camera_used"]["source"] == "exif_profile" and "orientation 6" in result["camera_used"]["detail"]
     assert main(["client", "--url", server_url, "locate", str(photo)]) == 2
     assert "--profile" in capsys.readouterr().err
     truncated = tmp_path / "truncated.jpg"
