@@ -19,11 +19,13 @@ from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 def _add_fov(commands) -> None:
     parser = commands.add_parser("fov", help="the paper's FOV and test grid (equations 1-7)")
-    parser.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    parser.add_argument(
+        "--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()), help="bundled device profile"
+    )
     parser.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
     parser.add_argument("--cell", type=float, default=0.05, help="grid cell side, metres")
-    parser.add_argument("--beacon-side", type=float, default=0.174, help="metres")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--beacon-side", type=float, default=0.174, help="side of the square panel, metres")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON on stdout")
     parser.set_defaults(run=_run_fov)
 
 
@@ -67,7 +69,12 @@ def _add_serve(commands) -> None:
     parser.add_argument(
         "--max-frames-in-flight", type=int, help="frame uploads held at once per worker (default 2 x cores + 2)"
     )
-    parser.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
+    parser.add_argument(
+        "--log-level",
+        default="info",
+        choices=["critical", "error", "warning", "info", "debug"],
+        help="uvicorn's log level",
+    )
     parser.set_defaults(run=_run_serve)
 
 

@@ -28,11 +28,13 @@ def add_commands(commands) -> None:
     steps = calibrate.add_subparsers(dest="step", required=True)
     board = steps.add_parser("board", help="write a printable ChArUco board and its spec (board.json)")
     board.add_argument("--out", type=Path, required=True, help="board.pdf (to print) or board.png (for a screen)")
-    board.add_argument("--squares", default="11x8", help="squares across x down (default 11x8: A4 landscape)")
-    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square (default 24)")
-    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default 0.6 of a square)")
-    board.add_argument("--dictionary", default="DICT_5X5_100", choices=DICTIONARIES)
-    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels (default 600)")
+    board.add_argument("--squares", default="11x8", help="squares across x down (default: 11x8, A4 landscape)")
+    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square")
+    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default: 0.6 of a square)")
+    board.add_argument(
+        "--dictionary", default="DICT_5X5_100", choices=DICTIONARIES, help="ArUco dictionary of the markers"
+    )
+    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
     board.set_defaults(run=_run_board)
     camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
     camera.add_argument("photos", type=Path, nargs="+", help="PNG or JPEG photos of the board, grey or colour")
