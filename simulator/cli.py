@@ -51,7 +51,8 @@ def add_commands(commands) -> None:
     bench = commands.add_parser("bench", help="benchmarks that print figures")
     benches = bench.add_subparsers(dest="bench", required=True)
     accuracy = benches.add_parser("accuracy", help="position error over rendered test-bench frames")
-    accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0], help="camera to beacon, metres")
+    accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0],
+                          help="camera to beacon, metres")
     accuracy.add_argument("--frames", type=int, default=None, help="per distance (200); with --shape, per shape (100)")
     accuracy.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
     accuracy.add_argument("--max-tilt", type=float, default=10.0, help="largest random camera tilt, degrees")
@@ -134,7 +135,8 @@ def add_commands(commands) -> None:
                               help="random phone yaw within +-this many degrees (0: exactly face to face, the paper's)")
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
     distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
-    distance.add_argument("--distances", type=float, nargs="+", default=None, help="metres (default: 1.0 to 3.0 by 0.1)")
+    distance.add_argument("--distances", type=float, nargs="+", default=None,
+                          help="metres (default: 1.0 to 3.0 by 0.1)")
     distance.add_argument("--yaw-jitter", type=float, default=0.0,
                           help="random phone yaw within +-this many degrees (0: exactly face to face)")
     tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
@@ -162,7 +164,8 @@ def add_commands(commands) -> None:
     calibration.set_defaults(run=_run_calibration_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
     fidelity.add_argument("--out", type=Path, default=Path("reports/fidelity"), help="report folder")
-    fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="metres (default: 1.0 to 3.0 by 0.1)")
+    fidelity.add_argument("--distances", type=float, nargs="+", default=None,
+                          help="metres (default: 1.0 to 3.0 by 0.1)")
     fidelity.add_argument("--blender", action="store_true", help="also render each view with Blender (needs bpy)")
     fidelity.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     fidelity.set_defaults(run=_run_fidelity)

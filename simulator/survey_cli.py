@@ -10,7 +10,8 @@ from pathlib import Path
 def add_survey_bench(benches) -> None:
     bench = benches.add_parser("survey",
                                help="beacon survey of an office of 4 or 9 panels against the truth (issue 14)")
-    bench.add_argument("--panels", type=int, nargs="+", default=[4, 9], choices=[4, 9], help="offices to survey, by panel count")
+    bench.add_argument("--panels", type=int, nargs="+", default=[4, 9], choices=[4, 9],
+                       help="offices to survey, by panel count")
     bench.add_argument("--frames", type=int, default=40, help="survey frames per office")
     bench.add_argument("--scale", type=float, default=None, help="of the Mi 8 front resolution (default: 0.5)")
     bench.add_argument("--seed", type=int, default=1, help="random seed")
