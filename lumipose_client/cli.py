@@ -7,18 +7,22 @@ come from whoever builds the command line (`lumipose_cli.main` hands in the simu
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
+
+from pydantic import BaseModel
 
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap, DeviceProfile
 from shared_schemas.api import Evaluation
+from shared_schemas.cli import describe_file_error
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
 
+Model = TypeVar("Model", bound=BaseModel)
 PlotEvaluation = Callable[[Evaluation, Path], list[Path]]  # (report, folder) -> the figure files written
 
 
@@ -150,6 +154,14 @@ def _evaluate(client: Client, args) -> int:
     return 0
 
 
+def _read_model(model: type[Model], path: Path) -> Model:
+    """A contract model from a JSON file; a ValueError naming the file and the field if it is not one."""
+    try:
+        return model.model_validate_json(path.read_bytes())
+    except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+        raise ValueError(describe_file_error(path, error)) from None
+
+
 def _list_maps(client: Client, args) -> int:
     for summary in client.maps():
         print(f"{'*' if summary.active else ' '} {summary.name}  {summary.beacons} beacons  ({summary.source})")
@@ -162,7 +174,7 @@ def _get_map(client: Client, args) -> int:
 
 
 def _put_map(client: Client, args) -> int:
-    stored = client.put_map(BeaconMap.model_validate(json.loads(args.file.read_text())))
+    stored = client.put_map(_read_model(BeaconMap, args.file))
     print(f"stored map '{stored.name}' ({len(stored.beacons)} beacons)")
     return 0
 
@@ -185,7 +197,7 @@ def _get_profile(client: Client, args) -> int:
 
 
 def _put_profile(client: Client, args) -> int:
-    stored = client.put_profile(DeviceProfile.model_validate_json(args.file.read_bytes()))
+    stored = client.put_profile(_read_model(DeviceProfile, args.file))
     kind = "calibrated" if stored.intrinsics is not None else "datasheet"
     print(f"stored profile '{stored.id}' ({stored.width}x{stored.height}, {kind})")
     return 0

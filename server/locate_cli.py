@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
+from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, describe_file_error, report_bad_input
 
 
 def add_locate_command(commands) -> None:
@@ -60,7 +60,9 @@ def read_profiles(paths: list[Path]):
         try:
             given.append(DeviceProfile.model_validate_json(path.read_bytes()))
         except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            raise BadInput(f"cannot read the device profile {path}: {error}", field="profile") from None
+            raise BadInput(
+                f"cannot read the device profile {describe_file_error(path, error)}", field="profile"
+            ) from None
     try:
         return profile_table(given)
     except ValueError as error:
@@ -73,7 +75,7 @@ def read_map(path: Path):
     try:
         return load_map(path)
     except (OSError, ValueError) as error:
-        raise BadInput(f"cannot read map {path}: {error}", field="map") from None
+        raise BadInput(f"cannot read the map {describe_file_error(path, error)}", field="map") from None
 
 
 def read_frame(path: Path, profiles):

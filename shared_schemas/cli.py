@@ -43,7 +43,8 @@ def describe_validation_error(error: ValidationError, source: str | Path | None 
     where = ".".join(str(part) for part in first["loc"])
     message = first["msg"].removeprefix("Value error, ")
     given = first.get("input")
-    if where and isinstance(given, int | float | str) and not isinstance(given, bool) and len(str(given)) <= 40:
+    shown = isinstance(given, int | float | str) and not isinstance(given, bool) and len(str(given)) <= 40
+    if where and shown and str(given) not in message:
         message += f" (got {given!r})"
     more = len(problems) - 1
     parts = [str(source) if source is not None else "", where, message]

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH, device_profiles
+from shared_schemas.cli import describe_file_error
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
@@ -209,7 +210,11 @@ def _run_render(args) -> int:
     from simulator.fixtures import fixture_meta, write_fixture
     from simulator.render import CameraPose, SensorModel, render_frame
 
-    beacon_map = load_map(args.map)
+    try:
+        beacon_map = load_map(args.map)
+    except (OSError, ValueError) as error:
+        print(f"error: cannot read the map {describe_file_error(args.map, error)}", file=sys.stderr)
+        return 2
     beacon = beacon_map.beacon(args.beacon_id) if args.beacon_id is not None else beacon_map.beacons[0]
     if beacon is None:
         print(f"error: beacon {args.beacon_id} is not in {args.map}", file=sys.stderr)
@@ -371,7 +376,7 @@ def _run_grid_bench(args) -> int:
             try:
                 profile = DeviceProfile.model_validate_json(args.profile.read_text())
             except (OSError, ValidationError) as error:
-                print(f"error: --profile {args.profile}: {str(error).splitlines()[0]}", file=sys.stderr)
+                print(f"error: --profile {describe_file_error(args.profile, error)}", file=sys.stderr)
                 return 2
         report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
                             args.workers, args.limit, profile)

@@ -11,6 +11,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 from server.options import LocateOptions
 from server.tracking.devices import DeviceRules
 from shared_schemas import load_map
+from shared_schemas.cli import describe_file_error
 
 
 class Settings(BaseSettings):
@@ -49,7 +50,7 @@ class Settings(BaseSettings):
             try:
                 load_map(value)
             except (OSError, ValueError) as error:
-                raise ValueError(f"cannot load map {value}: {error}") from None
+                raise ValueError(f"cannot load {describe_file_error(value, error)}") from None
         return value
 
     @field_validator("api_key")

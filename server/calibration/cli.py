@@ -8,6 +8,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from shared_schemas.cli import describe_file_error, describe_validation_error
+
 EXIT_OK, EXIT_REFUSED, EXIT_BAD_INPUT = 0, 1, 2
 DICTIONARIES = (
     "DICT_4X4_50",
@@ -72,8 +74,7 @@ def _run_board(args) -> int:
         )
         printed = write_board(spec, args.out, args.dpi)
     except ValidationError as error:
-        problem = error.errors()[0]
-        return _fail(f"{'.'.join(map(str, problem['loc'])) or 'board'}: {problem['msg']}")
+        return _fail(describe_validation_error(error, "board"))
     except (ValueError, OSError) as error:
         return _fail(str(error))
     print(
@@ -103,7 +104,7 @@ def _device(text: str):
     try:
         return DeviceProfile.model_validate_json(path.read_text())
     except (ValidationError, OSError, UnicodeDecodeError) as error:
-        raise ValueError(f"--device {path} is not a device profile: {str(error).splitlines()[0]}") from None
+        raise ValueError(f"--device is not a device profile: {describe_file_error(path, error)}") from None
 
 
 def _run_camera(args) -> int:
@@ -118,10 +119,7 @@ def _run_camera(args) -> int:
     except (OSError, UnicodeDecodeError) as error:
         return _fail(f"cannot read --board {args.board}: {error}")
     except ValidationError as error:
-        problem = error.errors()[0]
-        return _fail(
-            f"--board {args.board} is not a board spec: {'.'.join(map(str, problem['loc']))}: {problem['msg']}"
-        )
+        return _fail(f"--board is not a board spec: {describe_file_error(args.board, error)}")
     try:
         device = _device(args.device)
     except ValueError as error:

@@ -11,6 +11,8 @@ import re
 import sys
 from pathlib import Path
 
+from shared_schemas.cli import describe_file_error
+
 EXIT_OK, EXIT_REFUSED, EXIT_BAD_INPUT = 0, 1, 2
 
 
@@ -87,12 +89,12 @@ def run_survey_command(args) -> int:
     try:
         sketch = load_map(args.map)
     except (OSError, ValueError) as error:
-        print(f"error: cannot read sketch {args.map}: {error}", file=sys.stderr)
+        print(f"error: cannot read the sketch {describe_file_error(args.map, error)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
         labels = _read_labels(args.labels, args.frames)
     except (OSError, ValueError, ValidationError) as error:
-        print(f"error: cannot read labels {args.labels}: {error}", file=sys.stderr)
+        print(f"error: cannot read the labels {describe_file_error(args.labels, error)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     frames = []
     for path, frame_labels in zip(args.frames, labels, strict=True):
