@@ -18,7 +18,7 @@ from pydantic import BaseModel
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap, DeviceProfile
 from shared_schemas.api import Evaluation
-from shared_schemas.cli import describe_file_error
+from shared_schemas.cli import describe_file_error, plural
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
 
@@ -140,7 +140,7 @@ def _delete_samples(client: Client, args) -> int:
 def _evaluate(client: Client, args) -> int:
     report = client.evaluate_samples(map=args.map, cell_m=args.cell)
     print(
-        f"map {report.map}: {report.samples} samples, {report.with_truth} with truth, "
+        f"map {report.map}: {plural(report.samples, 'sample')}, {report.with_truth} with truth, "
         f"coverage {100 * report.coverage:.1f} %"
     )
     if report.mean_mm is not None:
@@ -164,7 +164,8 @@ def _read_model(model: type[Model], path: Path) -> Model:
 
 def _list_maps(client: Client, args) -> int:
     for summary in client.maps():
-        print(f"{'*' if summary.active else ' '} {summary.name}  {summary.beacons} beacons  ({summary.source})")
+        active = "*" if summary.active else " "
+        print(f"{active} {summary.name}  {plural(summary.beacons, 'beacon')}  ({summary.source})")
     return 0
 
 
@@ -175,7 +176,7 @@ def _get_map(client: Client, args) -> int:
 
 def _put_map(client: Client, args) -> int:
     stored = client.put_map(_read_model(BeaconMap, args.file))
-    print(f"stored map '{stored.name}' ({len(stored.beacons)} beacons)")
+    print(f"stored map '{stored.name}' ({plural(len(stored.beacons), 'beacon')})")
     return 0
 
 

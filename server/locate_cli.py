@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, describe_file_error, report_bad_input
+from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, describe_file_error, number, report_bad_input
 
 
 def add_locate_command(commands) -> None:
@@ -117,8 +117,8 @@ def print_result(result, frame, as_json: bool) -> None:
         f"   gravity prior {'used' if result.gravity_used else 'not used'}"
     )
     print(
-        f"quality   reprojection {result.reprojection_error_px:.3f} px, "
-        f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms"
+        f"quality   reprojection {number(result.reprojection_error_px, 3)} px, "
+        f"ambiguity ratio {number(result.ambiguity_ratio)}, {result.timing_ms['total']:.1f} ms"
     )
     truth = frame.meta.ground_truth
     if truth is not None:

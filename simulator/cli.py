@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH, device_profiles
-from shared_schemas.cli import describe_file_error
+from shared_schemas.cli import describe_file_error, plural
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
@@ -270,7 +270,7 @@ def _run_simulate(args) -> int:
     except (OSError, ValueError, ValidationError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    print(f"wrote {len(stems)} fixtures ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
+    print(f"wrote {plural(len(stems), 'fixture')} ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
 
 
@@ -352,7 +352,7 @@ def _print_report(report: dict, as_json: bool) -> None:
     for failure in report.get("failures", [])[:20]:
         print(f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
               f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}")
-    print(f"  wall time    {report['wall_s']:.0f} s on {report['workers']} workers (render + locate)")
+    print(f"  wall time    {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')} (render + locate)")
     for figure in report.get("figures", []):
         print(f"  figure {figure}")
 
@@ -440,8 +440,8 @@ def _run_render_speed(args) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print(f"render {report['scene']} sample {report['sample']}, {report['frame']}, {report['repeats']} runs, "
-          f"{report['cpu_count']} cores")
+    print(f"render {report['scene']} sample {report['sample']}, {report['frame']}, "
+          f"{plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}")
     print(f"median {report['median_ms']:.0f} ms wall (max {report['max_ms']:.0f} ms), {report['cpu_median_ms']:.0f} ms CPU; "
           f"load average {report['load_average_1min']:.1f}")
     print(f"for scale: one full-frame Gaussian draw takes {report['gaussian_noise_median_ms']:.0f} ms")
@@ -457,7 +457,8 @@ def _run_speed(args) -> int:
             print(json.dumps(many, indent=2))
             return 0
         rounds = ", ".join(f"{r:.2f}" for r in many["round_median_ratios"])
-        print(f"{many['frames']} frames at {many['distances_m']} m, {many['rounds']} rounds, {many['cpu_count']} cores")
+        print(f"{plural(many['frames'], 'frame')} at {many['distances_m']} m, {plural(many['rounds'], 'round')}, "
+              f"{plural(many['cpu_count'], 'core')}")
         print(f"pipeline / cv2.threshold: median {many['median_ratio_to_threshold']:.2f} "
               f"(p90 {many['p90_ratio']:.2f}; per round {rounds}); pipeline median {many['median_ms']:.2f} ms, "
               f"{many['refusals']} refusals")
@@ -466,7 +467,7 @@ def _run_speed(args) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print(f"frame {report['frame']}, {report['repeats']} runs, {report['cpu_count']} cores")
+    print(f"frame {report['frame']}, {plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}")
     print(f"pipeline median {report['median_ms']:.2f} ms (p90 {report['p90_ms']:.2f} ms)")
     print(f"cv2.threshold median {report['threshold_median_ms']:.2f} ms, ratio {report['ratio_to_threshold']:.2f}")
     for stage, ms in report["stage_median_ms"].items():

@@ -6,6 +6,8 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+from shared_schemas.cli import plural
+
 
 def add_survey_bench(benches) -> None:
     bench = benches.add_parser("survey",
@@ -59,7 +61,7 @@ def _print(report: dict) -> None:
         for label in ("surveyed_map", "true_map"):
             s = walk[label]
             f = s["fixes"]
-            print(f"  {label:>13}: {s['captures']} captures, cover {s['coverage_pct']:.1f} %, "
+            print(f"  {label:>13}: {plural(s['captures'], 'capture')}, cover {s['coverage_pct']:.1f} %, "
                   f"mean {_fmt(f['mean_mm'])}, "
                   f"p95 {_fmt(f['p95_mm'])}, max {_fmt(f['max_mm'])}, ID errors {s['id_errors']}")
 
