@@ -47,7 +47,7 @@ def run_service_load(frames: list[str], clients: list[int], seconds: float, enco
             map_path.write_text(beacon_map.model_dump_json(by_alias=True))
             for encoding in encodings:
                 for count in clients:
-                    print(f"{name}, {encoding or 'raw'}: {count} client(s) for {seconds:g} s ...",
+                    print(f"{name}, {encoding or 'none'}: {count} client(s) for {seconds:g} s ...",
                           file=sys.stderr, flush=True)
                     reports.append(run_load(server.url, name, data, meta, clients=count, seconds=seconds,
                                             compress=encoding, server_pid=server.pid, map_name=beacon_map.name))
