@@ -89,12 +89,12 @@ def run_survey_command(args) -> int:
     try:
         sketch = load_map(args.map)
     except (OSError, ValueError) as error:
-        print(f"error: cannot read the sketch {describe_file_error(args.map, error)}", file=sys.stderr)
+        print(f"error: cannot read sketch {describe_file_error(args.map, error)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
         labels = _read_labels(args.labels, args.frames)
     except (OSError, ValueError, ValidationError) as error:
-        print(f"error: cannot read the labels {describe_file_error(args.labels, error)}", file=sys.stderr)
+        print(f"error: cannot read labels {describe_file_error(args.labels, error)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     frames = []
     for path, frame_labels in zip(args.frames, labels, strict=True):
