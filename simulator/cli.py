@@ -461,7 +461,7 @@ def _run_speed(args) -> int:
               f"{plural(many['cpu_count'], 'core')}")
         print(f"pipeline / cv2.threshold: median {many['median_ratio_to_threshold']:.2f} "
               f"(p90 {many['p90_ratio']:.2f}; per round {rounds}); pipeline median {many['median_ms']:.2f} ms, "
-              f"{many['refusals']} refusals")
+              f"{plural(many['refusals'], 'refusal')}")
         return 0
     report = run_speed(args.repeats, args.distance, gravity=not args.no_gravity)
     if args.json:
