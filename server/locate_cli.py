@@ -30,7 +30,7 @@ def add_locate_command(commands) -> None:
         "--gravity",
         choices=["auto", "always", "never"],
         default="auto",
-        help="use the frame's gravity vector (default: where it helps)",
+        help="use the frame's gravity vector (default: auto, where it helps)",
     )
     parser.set_defaults(run=run_locate)
 

@@ -108,7 +108,8 @@ def add_commands(commands) -> None:
                       help="full-window: the full frame cut to the beacon's window by the client")
     load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4], help="concurrent clients, one run each")
     load.add_argument("--seconds", type=float, default=20.0,
-                      help="per run (frame x client count x encoding): the defaults run 9 x 20 s, over 3 minutes")
+                      help="per run, one per frame x client count x encoding (default: 20; with the other defaults "
+                           "9 runs, over 3 minutes)")
     load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"],
                       help="upload compression, one run each")
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
