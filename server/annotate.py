@@ -247,19 +247,24 @@ def _caption(
         texts.extend((line, TEXT) for line in textwrap.wrap(f"warning: {warning}", WRAP_CHARS))
     x0, y0, x1, y1 = part
     zoom = f"x{scale:.3g}" if scale != 1 else "not enlarged"
-    panels = f"{len(sights)} panel{'s' if len(sights) != 1 else ''} measured"
+    panels = f"{len(sights)} panel{'s' if len(sights) != 1 else ''} tried"
     texts.append((f"frame pixels x {x0}-{x1 - 1}, y {y0}-{y1 - 1}, {zoom}; {panels}", TEXT))
     thresholds = sorted({round(s.threshold_dn) for s in sights if s.threshold_dn is not None})
-    legend = [
-        ("corners 0-3 (contract order)", CORNER),
-        ("centre (diagonals)", CENTRE),
-        ("sub-pixel sides", SIDE),
-        (f"contour (threshold {', '.join(map(str, thresholds)) or '-'} DN)", CONTOUR),
-        ("polygon corners", POLYGON),
-        ("outline points", OUTLINE),
-        ("region read", REGION),
+    fixed = result.corners_px is not None or any(isinstance(s.outcome, Fix) for s in sights)
+    drawn = [  # the legend of what is in the picture
+        (fixed, "corners 0-3 (contract order)", CORNER),
+        (fixed, "centre (diagonals)", CENTRE),
+        (any(s.sides_px is not None for s in sights), "sub-pixel sides", SIDE),
+        (
+            any(s.contour_px is not None for s in sights),
+            f"contour (threshold {', '.join(map(str, thresholds))} DN)",
+            CONTOUR,
+        ),
+        (any(s.polygon_px is not None for s in sights), "polygon corners", POLYGON),
+        (any(s.outline_px is not None for s in sights), "outline points", OUTLINE),
+        (any(s.roi_px is not None for s in sights), "region read", REGION),
     ]
-    return [[text] for text in texts] + _flowed(legend)
+    return [[text] for text in texts] + _flowed([(label, colour) for shown, label, colour in drawn if shown])
 
 
 def _flowed(items: list[tuple[str, Colour]], width_px: int = 640) -> list[Line]:
