@@ -53,8 +53,8 @@ def annotate(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult) -
     to `server.locator.locate` in the pipeline's options) and `result` in a caption below."""
     pixels, sights = frame.pixels, diagnostics.in_frame(frame.meta.full_offset)
     height, width = pixels.shape
-    part = _part(sights, result, (width, height))
-    scale = _scale(part[2] - part[0], part[3] - part[1])
+    part = enlarged_part(sights, result, (width, height))
+    scale = display_scale(part[2] - part[0], part[3] - part[1])
     image = _view(pixels, part, scale, sights, result, labels=True)
     if result.corners_px is not None:
         image = _stacked(image, _corner_close_ups(pixels, sights, result))
@@ -81,9 +81,8 @@ def _view(
     image = cv2.cvtColor(enlarged, cv2.COLOR_GRAY2BGR)
 
     def to_display(points: np.ndarray) -> np.ndarray:
-        """Frame pixels (..., 2), pixel centres at integers, to fixed-point display pixels."""
-        display = (np.asarray(points, dtype=float) - (x0, y0) + 0.5) * scale - 0.5
-        return np.rint(display * (1 << SHIFT)).astype(np.int32)
+        """Frame pixels (..., 2) to OpenCV's fixed-point display pixels."""
+        return np.rint(display_px(points, part, scale) * (1 << SHIFT)).astype(np.int32)
 
     for sight in sights:
         _draw_sight(image, sight, to_display, labels)
@@ -124,7 +123,13 @@ def _stacked(top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
     return canvas
 
 
-def _part(sights: list[PanelSight], result: LocateResult, size: tuple[int, int]) -> tuple[int, int, int, int]:
+def display_px(points: np.ndarray, part: tuple[int, int, int, int], scale: float) -> np.ndarray:
+    """Frame pixels (..., 2), pixel centres at integers, to pixels of `part` enlarged by `scale`
+    (a frame pixel is a block of `scale` display pixels: its centre is the block's)."""
+    return (np.asarray(points, dtype=float) - part[:2] + 0.5) * scale - 0.5
+
+
+def enlarged_part(sights: list[PanelSight], result: LocateResult, size: tuple[int, int]) -> tuple[int, int, int, int]:
     """x0, y0, x1, y1 of the frame to enlarge: every panel seen, with a margin; the whole frame if none."""
     boxes = []
     for sight in sights:
@@ -147,7 +152,7 @@ def _part(sights: list[PanelSight], result: LocateResult, size: tuple[int, int])
     return x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)
 
 
-def _scale(width: int, height: int) -> float:
+def display_scale(width: int, height: int) -> float:
     """Display pixels per frame pixel: whole blocks up to `DISPLAY_PX` for small parts, a reduction for large."""
     longest = max(width, height)
     if longest > DISPLAY_PX:
@@ -257,7 +262,7 @@ def _caption(
         (any(s.sides_px is not None for s in sights), "sub-pixel sides", SIDE),
         (
             any(s.contour_px is not None for s in sights),
-            f"contour (threshold {', '.join(map(str, thresholds))} DN)",
+            "contour" + (f" (threshold {', '.join(map(str, thresholds))} DN)" if thresholds else " (coarse view)"),
             CONTOUR,
         ),
         (any(s.polygon_px is not None for s in sights), "polygon corners", POLYGON),

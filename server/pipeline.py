@@ -45,7 +45,7 @@ from server.vision.contour import Blob, BlobRules, PanelLook, find_beacon_blob
 from server.vision.outline import OutlinePoints, OutlineRules, outline_points
 from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
 from server.vision.readout import undo_readout_turn
-from server.vision.roi import FrameView, Roi, RoiRules, find_roi
+from server.vision.roi import FrameView, Roi, RoiRules, brightest_blob_px, find_roi
 from server.vision.subpixel import EdgeFit, EdgeRules, refine_edges
 from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
 
@@ -135,12 +135,14 @@ def locate_beacon(
     seen = _Seen()
     outcome = _locate_beacon(frame, beacon, options, id_source, seen)
     if options.diagnostics is not None:
-        options.diagnostics.add(_sight(frame, beacon.id, seen, outcome))
+        options.diagnostics.add(_sight(frame, beacon.id, seen, outcome, options))
     return outcome
 
 
-def _sight(frame: LumaFrame, beacon_id: int, seen: _Seen, outcome: Fix | Refusal) -> PanelSight:
-    """What `seen` holds, in the full frame's (distorted) pixels."""
+def _sight(
+    frame: LumaFrame, beacon_id: int, seen: _Seen, outcome: Fix | Refusal, options: PipelineOptions
+) -> PanelSight:
+    """What `seen` holds, in the full frame's (distorted) pixels; refused at the ROI stage, its largest blob."""
     roi, matrix, distortion = seen.roi, camera_matrix(frame.camera), distortion_vector(frame.camera)
     origin = np.zeros(2) if roi is None else np.array([roi.x0, roi.y0], dtype=float)
     sides = None
@@ -150,12 +152,16 @@ def _sight(frame: LumaFrame, beacon_id: int, seen: _Seen, outcome: Fix | Refusal
         sides = np.stack(
             [_distorted(corners[k] + along * (corners[(k + 1) % 4] - corners[k]), matrix, distortion) for k in range(4)]
         )
+    if roi is None:  # refused on the coarse view: the blob it judged
+        contour = brightest_blob_px(frame.pixels, options.roi, FrameView.of(frame.meta))
+    else:
+        contour = None if seen.blob is None else seen.blob.contour * seen.step + origin
     sight = PanelSight(
         beacon_id=beacon_id,
         outcome=outcome,
         roi_px=None if roi is None else (roi.x0, roi.y0, roi.x1, roi.y1),
         threshold_dn=None if roi is None else roi.levels.threshold,
-        contour_px=None if seen.blob is None else seen.blob.contour * seen.step + origin,
+        contour_px=contour,
         cut=seen.blob is not None and seen.blob.cut,
         polygon_px=None if seen.quad is None else seen.quad.corners + origin,
         sides_px=sides,
