@@ -86,8 +86,8 @@ def _view(
 
     for sight in sights:
         _draw_sight(image, sight, to_display, labels)
-    if not any(isinstance(s.outcome, Fix) for s in sights) and result.corners_px is not None:
-        _draw_fix(image, np.asarray(result.corners_px), result.center_px, to_display, labels)  # a fix from no sight
+    if not any(isinstance(s.outcome, Fix) for s in sights) and result.ok:  # a fix from no sight
+        _draw_fix(image, result.corners_px, result.center_px, to_display, labels)
     return image
 
 
@@ -98,13 +98,13 @@ def _corner_close_ups(pixels: np.ndarray, sights: list[PanelSight], result: Loca
     views = []
     for number, (x, y) in enumerate(result.corners_px):
         cx, cy = int(round(x)), int(round(y))
+        x0, y0 = min(max(0, cx - CLOSE_UP_HALF_PX), width - 1), min(max(0, cy - CLOSE_UP_HALF_PX), height - 1)
         box = (
-            min(max(0, cx - CLOSE_UP_HALF_PX), width - 1),
-            min(max(0, cy - CLOSE_UP_HALF_PX), height - 1),
-            max(min(width, cx + CLOSE_UP_HALF_PX + 1), 1),
-            max(min(height, cy + CLOSE_UP_HALF_PX + 1), 1),
+            x0,
+            y0,
+            min(width, max(cx + CLOSE_UP_HALF_PX + 1, x0 + 1)),
+            min(height, max(cy + CLOSE_UP_HALF_PX + 1, y0 + 1)),
         )
-        box = (box[0], box[1], max(box[2], box[0] + 1), max(box[3], box[1] + 1))
         view = _view(pixels, box, CLOSE_UP_BLOCK, sights, result, labels=False)
         cv2.putText(view, f"corner {number}", (6, 18), FONT, FONT_SCALE, CORNER, 1, cv2.LINE_AA)
         views.append(cv2.copyMakeBorder(view, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=BAND))
@@ -181,29 +181,32 @@ def _draw_sight(image: np.ndarray, sight: PanelSight, to_display, labels: bool) 
         for point in to_display(sight.outline_px):
             cv2.circle(image, tuple(point), 2 << SHIFT, OUTLINE, -1, cv2.LINE_AA, SHIFT)
     outcome = sight.outcome
-    if isinstance(outcome, Fix) and outcome.corners_px is not None:
+    if isinstance(outcome, Fix):
         _draw_fix(image, outcome.corners_px, outcome.center_px, to_display, labels)
     if labels:
         _label_panel(image, sight, to_display)
 
 
-def _draw_fix(image: np.ndarray, corners_px: np.ndarray, center_px, to_display, labels: bool) -> None:
-    """The corners, numbered in the contract's order, their diagonals and the centre."""
-    corners = to_display(corners_px)
-    for a, b in ((0, 2), (1, 3)):
-        cv2.line(image, tuple(corners[a]), tuple(corners[b]), (0, 140, 0), 1, cv2.LINE_AA, SHIFT)
-    for number, corner in enumerate(corners):
-        cv2.circle(image, tuple(corner), 5 << SHIFT, CORNER, -1, cv2.LINE_AA, SHIFT)
-        if not labels:
-            continue
-        # the number outside the panel, away from its middle
-        away = corner - corners.mean(axis=0)
-        away = away / max(float(np.hypot(*away)), 1.0) * (14 << SHIFT)
-        x, y = (corner + away) / (1 << SHIFT)
-        cv2.putText(image, str(number), (int(x) - 4, int(y) + 5), FONT, FONT_SCALE, CORNER, 1, cv2.LINE_AA)
+def _draw_fix(image: np.ndarray, corners_px, center_px, to_display, labels: bool) -> None:
+    """The corners, numbered in the contract's order, their diagonals and the centre (a round
+    panel has no corners: its centre only)."""
+    corners = None if corners_px is None else to_display(np.asarray(corners_px))
+    if corners is not None:
+        for a, b in ((0, 2), (1, 3)):
+            cv2.line(image, tuple(corners[a]), tuple(corners[b]), (0, 140, 0), 1, cv2.LINE_AA, SHIFT)
     if center_px is not None:
         centre = tuple(to_display(np.asarray(center_px)))
         cv2.drawMarker(image, (centre[0] >> SHIFT, centre[1] >> SHIFT), CENTRE, cv2.MARKER_CROSS, 14, 2)
+    if corners is None:
+        return
+    middle = corners.mean(axis=0)
+    for number, corner in enumerate(corners):
+        cv2.circle(image, tuple(corner), 5 << SHIFT, CORNER, -1, cv2.LINE_AA, SHIFT)
+        if labels:  # the number outside the panel, away from its middle
+            away = corner - middle
+            away = away / max(float(np.hypot(*away)), 1.0) * (14 << SHIFT)
+            x, y = (corner + away) / (1 << SHIFT)
+            cv2.putText(image, str(number), (int(x) - 4, int(y) + 5), FONT, FONT_SCALE, CORNER, 1, cv2.LINE_AA)
 
 
 def _label_panel(image: np.ndarray, sight: PanelSight, to_display) -> None:
@@ -253,7 +256,8 @@ def _caption(
     x0, y0, x1, y1 = part
     zoom = f"x{scale:.3g}" if scale != 1 else "not enlarged"
     panels = f"{len(sights)} panel{'s' if len(sights) != 1 else ''} tried"
-    texts.append((f"frame pixels x {x0}-{x1 - 1}, y {y0}-{y1 - 1}, {zoom}; {panels}", TEXT))
+    close_ups = f", corners x{CLOSE_UP_BLOCK:g}" if result.corners_px is not None else ""
+    texts.append((f"frame pixels x {x0}-{x1 - 1}, y {y0}-{y1 - 1}, {zoom}{close_ups}; {panels}", TEXT))
     thresholds = sorted({round(s.threshold_dn) for s in sights if s.threshold_dn is not None})
     fixed = result.corners_px is not None or any(isinstance(s.outcome, Fix) for s in sights)
     drawn = [  # the legend of what is in the picture
