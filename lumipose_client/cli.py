@@ -38,6 +38,9 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
     locate.add_argument("--map", help="map name (default: the active map)")
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="upload compression")
+    locate.add_argument(
+        "--annotate", type=Path, metavar="PNG", help="also write the service's picture of what its pipeline saw"
+    )
     locate.set_defaults(client_run=_locate)
 
     samples = actions.add_parser("samples", help="recorded samples")
@@ -106,8 +109,14 @@ def _print(model) -> None:
 
 def _locate(client: Client, args) -> int:
     result = client.locate_fixture(
-        args.frame, map=args.map, compress=None if args.compress == "none" else args.compress
+        args.frame,
+        map=args.map,
+        compress=None if args.compress == "none" else args.compress,
+        annotate=args.annotate is not None,
     )
+    if args.annotate is not None:
+        args.annotate.write_bytes(result.png)  # an OSError is reported as bad input by `_run`
+        result = result.result
     _print(result)
     return 0 if result.ok else 1
 
