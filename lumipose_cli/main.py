@@ -73,16 +73,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
     try:
-        code: int = args.run(args)
-        sys.stdout.flush()  # a closed pipe shows here, while we can still handle it
+        try:
+            args = build_parser().parse_args(argv)
+            code: int = args.run(args)
+            return code
+        finally:
+            sys.stdout.flush()  # a closed pipe shows here (after --help too), while we can still handle it
     except BrokenPipeError:
         # The reader left (`| head`): the Python docs' recipe, so that the interpreter's own flush at exit
         # does not print "Exception ignored ... BrokenPipeError" once more.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
-    return code
 
 
 if __name__ == "__main__":
