@@ -1,7 +1,11 @@
-"""`lumipose locate FRAME`: the camera's position and attitude from one recorded frame, on this machine.
+"""`lumipose locate FRAME...`: the camera's position and attitude from recorded frames, on this machine.
+
+Several frames (a walk, listed as shot) go through `server.locator.locate` in turn, with `--device`
+through one session as the service's do for a device: a burst's ID frames before its pose frame, as
+the app sends them (`shared_schemas.captures`). One line (or JSON line) per frame, in the order given.
 
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
-Exit codes: 0 a fix, 1 no fix (the reason is printed), 2 bad input (`shared_schemas.cli`).
+Exit codes: 0 a fix for every pose frame, 1 no fix (the reason is printed), 2 bad input (`shared_schemas.cli`).
 """
 
 from __future__ import annotations
@@ -9,12 +13,18 @@ from __future__ import annotations
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
+from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, check_beacon_id, report_bad_input
 
 
 def add_locate_command(commands) -> None:
-    parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
-    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    parser = commands.add_parser("locate", help="locate the camera from recorded frames")
+    parser.add_argument(
+        "frames",
+        type=Path,
+        nargs="+",
+        metavar="FRAME",
+        help="NAME.json, NAME.y, NAME.yuv or NAME.png; several (a walk's, as shot) are located in turn",
+    )
     parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
     parser.add_argument(
         "--profile",
@@ -23,7 +33,22 @@ def add_locate_command(commands) -> None:
         default=[],
         help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
     )
-    parser.add_argument("--json", action="store_true", help="print the contract's result (or error) as JSON")
+    parser.add_argument(
+        "--beacon-id",
+        type=int,
+        default=None,
+        help="the map beacon the frames see, as the app may send it (default: none; the map or VLC tells)",
+    )
+    parser.add_argument(
+        "--device",
+        default=None,
+        help="a device name: the frames go through one session, as the app's do (ID frames, tracking; default: none)",
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the contract's result (or error) as JSON; several frames: one result per line (JSON lines)",
+    )
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
     parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
     parser.add_argument(
@@ -38,16 +63,34 @@ def add_locate_command(commands) -> None:
 def run_locate(args) -> int:
     from server.locator import locate
     from server.options import LocateOptions
+    from server.tracking.devices import Devices
+    from shared_schemas import FrameKind
+    from shared_schemas.captures import bursts_in_upload_order
 
     try:
         profiles = read_profiles(args.profile)
         beacon_map = read_map(args.map)
-        frame = read_frame(args.frame, profiles)
+        check_beacon_id(args.beacon_id, beacon_map)
+        frames = [read_frame(path, profiles) for path in args.frames]
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
-    result = locate(frame, beacon_map, LocateOptions(pipeline=pipeline_options(args)))
-    print_result(result, frame, as_json=args.json)
-    return EXIT_OK if result.ok else EXIT_NO_FIX
+    options = LocateOptions(pipeline=pipeline_options(args))
+    devices = Devices() if args.device is not None else None
+    located_all = True
+    for capture in bursts_in_upload_order([frame.meta.frame_kind for frame in frames]):
+        results = {
+            index: locate(
+                frames[index], beacon_map, options, beacon_id=args.beacon_id, device_id=args.device, devices=devices
+            )
+            for index in capture
+        }
+        for index in sorted(capture):
+            if len(frames) == 1:
+                print_result(results[index], frames[index], as_json=args.json)
+            else:
+                print_line(args.frames[index], results[index], frames[index], as_json=args.json)
+            located_all &= results[index].ok or frames[index].meta.frame_kind is FrameKind.id
+    return EXIT_OK if located_all else EXIT_NO_FIX
 
 
 def read_profiles(paths: list[Path]):
@@ -127,3 +170,21 @@ def print_result(result, frame, as_json: bool) -> None:
         )
     for warning in result.warnings:
         print(f"warning   {warning}")
+
+
+def print_line(path: Path, result, frame, as_json: bool) -> None:
+    """One frame of several: its result as one JSON line, or its name and fix (or reason) on one line."""
+    if as_json:
+        print(result.model_dump_json(by_alias=True))
+        return
+    if not result.ok:
+        print(f"{path.name}  no fix: {result.reason}: {result.message}")
+        return
+    assert result.position_m is not None  # outcomes.located sets it
+    x, y, z = result.position_m
+    truth = frame.meta.ground_truth
+    error = ""
+    if truth is not None:
+        dx, dy = x - truth.position_m[0], y - truth.position_m[1]
+        error = f"  truth error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.1f} mm"
+    print(f"{path.name}  x={x:+.4f} y={y:+.4f} z={z:+.4f} m  beacon {result.beacon_id}{error}")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-from shared_schemas.models import ErrorBody
+from shared_schemas.models import BeaconMap, ErrorBody
 
 EXIT_OK, EXIT_NO_FIX, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -30,3 +30,14 @@ def report_bad_input(problem: BadInput | ErrorBody, as_json: bool = False) -> in
         where = f" (field {body.field})" if body.field and body.field not in body.message else ""
         print(f"error: {body.message}{where}", file=sys.stderr)
     return EXIT_BAD_INPUT
+
+
+def check_beacon_id(beacon_id: int | None, beacon_map: BeaconMap) -> None:
+    """`--beacon-id` must name a beacon of the map the frames are located in."""
+    if beacon_id is not None and beacon_map.beacon(beacon_id) is None:
+        known = ", ".join(str(beacon.id) for beacon in beacon_map.beacons)
+        raise BadInput(
+            f"beacon {beacon_id} is not in map '{beacon_map.name}' (its beacons: {known})",
+            field="beacon_id",
+            error="unknown_beacon",
+        )

@@ -1,0 +1,27 @@
+"""Recorded frames sent the way the app sends its captures (docs/vlc.md, docs/android.md).
+
+The app shoots a capture as a pose frame, then a burst of ID frames, and uploads the burst's ID
+frames first, then its pose frame: a device's session keeps ID frames for its next pose frame.
+`lumipose locate` and `lumipose client locate` take frames listed as shot and send them so.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from shared_schemas.models import FrameKind
+
+
+def bursts_in_upload_order(kinds: Sequence[FrameKind]) -> list[list[int]]:
+    """The captures of frames listed as shot (indices into `kinds`), each in the order the app sends it.
+
+    A capture is a pose frame and the ID frames listed after it (ID frames before the first pose
+    frame are a capture of their own); within it, its ID frames go first, then its pose frame.
+    """
+    captures: list[list[int]] = []
+    for index, kind in enumerate(kinds):
+        if kind is FrameKind.pose or not captures:
+            captures.append([index])
+        else:
+            captures[-1].append(index)
+    return [capture[1:] + capture[:1] if kinds[capture[0]] is FrameKind.pose else capture for capture in captures]
