@@ -14,8 +14,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
-from shared_schemas import BeaconMap, DeviceProfile
+from shared_schemas import BeaconMap, DeviceProfile, FrameKind
 from shared_schemas.api import Evaluation
+from shared_schemas.captures import bursts_in_upload_order
+from shared_schemas.cli import BadInput, check_beacon_id, report_bad_input
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
 
@@ -30,9 +32,24 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     client.add_argument("--api-key", default=os.environ.get("LUMIPOSE_API_KEY"), help="default $LUMIPOSE_API_KEY")
     actions = client.add_subparsers(dest="client_command", required=True)
 
-    locate = actions.add_parser("locate", help="locate one recorded frame")
-    locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    locate = actions.add_parser("locate", help="locate recorded frames")
+    locate.add_argument(
+        "frames",
+        type=Path,
+        nargs="+",
+        metavar="FRAME",
+        help="NAME.json, NAME.y, NAME.yuv or NAME.png; several (a walk's, as shot) are sent in turn, "
+        "a burst's ID frames before its pose frame as the app sends them",
+    )
     locate.add_argument("--map", help="map name (default: the active map)")
+    locate.add_argument(
+        "--beacon-id", type=int, help="the map beacon the frames see, as the app may send it (default: none)"
+    )
+    locate.add_argument(
+        "--device",
+        help="a device name sent with every frame (X-Lumipose-Device): the service's session for it combines "
+        "ID frames and tracks panels, as for the app (default: none)",
+    )
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
     locate.set_defaults(client_run=_locate)
 
@@ -99,11 +116,32 @@ def _print(model) -> None:
 
 
 def _locate(client: Client, args) -> int:
-    result = client.locate_fixture(
-        args.frame, map=args.map, compress=None if args.compress == "none" else args.compress
-    )
-    _print(result)
-    return 0 if result.ok else 1
+    """One result (indented JSON) for one frame; for several, one JSON line each, in the order given."""
+    frames = [read_fixture_files(path) for path in args.frames]
+    if args.beacon_id is not None:
+        beacon_map = client.get_map(args.map or client.active_map().name)
+        try:
+            check_beacon_id(args.beacon_id, beacon_map)
+        except BadInput as problem:
+            return report_bad_input(problem)
+    located_all = True
+    for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
+        results = {
+            index: client.locate(
+                frames[index][1],
+                frames[index][0],
+                map=args.map,
+                beacon_id=args.beacon_id,
+                device=args.device,
+                compress=None if args.compress == "none" else args.compress,
+            )
+            for index in capture
+        }
+        for index in sorted(capture):
+            result = results[index]
+            print(result.model_dump_json(by_alias=True, indent=2 if len(frames) == 1 else None))
+            located_all &= result.ok or frames[index][0].frame_kind is FrameKind.id
+    return 0 if located_all else 1
 
 
 def _store_samples(client: Client, args) -> int:
