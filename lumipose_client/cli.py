@@ -16,7 +16,7 @@ from pathlib import Path
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap, DeviceProfile, FrameKind
 from shared_schemas.api import Evaluation
-from shared_schemas.captures import bursts_in_upload_order
+from shared_schemas.captures import add_frame_series_arguments, bursts_in_upload_order
 from shared_schemas.cli import BadInput, check_beacon_id, report_bad_input
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
@@ -33,23 +33,8 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     actions = client.add_subparsers(dest="client_command", required=True)
 
     locate = actions.add_parser("locate", help="locate recorded frames")
-    locate.add_argument(
-        "frames",
-        type=Path,
-        nargs="+",
-        metavar="FRAME",
-        help="NAME.json, NAME.y, NAME.yuv or NAME.png; several (a walk's, as shot) are sent in turn, "
-        "a burst's ID frames before its pose frame as the app sends them",
-    )
+    add_frame_series_arguments(locate)  # sent with X-Lumipose-Device and beacon_id, as the app sends them
     locate.add_argument("--map", help="map name (default: the active map)")
-    locate.add_argument(
-        "--beacon-id", type=int, help="the map beacon the frames see, as the app may send it (default: none)"
-    )
-    locate.add_argument(
-        "--device",
-        help="a device name sent with every frame (X-Lumipose-Device): the service's session for it combines "
-        "ID frames and tracks panels, as for the app (default: none)",
-    )
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
     locate.set_defaults(client_run=_locate)
 

@@ -13,18 +13,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH
+from shared_schemas.captures import add_frame_series_arguments
 from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, check_beacon_id, report_bad_input
 
 
 def add_locate_command(commands) -> None:
     parser = commands.add_parser("locate", help="locate the camera from recorded frames")
-    parser.add_argument(
-        "frames",
-        type=Path,
-        nargs="+",
-        metavar="FRAME",
-        help="NAME.json, NAME.y, NAME.yuv or NAME.png; several (a walk's, as shot) are located in turn",
-    )
+    add_frame_series_arguments(parser)
     parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
     parser.add_argument(
         "--profile",
@@ -32,17 +27,6 @@ def add_locate_command(commands) -> None:
         action="append",
         default=[],
         help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
-    )
-    parser.add_argument(
-        "--beacon-id",
-        type=int,
-        default=None,
-        help="the map beacon the frames see, as the app may send it (default: none; the map or VLC tells)",
-    )
-    parser.add_argument(
-        "--device",
-        default=None,
-        help="a device name: the frames go through one session, as the app's do (ID frames, tracking; default: none)",
     )
     parser.add_argument(
         "--json",

@@ -7,7 +7,9 @@ frames first, then its pose frame: a device's session keeps ID frames for its ne
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Sequence
+from pathlib import Path
 
 from shared_schemas.models import FrameKind
 
@@ -25,3 +27,29 @@ def bursts_in_upload_order(kinds: Sequence[FrameKind]) -> list[list[int]]:
         else:
             captures[-1].append(index)
     return [capture[1:] + capture[:1] if kinds[capture[0]] is FrameKind.pose else capture for capture in captures]
+
+
+def add_frame_series_arguments(parser: argparse.ArgumentParser) -> None:
+    """`FRAME...`, `--beacon-id` and `--device`, as `lumipose locate` and `lumipose client locate` take them."""
+    parser.add_argument(
+        "frames",
+        type=Path,
+        nargs="+",
+        metavar="FRAME",
+        help="NAME.json, NAME.y, NAME.yuv or NAME.png; several (a walk's, listed as shot) are located in turn, "
+        "each capture's ID frames before its pose frame as the app sends them",
+    )
+    parser.add_argument(
+        "--beacon-id",
+        type=int,
+        metavar="N",
+        default=None,
+        help="the map beacon the frames see, as the app may send it (default: none; the map or VLC tells)",
+    )
+    parser.add_argument(
+        "--device",
+        metavar="NAME",
+        default=None,
+        help="a device name: the frames go through its session (ID frames, tracking), as the app's do "
+        "(default: none, each frame on its own)",
+    )
