@@ -14,9 +14,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
-from shared_schemas import BeaconMap, DeviceProfile, FrameKind
+from shared_schemas import BeaconMap, DeviceProfile, LocateResult
 from shared_schemas.api import Evaluation
-from shared_schemas.captures import add_frame_series_arguments, bursts_in_upload_order
+from shared_schemas.captures import add_frame_series_arguments, all_located, bursts_in_upload_order
 from shared_schemas.cli import BadInput, check_beacon_id, report_bad_input
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
@@ -109,9 +109,9 @@ def _locate(client: Client, args) -> int:
             check_beacon_id(args.beacon_id, beacon_map)
         except BadInput as problem:
             return report_bad_input(problem)
-    located_all = True
+    results: dict[int, LocateResult] = {}
     for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
-        results = {
+        results |= {
             index: client.locate(
                 frames[index][1],
                 frames[index][0],
@@ -123,10 +123,8 @@ def _locate(client: Client, args) -> int:
             for index in capture
         }
         for index in sorted(capture):
-            result = results[index]
-            print(result.model_dump_json(by_alias=True, indent=2 if len(frames) == 1 else None))
-            located_all &= result.ok or frames[index][0].frame_kind is FrameKind.id
-    return 0 if located_all else 1
+            print(results[index].model_dump_json(by_alias=True, indent=2 if len(frames) == 1 else None))
+    return 0 if all_located(list(results.values())) else 1
 
 
 def _store_samples(client: Client, args) -> int:

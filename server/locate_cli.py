@@ -5,7 +5,7 @@ through one session as the service's do for a device: a burst's ID frames before
 the app sends them (`shared_schemas.captures`). One line (or JSON line) per frame, in the order given.
 
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
-Exit codes: 0 a fix for every pose frame, 1 no fix (the reason is printed), 2 bad input (`shared_schemas.cli`).
+Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
 """
 
 from __future__ import annotations
@@ -48,8 +48,8 @@ def run_locate(args) -> int:
     from server.locator import locate
     from server.options import LocateOptions
     from server.tracking.devices import Devices
-    from shared_schemas import FrameKind
-    from shared_schemas.captures import bursts_in_upload_order
+    from shared_schemas import LocateResult
+    from shared_schemas.captures import all_located, bursts_in_upload_order
 
     try:
         profiles = read_profiles(args.profile)
@@ -60,9 +60,9 @@ def run_locate(args) -> int:
         return report_bad_input(problem, as_json=args.json)
     options = LocateOptions(pipeline=pipeline_options(args))
     devices = Devices() if args.device is not None else None
-    located_all = True
+    results: dict[int, LocateResult] = {}
     for capture in bursts_in_upload_order([frame.meta.frame_kind for frame in frames]):
-        results = {
+        results |= {
             index: locate(
                 frames[index], beacon_map, options, beacon_id=args.beacon_id, device_id=args.device, devices=devices
             )
@@ -73,8 +73,7 @@ def run_locate(args) -> int:
                 print_result(results[index], frames[index], as_json=args.json)
             else:
                 print_line(args.frames[index], results[index], frames[index], as_json=args.json)
-            located_all &= results[index].ok or frames[index].meta.frame_kind is FrameKind.id
-    return EXIT_OK if located_all else EXIT_NO_FIX
+    return EXIT_OK if all_located(list(results.values())) else EXIT_NO_FIX
 
 
 def read_profiles(paths: list[Path]):

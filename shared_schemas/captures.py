@@ -11,7 +11,7 @@ import argparse
 from collections.abc import Sequence
 from pathlib import Path
 
-from shared_schemas.models import FrameKind
+from shared_schemas.models import FailureReason, FrameKind, LocateResult
 
 
 def bursts_in_upload_order(kinds: Sequence[FrameKind]) -> list[list[int]]:
@@ -27,6 +27,13 @@ def bursts_in_upload_order(kinds: Sequence[FrameKind]) -> list[list[int]]:
         else:
             captures[-1].append(index)
     return [capture[1:] + capture[:1] if kinds[capture[0]] is FrameKind.pose else capture for capture in captures]
+
+
+def all_located(results: Sequence[LocateResult]) -> bool:
+    """The commands' exit 0: some frame has a fix and every other one too, or is an ID frame kept for
+    its session (`id_frame`: it has no fix of its own). One frame: its fix, as before."""
+    kept = [result.ok or result.reason is FailureReason.id_frame for result in results]
+    return all(kept) and any(result.ok for result in results)
 
 
 def add_frame_series_arguments(parser: argparse.ArgumentParser) -> None:
