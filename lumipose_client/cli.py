@@ -15,10 +15,11 @@ from typing import TypeVar
 
 from pydantic import BaseModel
 
-from lumipose_client.client import Client, LumiposeError, read_fixture_files
-from shared_schemas import BeaconMap, DeviceProfile
+from lumipose_client.client import AnnotatedResult, Client, LumiposeError, read_fixture_files
+from shared_schemas import BeaconMap, DeviceProfile, LocateResult
 from shared_schemas.api import Evaluation
-from shared_schemas.cli import describe_file_error, plural
+from shared_schemas.captures import add_frame_series_arguments, all_located, annotation_path, bursts_in_upload_order
+from shared_schemas.cli import BadInput, check_beacon_id, describe_file_error, plural, report_bad_input
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
 
@@ -34,8 +35,8 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     client.add_argument("--api-key", default=os.environ.get("LUMIPOSE_API_KEY"), help="default $LUMIPOSE_API_KEY")
     actions = client.add_subparsers(dest="client_command", required=True)
 
-    locate = actions.add_parser("locate", help="locate one recorded frame")
-    locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    locate = actions.add_parser("locate", help="locate recorded frames")
+    add_frame_series_arguments(locate)  # sent with X-Lumipose-Device and beacon_id, as the app sends them
     locate.add_argument("--map", help="map name (default: the active map)")
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="upload compression")
     locate.add_argument(
@@ -108,17 +109,35 @@ def _print(model) -> None:
 
 
 def _locate(client: Client, args) -> int:
-    result = client.locate_fixture(
-        args.frame,
-        map=args.map,
-        compress=None if args.compress == "none" else args.compress,
-        annotate=args.annotate is not None,
-    )
-    if args.annotate is not None:
-        args.annotate.write_bytes(result.png)  # an OSError is reported as bad input by `_run`
-        result = result.result
-    _print(result)
-    return 0 if result.ok else 1
+    """One result (indented JSON) for one frame; for several, one JSON line each, in the order given.
+    `--annotate PNG`: the service's picture of each frame (several: PNG-<frame>.png each)."""
+    frames = [read_fixture_files(path) for path in args.frames]
+    if args.beacon_id is not None:
+        beacon_map = client.get_map(args.map or client.active_map().name)
+        try:
+            check_beacon_id(args.beacon_id, beacon_map)
+        except BadInput as problem:
+            return report_bad_input(problem)
+    results: dict[int, LocateResult] = {}
+    for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
+        for index in capture:
+            answer = client.locate(
+                frames[index][1],
+                frames[index][0],
+                map=args.map,
+                beacon_id=args.beacon_id,
+                device=args.device,
+                compress=None if args.compress == "none" else args.compress,
+                annotate=args.annotate is not None,
+            )
+            if isinstance(answer, AnnotatedResult):
+                picture = annotation_path(args.annotate, args.frames[index], several=len(frames) > 1)
+                picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
+                answer = answer.result
+            results[index] = answer
+        for index in sorted(capture):
+            print(results[index].model_dump_json(by_alias=True, indent=2 if len(frames) == 1 else None))
+    return 0 if all_located(list(results.values())) else 1
 
 
 def _store_samples(client: Client, args) -> int:

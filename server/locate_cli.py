@@ -1,7 +1,11 @@
-"""`lumipose locate FRAME`: the camera's position and attitude from one recorded frame, on this machine.
+"""`lumipose locate FRAME...`: the camera's position and attitude from recorded frames, on this machine.
+
+Several frames (a walk, listed as shot) go through `server.locator.locate` in turn, with `--device`
+through one session as the service's do for a device: a burst's ID frames before its pose frame, as
+the app sends them (`shared_schemas.captures`). One line (or JSON line) per frame, in the order given.
 
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
-Exit codes: 0 a fix, 1 no fix (the reason is printed), 2 bad input (`shared_schemas.cli`).
+Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
 """
 
 from __future__ import annotations
@@ -9,12 +13,21 @@ from __future__ import annotations
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, describe_file_error, number, report_bad_input
+from shared_schemas.captures import add_frame_series_arguments, annotation_path
+from shared_schemas.cli import (
+    EXIT_NO_FIX,
+    EXIT_OK,
+    BadInput,
+    check_beacon_id,
+    describe_file_error,
+    number,
+    report_bad_input,
+)
 
 
 def add_locate_command(commands) -> None:
-    parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
-    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    parser = commands.add_parser("locate", help="locate the camera from recorded frames")
+    add_frame_series_arguments(parser)
     parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
     parser.add_argument(
         "--profile",
@@ -23,7 +36,11 @@ def add_locate_command(commands) -> None:
         default=[],
         help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
     )
-    parser.add_argument("--json", action="store_true", help="print the contract's result (or error) as JSON")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the contract's result (or error) as JSON; several frames: one result per line (JSON lines)",
+    )
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
     parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
     parser.add_argument(
@@ -36,7 +53,8 @@ def add_locate_command(commands) -> None:
         "--annotate",
         type=Path,
         metavar="PNG",
-        help="also write a picture of what the pipeline saw (panel, contour, sides, corners, centre, the result)",
+        help="also write a picture of what the pipeline saw (panel, contour, sides, corners, centre, the result); "
+        "several frames: one PNG each, named PNG-<frame>.png",
     )
     parser.set_defaults(run=run_locate)
 
@@ -47,22 +65,43 @@ def run_locate(args) -> int:
     from server.diagnostics import Diagnostics
     from server.locator import locate
     from server.options import LocateOptions
+    from server.tracking.devices import Devices
+    from shared_schemas import LocateResult
+    from shared_schemas.captures import all_located, bursts_in_upload_order
 
     try:
         profiles = read_profiles(args.profile)
         beacon_map = read_map(args.map)
-        frame = read_frame(args.frame, profiles)
+        check_beacon_id(args.beacon_id, beacon_map)
+        frames = [read_frame(path, profiles) for path in args.frames]
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
-    diagnostics = Diagnostics() if args.annotate else None
-    result = locate(frame, beacon_map, LocateOptions(pipeline=replace(pipeline_options(args), diagnostics=diagnostics)))
-    if diagnostics is not None:
-        try:
-            write_annotation(args.annotate, frame, diagnostics, result)
-        except BadInput as problem:
-            return report_bad_input(problem, as_json=args.json)
-    print_result(result, frame, as_json=args.json)
-    return EXIT_OK if result.ok else EXIT_NO_FIX
+    options = LocateOptions(pipeline=pipeline_options(args))
+    devices = Devices() if args.device is not None else None
+    results: dict[int, LocateResult] = {}
+    for capture in bursts_in_upload_order([frame.meta.frame_kind for frame in frames]):
+        for index in capture:
+            diagnostics = Diagnostics() if args.annotate else None
+            results[index] = locate(
+                frames[index],
+                beacon_map,
+                replace(options, pipeline=replace(options.pipeline, diagnostics=diagnostics)),
+                beacon_id=args.beacon_id,
+                device_id=args.device,
+                devices=devices,
+            )
+            if diagnostics is not None:
+                try:
+                    picture = annotation_path(args.annotate, args.frames[index], several=len(frames) > 1)
+                    write_annotation(picture, frames[index], diagnostics, results[index])
+                except BadInput as problem:
+                    return report_bad_input(problem, as_json=args.json)
+        for index in sorted(capture):
+            if len(frames) == 1:
+                print_result(results[index], frames[index], as_json=args.json)
+            else:
+                print_line(args.frames[index], results[index], frames[index], as_json=args.json)
+    return EXIT_OK if all_located(list(results.values())) else EXIT_NO_FIX
 
 
 def read_profiles(paths: list[Path]):
@@ -154,3 +193,21 @@ def print_result(result, frame, as_json: bool) -> None:
         )
     for warning in result.warnings:
         print(f"warning   {warning}")
+
+
+def print_line(path: Path, result, frame, as_json: bool) -> None:
+    """One frame of several: its result as one JSON line, or its name and fix (or reason) on one line."""
+    if as_json:
+        print(result.model_dump_json(by_alias=True))
+        return
+    if not result.ok:
+        print(f"{path.name}  no fix: {result.reason}: {result.message}")
+        return
+    assert result.position_m is not None  # outcomes.located sets it
+    x, y, z = result.position_m
+    truth = frame.meta.ground_truth
+    error = ""
+    if truth is not None:
+        dx, dy = x - truth.position_m[0], y - truth.position_m[1]
+        error = f"  truth error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.1f} mm"
+    print(f"{path.name}  x={x:+.4f} y={y:+.4f} z={z:+.4f} m  beacon {result.beacon_id}{error}")

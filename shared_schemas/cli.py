@@ -11,7 +11,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from shared_schemas.models import ErrorBody
+from shared_schemas.models import BeaconMap, ErrorBody
 
 EXIT_OK, EXIT_NO_FIX, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -74,3 +74,14 @@ def number(value: float, decimals: int = 2, digits: int = 2) -> str:
     if value == 0 or abs(value) >= 10 ** (digits - 1 - decimals):
         return f"{value:.{decimals}f}"
     return f"{value:.{digits}g}"
+
+
+def check_beacon_id(beacon_id: int | None, beacon_map: BeaconMap) -> None:
+    """`--beacon-id` must name a beacon of the map the frames are located in."""
+    if beacon_id is not None and beacon_map.beacon(beacon_id) is None:
+        known = ", ".join(str(beacon.id) for beacon in beacon_map.beacons)
+        raise BadInput(
+            f"beacon {beacon_id} is not in map '{beacon_map.name}' (its beacons: {known})",
+            field="beacon_id",
+            error="unknown_beacon",
+        )

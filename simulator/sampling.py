@@ -183,8 +183,10 @@ def _simulator_block(scene: Scene, sample: SamplePose) -> dict:
             "angular_velocity_dps": list(sample.angular_velocity_dps)}
 
 
-def progress(done: int, total: int, label: str, stream=sys.stderr) -> None:
-    """A one-line progress bar on a terminal; every tenth on a log."""
+def progress(done: int, total: int, label: str, stream=None) -> None:
+    """A one-line progress bar on a terminal; every tenth on a log. `stream` defaults to sys.stderr as it is
+    now (read at each call: a default bound at import would keep a stream replaced and closed since)."""
+    stream = stream or sys.stderr
     if stream.isatty():
         filled = int(30 * done / max(total, 1))
         print(f"\r{label} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}", end="\n" if done == total else "",
