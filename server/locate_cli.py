@@ -6,16 +6,27 @@ Exit codes: 0 a fix, 1 no fix (the reason is printed), 2 bad input (`shared_sche
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH
+from shared_schemas import DEMO_MAP_NAME
 from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
 
 
 def add_locate_command(commands) -> None:
     parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
     parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
-    parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
+    parser.add_argument(
+        "--map",
+        default=DEMO_MAP_NAME,
+        help="beacon map: a file, or a map's name (bundled, or stored in --data-dir) (default: %(default)s, bundled)",
+    )
+    parser.add_argument(
+        "--data-dir",
+        type=Path,
+        default=os.environ.get("LUMIPOSE_DATA_DIR"),
+        help="a service's data folder, whose stored maps --map may name (default: $LUMIPOSE_DATA_DIR, else none)",
+    )
     parser.add_argument(
         "--profile",
         type=Path,
@@ -41,7 +52,7 @@ def run_locate(args) -> int:
 
     try:
         profiles = read_profiles(args.profile)
-        beacon_map = read_map(args.map)
+        beacon_map = read_map(args.map, args.data_dir)
         frame = read_frame(args.frame, profiles)
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
@@ -67,9 +78,14 @@ def read_profiles(paths: list[Path]):
         raise BadInput(str(error), field="profile") from None
 
 
-def read_map(path: Path):
-    from shared_schemas import load_map
+def read_map(value: str, data_dir: Path | None = None):
+    """The map `--map` means: a file if one is there, else a map of that name (stored in `data_dir`, or bundled)."""
+    from shared_schemas import find_map_file, load_map
 
+    try:
+        path = find_map_file(value, data_dir)
+    except ValueError as error:
+        raise BadInput(str(error), field="map") from None
     try:
         return load_map(path)
     except (OSError, ValueError) as error:
