@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -96,7 +97,7 @@ def add_commands(commands) -> None:
     speed.add_argument("--rounds", type=int, default=5, help="with --frames: passes over all the frames")
     speed.add_argument("--json", action="store_true")
     speed.set_defaults(run=_run_speed)
-    load = benches.add_parser("load", help="the HTTP service under concurrent clients (starts its own server)")
+    load = benches.add_parser("load", help="the HTTP service under concurrent clients (its own server, or --url)")
     load.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],  # bench_service.FRAME_WIDTHS
                       default=["1080p", "full", "full-window"],
                       help="full-window: the full frame cut to the beacon's window by the client")
@@ -104,6 +105,9 @@ def add_commands(commands) -> None:
     load.add_argument("--seconds", type=float, default=20.0, help="per client count")
     load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
+    load.add_argument("--url", default=os.environ.get("LUMIPOSE_URL"),
+                      help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
+                           "no server-side figures then (default: $LUMIPOSE_URL, else our own server)")
     load.add_argument("--json", action="store_true")
     load.set_defaults(run=_run_load)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
