@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_PATH, device_profiles
-from shared_schemas.cli import EXIT_BAD_INPUT
+from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, report_bad_input
 from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 
@@ -36,8 +36,7 @@ def _run_fov(args) -> int:
     try:
         grid = fov_grid(device_profiles()[args.profile], args.distance, args.cell, args.beacon_side)
     except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return report_bad_input(BadInput(str(error)), as_json=args.json)
     if args.json:
         print(json.dumps({**asdict(grid), "points": grid.point_count}, indent=2))
         return EXIT_FIX

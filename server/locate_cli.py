@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
+from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, read_map_argument, report_bad_input
 
 
 def add_locate_command(commands) -> None:
@@ -80,16 +80,7 @@ def read_profiles(paths: list[Path]):
 
 def read_map(value: str, data_dir: Path | None = None):
     """The map `--map` means: a file if one is there, else a map of that name (stored in `data_dir`, or bundled)."""
-    from shared_schemas import find_map_file, load_map
-
-    try:
-        path = find_map_file(value, data_dir)
-    except ValueError as error:
-        raise BadInput(str(error), field="map") from None
-    try:
-        return load_map(path)
-    except (OSError, ValueError) as error:
-        raise BadInput(f"cannot read map {path}: {error}", field="map") from None
+    return read_map_argument(value, data_dir)
 
 
 def read_frame(path: Path, profiles):

@@ -8,7 +8,8 @@ import os
 import sys
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH, device_profiles
+from shared_schemas import DEMO_MAP_NAME, device_profiles
+from shared_schemas.cli import BadInput, read_map_argument, report_bad_input
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
@@ -20,7 +21,7 @@ def add_commands(commands) -> None:
     render.add_argument("out", type=Path, help="output stem, e.g. out/frame1")
     render.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
     render.add_argument("--scale", type=float, default=1.0, help="of the profile's native resolution")
-    render.add_argument("--map", type=Path, default=DEMO_MAP_PATH)
+    render.add_argument("--map", default=DEMO_MAP_NAME, help="a map file, or a bundled map's name")
     render.add_argument("--beacon-id", type=int, default=None, help="default: the map's first beacon")
     render.add_argument("--position", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("X", "Y", "Z"))
     render.add_argument("--ypr", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("YAW", "PITCH", "ROLL"),
@@ -200,15 +201,16 @@ def _run_render(args) -> int:
 
     from server.camera import intrinsics_from_profile
     from server.geometry import rotation_from_ypr
-    from shared_schemas import load_map
     from simulator.fixtures import fixture_meta, write_fixture
     from simulator.render import CameraPose, SensorModel, render_frame
 
-    beacon_map = load_map(args.map)
+    try:
+        beacon_map = read_map_argument(args.map)
+    except BadInput as problem:
+        return report_bad_input(problem)
     beacon = beacon_map.beacon(args.beacon_id) if args.beacon_id is not None else beacon_map.beacons[0]
     if beacon is None:
-        print(f"error: beacon {args.beacon_id} is not in {args.map}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(f"beacon {args.beacon_id} is not in {args.map}", field="beacon_id"))
     profile = device_profiles()[args.profile]
     width, height = round(profile.width * args.scale), round(profile.height * args.scale)
     camera = intrinsics_from_profile(profile, width, height)
@@ -217,8 +219,7 @@ def _run_render(args) -> int:
     try:
         pixels = render_frame(beacon, camera, pose, width, height, sensor, np.random.default_rng(args.seed))
     except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error)))
     gravity = None if args.no_gravity else (pose.rotation_wc.T @ [0.0, 0.0, -1.0]).tolist()
     raw, meta = write_fixture(args.out, pixels, fixture_meta(camera, width, height, pose, gravity_camera=gravity))
     print(f"wrote {raw} and {meta}")
@@ -258,8 +259,7 @@ def _run_simulate(args) -> int:
             scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
         stems = write_series(scene, args.out, args.workers, bursts=args.bursts)
     except (OSError, ValueError, ValidationError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error)))
     print(f"wrote {len(stems)} fixtures ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
 
@@ -309,8 +309,7 @@ def _run_partial(args) -> int:
     from simulator.bench_partial import PartialConfig, format_partial, plot_partial, run_partial
 
     if args.frames < 1 or min(args.scales) <= 0:
-        print("error: --frames must be at least 1 and every --scales positive", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput("--frames must be at least 1 and every --scales positive"), args.json)
     config = PartialConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                            seed=args.seed)
     report = run_partial(config, args.workers)
@@ -354,8 +353,7 @@ def _run_grid_bench(args) -> int:
         try:
             report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit, args.scene, args.yaw_jitter)
         except ValueError as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
+            return report_bad_input(BadInput(str(error)), args.json)
     else:
         profile = None
         if args.profile is not None:
@@ -366,8 +364,8 @@ def _run_grid_bench(args) -> int:
             try:
                 profile = DeviceProfile.model_validate_json(args.profile.read_text())
             except (OSError, ValidationError) as error:
-                print(f"error: --profile {args.profile}: {str(error).splitlines()[0]}", file=sys.stderr)
-                return 2
+                problem = BadInput(f"--profile {args.profile}: {str(error).splitlines()[0]}", field="profile")
+                return report_bad_input(problem, args.json)
         report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
                             args.workers, args.limit, profile)
     report["out"] = str(args.out)
@@ -380,9 +378,8 @@ def _run_calibration_bench(args) -> int:
 
     corner_views = CORNER_VIEWS if args.corner_views is None else args.corner_views
     if args.views < 3 or args.scale <= 0 or not 0 <= corner_views <= args.views:
-        print("error: --views must be at least 3, --scale positive and --corner-views within 0..views",
-              file=sys.stderr)
-        return 2
+        problem = BadInput("--views must be at least 3, --scale positive and --corner-views within 0..views")
+        return report_bad_input(problem, args.json)
     result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets,
                                corner_views=corner_views)
     profile = result["report"]["profile"]
@@ -416,8 +413,7 @@ def _run_fidelity(args) -> int:
     try:
         report = bench_fidelity(args.out, args.distances, blender=args.blender)
     except RuntimeError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error), field="blender"), args.json)
     (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else format_fidelity(report) + "\n  figure " + report["figures"][0])
     return 0
@@ -469,9 +465,9 @@ def _run_robustness(args) -> int:
 
     unknown = sorted(set(args.effects) - set(GROUPS))
     if unknown or args.frames < 1 or min(args.scales) <= 0:
-        print(f"error: --frames must be at least 1, every --scales positive and --effects among {', '.join(GROUPS)}"
-              f"{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}", file=sys.stderr)
-        return 2
+        problem = BadInput(f"--frames must be at least 1, every --scales positive and --effects among "
+                           f"{', '.join(GROUPS)}{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}")
+        return report_bad_input(problem, args.json)
     config = RobustnessConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                               effects=tuple(args.effects), seed=args.seed)
     report = run_robustness(config, args.workers)
