@@ -15,10 +15,11 @@ def build_parser() -> argparse.ArgumentParser:
     from lumipose_client.cli import add_commands as add_client_commands
     from server.calibration.cli import add_commands as add_calibration_commands
     from server.cli import add_commands as add_server_commands
+    from shared_schemas.cli import CommandParser
     from simulator.cli import add_commands as add_simulator_commands
     from simulator.cli import plot_sample_evaluation
 
-    parser = argparse.ArgumentParser(prog="lumipose", description=__doc__.splitlines()[0])
+    parser = CommandParser(prog="lumipose", description=__doc__.splitlines()[0])  # its subparsers are too
     commands = parser.add_subparsers(dest="command", required=True)
     add_server_commands(commands)
     add_calibration_commands(commands)

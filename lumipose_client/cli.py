@@ -83,7 +83,7 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     delete = _verb(sample_actions, "delete", _delete_samples, help="remove stored samples")
     delete.add_argument("ids", nargs="+", help="sample ids (from `samples list`)")
     evaluate = _verb(sample_actions, "evaluate", _evaluate, help="error and coverage of the stored samples")
-    evaluate.add_argument("--map", help=MAP_HELP + " (default: every sample's own map)")
+    evaluate.add_argument("--map", help=MAP_HELP + ", to re-locate every sample in (default: the active map)")
     evaluate.add_argument("--cell", type=float, default=0.05, help="grid cell side for 'i,j' labels, metres")
     if plot_evaluation is not None:
         evaluate.add_argument("--plots", type=Path, help="write the paper's Figs. 13-14 (scatter, heat map) here")

@@ -6,8 +6,11 @@ printed as JSON on stdout when the user asked for `--json`, as `error: ...` on s
 
 from __future__ import annotations
 
+import argparse
+import re
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 from shared_schemas.models import BeaconMap, ErrorBody
 
@@ -46,3 +49,24 @@ def report_bad_input(problem: BadInput | ErrorBody, as_json: bool = False) -> in
         where = f" (field {body.field})" if body.field and body.field not in body.message else ""
         print(f"error: {body.message}{where}", file=sys.stderr)
     return EXIT_BAD_INPUT
+
+
+class CommandParser(argparse.ArgumentParser):
+    """An ArgumentParser whose usage errors (an unknown flag, a bad value, a missing argument) follow
+    `--json` as every other bad input does: the contract's ErrorBody on stdout, exit 2."""
+
+    _json_errors = False  # shared by a command's subparsers: set when the whole command line is parsed
+
+    def parse_args(self, args=None, namespace=None):
+        given = sys.argv[1:] if args is None else list(args)
+        CommandParser._json_errors = "--json" in given
+        return super().parse_args(given, namespace)
+
+    def error(self, message: str) -> NoReturn:
+        if not CommandParser._json_errors:
+            super().error(message)
+        flag = re.match(r"argument (?:-\w/)?--([\w-]+)", message)
+        report_bad_input(
+            BadInput(f"{self.prog}: {message}", field=flag[1].replace("-", "_") if flag else None), as_json=True
+        )
+        sys.exit(EXIT_BAD_INPUT)

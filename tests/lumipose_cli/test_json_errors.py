@@ -48,3 +48,23 @@ def test_render_names_both_readings_of_a_bad_map(tmp_path, capsys):
     assert main(["render", str(tmp_path / "frame"), "--map", "nowhere", "--scale", "0.1"]) == 2
     assert "no map file 'nowhere', and no map named 'nowhere' bundled" in capsys.readouterr().err
     assert main(["render", str(tmp_path / "frame"), "--map", "test-bench", "--scale", "0.1"]) == 0
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["bench", "load", "--frames", "4k"], "frames"),
+    (["fov", "--beacon-side", "wide"], "beacon_side"),
+    (["client", "locate"], None),
+    (["locate", str(FIXTURE), "--no-such-flag"], None),
+])
+def test_a_usage_error_with_json_is_an_error_body_too(argv, field, capsys):
+    with pytest.raises(SystemExit) as exit_code:
+        main([*argv, "--json"])
+    assert exit_code.value.code == 2
+    captured = capsys.readouterr()
+    body = json.loads(captured.out)
+    assert (body["error"], body["field"]) == ("bad_input", field) and body["message"].startswith("lumipose")
+    assert captured.err == ""
+    with pytest.raises(SystemExit):
+        main(argv)  # without --json: argparse's usage and error on stderr
+    captured = capsys.readouterr()
+    assert captured.out == "" and "error:" in captured.err
