@@ -201,13 +201,7 @@ def _list_samples(client: Client, args) -> int:
 
 
 def _delete_samples(client: Client, args) -> int:
-    for sample_id in args.ids:
-        client.delete_sample(sample_id)
-        if not args.json:
-            print(f"deleted {sample_id}")
-    if args.json:
-        _print_json({"deleted": args.ids})
-    return 0
+    return _delete_each(args.ids, client.delete_sample, "", args.json)
 
 
 def _evaluate(client: Client, args) -> int:
@@ -266,13 +260,7 @@ def _activate_map(client: Client, args) -> int:
 
 
 def _delete_maps(client: Client, args) -> int:
-    for name in args.names:
-        client.delete_map(name)
-        if not args.json:
-            print(f"deleted map {name}")
-    if args.json:
-        _print_json({"deleted": args.names})
-    return 0
+    return _delete_each(args.names, client.delete_map, "map ", args.json)
 
 
 def _list_profiles(client: Client, args) -> int:
@@ -306,10 +294,15 @@ def _put_profile(client: Client, args) -> int:
 
 
 def _delete_profiles(client: Client, args) -> int:
-    for profile_id in args.ids:
-        client.delete_profile(profile_id)
-        if not args.json:
-            print(f"deleted profile {profile_id}")
-    if args.json:
-        _print_json({"deleted": args.ids})
+    return _delete_each(args.ids, client.delete_profile, "profile ", args.json)
+
+
+def _delete_each(names: list[str], delete: Callable[[str], object], what: str, as_json: bool) -> int:
+    """Delete each in turn, saying so; a refusal stops there (LumiposeError). With --json: the names deleted."""
+    for name in names:
+        delete(name)
+        if not as_json:
+            print(f"deleted {what}{name}")
+    if as_json:
+        _print_json({"deleted": names})
     return 0
