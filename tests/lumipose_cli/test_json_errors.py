@@ -21,6 +21,7 @@ CASES = {  # argv ("TMP/" is the test's folder), then the ErrorBody's error and 
     "survey anchor": ([*SURVEY, "TMP/map.json", "--map", str(DEMO_MAP_PATH), "--anchor", "99"], "bad_input", "anchor"),
     "calibrate camera": (["calibrate", "camera", str(FIXTURE), "--board", "TMP/missing.json", "--device",
                           "xiaomi-mi8-front"], "bad_input", "board"),
+    "bench accuracy --shape": (["bench", "accuracy", "--shape", "--frames", "0"], "bad_input", None),
     "bench partial": (["bench", "partial", "--frames", "0"], "bad_input", None),
     "bench robustness": (["bench", "robustness", "--effects", "fog"], "bad_input", None),
     "bench calibration": (["bench", "calibration", "--views", "1"], "bad_input", None),
