@@ -13,7 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH, device_profiles
+from shared_schemas import DEMO_MAP_NAME, DEMO_MAP_PATH, device_profiles
 from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, report_bad_input
 from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
@@ -63,7 +63,8 @@ def _add_serve(commands) -> None:
     parser.add_argument("--port", type=int, help="default 8000")
     parser.add_argument("--workers", type=int, help="worker processes (default 1)")
     parser.add_argument(
-        "--map", help="startup map: a file, or a map's name (stored in --data-dir, or bundled) (default: test-bench)"
+        "--map",
+        help=f"startup map: a file, or a map's name (stored in --data-dir, or bundled) (default: {DEMO_MAP_NAME})",
     )
     parser.add_argument("--data-dir", type=Path, help="folder for maps, profiles and samples (default ./data)")
     parser.add_argument("--data", type=Path, dest="data_dir", help=argparse.SUPPRESS)  # the old name of --data-dir
@@ -80,7 +81,11 @@ def _add_serve(commands) -> None:
         "--max-frames-in-flight", type=int, help="frame uploads held at once per worker (default 2 x cores + 2)"
     )
     parser.add_argument("--pipeline-threads", type=int, help="frames located at once per worker (default: cores)")
-    parser.add_argument("--cors-origins", nargs="+", help="origins browsers may call from (default: any, '*')")
+    parser.add_argument(
+        "--cors-origins",
+        nargs="+",
+        help="origins browsers may call from (default: any, '*'; as a variable, a JSON list)",
+    )
     parser.add_argument(
         "--log-level", choices=["critical", "error", "warning", "info", "debug"], help="uvicorn's (default info)"
     )
