@@ -72,6 +72,9 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
     locate.add_argument("--map", help=MAP_HELP + " (default: the service's active map)")
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
+    locate.add_argument(
+        "--annotate", type=Path, metavar="PNG", help="also write the service's picture of what its pipeline saw"
+    )
 
     samples = actions.add_parser("samples", help="recorded samples")
     sample_actions = samples.add_subparsers(dest="samples_command", required=True)
@@ -167,8 +170,14 @@ def _locate(client: Client, args) -> int:
     name, path = _map_name(args.map)
     with _map_hint(name, path):
         result = client.locate_fixture(
-            args.frame, map=name, compress=None if args.compress == "none" else args.compress
+            args.frame,
+            map=name,
+            compress=None if args.compress == "none" else args.compress,
+            annotate=args.annotate is not None,
         )
+    if args.annotate is not None:
+        args.annotate.write_bytes(result.png)  # an OSError is reported as bad input by `_run`
+        result = result.result
     _print(result)
     return 0 if result.ok else 1
 

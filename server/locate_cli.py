@@ -43,10 +43,19 @@ def add_locate_command(commands) -> None:
         default="auto",
         help="use the frame's gravity vector (default: where it helps)",
     )
+    parser.add_argument(
+        "--annotate",
+        type=Path,
+        metavar="PNG",
+        help="also write a picture of what the pipeline saw (panel, contour, sides, corners, centre, the result)",
+    )
     parser.set_defaults(run=run_locate)
 
 
 def run_locate(args) -> int:
+    from dataclasses import replace
+
+    from server.diagnostics import Diagnostics
     from server.locator import locate
     from server.options import LocateOptions
 
@@ -56,7 +65,13 @@ def run_locate(args) -> int:
         frame = read_frame(args.frame, profiles)
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
-    result = locate(frame, beacon_map, LocateOptions(pipeline=pipeline_options(args)))
+    diagnostics = Diagnostics() if args.annotate else None
+    result = locate(frame, beacon_map, LocateOptions(pipeline=replace(pipeline_options(args), diagnostics=diagnostics)))
+    if diagnostics is not None:
+        try:
+            write_annotation(args.annotate, frame, diagnostics, result)
+        except BadInput as problem:
+            return report_bad_input(problem, as_json=args.json)
     print_result(result, frame, as_json=args.json)
     return EXIT_OK if result.ok else EXIT_NO_FIX
 
@@ -102,6 +117,16 @@ def pipeline_options(args):
         subpixel=not args.no_subpixel,
         gravity_mode=GravityMode(args.gravity),
     )
+
+
+def write_annotation(path: Path, frame, diagnostics, result) -> None:
+    """The picture of what the pipeline saw (`server.annotate`) as a PNG file at `path`."""
+    from server.annotate import annotate
+
+    try:
+        path.write_bytes(annotate(frame, diagnostics, result))
+    except OSError as error:
+        raise BadInput(f"cannot write the picture {path}: {error.strerror or error}", field="annotate") from None
 
 
 def print_result(result, frame, as_json: bool) -> None:

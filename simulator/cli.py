@@ -30,6 +30,9 @@ def add_commands(commands) -> None:
     render.add_argument("--overexposure", type=float, default=4.0, help="panel level / saturation")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--no-gravity", action="store_true", help="leave gravity_camera out of the JSON")
+    render.add_argument(
+        "--png", action="store_true", help="also write OUT.png: the same pixels, to view (and locate: `locate OUT.png`)"
+    )
     render.set_defaults(run=_run_render)
 
     simulate = commands.add_parser("simulate", help="render a scene's series (or one pose) into fixture files")
@@ -223,6 +226,12 @@ def _run_render(args) -> int:
     gravity = None if args.no_gravity else (pose.rotation_wc.T @ [0.0, 0.0, -1.0]).tolist()
     raw, meta = write_fixture(args.out, pixels, fixture_meta(camera, width, height, pose, gravity_camera=gravity))
     print(f"wrote {raw} and {meta}")
+    if args.png:
+        import cv2
+
+        png = raw.with_suffix(".png")
+        png.write_bytes(cv2.imencode(".png", pixels)[1].tobytes())  # 8-bit grey, lossless: the frame's own pixels
+        print(f"wrote {png}")
     return 0
 
 
