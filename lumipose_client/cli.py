@@ -11,8 +11,7 @@ import argparse
 import json
 import os
 import re
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 
 import httpx
@@ -28,7 +27,7 @@ DEFAULT_URL = "http://127.0.0.1:8000"
 # looks like a negative number; a grid cell 'i,j' with a negative i is the common label, so it counts as one.
 NEGATIVE_NUMBER_OR_CELL = re.compile(r"^-\d+$|^-\d*\.\d+$|^-\d+,-?\d+$")
 
-MAP_HELP = "a map's name, or a map file (its map's name is sent: the service must hold it, see `maps put`)"
+MAP_HELP = "a map's name, or a map file (its name is sent: the service must hold that map, see `maps put`)"
 
 PlotEvaluation = Callable[[Evaluation, Path], list[Path]]  # (report, folder) -> the figure files written
 
@@ -134,26 +133,27 @@ def _run(args) -> int:
         return report_bad_input(unreachable, as_json=args.json)
 
 
-def _map_name(value: str | None) -> tuple[str | None, Path | None]:
-    """What `--map` sends: the name inside the map file `value` if there is one (and that file), else `value`."""
+def _served_map_name(client: Client, value: str | None) -> str | None:
+    """What `--map` sends: `value`, a map's name; or, when `value` is a map file, the name inside it, once
+    the service is seen to hold that very map (else BadInput saying how to store it)."""
     if value is None or not Path(value).is_file():
-        return value, None
+        return value
     try:
-        return BeaconMap.model_validate_json(Path(value).read_bytes()).name, Path(value)
+        beacon_map = BeaconMap.model_validate_json(Path(value).read_bytes())
     except ValueError as error:
         raise BadInput(f"cannot read map {value}: {error}", field="map") from None
-
-
-@contextmanager
-def _map_hint(name: str | None, path: Path | None) -> Iterator[None]:
-    """A service without the map read from `path`: say so, and how to store it."""
+    store = f"store it with `lumipose client maps put {value}`"
     try:
-        yield
+        served = client.get_map(beacon_map.name)
     except LumiposeError as error:
-        if path is None or error.status != 404:
+        if error.status != 404:
             raise
-        message = f"the service has no map '{name}' (read from {path}): store it with `lumipose client maps put {path}`"
-        raise LumiposeError(error.status, error.body.model_copy(update={"message": message})) from None
+        message = f"the service has no map '{beacon_map.name}' (read from {value}): {store}"
+        raise BadInput(message, field="map", error="not_found") from None
+    if served != beacon_map:
+        message = f"the service's map '{beacon_map.name}' differs from {value}: {store} (it replaces the service's)"
+        raise BadInput(message, field="map", error="map_differs")
+    return beacon_map.name
 
 
 def _print(model) -> None:
@@ -167,14 +167,12 @@ def _print_json(value: list[BaseModel] | dict) -> None:
 
 
 def _locate(client: Client, args) -> int:
-    name, path = _map_name(args.map)
-    with _map_hint(name, path):
-        result = client.locate_fixture(
-            args.frame,
-            map=name,
-            compress=None if args.compress == "none" else args.compress,
-            annotate=args.annotate is not None,
-        )
+    result = client.locate_fixture(
+        args.frame,
+        map=_served_map_name(client, args.map),
+        compress=None if args.compress == "none" else args.compress,
+        annotate=args.annotate is not None,
+    )
     if args.annotate is not None:
         args.annotate.write_bytes(result.png)  # an OSError is reported as bad input by `_run`
         result = result.result
@@ -214,9 +212,7 @@ def _delete_samples(client: Client, args) -> int:
 
 
 def _evaluate(client: Client, args) -> int:
-    name, path = _map_name(args.map)
-    with _map_hint(name, path):
-        report = client.evaluate_samples(map=name, cell_m=args.cell)
+    report = client.evaluate_samples(map=_served_map_name(client, args.map), cell_m=args.cell)
     figures = args.plot_evaluation(report, args.plots) if getattr(args, "plots", None) else []
     if args.json:
         _print(report)

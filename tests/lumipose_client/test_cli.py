@@ -133,6 +133,14 @@ def test_map_names_or_files_and_maps_delete(server_url, capsys, tmp_path):
         in capsys.readouterr().err
     assert main(["client", "maps", "put", str(room), *url]) == 0
     assert main(["client", "locate", str(FIXTURE), "--map", str(room), *url]) == 0
+    moved = load_map().model_copy(update={"name": "cli-room", "beacons": []})
+    moved.beacons.append(load_map().beacons[0].model_copy(update={"center_m": [1.0, 0.0, 1.0]}))
+    edited = tmp_path / "edited.json"
+    edited.write_text(moved.model_dump_json(by_alias=True))
+    capsys.readouterr()
+    assert main(["client", "samples", "evaluate", "--map", str(edited), *url, "--json"]) == 2
+    body = json.loads(capsys.readouterr().out)
+    assert body["error"] == "map_differs" and f"the service's map 'cli-room' differs from {edited}" in body["message"]
     assert main(["client", "locate", str(FIXTURE), "--map", "cli-room", *url]) == 0
     assert main(["client", "maps", "delete", "cli-room", *url]) == 0
     assert "deleted map cli-room" in capsys.readouterr().out
