@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -40,11 +39,11 @@ def _add_shared_options(parser: argparse.ArgumentParser, top: bool) -> None:
     def default(value):
         return value if top else argparse.SUPPRESS
 
-    url = os.environ.get("LUMIPOSE_URL") or DEFAULT_URL
-    parser.add_argument("--url", default=default(url), help=f"service URL (default $LUMIPOSE_URL, else {DEFAULT_URL})")
+    # their variables LUMIPOSE_URL and LUMIPOSE_API_KEY: shared_schemas.cli.CommandParser reads them
     parser.add_argument(
-        "--api-key", default=default(os.environ.get("LUMIPOSE_API_KEY")), help="for writes (default $LUMIPOSE_API_KEY)"
+        "--url", default=default(DEFAULT_URL), help=f"service URL (default $LUMIPOSE_URL, else {DEFAULT_URL})"
     )
+    parser.add_argument("--api-key", default=default(None), help="for writes (default $LUMIPOSE_API_KEY)")
     parser.add_argument(
         "--json",
         action="store_true",

@@ -6,7 +6,6 @@ Exit codes: 0 a fix, 1 no fix (the reason is printed), 2 bad input (`shared_sche
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME
@@ -24,7 +23,6 @@ def add_locate_command(commands) -> None:
     parser.add_argument(
         "--data-dir",
         type=Path,
-        default=os.environ.get("LUMIPOSE_DATA_DIR"),
         help="a service's data folder, whose stored maps --map may name (default: $LUMIPOSE_DATA_DIR, else none)",
     )
     parser.add_argument(

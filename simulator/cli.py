@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -109,7 +108,7 @@ def add_commands(commands) -> None:
     load.add_argument("--seconds", type=float, default=20.0, help="per client count")
     load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
-    load.add_argument("--url", default=os.environ.get("LUMIPOSE_URL"),
+    load.add_argument("--url",
                       help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
                            "no server-side figures then (default: $LUMIPOSE_URL, else our own server)")
     load.add_argument("--json", action="store_true")
