@@ -19,7 +19,7 @@ from pydantic import BaseModel
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap, DeviceProfile
 from shared_schemas.api import Evaluation
-from shared_schemas.cli import BadInput, report_bad_input
+from shared_schemas.cli import BadInput, read_map_argument, report_bad_input
 
 DEFAULT_URL = "http://127.0.0.1:8000"
 # `client samples store --label -8,11`: argparse reads an argument that starts with '-' as a flag unless it
@@ -137,10 +137,7 @@ def _served_map_name(client: Client, value: str | None) -> str | None:
     the service is seen to hold that very map (else BadInput saying how to store it)."""
     if value is None or not Path(value).is_file():
         return value
-    try:
-        beacon_map = BeaconMap.model_validate_json(Path(value).read_bytes())
-    except ValueError as error:
-        raise BadInput(f"cannot read map {value}: {error}", field="map") from None
+    beacon_map = read_map_argument(value)
     store = f"store it with `lumipose client maps put {value}`"
     try:
         served = client.get_map(beacon_map.name)
