@@ -12,6 +12,7 @@ import json
 import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import httpx
 from pydantic import BaseModel
@@ -19,7 +20,7 @@ from pydantic import BaseModel
 from lumipose_client.client import Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap, DeviceProfile
 from shared_schemas.api import Evaluation
-from shared_schemas.cli import BadInput, read_map_argument, report_bad_input
+from shared_schemas.cli import BadInput, describe_file_error, plural, read_map_argument, report_bad_input
 
 DEFAULT_URL = "http://127.0.0.1:8000"
 # `client samples store --label -8,11`: argparse reads an argument that starts with '-' as a flag unless it
@@ -28,6 +29,7 @@ NEGATIVE_NUMBER_OR_CELL = re.compile(r"^-\d+$|^-\d*\.\d+$|^-\d+,-?\d+$")
 
 MAP_HELP = "a map's name, or a map file (its name is sent: the service must hold that map, see `maps put`)"
 
+Model = TypeVar("Model", bound=BaseModel)
 PlotEvaluation = Callable[[Evaluation, Path], list[Path]]  # (report, folder) -> the figure files written
 
 
@@ -69,7 +71,7 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     locate = _verb(actions, "locate", _locate, help="locate one recorded frame")
     locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
     locate.add_argument("--map", help=MAP_HELP + " (default: the service's active map)")
-    locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
+    locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="upload compression")
     locate.add_argument(
         "--annotate", type=Path, metavar="PNG", help="also write the service's picture of what its pipeline saw"
     )
@@ -78,7 +80,7 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     sample_actions = samples.add_subparsers(dest="samples_command", required=True)
     store = _verb(sample_actions, "store", _store_samples, help="store frames with a label")
     store._negative_number_matcher = NEGATIVE_NUMBER_OR_CELL  # see NEGATIVE_NUMBER_OR_CELL
-    store.add_argument("frames", type=Path, nargs="+", help="recorded frames (NAME.json, ...)")
+    store.add_argument("frames", type=Path, nargs="+", help="NAME.json, NAME.y, NAME.yuv or NAME.png")
     store.add_argument("--label", help="for example a grid cell 'i,j' such as -8,11")
     _verb(sample_actions, "list", _list_samples, help="the stored samples")
     delete = _verb(sample_actions, "delete", _delete_samples, help="remove stored samples")
@@ -214,7 +216,7 @@ def _evaluate(client: Client, args) -> int:
         _print(report)
         return 0
     print(
-        f"map {report.map}: {report.samples} samples, {report.with_truth} with truth, "
+        f"map {report.map}: {plural(report.samples, 'sample')}, {report.with_truth} with truth, "
         f"coverage {100 * report.coverage:.1f} %"
     )
     if report.mean_mm is not None:
@@ -227,13 +229,22 @@ def _evaluate(client: Client, args) -> int:
     return 0
 
 
+def _read_model(model: type[Model], path: Path) -> Model:
+    """A contract model from a JSON file; a ValueError naming the file and the field if it is not one."""
+    try:
+        return model.model_validate_json(path.read_bytes())
+    except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+        raise ValueError(describe_file_error(path, error)) from None
+
+
 def _list_maps(client: Client, args) -> int:
     summaries = client.maps()
     if args.json:
         _print_json(summaries)
         return 0
     for summary in summaries:
-        print(f"{'*' if summary.active else ' '} {summary.name}  {summary.beacons} beacons  ({summary.source})")
+        active = "*" if summary.active else " "
+        print(f"{active} {summary.name}  {plural(summary.beacons, 'beacon')}  ({summary.source})")
     return 0
 
 
@@ -243,11 +254,11 @@ def _get_map(client: Client, args) -> int:
 
 
 def _put_map(client: Client, args) -> int:
-    stored = client.put_map(BeaconMap.model_validate(json.loads(args.file.read_text())))
+    stored = client.put_map(_read_model(BeaconMap, args.file))
     if args.json:
         _print(stored)
     else:
-        print(f"stored map '{stored.name}' ({len(stored.beacons)} beacons)")
+        print(f"stored map '{stored.name}' ({plural(len(stored.beacons), 'beacon')})")
     return 0
 
 
@@ -285,7 +296,7 @@ def _get_profile(client: Client, args) -> int:
 
 
 def _put_profile(client: Client, args) -> int:
-    stored = client.put_profile(DeviceProfile.model_validate_json(args.file.read_bytes()))
+    stored = client.put_profile(_read_model(DeviceProfile, args.file))
     if args.json:
         _print(stored)
     else:

@@ -9,22 +9,25 @@ Exit codes: 0 a fix (or success), 1 no fix (the reason is printed), 2 bad input.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME, DEMO_MAP_PATH, device_profiles
-from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, report_bad_input
+from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, describe_validation_error, report_bad_input
 from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 
 def _add_fov(commands) -> None:
     parser = commands.add_parser("fov", help="the paper's FOV and test grid (equations 1-7)")
-    parser.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    parser.add_argument(
+        "--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()), help="bundled device profile"
+    )
     parser.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
     parser.add_argument("--cell", type=float, default=0.05, help="grid cell side, metres")
-    parser.add_argument("--beacon-side", type=float, default=0.174, help="metres")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--beacon-side", type=float, default=0.174, help="side of the square panel, metres")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON on stdout")
     parser.set_defaults(run=_run_fov)
 
 
@@ -105,10 +108,11 @@ def _run_serve(args) -> int:
     try:
         settings = Settings(**given)
     except ValidationError as error:
-        first = error.errors()[0]
-        where = ".".join(str(part) for part in first["loc"])  # empty for the map, checked after the other fields
-        message = first["msg"].removeprefix("Value error, ")
-        print(f"error: {where + ': ' if where else ''}{message}", file=sys.stderr)
+        print(f"error: {describe_validation_error(error)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    problem = _port_problem(settings.host, settings.port)
+    if problem is not None:  # say so now, rather than announce a server that never starts
+        print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     # Workers are separate processes: hand them the checked settings through the environment.
     for name, value in settings.model_dump(exclude_none=True).items():
@@ -130,6 +134,25 @@ def _run_serve(args) -> int:
         http=GuardedHttpToolsProtocol,
     )
     return EXIT_FIX
+
+
+def _port_problem(host: str, port: int) -> str | None:
+    """Why uvicorn could not listen on host:port (in use, not allowed, no such address), or None.
+    A trial bind with SO_REUSEADDR, as uvicorn's own: only a live listener makes it fail."""
+    import socket
+
+    try:
+        family, kind, protocol, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, protocol) as trial:
+            trial.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            trial.bind(address)
+    except socket.gaierror as error:
+        return f"cannot listen on {host}: {error.strerror}"
+    except OSError as error:
+        if error.errno == errno.EADDRINUSE:
+            return f"port {port} is in use on {host} (another server? give --port)"
+        return f"cannot listen on {host}:{port}: {error.strerror}"
+    return None
 
 
 def _startup_map_name(settings) -> str:

@@ -9,7 +9,15 @@ from __future__ import annotations
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, read_map_argument, report_bad_input
+from shared_schemas.cli import (
+    EXIT_NO_FIX,
+    EXIT_OK,
+    BadInput,
+    describe_file_error,
+    number,
+    read_map_argument,
+    report_bad_input,
+)
 
 
 def add_locate_command(commands) -> None:
@@ -39,7 +47,7 @@ def add_locate_command(commands) -> None:
         "--gravity",
         choices=["auto", "always", "never"],
         default="auto",
-        help="use the frame's gravity vector (default: where it helps)",
+        help="use the frame's gravity vector (default: auto, where it helps)",
     )
     parser.add_argument(
         "--annotate",
@@ -84,7 +92,9 @@ def read_profiles(paths: list[Path]):
         try:
             given.append(DeviceProfile.model_validate_json(path.read_bytes()))
         except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            raise BadInput(f"cannot read the device profile {path}: {error}", field="profile") from None
+            raise BadInput(
+                f"cannot read the device profile {describe_file_error(path, error)}", field="profile"
+            ) from None
     try:
         return profile_table(given)
     except ValueError as error:
@@ -145,8 +155,8 @@ def print_result(result, frame, as_json: bool) -> None:
         f"   gravity prior {'used' if result.gravity_used else 'not used'}"
     )
     print(
-        f"quality   reprojection {result.reprojection_error_px:.3f} px, "
-        f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms"
+        f"quality   reprojection {number(result.reprojection_error_px, 3)} px, "
+        f"ambiguity ratio {number(result.ambiguity_ratio)}, {result.timing_ms['total']:.1f} ms"
     )
     truth = frame.meta.ground_truth
     if truth is not None:

@@ -14,6 +14,8 @@ import sys
 from pathlib import Path
 from typing import NoReturn
 
+from pydantic import ValidationError
+
 from shared_schemas.models import BeaconMap, ErrorBody
 
 EXIT_OK, EXIT_NO_FIX, EXIT_BAD_INPUT = 0, 1, 2
@@ -39,7 +41,7 @@ def read_map_argument(value: str, data_dir: Path | None = None) -> BeaconMap:
     try:
         return load_map(path)
     except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-        raise BadInput(f"cannot read map {path}: {error}", field="map") from None
+        raise BadInput(f"cannot read the map {describe_file_error(path, error)}", field="map") from None
 
 
 def report_bad_input(problem: BadInput | ErrorBody, as_json: bool = False) -> int:
@@ -51,6 +53,47 @@ def report_bad_input(problem: BadInput | ErrorBody, as_json: bool = False) -> in
         where = f" (field {body.field})" if body.field and body.field not in body.message else ""
         print(f"error: {body.message}{where}", file=sys.stderr)
     return EXIT_BAD_INPUT
+
+
+def describe_validation_error(error: ValidationError, source: str | Path | None = None) -> str:
+    """A pydantic ValidationError in one short line: `map.json: beacons.0.side_m: Input should be greater
+    than 0 (got -1)`, the first problem and how many more there are (no pydantic dump with links)."""
+    problems = error.errors(include_url=False)
+    first = problems[0]
+    where = ".".join(str(part) for part in first["loc"])
+    message = first["msg"].removeprefix("Value error, ")
+    given = first.get("input")
+    shown = isinstance(given, int | float | str) and not isinstance(given, bool) and len(str(given)) <= 40
+    if where and shown and str(given) not in message:
+        message += f" (got {given!r})"
+    more = len(problems) - 1
+    parts = [str(source) if source is not None else "", where, message]
+    text = ": ".join(part for part in parts if part)
+    return text + (f" (and {plural(more, 'more problem')})" if more else "")
+
+
+def describe_file_error(path: str | Path, error: Exception) -> str:
+    """Why the file at `path` could not be used, naming the file and (for a model) the field."""
+    if isinstance(error, ValidationError):
+        return describe_validation_error(error, path)
+    if isinstance(error, OSError) and error.strerror:
+        return f"{path}: {error.strerror}"
+    if isinstance(error, UnicodeDecodeError):
+        return f"{path}: not a text file"
+    return f"{path}: {error}"
+
+
+def plural(count: int, noun: str, plural_form: str | None = None) -> str:
+    """`1 beacon`, `2 beacons` (`plural_form` for irregular nouns)."""
+    return f"{count} {noun if count == 1 else plural_form or noun + 's'}"
+
+
+def number(value: float, decimals: int = 2, digits: int = 2) -> str:
+    """`value` with `decimals` decimals, or `digits` significant ones where the decimals would hide it
+    (an ambiguity ratio of 0.0031 prints as 0.0031, not 0.00)."""
+    if value == 0 or abs(value) >= 10 ** (digits - 1 - decimals):
+        return f"{value:.{decimals}f}"
+    return f"{value:.{digits}g}"
 
 
 ENVIRONMENT_PREFIX = "LUMIPOSE_"

@@ -59,7 +59,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.outline import OutlineFitRules
 from shared_schemas import Beacon, BeaconMap, PanelShape, device_profiles
-from shared_schemas.cli import BadInput, report_bad_input
+from shared_schemas.cli import BadInput, plural, report_bad_input
 from simulator.benchmarks import summarize
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
@@ -354,7 +354,7 @@ def format_shapes(report: dict) -> str:
                 f"45 deg); worst: frame {worst['index']}, camera yaw {worst['relative_yaw_deg']} deg from the "
                 f"beacon's, {worst['error_2d_mm']} mm"
             )
-    lines.append(f"  wall time {report['wall_s']:.0f} s on {report['workers']} workers (render + locate)")
+    lines.append(f"  wall time {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')} (render + locate)")
     return "\n".join(lines)
 
 

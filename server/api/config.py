@@ -12,6 +12,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 from server.options import LocateOptions
 from server.tracking.devices import DeviceRules
 from shared_schemas import find_map_file, load_map
+from shared_schemas.cli import describe_file_error
 
 
 class Settings(BaseSettings):
@@ -55,7 +56,7 @@ class Settings(BaseSettings):
             try:
                 load_map(self.map)
             except (OSError, ValueError) as error:
-                raise ValueError(f"cannot load map {self.map}: {error}") from None
+                raise ValueError(f"cannot load {describe_file_error(self.map, error)}") from None
         return self
 
     @field_validator("api_key")

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shared_schemas.cli import BadInput, report_bad_input
+from shared_schemas.cli import BadInput, describe_file_error, describe_validation_error, report_bad_input
 
 EXIT_OK, EXIT_REFUSED = 0, 1
 DICTIONARIES = (
@@ -29,11 +29,13 @@ def add_commands(commands) -> None:
     steps = calibrate.add_subparsers(dest="step", required=True)
     board = steps.add_parser("board", help="write a printable ChArUco board and its spec (board.json)")
     board.add_argument("--out", type=Path, required=True, help="board.pdf (to print) or board.png (for a screen)")
-    board.add_argument("--squares", default="11x8", help="squares across x down (default 11x8: A4 landscape)")
-    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square (default 24)")
-    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default 0.6 of a square)")
-    board.add_argument("--dictionary", default="DICT_5X5_100", choices=DICTIONARIES)
-    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels (default 600)")
+    board.add_argument("--squares", default="11x8", help="squares across x down (default: 11x8, A4 landscape)")
+    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square")
+    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default: 0.6 of a square)")
+    board.add_argument(
+        "--dictionary", default="DICT_5X5_100", choices=DICTIONARIES, help="ArUco dictionary of the markers"
+    )
+    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
     board.set_defaults(run=_run_board)
     camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
     camera.add_argument("photos", type=Path, nargs="+", help="PNG or JPEG photos of the board, grey or colour")
@@ -71,8 +73,7 @@ def _run_board(args) -> int:
         )
         printed = write_board(spec, args.out, args.dpi)
     except ValidationError as error:
-        problem = error.errors()[0]
-        return _fail(f"{'.'.join(map(str, problem['loc'])) or 'board'}: {problem['msg']}")
+        return _fail(describe_validation_error(error, "board"))
     except (ValueError, OSError) as error:
         return _fail(str(error))
     print(
@@ -102,7 +103,7 @@ def _device(text: str):
     try:
         return DeviceProfile.model_validate_json(path.read_text())
     except (ValidationError, OSError, UnicodeDecodeError) as error:
-        raise ValueError(f"--device {path} is not a device profile: {str(error).splitlines()[0]}") from None
+        raise ValueError(f"--device is not a device profile: {describe_file_error(path, error)}") from None
 
 
 def _run_camera(args) -> int:
@@ -117,9 +118,7 @@ def _run_camera(args) -> int:
     except (OSError, UnicodeDecodeError) as error:
         return _fail(f"cannot read --board {args.board}: {error}", args.json, "board")
     except ValidationError as error:
-        problem = error.errors()[0]
-        where = ".".join(map(str, problem["loc"]))
-        return _fail(f"--board {args.board} is not a board spec: {where}: {problem['msg']}", args.json, "board")
+        return _fail(f"--board is not a board spec: {describe_file_error(args.board, error)}", args.json, "board")
     try:
         device = _device(args.device)
     except ValueError as error:

@@ -11,7 +11,7 @@ import re
 import sys
 from pathlib import Path
 
-from shared_schemas.cli import BadInput, read_map_argument, report_bad_input
+from shared_schemas.cli import BadInput, describe_file_error, read_map_argument, report_bad_input
 
 EXIT_OK, EXIT_REFUSED = 0, 1
 
@@ -93,7 +93,7 @@ def run_survey_command(args) -> int:
         try:
             labels = _read_labels(args.labels, args.frames)
         except (OSError, ValueError, ValidationError) as error:
-            raise BadInput(f"cannot read labels {args.labels}: {error}", field="labels") from None
+            raise BadInput(f"cannot read labels {describe_file_error(args.labels, error)}", field="labels") from None
         frames = []
         for path, frame_labels in zip(args.frames, labels, strict=True):
             try:

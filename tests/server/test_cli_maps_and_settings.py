@@ -58,7 +58,7 @@ def test_serve_map_is_a_file_or_a_name_and_a_bad_one_stops_it(tmp_path, capsys):
     assert capsys.readouterr().err == (f"error: no map file 'lobby', and no map named 'lobby' stored in "
                                        f"{tmp_path / 'maps'} or bundled (maps: room, test-bench)\n")
     assert main(["serve", "--data", str(tmp_path), "--port", "70000"]) == 2  # --data: the old name, kept
-    assert capsys.readouterr().err == "error: port: Input should be less than or equal to 65535\n"
+    assert capsys.readouterr().err == "error: port: Input should be less than or equal to 65535 (got 70000)\n"
 
 
 def test_every_serve_flag_is_a_setting_read_from_lumipose_flag(monkeypatch):
