@@ -13,6 +13,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from shared_schemas.cli import CommandParser
+
 EXIT_BROKEN_PIPE = 141
 
 
@@ -30,9 +32,10 @@ class DefaultsHelpFormatter(argparse.HelpFormatter):
         return f"{text} (default: {shown.replace('%', '%%')})".lstrip()
 
 
-class LumiposeParser(argparse.ArgumentParser):
-    """An ArgumentParser whose help shows the defaults; add_subparsers hands its class to every
-    subcommand, so the whole tree gets it."""
+class LumiposeParser(CommandParser):
+    """An ArgumentParser whose help shows the defaults, whose flags read LUMIPOSE_<FLAG> and whose usage
+    errors follow --json (CommandParser); add_subparsers hands its class to every subcommand, so the
+    whole tree gets it."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", DefaultsHelpFormatter)

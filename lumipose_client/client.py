@@ -219,6 +219,9 @@ class _Endpoints:
             )
         )
 
+    def delete_map(self, name: str):
+        return self._run(_Call("DELETE", f"/v1/maps/{name}", _nothing))
+
     def active_map(self):
         return self._run(_Call("GET", "/v1/maps/active", _model(ActiveMap)))
 

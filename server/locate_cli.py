@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH
+from shared_schemas import DEMO_MAP_NAME
 from shared_schemas.captures import add_frame_series_arguments, annotation_path
 from shared_schemas.cli import (
     EXIT_NO_FIX,
@@ -21,6 +21,7 @@ from shared_schemas.cli import (
     check_beacon_id,
     describe_file_error,
     number,
+    read_map_argument,
     report_bad_input,
 )
 
@@ -28,7 +29,16 @@ from shared_schemas.cli import (
 def add_locate_command(commands) -> None:
     parser = commands.add_parser("locate", help="locate the camera from recorded frames")
     add_frame_series_arguments(parser)
-    parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
+    parser.add_argument(
+        "--map",
+        default=DEMO_MAP_NAME,
+        help="beacon map: a file, or a map's name (bundled, or stored in --data-dir) (default: %(default)s, bundled)",
+    )
+    parser.add_argument(
+        "--data-dir",
+        type=Path,
+        help="a service's data folder, whose stored maps --map may name (default: $LUMIPOSE_DATA_DIR, else none)",
+    )
     parser.add_argument(
         "--profile",
         type=Path,
@@ -71,7 +81,7 @@ def run_locate(args) -> int:
 
     try:
         profiles = read_profiles(args.profile)
-        beacon_map = read_map(args.map)
+        beacon_map = read_map(args.map, args.data_dir)
         check_beacon_id(args.beacon_id, beacon_map)
         frames = [read_frame(path, profiles) for path in args.frames]
     except BadInput as problem:
@@ -123,13 +133,9 @@ def read_profiles(paths: list[Path]):
         raise BadInput(str(error), field="profile") from None
 
 
-def read_map(path: Path):
-    from shared_schemas import load_map
-
-    try:
-        return load_map(path)
-    except (OSError, ValueError) as error:
-        raise BadInput(f"cannot read the map {describe_file_error(path, error)}", field="map") from None
+def read_map(value: str, data_dir: Path | None = None):
+    """The map `--map` means: a file if one is there, else a map of that name (stored in `data_dir`, or bundled)."""
+    return read_map_argument(value, data_dir)
 
 
 def read_frame(path: Path, profiles):

@@ -112,6 +112,11 @@ def is_survey_label(label: str | None) -> bool:
     return label is not None and label.startswith(SURVEY_LABEL_PREFIX)
 
 
+def cell_label(i: int, j: int) -> str:
+    """The label of grid cell (i, j): 'i,j', as `cell_truth_m` reads it (e.g. '-8,11')."""
+    return f"{i},{j}"
+
+
 def cell_truth_m(label: str | None, cell_m: float, height_m: float = 0.0) -> list[float] | None:
     """The test-bench position of a grid-cell label 'i,j' (paper Section II-B), or None."""
     match = CELL_LABEL.match(label or "")

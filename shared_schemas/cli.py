@@ -6,8 +6,13 @@ printed as JSON on stdout when the user asked for `--json`, as `error: ...` on s
 
 from __future__ import annotations
 
+import argparse
+import json
+import os
+import re
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 from pydantic import ValidationError
 
@@ -22,6 +27,21 @@ class BadInput(Exception):
     def __init__(self, message: str, field: str | None = None, error: str = "bad_input"):
         super().__init__(message)
         self.body = ErrorBody(error=error, field=field, message=message)
+
+
+def read_map_argument(value: str, data_dir: Path | None = None) -> BeaconMap:
+    """The map a `--map` value means: a file if one is there, else a map of that name (stored in
+    `data_dir`, or bundled); BadInput (field `map`) naming both readings when neither exists."""
+    from shared_schemas import find_map_file, load_map
+
+    try:
+        path = find_map_file(value, data_dir)
+    except ValueError as error:
+        raise BadInput(str(error), field="map") from None
+    try:
+        return load_map(path)
+    except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+        raise BadInput(f"cannot read the map {describe_file_error(path, error)}", field="map") from None
 
 
 def report_bad_input(problem: BadInput | ErrorBody, as_json: bool = False) -> int:
@@ -85,3 +105,73 @@ def check_beacon_id(beacon_id: int | None, beacon_map: BeaconMap) -> None:
             field="beacon_id",
             error="unknown_beacon",
         )
+
+
+ENVIRONMENT_PREFIX = "LUMIPOSE_"
+_TRUE, _FALSE = {"1", "true", "yes", "on"}, {"0", "false", "no", "off", ""}
+
+
+def environment_name(flag: str) -> str:
+    """The environment variable of a flag: `--some-flag` is LUMIPOSE_SOME_FLAG."""
+    return ENVIRONMENT_PREFIX + flag.removeprefix("--").upper().replace("-", "_")
+
+
+class CommandParser(argparse.ArgumentParser):
+    """An ArgumentParser for the one rule of every `lumipose` command: a flag `--some-flag` not given reads
+    LUMIPOSE_SOME_FLAG; and its usage errors (an unknown flag, a bad value, a missing argument) follow
+    `--json` as every other bad input does: the contract's ErrorBody on stdout, exit 2."""
+
+    _json_errors = False  # shared by a command's subparsers: set when the whole command line is parsed
+
+    def parse_args(self, args=None, namespace=None):
+        given = sys.argv[1:] if args is None else list(args)
+        CommandParser._json_errors = "--json" in given or _environment_value("--json") in _TRUE
+        return super().parse_args(given, namespace)
+
+    def parse_known_args(self, args=None, namespace=None):
+        # each parser on the command's path (the root, `bench`, `bench load`) reads its own flags' variables
+        for action in self._actions:
+            self._default_from_environment(action)
+        return super().parse_known_args(args, namespace)
+
+    def _default_from_environment(self, action: argparse.Action) -> None:
+        flag = next((option for option in action.option_strings if option.startswith("--")), None)
+        value = None if flag is None or action.default is argparse.SUPPRESS else _environment_value(flag)
+        if flag is None or value is None or action.help is argparse.SUPPRESS:
+            return
+        where = f"{environment_name(flag)}={value!r}"
+        if isinstance(action, argparse._StoreTrueAction | argparse._StoreFalseAction):
+            if value.lower() not in _TRUE | _FALSE:
+                self.error(f"{where}: say 1 or 0 (true or false)")
+            action.default = (value.lower() in _TRUE) == isinstance(action, argparse._StoreTrueAction)
+            return
+        if not isinstance(action, argparse._StoreAction | argparse._AppendAction):
+            return
+        many = action.nargs in ("+", "*") or isinstance(action.nargs, int) or isinstance(action, argparse._AppendAction)
+        try:
+            words = _words(value) if many else [value]
+            converted = [action.type(word) if callable(action.type) else word for word in words]
+        except (TypeError, ValueError) as error:
+            self.error(f"{where}: {error}")
+        if action.choices is not None and any(word not in action.choices for word in converted):
+            self.error(f"{where}: choose from {', '.join(map(str, action.choices))}")
+        action.default = converted if many else converted[0]
+
+    def error(self, message: str) -> NoReturn:
+        if not CommandParser._json_errors:
+            super().error(message)
+        flag = re.match(r"(?:argument (?:-\w/)?--|LUMIPOSE_)([\w-]+)", message)
+        field = flag[1].replace("-", "_").lower() if flag else None
+        report_bad_input(BadInput(f"{self.prog}: {message}", field=field), as_json=True)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def _environment_value(flag: str) -> str | None:
+    return os.environ.get(environment_name(flag))
+
+
+def _words(value: str) -> list[str]:
+    """A variable's list: a JSON list (as pydantic-settings reads them), or words split on spaces."""
+    if value.lstrip().startswith("["):
+        return [str(word) for word in json.loads(value)]
+    return value.split()

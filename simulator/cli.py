@@ -7,8 +7,8 @@ import json
 import sys
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH, device_profiles
-from shared_schemas.cli import describe_file_error, plural
+from shared_schemas import DEMO_MAP_NAME, device_profiles
+from shared_schemas.cli import BadInput, describe_file_error, plural, read_map_argument, report_bad_input
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
@@ -21,7 +21,7 @@ def add_commands(commands) -> None:
     render.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()),
                         help="bundled device profile of the camera")
     render.add_argument("--scale", type=float, default=1.0, help="of the profile's native resolution")
-    render.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: the bundled demo map)")
+    render.add_argument("--map", default=DEMO_MAP_NAME, help="a map file, or a bundled map's name")
     render.add_argument("--beacon-id", type=int, default=None, help="default: the map's first beacon")
     render.add_argument("--position", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("X", "Y", "Z"),
                         help="camera position in the map, metres")
@@ -104,8 +104,9 @@ def add_commands(commands) -> None:
     speed.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     speed.set_defaults(run=_run_speed)
     load = benches.add_parser("load", help="the HTTP service under concurrent clients (over 3 minutes by default)",
-                              description="The HTTP service under concurrent clients. One run per frame kind, client "
-                                          "count and encoding: the defaults take over 3 minutes (9 runs of 20 s).")
+                              description="The HTTP service under concurrent clients (its own server, or --url). One "
+                                          "run per frame kind, client count and encoding: the defaults take over 3 "
+                                          "minutes (9 runs of 20 s).")
     load.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],  # bench_service.FRAME_WIDTHS
                       default=["1080p", "full", "full-window"],
                       help="full-window: the full frame cut to the beacon's window by the client")
@@ -116,6 +117,9 @@ def add_commands(commands) -> None:
     load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"],
                       help="upload compression, one run each")
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
+    load.add_argument("--url",
+                      help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
+                           "no server-side figures then (default: $LUMIPOSE_URL, else our own server)")
     load.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     load.set_defaults(run=_run_load)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
@@ -210,19 +214,16 @@ def _run_render(args) -> int:
 
     from server.camera import intrinsics_from_profile
     from server.geometry import rotation_from_ypr
-    from shared_schemas import load_map
     from simulator.fixtures import fixture_meta, write_fixture
     from simulator.render import CameraPose, SensorModel, render_frame
 
     try:
-        beacon_map = load_map(args.map)
-    except (OSError, ValueError) as error:
-        print(f"error: cannot read the map {describe_file_error(args.map, error)}", file=sys.stderr)
-        return 2
+        beacon_map = read_map_argument(args.map)
+    except BadInput as problem:
+        return report_bad_input(problem)
     beacon = beacon_map.beacon(args.beacon_id) if args.beacon_id is not None else beacon_map.beacons[0]
     if beacon is None:
-        print(f"error: beacon {args.beacon_id} is not in {args.map}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(f"beacon {args.beacon_id} is not in {args.map}", field="beacon_id"))
     profile = device_profiles()[args.profile]
     width, height = round(profile.width * args.scale), round(profile.height * args.scale)
     camera = intrinsics_from_profile(profile, width, height)
@@ -231,8 +232,7 @@ def _run_render(args) -> int:
     try:
         pixels = render_frame(beacon, camera, pose, width, height, sensor, np.random.default_rng(args.seed))
     except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error)))
     gravity = None if args.no_gravity else (pose.rotation_wc.T @ [0.0, 0.0, -1.0]).tolist()
     raw, meta = write_fixture(args.out, pixels, fixture_meta(camera, width, height, pose, gravity_camera=gravity))
     print(f"wrote {raw} and {meta}")
@@ -278,8 +278,7 @@ def _run_simulate(args) -> int:
             scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
         stems = write_series(scene, args.out, args.workers, bursts=args.bursts)
     except (OSError, ValueError, ValidationError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error)))
     print(f"wrote {plural(len(stems), 'fixture')} ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
 
@@ -329,8 +328,7 @@ def _run_partial(args) -> int:
     from simulator.bench_partial import PartialConfig, format_partial, plot_partial, run_partial
 
     if args.frames < 1 or min(args.scales) <= 0:
-        print("error: --frames must be at least 1 and every --scales positive", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput("--frames must be at least 1 and every --scales positive"), args.json)
     config = PartialConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                            seed=args.seed)
     report = run_partial(config, args.workers)
@@ -374,8 +372,7 @@ def _run_grid_bench(args) -> int:
         try:
             report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit, args.scene, args.yaw_jitter)
         except ValueError as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
+            return report_bad_input(BadInput(str(error)), args.json)
     else:
         profile = None
         if args.profile is not None:
@@ -386,8 +383,8 @@ def _run_grid_bench(args) -> int:
             try:
                 profile = DeviceProfile.model_validate_json(args.profile.read_text())
             except (OSError, ValidationError) as error:
-                print(f"error: --profile {describe_file_error(args.profile, error)}", file=sys.stderr)
-                return 2
+                problem = BadInput(f"--profile {describe_file_error(args.profile, error)}", field="profile")
+                return report_bad_input(problem, args.json)
         report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
                             args.workers, args.limit, profile)
     report["out"] = str(args.out)
@@ -400,9 +397,8 @@ def _run_calibration_bench(args) -> int:
 
     corner_views = CORNER_VIEWS if args.corner_views is None else args.corner_views
     if args.views < 3 or args.scale <= 0 or not 0 <= corner_views <= args.views:
-        print("error: --views must be at least 3, --scale positive and --corner-views within 0..views",
-              file=sys.stderr)
-        return 2
+        problem = BadInput("--views must be at least 3, --scale positive and --corner-views within 0..views")
+        return report_bad_input(problem, args.json)
     result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets,
                                corner_views=corner_views)
     profile = result["report"]["profile"]
@@ -436,8 +432,7 @@ def _run_fidelity(args) -> int:
     try:
         report = bench_fidelity(args.out, args.distances, blender=args.blender)
     except RuntimeError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error), field="blender"), args.json)
     (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else format_fidelity(report) + "\n  figure " + report["figures"][0])
     return 0
@@ -490,9 +485,9 @@ def _run_robustness(args) -> int:
 
     unknown = sorted(set(args.effects) - set(GROUPS))
     if unknown or args.frames < 1 or min(args.scales) <= 0:
-        print(f"error: --frames must be at least 1, every --scales positive and --effects among {', '.join(GROUPS)}"
-              f"{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}", file=sys.stderr)
-        return 2
+        problem = BadInput(f"--frames must be at least 1, every --scales positive and --effects among "
+                           f"{', '.join(GROUPS)}{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}")
+        return report_bad_input(problem, args.json)
     config = RobustnessConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                               effects=tuple(args.effects), seed=args.seed)
     report = run_robustness(config, args.workers)

@@ -5,12 +5,11 @@ Exit codes: 0 calibrated (or the board written), 1 the set refused (the advice i
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-from shared_schemas.cli import describe_file_error, describe_validation_error
+from shared_schemas.cli import BadInput, describe_file_error, describe_validation_error, report_bad_input
 
-EXIT_OK, EXIT_REFUSED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_REFUSED = 0, 1
 DICTIONARIES = (
     "DICT_4X4_50",
     "DICT_4X4_100",
@@ -48,9 +47,9 @@ def add_commands(commands) -> None:
     camera.set_defaults(run=_run_camera)
 
 
-def _fail(message: str) -> int:
-    print(f"error: {message}", file=sys.stderr)
-    return EXIT_BAD_INPUT
+def _fail(message: str, as_json: bool = False, field: str | None = None) -> int:
+    """Bad input: `error: ...` on stderr, or the contract's ErrorBody on stdout with --json; exit 2."""
+    return report_bad_input(BadInput(message, field=field), as_json=as_json)
 
 
 def _run_board(args) -> int:
@@ -117,20 +116,20 @@ def _run_camera(args) -> int:
     try:
         spec = BoardSpec.model_validate_json(args.board.read_text())
     except (OSError, UnicodeDecodeError) as error:
-        return _fail(f"cannot read --board {args.board}: {error}")
+        return _fail(f"cannot read --board {args.board}: {error}", args.json, "board")
     except ValidationError as error:
-        return _fail(f"--board is not a board spec: {describe_file_error(args.board, error)}")
+        return _fail(f"--board is not a board spec: {describe_file_error(args.board, error)}", args.json, "board")
     try:
         device = _device(args.device)
     except ValueError as error:
-        return _fail(str(error))
+        return _fail(str(error), args.json, "device")
     try:
         photos = [(str(path), path.read_bytes()) for path in args.photos]
         views, skipped = find_views(photos, spec)
     except OSError as error:
-        return _fail(f"cannot read a photo: {error}")
+        return _fail(f"cannot read a photo: {error}", args.json, "photos")
     except PhotoError as error:
-        return _fail(str(error))
+        return _fail(str(error), args.json, "photos")
     if not views:
         report = no_board_report(skipped)
         print(report.model_dump_json(by_alias=True, indent=2) if args.json else format_report(report))
@@ -138,7 +137,7 @@ def _run_camera(args) -> int:
     try:
         report = calibrate(views, spec, device, args.profile_id)
     except CalibrationInputError as error:
-        return _fail(str(error))
+        return _fail(str(error), args.json)
     report = report.model_copy(update={"views": report.views + skipped})
     if args.out is not None and report.profile is not None:
         args.out.write_text(report.profile.model_dump_json(indent=2, exclude_none=True) + "\n")
