@@ -28,7 +28,7 @@ def test_lists_switches_and_paths_from_variables(monkeypatch, tmp_path):
     assert build_parser().parse_args(["bench", "load"]).encodings == ["gzip", "zstd"]
     assert build_parser().parse_args(["render", "out"]).no_gravity is True
     monkeypatch.setenv("LUMIPOSE_PROFILE", str(tmp_path / "a.json"))
-    assert build_parser().parse_args(["locate", "frame.json"]).profile == [tmp_path / "a.json"]  # an appended flag
+    assert build_parser().parse_args(["locate", "frame.json"]).profile == [str(tmp_path / "a.json")]  # appended, NAME|FILE
 
 
 @pytest.mark.parametrize("variable, value", [("LUMIPOSE_CELL", "wide"), ("LUMIPOSE_NO_GRAVITY", "maybe"),
