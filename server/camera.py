@@ -95,14 +95,20 @@ def _profile_camera(ref: ProfileRef, meta: FrameMeta, profiles: ProfileTable) ->
         raise FrameError(
             f"frame {width}x{height} is turned against profile {profile.width}x{profile.height}", field="width"
         )
+    return scaled_profile(profile, width, height, "frame", field="width")
+
+
+def scaled_profile(profile: DeviceProfile, width: int, height: int, what: str, field: str) -> CameraIntrinsics:
+    """`intrinsics_from_profile`, or a FrameError naming `what` ("frame", "photo") when the size is far from the
+    profile's native one (the scaled focal or pixel size leaves the contract's range)."""
     try:
         return intrinsics_from_profile(profile, width, height)
-    except ValidationError as error:  # a frame far smaller or larger than the profile's native size
+    except ValidationError as error:
         problem = error.errors()[0]
         raise FrameError(
-            f"frame {width}x{height} scales profile '{ref.profile}' ({profile.width}x{profile.height}) out of the "
+            f"{what} {width}x{height} scales profile '{profile.id}' ({profile.width}x{profile.height}) out of the "
             f"contract's range: {'.'.join(map(str, problem['loc']))}: {problem['msg']}",
-            field="width",
+            field=field,
         ) from None
 
 
@@ -195,15 +201,7 @@ def _profile_photo_camera(
     if (width > height) != (profile.width > profile.height):  # the profile is upright, the photo stored turned
         turn = exif.orientation if exif.turned else PORTRAIT_ORIENTATION
         width, height = height, width
-    try:
-        intrinsics = intrinsics_from_profile(profile, width, height)
-    except ValidationError as error:
-        problem = error.errors()[0]
-        raise FrameError(
-            f"photo {width}x{height} scales profile '{profile.id}' ({profile.width}x{profile.height}) out of the "
-            f"contract's range: {'.'.join(map(str, problem['loc']))}: {problem['msg']}",
-            field="profile",
-        ) from None
+    intrinsics = scaled_profile(profile, width, height, "photo", field="profile")
     turned = f", turned upright (EXIF orientation {turn})" if turn != 1 else ""
     kind = "calibrated" if profile.intrinsics is not None else "datasheet"
     detail = f"{kind} profile '{profile.id}'{turned}"

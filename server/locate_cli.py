@@ -18,6 +18,7 @@ from shared_schemas.cli import (
     EXIT_NO_FIX,
     EXIT_OK,
     BadInput,
+    add_profile_argument,
     check_beacon_id,
     number,
     read_map_argument,
@@ -38,14 +39,7 @@ def add_locate_command(commands) -> None:
         type=Path,
         help="a service's data folder, whose stored maps --map may name (default: $LUMIPOSE_DATA_DIR, else none)",
     )
-    parser.add_argument(
-        "--profile",
-        action="append",
-        default=[],
-        metavar="NAME|FILE",
-        help="a device profile id or file (a file is registered, so a frame's camera.profile may name it); "
-        "a photo uses the last one given; repeatable (default: none; a photo's EXIF make and model pick one)",
-    )
+    add_profile_argument(parser, "a photo uses the last one given, else the one its EXIF make and model name")
     parser.add_argument(
         "--camera",
         metavar="FX,FY,CX,CY[,K1,K2,P1,P2,K3]",

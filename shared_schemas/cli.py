@@ -175,3 +175,16 @@ def _words(value: str) -> list[str]:
     if value.lstrip().startswith("["):
         return [str(word) for word in json.loads(value)]
     return value.split()
+
+
+def add_profile_argument(parser, used_by: str) -> None:
+    """`--profile NAME|FILE`, repeatable, as `locate` and `survey` take it (`server.camera.resolve_profile_args`
+    reads it); `used_by` says which frames use the last one given."""
+    parser.add_argument(
+        "--profile",
+        action="append",
+        default=[],
+        metavar="NAME|FILE",
+        help="a device profile id or file (a file is registered, so a frame's camera.profile may name it); "
+        f"{used_by}; repeatable (default: none)",
+    )

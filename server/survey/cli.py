@@ -11,7 +11,7 @@ import re
 import sys
 from pathlib import Path
 
-from shared_schemas.cli import BadInput, describe_file_error, read_map_argument, report_bad_input
+from shared_schemas.cli import BadInput, add_profile_argument, describe_file_error, read_map_argument, report_bad_input
 
 EXIT_OK, EXIT_REFUSED = 0, 1
 
@@ -30,14 +30,7 @@ def add_survey_command(commands) -> None:
     parser.add_argument("--out", type=Path, required=True, help="where to write the surveyed map")
     parser.add_argument("--labels", type=Path, help="JSON: a frame's file name -> list of PanelLabel")
     parser.add_argument("--name", help="the surveyed map's name (default: the --out file's stem)")
-    parser.add_argument(
-        "--profile",
-        action="append",
-        default=[],
-        metavar="NAME|FILE",
-        help="a device profile id or file (a file is registered, so a frame's camera.profile may name it); "
-        "photos among the frames use the last one given; repeatable (default: none)",
-    )
+    add_profile_argument(parser, "photos among the frames use the last one given")
     parser.add_argument("--json", action="store_true", help="print the contract's SurveyReport as JSON")
     parser.set_defaults(run=run_survey_command)
 
