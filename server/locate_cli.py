@@ -10,6 +10,7 @@ Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reas
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME
@@ -167,6 +168,7 @@ def write_annotation(path: Path, frame, diagnostics, result) -> None:
         path.write_bytes(annotate(frame, diagnostics, result))
     except OSError as error:
         raise BadInput(f"cannot write the picture {path}: {error.strerror or error}", field="annotate") from None
+    print(f"picture: {path}", file=sys.stderr)  # stdout stays the result alone (--json)
 
 
 def print_result(result, frame, as_json: bool, beacon_map=None) -> None:
