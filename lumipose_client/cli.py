@@ -1,7 +1,7 @@
 """`lumipose client ...`: the service from the command line, through the Python client.
 
 Exit codes as `lumipose locate`: 0 success (a fix), 1 no fix, 2 a refused request or bad input.
-Only the client and the contract are imported here; the figures of `samples evaluate --plots`
+Only the client and the contract are imported here; the figures of `samples evaluate --figures`
 come from whoever builds the command line (`lumipose_cli.main` hands in the simulator's).
 """
 
@@ -19,11 +19,11 @@ from shared_schemas.api import Evaluation
 
 DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
 
-PlotEvaluation = Callable[[Evaluation, Path], list[Path]]  # (report, folder) -> the figure files written
+PlotEvaluation = Callable[[Evaluation, Path, float], list[Path]]  # (report, folder, cell m) -> the figures written
 
 
 def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> None:
-    """Add `client ...` to an argparse subparsers object; `samples evaluate --plots` exists when
+    """Add `client ...` to an argparse subparsers object; `samples evaluate --figures` exists when
     `plot_evaluation` is given."""
     client = commands.add_parser("client", help="talk to a running Lumipose service")
     client.add_argument("--url", default=DEFAULT_URL, help="service URL (default $LUMIPOSE_URL or %(default)s)")
@@ -50,7 +50,14 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     evaluate.add_argument("--map")
     evaluate.add_argument("--cell", type=float, default=0.05, help="grid cell side for 'i,j' labels, metres")
     if plot_evaluation is not None:
-        evaluate.add_argument("--plots", type=Path, help="write the paper's Figs. 13-14 (scatter, heat map) here")
+        evaluate.add_argument(
+            "--figures",
+            type=Path,
+            default=None,
+            metavar="DIR",
+            help="write the paper's Figs. 13-14 (samples_scatter.png, samples_heatmap.png in "
+            "--cell cells) into this folder (default: no figures)",
+        )
     evaluate.set_defaults(client_run=_evaluate, plot_evaluation=plot_evaluation)
 
     maps = actions.add_parser("maps", help="beacon maps")
@@ -142,9 +149,9 @@ def _evaluate(client: Client, args) -> int:
             f"2D error mm: mean {report.mean_mm:.2f}  std {report.std_mm:.2f}  "
             f"min {report.min_mm:.2f}  max {report.max_mm:.2f}"
         )
-    if getattr(args, "plots", None):
-        for path in args.plot_evaluation(report, args.plots):
-            print(f"wrote {path}")
+    if getattr(args, "figures", None):
+        for path in args.plot_evaluation(report, args.figures, args.cell):
+            print(f"  figure {path}")
     return 0
 
 

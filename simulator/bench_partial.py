@@ -387,7 +387,7 @@ def format_partial(report: dict) -> str:
 def plot_partial(report: dict, path: Path) -> None:
     """2D error against visible share, one panel per resolution, coloured by distance; refusals as x
     along the bottom."""
-    from simulator.reports import pyplot
+    from simulator.reports import plain_log_axis, pyplot
 
     plt = pyplot()
     scales = report["config"]["scales"]
@@ -418,6 +418,7 @@ def plot_partial(report: dict, path: Path) -> None:
             )
         panel.axhline(OFF_M * 1000, color="red", linestyle=":", linewidth=1)
         panel.set_yscale("log")
+        plain_log_axis(panel.yaxis)
         panel.set(
             xlim=(15, 100),
             ylim=(floor_mm, 1000),
