@@ -416,9 +416,8 @@ def plot_partial(report: dict, path: Path) -> None:
                 color=colours[distance],
                 label=f"{distance:g} m refused ({len(refused)})" if refused else "_nolegend_",
             )
-        panel.axhline(OFF_M * 1000, color="red", linestyle=":", linewidth=1)
+        panel.axhline(OFF_M * 1000, color="red", linestyle=":", linewidth=1, label=f"{OFF_M * 1000:g} mm: off")
         panel.set_yscale("log")
-        plain_log_axis(panel.yaxis)
         panel.set(
             xlim=(15, 100),
             ylim=(floor_mm, 1000),
@@ -426,6 +425,7 @@ def plot_partial(report: dict, path: Path) -> None:
             ylabel="2D error (mm)",
             title=f"{width} x {height}",
         )
+        plain_log_axis(panel.yaxis)
         panel.legend(fontsize=7, loc="upper right")
     figure.suptitle("cut panels: error against visible share (x = refused)")
     figure.tight_layout()
