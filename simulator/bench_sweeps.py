@@ -87,12 +87,13 @@ def bench_distance(figures_dir: Path | None, distances_m: list[float] | None = N
     return _sweep_report(rows, "distance_m", figures_dir, "distance", title, "camera to panel distance (m)")
 
 
-def bench_tilt(figures_dir: Path | None, tilts_deg: list[float] | None = None, scale: float = 1.0, seed: int | None = None,
-               workers: int | None = None) -> dict:
+def bench_tilt(figures_dir: Path | None, tilts_deg: list[float] | None = None, scale: float = 1.0,
+               seed: int | None = None, workers: int | None = None) -> dict:
     tilts_deg = tilts_deg or [2.5 * k for k in range(7)]
     base = grid_scene(scale, seed)
     rows = _sweep([(t, tilt_scene(base, t)) for t in tilts_deg], "tilt_deg", workers)
-    return _sweep_report(rows, "tilt_deg", figures_dir, "tilt", "2D error against tilt (1 m, 3 x 3 points x 4 directions)",
+    return _sweep_report(rows, "tilt_deg", figures_dir, "tilt",
+                         "2D error against tilt (1 m, 3 x 3 points x 4 directions)",
                          "camera tilt (degrees)")
 
 

@@ -358,7 +358,8 @@ def _run_grid_bench(args) -> int:
 
     if args.bench_name == "grid":
         try:
-            report = bench_grid(args.figures, args.scale, args.seed, args.workers, args.limit, args.scene, args.yaw_jitter)
+            report = bench_grid(args.figures, args.scale, args.seed, args.workers, args.limit, args.scene,
+                                args.yaw_jitter)
         except ValueError as error:
             print(f"error: {error}", file=sys.stderr)
             return 2

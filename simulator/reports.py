@@ -284,7 +284,7 @@ def plot_scatter(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
         spread.set_xlim(-reach, reach)
         spread.set_ylim(-reach, reach)
         spread.legend(loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=2, fontsize=8, frameon=False)
-    lost = f"{len(missing)} without a fix, {int((~good).sum())} outliers not shown" if len(missing) or (~good).any() \
+    lost = f"not shown: {len(missing)} without a fix, {int((~good).sum())} outliers" if len(missing) or (~good).any() \
         else "every sample fixed within the margin"
     spread.set(xlabel="X error (mm)", ylabel="Y error (mm)", aspect="equal")
     spread.set_title(f"each error from its own true position\n{int(good.sum())} fixes; {lost}", fontsize=10,
@@ -347,7 +347,8 @@ def plot_heatmap(outcomes: list[Outcome], path: Path, title: str, cell_m: float 
     axes.set_title(f"{title}\n{fixed_cells} of {counts['run']} cells run have a fix "
                    f"({100 * fixed_cells / max(counts['run'], 1):.1f} %), {cell_m * 1000:g} mm cells", fontsize=10)
     axes.legend(handles=[Patch(facecolor="tab:red", label=f"no fix ({counts['no_fix']})"),
-                         Patch(facecolor="white", edgecolor="0.6", hatch="///", label=f"not run ({counts['not_run']})")],
+                         Patch(facecolor="white", edgecolor="0.6", hatch="///",
+                               label=f"not run ({counts['not_run']})")],
                 loc="upper left", bbox_to_anchor=(0.0, -0.07), ncol=2, fontsize=8, frameon=False)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
