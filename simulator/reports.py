@@ -225,10 +225,16 @@ def plain_log_axis(axis) -> None:
     when the axis spans less than about a decade and a half (call it once the limits are set)."""
     from matplotlib.ticker import FuncFormatter, NullFormatter
 
-    label = FuncFormatter(lambda value, _: f"{value:g}")
     low, high = sorted(axis.get_view_interval())
-    axis.set_major_formatter(label)
-    axis.set_minor_formatter(label if low > 0 and math.log10(high / low) < 1.5 else NullFormatter())
+    axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.set_minor_formatter(FuncFormatter(_minor_label) if low > 0 and math.log10(high / low) < 1.5
+                             else NullFormatter())
+
+
+def _minor_label(value: float, _position) -> str:
+    """2, 3 and 5 times a power of ten: enough to read a value, few enough not to crowd."""
+    mantissa = round(value / 10.0 ** math.floor(math.log10(value)), 6) if value > 0 else 0
+    return f"{value:g}" if mantissa in (2, 3, 5) else ""
 
 
 def nice_length(value: float) -> float:
