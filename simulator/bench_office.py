@@ -261,8 +261,8 @@ def plot_walk(report: dict, path: Path) -> None:
             ax.plot(fixes[:, 0], fixes[:, 1], ".", color=colour, ms=4, label=f"fixes from ID {beacon_id}")
     filtered = np.array([r["filtered_m"] for r in records if "filtered_m" in r])
     if len(filtered):
-        ax.plot(filtered[:, 0], filtered[:, 1], "-", color="tab:purple", lw=1.2, alpha=0.8, label="filtered track",
-                zorder=3)
+        ax.plot(filtered[:, 0], filtered[:, 1], "-", color="tab:purple", lw=2.6, alpha=0.45, label="filtered track",
+                zorder=3)  # wide and pale under the truth: both stay visible where they coincide
     # the truth last and dashed in black, a colour no beacon has, so the track cannot hide it
     truth = np.array([r["truth_m"] for r in records])
     ax.plot(truth[:, 0], truth[:, 1], "--", color="black", lw=0.9, label="true path", zorder=4)

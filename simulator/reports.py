@@ -222,12 +222,12 @@ def print_figures(paths: list[Path] | list[str], as_json: bool) -> None:
 
 def plain_log_axis(axis) -> None:
     """Decimal tick labels (0.2, 1, 50) on a log axis instead of 2x10^-1; the minor ticks labelled only
-    when the axis spans less than about a decade and a half (call it once the limits are set)."""
+    when the axis spans less than two decades (call it once the limits are set)."""
     from matplotlib.ticker import FuncFormatter, NullFormatter
 
     low, high = sorted(axis.get_view_interval())
     axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
-    axis.set_minor_formatter(FuncFormatter(_minor_label) if low > 0 and math.log10(high / low) < 1.5
+    axis.set_minor_formatter(FuncFormatter(_minor_label) if low > 0 and math.log10(high / low) < 2.0
                              else NullFormatter())
 
 
