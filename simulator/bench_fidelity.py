@@ -162,9 +162,10 @@ def plot_fidelity(rows: list[dict], path: Path) -> None:
 
     plt = pyplot()
     figure, axes = plt.subplots(figsize=(8, 5))
-    for o in dict.fromkeys(r["overexposure"] for r in rows):  # in the rows' order
+    # lines that coincide (ours unclipped and Blender sit on 1.0) each keep a marker and dash of their own
+    for style, o in zip(("o-", "s--", "^:"), dict.fromkeys(r["overexposure"] for r in rows), strict=False):
         part = [r for r in rows if r["overexposure"] == o]
-        axes.plot([r["distance_m"] for r in part], [r["ratio"] for r in part], "o-", label=_name(o))
+        axes.plot([r["distance_m"] for r in part], [r["ratio"] for r in part], style, mfc="none", label=_name(o))
     axes.axhline(PAPER_FIG_10["mean_ratio"], color="grey", linestyle="--", label="paper: real / Blender, mean")
     axes.axhline(1.0, color="black", linewidth=0.8)
     axes.set(xlabel="distance (m)", ylabel="top side ratio", title="Simulation fidelity: rendered / exact projection",
