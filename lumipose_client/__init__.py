@@ -7,6 +7,22 @@
 Every 4xx/5xx answer raises `LumiposeError` carrying the server's ErrorBody.
 """
 
-from lumipose_client.client import AsyncClient, Client, EncodedFrame, LumiposeError, encode_frame, read_fixture_files
+from lumipose_client.client import (
+    AnnotatedResult,
+    AsyncClient,
+    Client,
+    EncodedFrame,
+    LumiposeError,
+    encode_frame,
+    read_fixture_files,
+)
 
-__all__ = ["AsyncClient", "Client", "EncodedFrame", "LumiposeError", "encode_frame", "read_fixture_files"]
+__all__ = [
+    "AnnotatedResult",
+    "AsyncClient",
+    "Client",
+    "EncodedFrame",
+    "LumiposeError",
+    "encode_frame",
+    "read_fixture_files",
+]

@@ -7,47 +7,95 @@ come from whoever builds the command line (`lumipose_cli.main` hands in the simu
 
 from __future__ import annotations
 
+import argparse
 import json
-import os
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
-from lumipose_client.client import Client, LumiposeError, read_fixture_files
-from shared_schemas import BeaconMap, DeviceProfile
+import httpx
+from pydantic import BaseModel
+
+from lumipose_client.client import AnnotatedResult, Client, LumiposeError, read_fixture_files
+from shared_schemas import BeaconMap, DeviceProfile, LocateResult
 from shared_schemas.api import Evaluation
+from shared_schemas.captures import add_frame_series_arguments, all_located, annotation_path, bursts_in_upload_order
+from shared_schemas.cli import (
+    BadInput,
+    check_beacon_id,
+    describe_file_error,
+    plural,
+    read_map_argument,
+    report_bad_input,
+)
 
-DEFAULT_URL = os.environ.get("LUMIPOSE_URL", "http://127.0.0.1:8000")
+DEFAULT_URL = "http://127.0.0.1:8000"
+# `client samples store --label -8,11`: argparse reads an argument that starts with '-' as a flag unless it
+# looks like a negative number; a grid cell 'i,j' with a negative i is the common label, so it counts as one.
+NEGATIVE_NUMBER_OR_CELL = re.compile(r"^-\d+$|^-\d*\.\d+$|^-\d+,-?\d+$")
 
+MAP_HELP = "a map's name, or a map file (its name is sent: the service must hold that map, see `maps put`)"
+
+Model = TypeVar("Model", bound=BaseModel)
 PlotEvaluation = Callable[[Evaluation, Path, float], list[Path]]  # (report, folder, cell m) -> the figures written
+
+
+def _add_shared_options(parser: argparse.ArgumentParser, top: bool) -> None:
+    """--url, --api-key and --json, before the verb (`top`) or after it: `client --url U locate F` and
+    `client locate F --url U` both work. Only the top level holds the defaults, so a flag given before
+    the verb is not overwritten by a verb's default."""
+
+    def default(value):
+        return value if top else argparse.SUPPRESS
+
+    # their variables LUMIPOSE_URL and LUMIPOSE_API_KEY: shared_schemas.cli.CommandParser reads them
+    parser.add_argument(
+        "--url", default=default(DEFAULT_URL), help=f"service URL (default $LUMIPOSE_URL, else {DEFAULT_URL})"
+    )
+    parser.add_argument("--api-key", default=default(None), help="for writes (default $LUMIPOSE_API_KEY)")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        default=default(False),
+        help="print the service's answer as JSON, and a refusal or bad input as the contract's ErrorBody",
+    )
+
+
+def _verb(actions, name: str, run: Callable[[Client, argparse.Namespace], int], **kwargs) -> argparse.ArgumentParser:
+    parser = actions.add_parser(name, **kwargs)
+    _add_shared_options(parser, top=False)
+    parser.set_defaults(client_run=run)
+    return parser
 
 
 def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> None:
     """Add `client ...` to an argparse subparsers object; `samples evaluate --figures` exists when
     `plot_evaluation` is given."""
     client = commands.add_parser("client", help="talk to a running Lumipose service")
-    client.add_argument("--url", default=DEFAULT_URL, help="service URL (default $LUMIPOSE_URL or %(default)s)")
-    client.add_argument("--api-key", default=os.environ.get("LUMIPOSE_API_KEY"), help="default $LUMIPOSE_API_KEY")
+    _add_shared_options(client, top=True)
     actions = client.add_subparsers(dest="client_command", required=True)
 
-    locate = actions.add_parser("locate", help="locate one recorded frame")
-    locate.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
-    locate.add_argument("--map", help="map name (default: the active map)")
-    locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="default gzip")
-    locate.set_defaults(client_run=_locate)
+    locate = _verb(actions, "locate", _locate, help="locate recorded frames")
+    add_frame_series_arguments(locate)  # sent with X-Lumipose-Device and beacon_id, as the app sends them
+    locate.add_argument("--map", help=MAP_HELP + " (default: the service's active map)")
+    locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="upload compression")
+    locate.add_argument(
+        "--annotate", type=Path, metavar="PNG", help="also write the service's picture of what its pipeline saw"
+    )
 
     samples = actions.add_parser("samples", help="recorded samples")
     sample_actions = samples.add_subparsers(dest="samples_command", required=True)
-    store = sample_actions.add_parser("store", help="store frames with a label")
-    store.add_argument("frames", type=Path, nargs="+")
-    store.add_argument("--label", help="for example a grid cell 'i,j'")
-    store.set_defaults(client_run=_store_samples)
-    sample_actions.add_parser("list").set_defaults(client_run=_list_samples)
-    delete = sample_actions.add_parser("delete")
-    delete.add_argument("ids", nargs="+")
-    delete.set_defaults(client_run=_delete_samples)
-    evaluate = sample_actions.add_parser("evaluate", help="error and coverage of the stored samples")
-    evaluate.add_argument("--map")
+    store = _verb(sample_actions, "store", _store_samples, help="store frames with a label")
+    store._negative_number_matcher = NEGATIVE_NUMBER_OR_CELL  # see NEGATIVE_NUMBER_OR_CELL
+    store.add_argument("frames", type=Path, nargs="+", help="NAME.json, NAME.y, NAME.yuv or NAME.png")
+    store.add_argument("--label", help="for example a grid cell 'i,j' such as -8,11")
+    _verb(sample_actions, "list", _list_samples, help="the stored samples")
+    delete = _verb(sample_actions, "delete", _delete_samples, help="remove stored samples")
+    delete.add_argument("ids", nargs="+", help="sample ids (from `samples list`)")
+    evaluate = _verb(sample_actions, "evaluate", _evaluate, help="error and coverage of the stored samples")
+    evaluate.add_argument("--map", help=MAP_HELP + ", to re-locate every sample in (default: the active map)")
     evaluate.add_argument("--cell", type=float, default=0.05, help="grid cell side for 'i,j' labels, metres")
     if plot_evaluation is not None:
         evaluate.add_argument(
@@ -58,33 +106,29 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
             help="write the paper's Figs. 13-14 (samples_scatter.png, samples_heatmap.png in "
             "--cell cells) into this folder (default: no figures)",
         )
-    evaluate.set_defaults(client_run=_evaluate, plot_evaluation=plot_evaluation)
+    evaluate.set_defaults(plot_evaluation=plot_evaluation)
 
     maps = actions.add_parser("maps", help="beacon maps")
     map_actions = maps.add_subparsers(dest="maps_command", required=True)
-    map_actions.add_parser("list").set_defaults(client_run=_list_maps)
-    get = map_actions.add_parser("get")
-    get.add_argument("name")
-    get.set_defaults(client_run=_get_map)
-    put = map_actions.add_parser("put", help="store a map file under its own name")
-    put.add_argument("file", type=Path)
-    put.set_defaults(client_run=_put_map)
-    activate = map_actions.add_parser("activate")
-    activate.add_argument("name")
-    activate.set_defaults(client_run=_activate_map)
+    _verb(map_actions, "list", _list_maps, help="the service's maps (* marks the active one)")
+    get = _verb(map_actions, "get", _get_map, help="print a map's JSON (to save or edit it)")
+    get.add_argument("name", help="the map's name")
+    put = _verb(map_actions, "put", _put_map, help="store a map file under its own name")
+    put.add_argument("file", type=Path, help="a map file (JSON)")
+    activate = _verb(map_actions, "activate", _activate_map, help="make a map the one locate uses by default")
+    activate.add_argument("name", help="the map's name")
+    delete_map = _verb(map_actions, "delete", _delete_maps, help="remove stored maps (not the active or bundled one)")
+    delete_map.add_argument("names", nargs="+", help="the maps' names")
 
     profiles = actions.add_parser("profiles", help="device profiles (bundled, and stored calibrated ones)")
     profile_actions = profiles.add_subparsers(dest="profiles_command", required=True)
-    profile_actions.add_parser("list").set_defaults(client_run=_list_profiles)
-    get_profile = profile_actions.add_parser("get")
-    get_profile.add_argument("id")
-    get_profile.set_defaults(client_run=_get_profile)
-    put_profile = profile_actions.add_parser("put", help="store a profile file under its own id")
-    put_profile.add_argument("file", type=Path)
-    put_profile.set_defaults(client_run=_put_profile)
-    delete_profile = profile_actions.add_parser("delete", help="remove stored profiles")
-    delete_profile.add_argument("ids", nargs="+")
-    delete_profile.set_defaults(client_run=_delete_profiles)
+    _verb(profile_actions, "list", _list_profiles, help="the bundled and stored device profiles")
+    get_profile = _verb(profile_actions, "get", _get_profile, help="print a profile's JSON (to save or edit it)")
+    get_profile.add_argument("id", help="the profile's id (from `profiles list`)")
+    put_profile = _verb(profile_actions, "put", _put_profile, help="store a profile file under its own id")
+    put_profile.add_argument("file", type=Path, help="a device profile file (JSON), e.g. from `calibrate camera`")
+    delete_profile = _verb(profile_actions, "delete", _delete_profiles, help="remove stored profiles")
+    delete_profile.add_argument("ids", nargs="+", help="the profiles' ids")
     client.set_defaults(run=_run)
 
 
@@ -93,37 +137,102 @@ def _run(args) -> int:
         with Client(args.url, api_key=args.api_key) as client:
             return args.client_run(client, args)
     except LumiposeError as error:
-        print(f"error: {error}" + (f" (field {error.body.field})" if error.body.field else ""), file=sys.stderr)
-    except (OSError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-    except Exception as error:  # httpx transport errors: the service is not there
-        print(f"error: cannot reach {args.url}: {error}", file=sys.stderr)
-    return 2
+        if args.json:  # the service's own ErrorBody, as it sent it
+            return report_bad_input(error.body, as_json=True)
+        body = error.body.model_copy(update={"message": f"{error}"})  # with the HTTP status and error code
+        return report_bad_input(body)
+    except BadInput as problem:
+        return report_bad_input(problem, as_json=args.json)
+    except (OSError, ValueError) as error:  # a file that cannot be read (a pydantic ValidationError is a ValueError)
+        return report_bad_input(BadInput(str(error)), as_json=args.json)
+    except httpx.HTTPError as error:  # the service is not there
+        unreachable = BadInput(f"cannot reach {args.url}: {error}", field="url", error="unreachable")
+        return report_bad_input(unreachable, as_json=args.json)
+
+
+def _served_map_name(client: Client, value: str | None) -> str | None:
+    """What `--map` sends: `value`, a map's name; or, when `value` is a map file, the name inside it, once
+    the service is seen to hold that very map (else BadInput saying how to store it)."""
+    if value is None or not Path(value).is_file():
+        return value
+    beacon_map = read_map_argument(value)
+    store = f"store it with `lumipose client maps put {value}`"
+    try:
+        served = client.get_map(beacon_map.name)
+    except LumiposeError as error:
+        if error.status != 404:
+            raise
+        message = f"the service has no map '{beacon_map.name}' (read from {value}): {store}"
+        raise BadInput(message, field="map", error="not_found") from None
+    if served != beacon_map:
+        message = f"the service's map '{beacon_map.name}' differs from {value}: {store} (it replaces the service's)"
+        raise BadInput(message, field="map", error="map_differs")
+    return beacon_map.name
 
 
 def _print(model) -> None:
     print(model.model_dump_json(by_alias=True, indent=2))
 
 
+def _print_json(value: list[BaseModel] | dict) -> None:
+    """A list of the contract's models, or a plain dict, as JSON."""
+    plain = [model.model_dump(mode="json", by_alias=True) for model in value] if isinstance(value, list) else value
+    print(json.dumps(plain, indent=2))
+
+
 def _locate(client: Client, args) -> int:
-    result = client.locate_fixture(
-        args.frame, map=args.map, compress=None if args.compress == "none" else args.compress
-    )
-    _print(result)
-    return 0 if result.ok else 1
+    """One result (indented JSON) for one frame; for several, one JSON line each, in the order given.
+    `--annotate PNG`: the service's picture of each frame (several: PNG-<frame>.png each)."""
+    frames = [read_fixture_files(path) for path in args.frames]
+    map_name = _served_map_name(client, args.map)
+    if args.beacon_id is not None:
+        beacon_map = client.get_map(map_name or client.active_map().name)
+        try:
+            check_beacon_id(args.beacon_id, beacon_map)
+        except BadInput as problem:
+            return report_bad_input(problem, as_json=args.json)
+    results: dict[int, LocateResult] = {}
+    for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
+        for index in capture:
+            answer = client.locate(
+                frames[index][1],
+                frames[index][0],
+                map=map_name,
+                beacon_id=args.beacon_id,
+                device=args.device,
+                compress=None if args.compress == "none" else args.compress,
+                annotate=args.annotate is not None,
+            )
+            if isinstance(answer, AnnotatedResult):
+                picture = annotation_path(args.annotate, args.frames[index], several=len(frames) > 1)
+                picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
+                answer = answer.result
+            results[index] = answer
+        for index in sorted(capture):
+            print(results[index].model_dump_json(by_alias=True, indent=2 if len(frames) == 1 else None))
+    return 0 if all_located(list(results.values())) else 1
 
 
 def _store_samples(client: Client, args) -> int:
+    stored = []
     for path in args.frames:
         meta, data = read_fixture_files(path)
         info = client.store_sample(data, meta, label=args.label)
-        outcome = "fix" if info.result.ok else f"no fix ({info.result.reason.value})"
-        print(f"{info.id}  {path}  label={info.label}  {outcome}")
+        stored.append(info)
+        if not args.json:
+            outcome = "fix" if info.result.ok else f"no fix ({info.result.reason.value})"
+            print(f"{info.id}  {path}  label={info.label}  {outcome}")
+    if args.json:
+        _print_json(stored)
     return 0
 
 
 def _list_samples(client: Client, args) -> int:
-    for info in client.samples().samples:
+    listed = client.samples()
+    if args.json:
+        _print(listed)
+        return 0
+    for info in listed.samples:
         print(
             f"{info.id}  {info.created:%Y-%m-%d %H:%M:%S}  label={info.label}  map={info.map}  "
             f"{'fix' if info.result.ok else info.result.reason.value}"
@@ -132,16 +241,19 @@ def _list_samples(client: Client, args) -> int:
 
 
 def _delete_samples(client: Client, args) -> int:
-    for sample_id in args.ids:
-        client.delete_sample(sample_id)
-        print(f"deleted {sample_id}")
-    return 0
+    return _delete_each(args.ids, client.delete_sample, "", args.json)
 
 
 def _evaluate(client: Client, args) -> int:
-    report = client.evaluate_samples(map=args.map, cell_m=args.cell)
+    report = client.evaluate_samples(map=_served_map_name(client, args.map), cell_m=args.cell)
+    figures = args.plot_evaluation(report, args.figures, args.cell) if getattr(args, "figures", None) else []
+    if args.json:
+        _print(report)
+        for figure in figures:  # stdout is the report
+            print(f"  figure {figure}", file=sys.stderr)
+        return 0
     print(
-        f"map {report.map}: {report.samples} samples, {report.with_truth} with truth, "
+        f"map {report.map}: {plural(report.samples, 'sample')}, {report.with_truth} with truth, "
         f"coverage {100 * report.coverage:.1f} %"
     )
     if report.mean_mm is not None:
@@ -149,15 +261,27 @@ def _evaluate(client: Client, args) -> int:
             f"2D error mm: mean {report.mean_mm:.2f}  std {report.std_mm:.2f}  "
             f"min {report.min_mm:.2f}  max {report.max_mm:.2f}"
         )
-    if getattr(args, "figures", None):
-        for path in args.plot_evaluation(report, args.figures, args.cell):
-            print(f"  figure {path}")
+    for figure in figures:
+        print(f"  figure {figure}")
     return 0
 
 
+def _read_model(model: type[Model], path: Path) -> Model:
+    """A contract model from a JSON file; a ValueError naming the file and the field if it is not one."""
+    try:
+        return model.model_validate_json(path.read_bytes())
+    except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+        raise ValueError(describe_file_error(path, error)) from None
+
+
 def _list_maps(client: Client, args) -> int:
-    for summary in client.maps():
-        print(f"{'*' if summary.active else ' '} {summary.name}  {summary.beacons} beacons  ({summary.source})")
+    summaries = client.maps()
+    if args.json:
+        _print_json(summaries)
+        return 0
+    for summary in summaries:
+        active = "*" if summary.active else " "
+        print(f"{active} {summary.name}  {plural(summary.beacons, 'beacon')}  ({summary.source})")
     return 0
 
 
@@ -167,20 +291,39 @@ def _get_map(client: Client, args) -> int:
 
 
 def _put_map(client: Client, args) -> int:
-    stored = client.put_map(BeaconMap.model_validate(json.loads(args.file.read_text())))
-    print(f"stored map '{stored.name}' ({len(stored.beacons)} beacons)")
+    stored = client.put_map(_read_model(BeaconMap, args.file))
+    if args.json:
+        _print(stored)
+    else:
+        print(f"stored map '{stored.name}' ({plural(len(stored.beacons), 'beacon')})")
     return 0
 
 
 def _activate_map(client: Client, args) -> int:
-    print(f"active map: {client.set_active_map(args.name).name}")
+    active = client.set_active_map(args.name)
+    if args.json:
+        _print(active)
+    else:
+        print(f"active map: {active.name}")
     return 0
 
 
+def _delete_maps(client: Client, args) -> int:
+    return _delete_each(args.names, client.delete_map, "map ", args.json)
+
+
 def _list_profiles(client: Client, args) -> int:
-    for summary in client.profiles():
-        kind = "calibrated" if summary.calibrated else "datasheet"
-        print(f"{summary.id}  {summary.width}x{summary.height}  {summary.facing.value}  {kind}  ({summary.source})")
+    summaries = client.profiles()
+    if args.json:
+        _print_json(summaries)
+        return 0
+    rows = [
+        (s.id, f"{s.width}x{s.height}", s.facing.value, "calibrated" if s.calibrated else "datasheet", s.source, s.name)
+        for s in summaries
+    ]
+    widths = [max(len(row[column]) for row in rows) for column in range(5)]
+    for row in rows:
+        print("  ".join(value.ljust(width) for value, width in zip(row, widths, strict=False)) + f"  {row[5]}")
     return 0
 
 
@@ -190,14 +333,25 @@ def _get_profile(client: Client, args) -> int:
 
 
 def _put_profile(client: Client, args) -> int:
-    stored = client.put_profile(DeviceProfile.model_validate_json(args.file.read_bytes()))
-    kind = "calibrated" if stored.intrinsics is not None else "datasheet"
-    print(f"stored profile '{stored.id}' ({stored.width}x{stored.height}, {kind})")
+    stored = client.put_profile(_read_model(DeviceProfile, args.file))
+    if args.json:
+        _print(stored)
+    else:
+        kind = "calibrated" if stored.intrinsics is not None else "datasheet"
+        print(f"stored profile '{stored.id}' ({stored.width}x{stored.height}, {kind})")
     return 0
 
 
 def _delete_profiles(client: Client, args) -> int:
-    for profile_id in args.ids:
-        client.delete_profile(profile_id)
-        print(f"deleted profile {profile_id}")
+    return _delete_each(args.ids, client.delete_profile, "profile ", args.json)
+
+
+def _delete_each(names: list[str], delete: Callable[[str], object], what: str, as_json: bool) -> int:
+    """Delete each in turn, saying so; a refusal stops there (LumiposeError). With --json: the names deleted."""
+    for name in names:
+        delete(name)
+        if not as_json:
+            print(f"deleted {what}{name}")
+    if as_json:
+        _print_json({"deleted": names})
     return 0

@@ -14,7 +14,17 @@ import zstandard
 from pydantic import BaseModel, ValidationError
 
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, FrameMeta, LocateResult
-from shared_schemas.api import ActiveMap, Evaluation, Health, MapSummary, ProfileSummary, SampleInfo, SampleList
+from shared_schemas.api import (
+    RESULT_HEADER,
+    ActiveMap,
+    Evaluation,
+    Health,
+    MapSummary,
+    ProfileSummary,
+    SampleInfo,
+    SampleList,
+    result_from_header,
+)
 from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, CalibrationRequest
 from shared_schemas.fixture_files import read_fixture_files
 from shared_schemas.survey import SurveyReport, SurveyRequest
@@ -89,6 +99,19 @@ def _frame(response: httpx.Response) -> tuple[FrameMeta, bytes]:
 
 
 @dataclass(frozen=True)
+class AnnotatedResult:
+    """A frame's result and the service's PNG of what its pipeline saw (`locate(..., annotate=True)`)."""
+
+    result: LocateResult
+    png: bytes
+
+
+def _annotated(response: httpx.Response) -> AnnotatedResult:
+    _raise_for_error(response)
+    return AnnotatedResult(result_from_header(response.headers[RESULT_HEADER]), response.content)
+
+
+@dataclass(frozen=True)
 class EncodedFrame:
     """Frame bytes with their Content-Encoding, encoded once (for example to send the same frame often)."""
 
@@ -137,11 +160,13 @@ class _Endpoints:
         gravity: str | None = None,
         compress: str | None = "gzip",
         device: str | None = None,
+        annotate: bool = False,
     ):
         """Locate the camera of one frame: LocateResult (ok, or ok=False with a reason).
 
         `data` is sent with `compress` ('gzip', 'zstd' or None) unless it is already an EncodedFrame.
         With `device`, the frame joins that device's session on the server (ID frames, tracking).
+        With `annotate`, an `AnnotatedResult` instead: the result and a PNG of what the pipeline saw.
         """
         request = _frame_request(meta, data, compress)
         request["headers"] |= {"X-Lumipose-Device": device} if device else {}
@@ -149,8 +174,8 @@ class _Endpoints:
             _Call(
                 "POST",
                 "/v1/locate",
-                _model(LocateResult),
-                params={"map": map, "beacon_id": beacon_id, "gravity": gravity},
+                _annotated if annotate else _model(LocateResult),
+                params={"map": map, "beacon_id": beacon_id, "gravity": gravity, "annotate": 1 if annotate else None},
                 **request,
             )
         )
@@ -193,6 +218,9 @@ class _Endpoints:
                 json=beacon_map.model_dump(mode="json", by_alias=True),
             )
         )
+
+    def delete_map(self, name: str):
+        return self._run(_Call("DELETE", f"/v1/maps/{name}", _nothing))
 
     def active_map(self):
         return self._run(_Call("GET", "/v1/maps/active", _model(ActiveMap)))

@@ -8,22 +8,26 @@ Exit codes: 0 a fix (or success), 1 no fix (the reason is printed), 2 bad input.
 
 from __future__ import annotations
 
+import argparse
+import errno
 import json
 import sys
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH, device_profiles
-from shared_schemas.cli import EXIT_BAD_INPUT
+from shared_schemas import DEMO_MAP_NAME, DEMO_MAP_PATH, device_profiles
+from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, describe_validation_error, report_bad_input
 from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 
 def _add_fov(commands) -> None:
     parser = commands.add_parser("fov", help="the paper's FOV and test grid (equations 1-7)")
-    parser.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    parser.add_argument(
+        "--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()), help="bundled device profile"
+    )
     parser.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
     parser.add_argument("--cell", type=float, default=0.05, help="grid cell side, metres")
-    parser.add_argument("--beacon-side", type=float, default=0.174, help="metres")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--beacon-side", type=float, default=0.174, help="side of the square panel, metres")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON on stdout")
     parser.set_defaults(run=_run_fov)
 
 
@@ -35,8 +39,7 @@ def _run_fov(args) -> int:
     try:
         grid = fov_grid(device_profiles()[args.profile], args.distance, args.cell, args.beacon_side)
     except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return report_bad_input(BadInput(str(error)), as_json=args.json)
     if args.json:
         print(json.dumps({**asdict(grid), "points": grid.point_count}, indent=2))
         return EXIT_FIX
@@ -48,13 +51,26 @@ def _run_fov(args) -> int:
     return EXIT_FIX
 
 
+SERVE_ENVIRONMENT = (
+    "Every flag --some-flag may instead be given as the environment variable LUMIPOSE_SOME_FLAG "
+    "(upper case, dashes to underscores); a flag given on the command line wins."
+)
+
+
 def _add_serve(commands) -> None:
-    parser = commands.add_parser("serve", help="run the HTTP service (flags override LUMIPOSE_* variables)")
+    # Each flag's dest is a field of server.api.config.Settings, which reads LUMIPOSE_<DEST> from the environment.
+    parser = commands.add_parser(
+        "serve", help="run the HTTP service (flags or LUMIPOSE_<FLAG> variables)", description=SERVE_ENVIRONMENT
+    )
     parser.add_argument("--host", help="default 127.0.0.1; 0.0.0.0 to serve the network")
     parser.add_argument("--port", type=int, help="default 8000")
     parser.add_argument("--workers", type=int, help="worker processes (default 1)")
-    parser.add_argument("--map", type=Path, help="startup map (default: the bundled demo map)")
-    parser.add_argument("--data", type=Path, dest="data_dir", help="folder for maps and samples (default ./data)")
+    parser.add_argument(
+        "--map",
+        help=f"startup map: a file, or a map's name (stored in --data-dir, or bundled) (default: {DEMO_MAP_NAME})",
+    )
+    parser.add_argument("--data-dir", type=Path, help="folder for maps, profiles and samples (default ./data)")
+    parser.add_argument("--data", type=Path, dest="data_dir", help=argparse.SUPPRESS)  # the old name of --data-dir
     parser.add_argument("--api-key", help="required for writes when set")
     parser.add_argument("--max-upload-mb", type=float, help="upload limit (default 64)")
     parser.add_argument("--read-timeout-s", type=float, help="longest time to receive one upload (default 30)")
@@ -67,7 +83,15 @@ def _add_serve(commands) -> None:
     parser.add_argument(
         "--max-frames-in-flight", type=int, help="frame uploads held at once per worker (default 2 x cores + 2)"
     )
-    parser.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
+    parser.add_argument("--pipeline-threads", type=int, help="frames located at once per worker (default: cores)")
+    parser.add_argument(
+        "--cors-origins",
+        nargs="+",
+        help="origins browsers may call from (default: any, '*'; as a variable, a JSON list)",
+    )
+    parser.add_argument(
+        "--log-level", choices=["critical", "error", "warning", "info", "debug"], help="uvicorn's (default info)"
+    )
     parser.set_defaults(run=_run_serve)
 
 
@@ -80,29 +104,15 @@ def _run_serve(args) -> int:
     from server.api.config import Settings
     from server.api.protocol import GuardedHttpToolsProtocol
 
-    given = {
-        name: getattr(args, name)
-        for name in (
-            "host",
-            "port",
-            "workers",
-            "map",
-            "data_dir",
-            "api_key",
-            "max_upload_mb",
-            "read_timeout_s",
-            "session_idle_s",
-            "max_devices",
-            "max_body_kb",
-            "max_header_kb",
-            "max_frames_in_flight",
-        )
-        if getattr(args, name) is not None
-    }
+    given = {name: getattr(args, name) for name in Settings.model_fields if getattr(args, name, None) is not None}
     try:
         settings = Settings(**given)
     except ValidationError as error:
-        print(f"error: {error.errors()[0]['loc'][0]}: {error.errors()[0]['msg']}", file=sys.stderr)
+        print(f"error: {describe_validation_error(error)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    problem = _port_problem(settings.host, settings.port)
+    if problem is not None:  # say so now, rather than announce a server that never starts
+        print(f"error: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
     # Workers are separate processes: hand them the checked settings through the environment.
     for name, value in settings.model_dump(exclude_none=True).items():
@@ -119,11 +129,30 @@ def _run_serve(args) -> int:
         host=settings.host,
         port=settings.port,
         workers=settings.workers,
-        log_level=args.log_level,
+        log_level=settings.log_level,
         timeout_keep_alive=30,
         http=GuardedHttpToolsProtocol,
     )
     return EXIT_FIX
+
+
+def _port_problem(host: str, port: int) -> str | None:
+    """Why uvicorn could not listen on host:port (in use, not allowed, no such address), or None.
+    A trial bind with SO_REUSEADDR, as uvicorn's own: only a live listener makes it fail."""
+    import socket
+
+    try:
+        family, kind, protocol, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, protocol) as trial:
+            trial.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            trial.bind(address)
+    except socket.gaierror as error:
+        return f"cannot listen on {host}: {error.strerror}"
+    except OSError as error:
+        if error.errno == errno.EADDRINUSE:
+            return f"port {port} is in use on {host} (another server? give --port)"
+        return f"cannot listen on {host}:{port}: {error.strerror}"
+    return None
 
 
 def _startup_map_name(settings) -> str:

@@ -1,21 +1,44 @@
-"""`lumipose locate FRAME`: the camera's position and attitude from one recorded frame, on this machine.
+"""`lumipose locate FRAME...`: the camera's position and attitude from recorded frames, on this machine.
+
+Several frames (a walk, listed as shot) go through `server.locator.locate` in turn, with `--device`
+through one session as the service's do for a device: a burst's ID frames before its pose frame, as
+the app sends them (`shared_schemas.captures`). One line (or JSON line) per frame, in the order given.
 
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
-Exit codes: 0 a fix, 1 no fix (the reason is printed), 2 bad input (`shared_schemas.cli`).
+Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH
-from shared_schemas.cli import EXIT_NO_FIX, EXIT_OK, BadInput, report_bad_input
+from shared_schemas import DEMO_MAP_NAME
+from shared_schemas.captures import add_frame_series_arguments, annotation_path
+from shared_schemas.cli import (
+    EXIT_NO_FIX,
+    EXIT_OK,
+    BadInput,
+    check_beacon_id,
+    describe_file_error,
+    number,
+    read_map_argument,
+    report_bad_input,
+)
 
 
 def add_locate_command(commands) -> None:
-    parser = commands.add_parser("locate", help="locate the camera from one recorded frame")
-    parser.add_argument("frame", type=Path, help="NAME.json, NAME.y, NAME.yuv or NAME.png")
-    parser.add_argument("--map", type=Path, default=DEMO_MAP_PATH, help="beacon map (default: bundled demo)")
+    parser = commands.add_parser("locate", help="locate the camera from recorded frames")
+    add_frame_series_arguments(parser)
+    parser.add_argument(
+        "--map",
+        default=DEMO_MAP_NAME,
+        help="beacon map: a file, or a map's name (bundled, or stored in --data-dir) (default: %(default)s, bundled)",
+    )
+    parser.add_argument(
+        "--data-dir",
+        type=Path,
+        help="a service's data folder, whose stored maps --map may name (default: $LUMIPOSE_DATA_DIR, else none)",
+    )
     parser.add_argument(
         "--profile",
         type=Path,
@@ -23,31 +46,72 @@ def add_locate_command(commands) -> None:
         default=[],
         help="a device profile file (for example a calibrated one) the frame's camera.profile may name; repeatable",
     )
-    parser.add_argument("--json", action="store_true", help="print the contract's result (or error) as JSON")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the contract's result (or error) as JSON; several frames: one result per line (JSON lines)",
+    )
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
     parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
     parser.add_argument(
         "--gravity",
         choices=["auto", "always", "never"],
         default="auto",
-        help="use the frame's gravity vector (default: where it helps)",
+        help="use the frame's gravity vector (default: auto, where it helps)",
+    )
+    parser.add_argument(
+        "--annotate",
+        type=Path,
+        metavar="PNG",
+        help="also write a picture of what the pipeline saw (panel, contour, sides, corners, centre, the result); "
+        "several frames: one PNG each, named PNG-<frame>.png",
     )
     parser.set_defaults(run=run_locate)
 
 
 def run_locate(args) -> int:
+    from dataclasses import replace
+
+    from server.diagnostics import Diagnostics
     from server.locator import locate
     from server.options import LocateOptions
+    from server.tracking.devices import Devices
+    from shared_schemas import LocateResult
+    from shared_schemas.captures import all_located, bursts_in_upload_order
 
     try:
         profiles = read_profiles(args.profile)
-        beacon_map = read_map(args.map)
-        frame = read_frame(args.frame, profiles)
+        beacon_map = read_map(args.map, args.data_dir)
+        check_beacon_id(args.beacon_id, beacon_map)
+        frames = [read_frame(path, profiles) for path in args.frames]
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
-    result = locate(frame, beacon_map, LocateOptions(pipeline=pipeline_options(args)))
-    print_result(result, frame, as_json=args.json)
-    return EXIT_OK if result.ok else EXIT_NO_FIX
+    options = LocateOptions(pipeline=pipeline_options(args))
+    devices = Devices() if args.device is not None else None
+    results: dict[int, LocateResult] = {}
+    for capture in bursts_in_upload_order([frame.meta.frame_kind for frame in frames]):
+        for index in capture:
+            diagnostics = Diagnostics() if args.annotate else None
+            results[index] = locate(
+                frames[index],
+                beacon_map,
+                replace(options, pipeline=replace(options.pipeline, diagnostics=diagnostics)),
+                beacon_id=args.beacon_id,
+                device_id=args.device,
+                devices=devices,
+            )
+            if diagnostics is not None:
+                try:
+                    picture = annotation_path(args.annotate, args.frames[index], several=len(frames) > 1)
+                    write_annotation(picture, frames[index], diagnostics, results[index])
+                except BadInput as problem:
+                    return report_bad_input(problem, as_json=args.json)
+        for index in sorted(capture):
+            if len(frames) == 1:
+                print_result(results[index], frames[index], as_json=args.json)
+            else:
+                print_line(args.frames[index], results[index], frames[index], as_json=args.json)
+    return EXIT_OK if all_located(list(results.values())) else EXIT_NO_FIX
 
 
 def read_profiles(paths: list[Path]):
@@ -60,20 +124,18 @@ def read_profiles(paths: list[Path]):
         try:
             given.append(DeviceProfile.model_validate_json(path.read_bytes()))
         except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            raise BadInput(f"cannot read the device profile {path}: {error}", field="profile") from None
+            raise BadInput(
+                f"cannot read the device profile {describe_file_error(path, error)}", field="profile"
+            ) from None
     try:
         return profile_table(given)
     except ValueError as error:
         raise BadInput(str(error), field="profile") from None
 
 
-def read_map(path: Path):
-    from shared_schemas import load_map
-
-    try:
-        return load_map(path)
-    except (OSError, ValueError) as error:
-        raise BadInput(f"cannot read map {path}: {error}", field="map") from None
+def read_map(value: str, data_dir: Path | None = None):
+    """The map `--map` means: a file if one is there, else a map of that name (stored in `data_dir`, or bundled)."""
+    return read_map_argument(value, data_dir)
 
 
 def read_frame(path: Path, profiles):
@@ -97,6 +159,16 @@ def pipeline_options(args):
     )
 
 
+def write_annotation(path: Path, frame, diagnostics, result) -> None:
+    """The picture of what the pipeline saw (`server.annotate`) as a PNG file at `path`."""
+    from server.annotate import annotate
+
+    try:
+        path.write_bytes(annotate(frame, diagnostics, result))
+    except OSError as error:
+        raise BadInput(f"cannot write the picture {path}: {error.strerror or error}", field="annotate") from None
+
+
 def print_result(result, frame, as_json: bool) -> None:
     """The contract's LocateResult as JSON, or a few lines for people (with the error against the
     frame's ground truth when it has one)."""
@@ -115,8 +187,8 @@ def print_result(result, frame, as_json: bool) -> None:
         f"   gravity prior {'used' if result.gravity_used else 'not used'}"
     )
     print(
-        f"quality   reprojection {result.reprojection_error_px:.3f} px, "
-        f"ambiguity ratio {result.ambiguity_ratio:.2f}, {result.timing_ms['total']:.1f} ms"
+        f"quality   reprojection {number(result.reprojection_error_px, 3)} px, "
+        f"ambiguity ratio {number(result.ambiguity_ratio)}, {result.timing_ms['total']:.1f} ms"
     )
     truth = frame.meta.ground_truth
     if truth is not None:
@@ -127,3 +199,21 @@ def print_result(result, frame, as_json: bool) -> None:
         )
     for warning in result.warnings:
         print(f"warning   {warning}")
+
+
+def print_line(path: Path, result, frame, as_json: bool) -> None:
+    """One frame of several: its result as one JSON line, or its name and fix (or reason) on one line."""
+    if as_json:
+        print(result.model_dump_json(by_alias=True))
+        return
+    if not result.ok:
+        print(f"{path.name}  no fix: {result.reason}: {result.message}")
+        return
+    assert result.position_m is not None  # outcomes.located sets it
+    x, y, z = result.position_m
+    truth = frame.meta.ground_truth
+    error = ""
+    if truth is not None:
+        dx, dy = x - truth.position_m[0], y - truth.position_m[1]
+        error = f"  truth error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.1f} mm"
+    print(f"{path.name}  x={x:+.4f} y={y:+.4f} z={z:+.4f} m  beacon {result.beacon_id}{error}")

@@ -24,6 +24,7 @@ from functools import partial
 import cv2
 import numpy as np
 
+from server.diagnostics import Diagnostics, PanelSight
 from server.geometry import (
     angle_deg,
     beacon_corners_m,
@@ -40,12 +41,12 @@ from server.pose.ordering import order_corners
 from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
 from server.pose.solve import GravityMode, PoseRules, side_errors, solve_pose
 from server.vision.binarize import Levels, blur, threshold
-from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
-from server.vision.outline import OutlineRules, outline_points
+from server.vision.contour import Blob, BlobRules, PanelLook, find_beacon_blob
+from server.vision.outline import OutlinePoints, OutlineRules, outline_points
 from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_square_corners, square_corners
 from server.vision.readout import undo_readout_turn
-from server.vision.roi import FrameView, RoiRules, find_roi
-from server.vision.subpixel import EdgeRules, refine_edges
+from server.vision.roi import FrameView, Roi, RoiRules, brightest_blob_px, find_roi
+from server.vision.subpixel import EdgeFit, EdgeRules, refine_edges
 from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
 
 # The app asks for a linear tone curve (docs/android.md); the edge model assumes one.
@@ -80,6 +81,9 @@ class PipelineOptions:
     # the contour growth this device's whole panels showed (`Fix.growth_px`): given, the outline
     # fit of a cut panel need not tell it from distance (`server.tracking.session` keeps it)
     growth_px: float | None = None
+    # given (for a picture of what the pipeline saw: server.annotate), every panel measured is
+    # recorded in it; None on the normal path, which then keeps nothing beyond its result
+    diagnostics: Diagnostics | None = None
 
 
 @dataclass
@@ -108,6 +112,19 @@ def _undistorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray 
     return cv2.undistortPoints(points.reshape(-1, 1, 2), matrix, distortion, P=matrix).reshape(-1, 2)
 
 
+@dataclass
+class _Seen:
+    """What the stages of one `locate_beacon` call found, by reference (no copies, no cost): made
+    into a `PanelSight` only when the options ask for diagnostics."""
+
+    roi: Roi | None = None
+    step: int = 1  # of the mask the blob's contour is in
+    blob: Blob | None = None
+    quad: Quad | None = None  # window pixels
+    edges: EdgeFit | None = None
+    outline: OutlinePoints | None = None
+
+
 def locate_beacon(
     frame: LumaFrame,
     beacon: Beacon,
@@ -115,6 +132,47 @@ def locate_beacon(
     id_source: BeaconIdSource = BeaconIdSource.single_beacon_map,
 ) -> Fix | Refusal:
     """The pose of the camera that took `frame`, which shows map beacon `beacon`, or why there is none."""
+    seen = _Seen()
+    outcome = _locate_beacon(frame, beacon, options, id_source, seen)
+    if options.diagnostics is not None:
+        options.diagnostics.add(_sight(frame, beacon.id, seen, outcome, options))
+    return outcome
+
+
+def _sight(
+    frame: LumaFrame, beacon_id: int, seen: _Seen, outcome: Fix | Refusal, options: PipelineOptions
+) -> PanelSight:
+    """What `seen` holds, in the full frame's (distorted) pixels; refused at the ROI stage, its largest blob."""
+    roi, matrix, distortion = seen.roi, camera_matrix(frame.camera), distortion_vector(frame.camera)
+    origin = np.zeros(2) if roi is None else np.array([roi.x0, roi.y0], dtype=float)
+    sides = None
+    if seen.edges is not None:
+        # each fitted line drawn from corner to corner, through the lens again (the fit is undistorted)
+        corners, along = seen.edges.corners, np.linspace(0.0, 1.0, 25)[:, None]
+        sides = np.stack(
+            [_distorted(corners[k] + along * (corners[(k + 1) % 4] - corners[k]), matrix, distortion) for k in range(4)]
+        )
+    if roi is None:  # refused on the coarse view: the blob it judged
+        contour = brightest_blob_px(frame.pixels, options.roi, FrameView.of(frame.meta))
+    else:
+        contour = None if seen.blob is None else seen.blob.contour * seen.step + origin
+    sight = PanelSight(
+        beacon_id=beacon_id,
+        outcome=outcome,
+        roi_px=None if roi is None else (roi.x0, roi.y0, roi.x1, roi.y1),
+        threshold_dn=None if roi is None else roi.levels.threshold,
+        contour_px=contour,
+        cut=seen.blob is not None and seen.blob.cut,
+        polygon_px=None if seen.quad is None else seen.quad.corners + origin,
+        sides_px=sides,
+        outline_px=None if seen.outline is None else seen.outline.points_px,
+    )
+    return sight.moved(frame.meta.full_offset)
+
+
+def _locate_beacon(
+    frame: LumaFrame, beacon: Beacon, options: PipelineOptions, id_source: BeaconIdSource, seen: _Seen
+) -> Fix | Refusal:
     timer = _Timer()
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
     look = PanelLook.of(beacon)
@@ -123,6 +181,7 @@ def locate_beacon(
         roi = find_roi(frame.pixels, options.roi, options.blobs, look, FrameView.of(frame.meta))
     if isinstance(roi, Refusal):
         return timer.refusal(roi)
+    seen.roi = roi
     window = frame.pixels[roi.y0 : roi.y1, roi.x0 : roi.x1]
     step = options.mask_step_px if options.subpixel else 1
     with timer.stage("blur"):
@@ -136,10 +195,11 @@ def locate_beacon(
         blob = find_beacon_blob(mask, options.blobs, look)
     if isinstance(blob, Refusal):
         return timer.refusal(blob)
+    seen.blob, seen.step = blob, step
     x, y, w, h = blob.bounding_box
     box = (roi.x0 + x * step, roi.y0 + y * step, w * step, h * step)
     if blob.cut or not _corner_path_fits(beacon):
-        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=blob.cut)
+        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=blob.cut, seen=seen)
     with timer.stage("polygon"):
         quad = (
             rounded_square_corners(blob.contour, options.polygon)
@@ -155,8 +215,9 @@ def locate_beacon(
             return timer.refusal(quad)
         # RDP found no four straight sides (a small panel, its rounded corners a large share of
         # its outline, or a soft edge): the outline fit needs no sides, only the outline.
-        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
+        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False, seen=seen)
     quad = Quad(corners=quad.corners * step)  # pixel i of the mask is pixel step * i of the window
+    seen.quad = quad
 
     warnings: list[str] = []
     origin = np.array([roi.x0, roi.y0], dtype=float)
@@ -169,10 +230,11 @@ def locate_beacon(
             )
             if edges is not None:
                 warnings.extend(edges.warnings)
+                seen.edges = edges
     if options.subpixel and edges is None:
         # The polygon's corners were too far off for the sides' search windows (a large panel
         # whose small corner arcs RDP takes for sharp corners): its visible outline measures it.
-        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
+        return _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False, seen=seen)
     corners = edges.corners if edges is not None else _undistorted(quad.corners + origin, matrix, distortion)
     corners = undo_readout_turn(corners, matrix, frame.meta)
     with timer.stage("center"):
@@ -272,7 +334,7 @@ def locate_beacon(
     # The corners fix the position only loosely (a small panel whose few-pixel corner arcs
     # measure the clipped-edge growth badly): the outline fit, which fits the growth with the
     # pose from every outline point, decides; what it cannot pin down is refused.
-    by_outline = _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False)
+    by_outline = _locate_by_outline(frame, beacon, box, roi.levels, options, id_source, timer, cut=False, seen=seen)
     note = f"the corners fixed the position only to {corner_sigma_mm:.0f} mm (1 sigma): outline fit"
     if not isinstance(by_outline, Fix):
         return replace(by_outline, warnings=(*by_outline.warnings, note))
@@ -325,11 +387,13 @@ def _locate_by_outline(
     id_source: BeaconIdSource,
     timer: _Timer,
     cut: bool,
+    seen: _Seen,
 ) -> Fix | Refusal:
     """The pose from the visible outline of the blob in `box` (frame pixels)."""
     matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
     with timer.stage("outline"):
         found = outline_points(frame.pixels, box, levels, options.outline_points)
+        seen.outline = found
         points = undo_readout_turn(_undistorted(found.points_px, matrix, distortion), matrix, frame.meta)
     gravity = _gravity(frame, options)
     with timer.stage("pose"):

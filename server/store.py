@@ -455,6 +455,24 @@ class MapStore:
         self._files.put(name, beacon_map)
         return beacon_map
 
+    def delete(self, name: str) -> None:
+        """Remove a stored map, also a damaged one. The active map (`active_map`) and the bundled and
+        startup maps (`fixed_map`: not in the data folder) are refused, so no request loses its map."""
+        if _check_name(name) == self.active_name():
+            raise StoreError(
+                "active_map", f"'{name}' is the active map: activate another map before deleting it", field="name"
+            )
+        if self._files.delete(name):
+            return
+        if name in self._fixed:
+            source = self._fixed[name][0]
+            raise StoreError(
+                "fixed_map",
+                f"'{name}' is the {source} map (not stored in the data folder): it cannot be deleted",
+                field="name",
+            )
+        raise StoreError("not_found", f"no stored map named '{name}'", field="name")
+
     def recover(self) -> None:
         """Remove the temporary files of interrupted writes; log every damaged map file."""
         if not self.data_dir.is_dir():

@@ -6,6 +6,7 @@ reads them; `shared_schemas/openapi.json` is exported from the app that uses the
 
 from __future__ import annotations
 
+import json
 import re
 from datetime import datetime
 from typing import Final
@@ -15,6 +16,10 @@ from pydantic import BaseModel, ConfigDict, Field
 from shared_schemas.models import Facing, FrameMeta, LocateResult, Vec3
 
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
+# `POST /v1/locate?annotate=1` answers with a PNG and the result in this header (compact JSON, ASCII:
+# non-ASCII characters escaped); 1-3 KB, within every hop's limit for a response's head (httpx/h11:
+# 16 KB; the bundled nginx: proxy_buffer_size 16k)
+RESULT_HEADER: Final = "X-Lumipose-Result"
 CELL_LABEL = re.compile(r"^\s*(-?\d+)\s*,\s*(-?\d+)\s*$")
 
 
@@ -107,9 +112,24 @@ def is_survey_label(label: str | None) -> bool:
     return label is not None and label.startswith(SURVEY_LABEL_PREFIX)
 
 
+def cell_label(i: int, j: int) -> str:
+    """The label of grid cell (i, j): 'i,j', as `cell_truth_m` reads it (e.g. '-8,11')."""
+    return f"{i},{j}"
+
+
 def cell_truth_m(label: str | None, cell_m: float, height_m: float = 0.0) -> list[float] | None:
     """The test-bench position of a grid-cell label 'i,j' (paper Section II-B), or None."""
     match = CELL_LABEL.match(label or "")
     if match is None:
         return None
     return [int(match[1]) * cell_m, int(match[2]) * cell_m, height_m]
+
+
+def result_header(result: LocateResult) -> str:
+    """`result` as the value of `RESULT_HEADER`."""
+    return json.dumps(result.model_dump(mode="json", by_alias=True, exclude_none=True), separators=(",", ":"))
+
+
+def result_from_header(value: str) -> LocateResult:
+    """The result a `RESULT_HEADER` value holds (raises pydantic's ValidationError when it holds none)."""
+    return LocateResult.model_validate_json(value)

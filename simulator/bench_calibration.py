@@ -34,6 +34,7 @@ from server.calibration.report import CalibrationRules, calibrate
 from server.calibration.board import find_board
 from shared_schemas import DeviceProfile, device_profiles
 from shared_schemas.calibration import BoardSpec, CalibrationReport
+from shared_schemas.cli import plural
 from simulator.board import BoardLook, PoseRules, PoseSet, board_poses, render_board
 
 PROFILE = "xiaomi-mi8-front"
@@ -158,5 +159,5 @@ def format_calibration(result: dict) -> str:
             verdict_text = "refused" if not poor["ok"] else "ACCEPTED (should be refused)"
             lines.append(f"  poor set '{kind}': {verdict_text}: {'; '.join(poor['advice'])}")
     lines.append(f"  time: render {good['render_s']:.0f} s, find {good['find_s']:.0f} s, fit {good['fit_s']:.1f} s "
-                 f"(good set); {result['wall_s']:.0f} s in all on {result['cpu_count']} cores")
+                 f"(good set); {result['wall_s']:.0f} s in all on {plural(result['cpu_count'], 'core')}")
     return "\n".join(lines)

@@ -34,9 +34,10 @@ class LoadReport:
     throughput_rps: float
     p50_ms: float
     p99_ms: float
-    server_request_ms: float  # mean, from the server's own metrics
-    server_pipeline_ms: float
-    outside_pipeline_share: float  # of the server's request time
+    # the server's side: measured on our own server only (a deployment's replicas each count their own)
+    server_request_ms: float | None  # mean, from the server's own metrics
+    server_pipeline_ms: float | None
+    outside_pipeline_share: float | None  # of the server's request time
     server_cpu_ms: float | None  # server process CPU time (user + system) per request
     server_peak_rss_mb: float | None
 
@@ -85,18 +86,18 @@ async def _client_loop(client: AsyncClient, frame: EncodedFrame, meta: FrameMeta
 
 
 async def _run(url: str, frame: EncodedFrame, meta: FrameMeta, clients: int, seconds: float,
-               map_name: str | None):
+               map_name: str | None, metrics: bool):
     latencies: list[float] = []
     outcomes: list[str] = []
     async with AsyncClient(url, timeout_s=120) as client:
         await client.locate(frame, meta, map=map_name)  # warm-up, not counted
-        before = httpx.get(f"{url}/metrics").text
+        before = httpx.get(f"{url}/metrics").text if metrics else ""
         stop_at = time.perf_counter() + seconds
         started = time.perf_counter()
         await asyncio.gather(*(_client_loop(client, frame, meta, map_name, stop_at, latencies, outcomes)
                                for _ in range(clients)))
         elapsed = time.perf_counter() - started
-        after = httpx.get(f"{url}/metrics").text
+        after = httpx.get(f"{url}/metrics").text if metrics else ""
     return latencies, outcomes, elapsed, before, after
 
 
@@ -105,7 +106,7 @@ def run_load(url: str, name: str, data: bytes, meta: FrameMeta, *, clients: int,
     frame = encode_frame(data, compress)  # encoded once: the client's cost is not measured
     cpu_before = cpu_seconds(server_pid) if server_pid else None
     latencies, outcomes, elapsed, before, after = asyncio.run(
-        _run(url, frame, meta, clients, seconds, map_name))
+        _run(url, frame, meta, clients, seconds, map_name, metrics=server_pid is not None))
     cpu_after = cpu_seconds(server_pid) if server_pid else None
     deltas = [np.subtract(_metric_sum(after, metric, route), _metric_sum(before, metric, route))
               for metric, route in (("lumipose_request_seconds", "/v1/locate"), ("lumipose_pipeline_seconds", None))]
@@ -116,9 +117,9 @@ def run_load(url: str, name: str, data: bytes, meta: FrameMeta, *, clients: int,
         errors=sum(outcome.startswith("error") for outcome in outcomes),
         fixes=outcomes.count("fix"), throughput_rps=len(outcomes) / elapsed,
         p50_ms=float(np.percentile(latency_ms, 50)), p99_ms=float(np.percentile(latency_ms, 99)),
-        server_request_ms=1000 * request_s / max(request_n, 1),
-        server_pipeline_ms=1000 * pipeline_s / max(pipeline_n, 1),
-        outside_pipeline_share=1 - pipeline_s / request_s if request_s else float("nan"),
+        server_request_ms=1000 * request_s / max(request_n, 1) if server_pid else None,
+        server_pipeline_ms=1000 * pipeline_s / max(pipeline_n, 1) if server_pid else None,
+        outside_pipeline_share=(1 - pipeline_s / request_s if request_s else float("nan")) if server_pid else None,
         server_cpu_ms=(1000 * (cpu_after - cpu_before) / (len(outcomes) + 1)  # + the warm-up request
                        if cpu_before is not None and cpu_after is not None else None),
         server_peak_rss_mb=peak_rss_mb(server_pid) if server_pid else None,

@@ -36,6 +36,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import device_profiles
+from shared_schemas.cli import plural
 from simulator.benchmarks import (
     PROFILE_ID, AccuracyConfig, accuracy_frame, bench_beacon, bench_motion, position_seen_m, summarize,
 )
@@ -234,5 +235,5 @@ def format_robustness(report: dict) -> str:
     for t in report["targets"]:
         state = {True: "met", False: "NOT met", None: "not measured"}[t["met"]]
         lines.append(f"  {state:<12} {t['target']}")
-    lines.append(f"wall time {report['wall_s']:.0f} s on {report['workers']} workers")
+    lines.append(f"wall time {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')}")
     return "\n".join(lines)

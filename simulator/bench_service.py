@@ -1,16 +1,20 @@
-"""`lumipose bench load`: the service under N concurrent clients, on rendered frames of two sizes."""
+"""`lumipose bench load`: the service under N concurrent clients, on rendered frames of two sizes; its
+own fresh server, or a running deployment (`--url`, e.g. the nginx replicas of docker/)."""
 
 from __future__ import annotations
 
 import json
 import sys
 
+import httpx
 import numpy as np
 
+from lumipose_client.client import Client, LumiposeError
 from lumipose_client.crop import crop_frame
 from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
-from shared_schemas import BeaconMap, FrameMeta, device_profiles
+from shared_schemas import DEMO_MAP_NAME, BeaconMap, FrameMeta, device_profiles
+from shared_schemas.cli import BadInput, report_bad_input
 from simulator.bench_load import LoadReport, run_load
 from simulator.benchmarks import PROFILE_ID, bench_beacon
 from simulator.fixtures import fixture_meta
@@ -34,23 +38,47 @@ def service_frame(width: int | None, distance_m: float = 1.0, seed: int = 3) -> 
 
 
 def run_service_load(frames: list[str], clients: list[int], seconds: float, encodings: list[str | None],
-                     workers: int = 1) -> list[LoadReport]:
-    """Each frame size against its own fresh server; every client count and encoding in turn."""
+                     workers: int = 1, url: str | None = None) -> list[LoadReport]:
+    """Each frame size against its own fresh server, or against the running service at `url` (a
+    deployment: its bundled demo map holds the frames' panel); every client count and encoding in turn."""
     reports = []
     for name in frames:
         meta, data, beacon_map = service_frame(FRAME_WIDTHS[name])
         if name.endswith("-window"):  # what a client sends when it cuts the frame to the beacon's window
             meta, data = crop_frame(np.frombuffer(data, np.uint8).reshape(meta.height, meta.width), meta)
+        if url is not None:
+            reports += _load_runs(url, None, deployment_map(url, beacon_map), name, data, meta, clients, seconds,
+                                  encodings)
+            continue
         with LocalServer("--workers", str(workers), "--log-level", "warning") as server:
             map_path = server.data_dir / "maps" / f"{beacon_map.name}.json"
             map_path.parent.mkdir(parents=True, exist_ok=True)
             map_path.write_text(beacon_map.model_dump_json(by_alias=True))
-            for encoding in encodings:
-                for count in clients:
-                    print(f"{name}, {encoding or 'raw'}: {count} client(s) for {seconds:g} s ...",
-                          file=sys.stderr, flush=True)
-                    reports.append(run_load(server.url, name, data, meta, clients=count, seconds=seconds,
-                                            compress=encoding, server_pid=server.pid, map_name=beacon_map.name))
+            reports += _load_runs(server.url, server.pid, beacon_map.name, name, data, meta, clients, seconds,
+                                  encodings)
+    return reports
+
+
+def deployment_map(url: str, beacon_map: BeaconMap) -> str:
+    """The name of the map of `url` that holds the load frames' panel: the bundled demo map, which every
+    deployment serves (BadInput if that name holds another map there)."""
+    with Client(url, timeout_s=30) as client:
+        served = client.get_map(DEMO_MAP_NAME)
+    if served.beacons != beacon_map.beacons:
+        raise BadInput(f"the map '{DEMO_MAP_NAME}' of {url} is not the bundled demo map the load frames were "
+                       "rendered for (a stored map of that name hides it)", field="url")
+    return DEMO_MAP_NAME
+
+
+def _load_runs(url: str, server_pid: int | None, map_name: str, name: str, data: bytes, meta: FrameMeta,
+               clients: list[int], seconds: float, encodings: list[str | None]) -> list[LoadReport]:
+    reports = []
+    for encoding in encodings:
+        for count in clients:
+            print(f"{name}, {encoding or 'none'}: {count} client(s) for {seconds:g} s against {url} ...",
+                  file=sys.stderr, flush=True)
+            reports.append(run_load(url, name, data, meta, clients=count, seconds=seconds, compress=encoding,
+                                    server_pid=server_pid, map_name=map_name))
     return reports
 
 
@@ -64,14 +92,31 @@ def print_reports(reports: list[LoadReport], as_json: bool) -> None:
     for r in reports:
         print(f"| {r.frame} | {r.encoding} {r.body_mb:.1f} MB | {r.clients} | {r.requests} | {r.errors} | {r.fixes} "
               f"| {r.throughput_rps:.1f} "
-              f"| {r.p50_ms:.1f} | {r.p99_ms:.1f} | {r.server_request_ms:.1f} | {r.server_pipeline_ms:.1f} "
-              f"| {100 * r.outside_pipeline_share:.0f} % | {r.server_cpu_ms or float('nan'):.1f} "
-              f"| {r.server_peak_rss_mb or float('nan'):.0f} |")
+              f"| {r.p50_ms:.1f} | {r.p99_ms:.1f} | {_figure(r.server_request_ms, '.1f')} "
+              f"| {_figure(r.server_pipeline_ms, '.1f')} "
+              f"| {_figure(_percent(r.outside_pipeline_share), '.0f', ' %')} "
+              f"| {_figure(r.server_cpu_ms, '.1f')} | {_figure(r.server_peak_rss_mb, '.0f')} |")
+
+
+def _percent(share: float | None) -> float | None:
+    return None if share is None else 100 * share
+
+
+def _figure(value: float | None, spec: str, unit: str = "") -> str:
+    """A server-side figure, '-' where it was not measured (a deployment's replicas: `--url`)."""
+    return "-" if value is None else f"{value:{spec}}{unit}"
 
 
 def run_load_command(args) -> int:
     """`lumipose bench load` (its flags: simulator/cli.py)."""
     encodings = [None if encoding == "none" else encoding for encoding in args.encodings]
-    reports = run_service_load(args.frames, args.clients, args.seconds, encodings, args.workers)
+    try:
+        if min(args.clients) < 1 or args.seconds <= 0:
+            raise BadInput("--clients must be at least 1 and --seconds positive", field="clients")
+        reports = run_service_load(args.frames, args.clients, args.seconds, encodings, args.workers, args.url)
+    except BadInput as problem:
+        return report_bad_input(problem, as_json=args.json)
+    except (LumiposeError, httpx.HTTPError) as error:
+        return report_bad_input(BadInput(f"cannot load-test {args.url}: {error}", field="url"), as_json=args.json)
     print_reports(reports, args.json)
     return 0 if all(report.errors == 0 for report in reports) else 1

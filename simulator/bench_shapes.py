@@ -59,6 +59,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.outline import OutlineFitRules
 from shared_schemas import Beacon, BeaconMap, PanelShape, device_profiles
+from shared_schemas.cli import BadInput, plural, report_bad_input
 from simulator.benchmarks import summarize
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
@@ -353,7 +354,7 @@ def format_shapes(report: dict) -> str:
                 f"45 deg); worst: frame {worst['index']}, camera yaw {worst['relative_yaw_deg']} deg from the "
                 f"beacon's, {worst['error_2d_mm']} mm"
             )
-    lines.append(f"  wall time {report['wall_s']:.0f} s on {report['workers']} workers (render + locate)")
+    lines.append(f"  wall time {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')} (render + locate)")
     return "\n".join(lines)
 
 
@@ -361,8 +362,7 @@ def run_shapes_command(args: argparse.Namespace) -> int:
     """`lumipose bench accuracy --shape`: the accuracy sub-command's options, one row per shape."""
     frames = 100 if args.frames is None else args.frames
     if frames < 1 or args.scale <= 0:
-        print("error: --frames must be at least 1 and --scale positive", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput("--frames must be at least 1 and --scale positive"), args.json)
     config = ShapesConfig(frames=frames, scale=args.scale, max_tilt_deg=args.max_tilt,
                           gravity_sigma_deg=args.gravity_sigma, seed=args.seed)  # fmt: skip
     report = run_shapes(config, args.workers)

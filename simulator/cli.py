@@ -7,7 +7,8 @@ import json
 import sys
 from pathlib import Path
 
-from shared_schemas import DEMO_MAP_PATH, device_profiles
+from shared_schemas import DEMO_MAP_NAME, device_profiles
+from shared_schemas.cli import BadInput, describe_file_error, plural, read_map_argument, report_bad_input
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
 # every command that draws: `--figures DIR`, no figures unless asked; the data drawn from goes beside them
@@ -20,17 +21,22 @@ ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "no
 def add_commands(commands) -> None:
     render = commands.add_parser("render", help="render a fixture (NAME.y + NAME.json) for a given pose")
     render.add_argument("out", type=Path, help="output stem, e.g. out/frame1")
-    render.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()))
+    render.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()),
+                        help="bundled device profile of the camera")
     render.add_argument("--scale", type=float, default=1.0, help="of the profile's native resolution")
-    render.add_argument("--map", type=Path, default=DEMO_MAP_PATH)
+    render.add_argument("--map", default=DEMO_MAP_NAME, help="a map file, or a bundled map's name")
     render.add_argument("--beacon-id", type=int, default=None, help="default: the map's first beacon")
-    render.add_argument("--position", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("X", "Y", "Z"))
+    render.add_argument("--position", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("X", "Y", "Z"),
+                        help="camera position in the map, metres")
     render.add_argument("--ypr", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("YAW", "PITCH", "ROLL"),
                         help="camera attitude in degrees, R_wc = Rz(yaw) Ry(pitch) Rx(roll)")
     render.add_argument("--psf", type=float, default=1.0, help="PSF sigma, pixels")
     render.add_argument("--overexposure", type=float, default=4.0, help="panel level / saturation")
-    render.add_argument("--seed", type=int, default=0)
+    render.add_argument("--seed", type=int, default=0, help="sensor noise seed")
     render.add_argument("--no-gravity", action="store_true", help="leave gravity_camera out of the JSON")
+    render.add_argument(
+        "--png", action="store_true", help="also write OUT.png: the same pixels, to view (and locate: `locate OUT.png`)"
+    )
     render.set_defaults(run=_run_render)
 
     simulate = commands.add_parser("simulate", help="render a scene's series (or one pose) into fixture files")
@@ -52,14 +58,15 @@ def add_commands(commands) -> None:
     bench = commands.add_parser("bench", help="benchmarks that print figures")
     benches = bench.add_subparsers(dest="bench", required=True)
     accuracy = benches.add_parser("accuracy", help="position error over rendered test-bench frames")
-    accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0])
+    accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0],
+                          help="camera to beacon, metres")
     accuracy.add_argument("--frames", type=int, default=None, help="per distance (200); with --shape, per shape (100)")
-    accuracy.add_argument("--scale", type=float, default=1.0)
-    accuracy.add_argument("--max-tilt", type=float, default=10.0)
+    accuracy.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
+    accuracy.add_argument("--max-tilt", type=float, default=10.0, help="largest random camera tilt, degrees")
     accuracy.add_argument("--gravity-sigma", type=float, default=0.1, help="gravity sensor error, degrees")
-    accuracy.add_argument("--seed", type=int, default=1)
-    accuracy.add_argument("--workers", type=int, default=None)
-    accuracy.add_argument("--json", action="store_true")
+    accuracy.add_argument("--seed", type=int, default=1, help="random seed")
+    accuracy.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    accuracy.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     accuracy.add_argument("--renderer", choices=["ours", "blender", "both"], default="ours",
                           help="blender: Cycles' radiance through the same sensor (needs bpy); both: the same frames "
                                "from each, and the ratio of their mean errors")
@@ -68,47 +75,56 @@ def add_commands(commands) -> None:
                                "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)")
     accuracy.set_defaults(run=_run_accuracy)
     partial = benches.add_parser("partial", help="panels cut by the image border: coverage and error by visible share")
-    partial.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0])
+    partial.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0], help="camera to beacon, metres")
     partial.add_argument("--frames", type=int, default=40, help="per distance and resolution")
     partial.add_argument("--scales", type=float, nargs="+", default=[1.0, 0.25],
                          help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
-    partial.add_argument("--seed", type=int, default=1)
-    partial.add_argument("--workers", type=int, default=None)
+    partial.add_argument("--seed", type=int, default=1, help="random seed")
+    partial.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     partial.add_argument("--figures", type=Path, default=None, metavar="DIR",
                          help="write partial.png (error against visible share) here, with partial.json beside it "
                               "(default: no figures)")
-    partial.add_argument("--json", action="store_true")
+    partial.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     partial.set_defaults(run=_run_partial)
     robustness = benches.add_parser("robustness", help="what each stage of a phone's image chain costs (issue 13)")
-    robustness.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0])
+    robustness.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0], help="camera to beacon, metres")
     robustness.add_argument("--scales", type=float, nargs="+", default=[0.25, 1.0],
                             help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
     robustness.add_argument("--frames", type=int, default=40, help="per cell (effect x distance x scale)")
     robustness.add_argument("--effects", nargs="+", default=list(ROBUSTNESS_GROUPS), metavar="GROUP",
                             help="effect groups: " + ", ".join(ROBUSTNESS_GROUPS[1:]) + " (the references no chain, "
                                  "ISP off and ISP on always run)")
-    robustness.add_argument("--seed", type=int, default=1)
-    robustness.add_argument("--workers", type=int, default=None)
-    robustness.add_argument("--json", action="store_true")
+    robustness.add_argument("--seed", type=int, default=1, help="random seed")
+    robustness.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    robustness.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     robustness.set_defaults(run=_run_robustness)
     speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
-    speed.add_argument("--repeats", type=int, default=50)
-    speed.add_argument("--distance", type=float, default=1.0)
+    speed.add_argument("--repeats", type=int, default=50, help="timed runs")
+    speed.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
     speed.add_argument("--no-gravity", action="store_true", help="leave the gravity vector out (no MAP pose fit)")
     speed.add_argument("--frames", type=int, default=None,
                        help="instead: N accuracy-bench frames per distance (1, 2, 3 m), the median ratio over them")
     speed.add_argument("--rounds", type=int, default=5, help="with --frames: passes over all the frames")
-    speed.add_argument("--json", action="store_true")
+    speed.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     speed.set_defaults(run=_run_speed)
-    load = benches.add_parser("load", help="the HTTP service under concurrent clients (starts its own server)")
+    load = benches.add_parser("load", help="the HTTP service under concurrent clients (over 3 minutes by default)",
+                              description="The HTTP service under concurrent clients (its own server, or --url). One "
+                                          "run per frame kind, client count and encoding: the defaults take over 3 "
+                                          "minutes (9 runs of 20 s).")
     load.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],  # bench_service.FRAME_WIDTHS
                       default=["1080p", "full", "full-window"],
                       help="full-window: the full frame cut to the beacon's window by the client")
-    load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4])
-    load.add_argument("--seconds", type=float, default=20.0, help="per client count")
-    load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"])
+    load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4], help="concurrent clients, one run each")
+    load.add_argument("--seconds", type=float, default=20.0,
+                      help="per run, one per frame x client count x encoding (default: 20; with the other defaults "
+                           "9 runs, over 3 minutes)")
+    load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"],
+                      help="upload compression, one run each")
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
-    load.add_argument("--json", action="store_true")
+    load.add_argument("--url",
+                      help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
+                           "no server-side figures then (default: $LUMIPOSE_URL, else our own server)")
+    load.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     load.set_defaults(run=_run_load)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
                             ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
@@ -116,10 +132,10 @@ def add_commands(commands) -> None:
         grid.add_argument("--figures", type=Path, default=None, metavar="DIR", help=FIGURES_HELP.format(
             pngs="the scatter and heat map", data="report.json, outcomes.json and scene.json"))
         grid.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
-        grid.add_argument("--seed", type=int, default=None, help="default: the scene file's")
+        grid.add_argument("--seed", type=int, default=None, help="random seed (default: the scene file's)")
         grid.add_argument("--limit", type=int, default=None, help="only about N evenly spread grid points")
-        grid.add_argument("--workers", type=int, default=None)
-        grid.add_argument("--json", action="store_true")
+        grid.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+        grid.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
         if name == "bench-real":
             grid.add_argument("--uncalibrated", action="store_true",
                               help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
@@ -133,23 +149,24 @@ def add_commands(commands) -> None:
                               help="random phone yaw within +-this many degrees (0: exactly face to face, the paper's)")
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
     distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
-    distance.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
+    distance.add_argument("--distances", type=float, nargs="+", default=None,
+                          help="metres (default: 1.0 to 3.0 by 0.1)")
     distance.add_argument("--yaw-jitter", type=float, default=0.0,
                           help="random phone yaw within +-this many degrees (0: exactly face to face)")
     tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
-    tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees; default 0 to 15 by 2.5")
+    tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees (default: 0 to 15 by 2.5)")
     for sweep, name in ((distance, "distance"), (tilt, "tilt")):
         sweep.add_argument("--figures", type=Path, default=None, metavar="DIR",
                            help=FIGURES_HELP.format(pngs=f"{name}-sweep.png", data="report.json"))
-        sweep.add_argument("--scale", type=float, default=1.0)
-        sweep.add_argument("--seed", type=int, default=None)
-        sweep.add_argument("--workers", type=int, default=None)
-        sweep.add_argument("--json", action="store_true")
+        sweep.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
+        sweep.add_argument("--seed", type=int, default=None, help="random seed (default: the scene file's)")
+        sweep.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+        sweep.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
         sweep.set_defaults(run=_run_sweep, bench_name=name)
     calibration = benches.add_parser("calibration", help="camera calibration on rendered ChArUco photos (issue 14)")
     calibration.add_argument("--views", type=int, default=20, help="photos per set")
     calibration.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
-    calibration.add_argument("--seed", type=int, default=1)
+    calibration.add_argument("--seed", type=int, default=1, help="random seed")
     calibration.add_argument("--lens", choices=["phone", "phone-k3", "bench-real"], default="phone",
                              help="phone: a phone-like Mi 8 front lens (k3 0); phone-k3: the same with k3 0.002; "
                                   "bench-real: `bench bench-real`'s lens")
@@ -158,19 +175,20 @@ def add_commands(commands) -> None:
                                   "(default 12: three per corner)")
     calibration.add_argument("--no-poor-sets", action="store_true", help="skip the frontal and corner-only sets")
     calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
-    calibration.add_argument("--json", action="store_true")
+    calibration.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     calibration.set_defaults(run=_run_calibration_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
     fidelity.add_argument("--figures", type=Path, default=None, metavar="DIR",
                           help=FIGURES_HELP.format(pngs="fidelity.png", data="report.json"))
-    fidelity.add_argument("--distances", type=float, nargs="+", default=None, help="default 1.0 to 3.0 by 0.1")
+    fidelity.add_argument("--distances", type=float, nargs="+", default=None,
+                          help="metres (default: 1.0 to 3.0 by 0.1)")
     fidelity.add_argument("--blender", action="store_true", help="also render each view with Blender (needs bpy)")
-    fidelity.add_argument("--json", action="store_true")
+    fidelity.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     fidelity.set_defaults(run=_run_fidelity)
     render_speed = benches.add_parser("render", help="time to render one full-resolution frame of a scene")
-    render_speed.add_argument("--scene", default="paper-bench")
-    render_speed.add_argument("--repeats", type=int, default=10)
-    render_speed.add_argument("--json", action="store_true")
+    render_speed.add_argument("--scene", default="paper-bench", help="a scene file or a bundled scene")
+    render_speed.add_argument("--repeats", type=int, default=10, help="timed renders")
+    render_speed.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     render_speed.set_defaults(run=_run_render_speed)
     from simulator.vlc_cli import add_vlc_benches  # `bench vlc` and `bench office` (issue 4)
 
@@ -204,15 +222,16 @@ def _run_render(args) -> int:
 
     from server.camera import intrinsics_from_profile
     from server.geometry import rotation_from_ypr
-    from shared_schemas import load_map
     from simulator.fixtures import fixture_meta, write_fixture
     from simulator.render import CameraPose, SensorModel, render_frame
 
-    beacon_map = load_map(args.map)
+    try:
+        beacon_map = read_map_argument(args.map)
+    except BadInput as problem:
+        return report_bad_input(problem)
     beacon = beacon_map.beacon(args.beacon_id) if args.beacon_id is not None else beacon_map.beacons[0]
     if beacon is None:
-        print(f"error: beacon {args.beacon_id} is not in {args.map}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(f"beacon {args.beacon_id} is not in {args.map}", field="beacon_id"))
     profile = device_profiles()[args.profile]
     width, height = round(profile.width * args.scale), round(profile.height * args.scale)
     camera = intrinsics_from_profile(profile, width, height)
@@ -221,11 +240,16 @@ def _run_render(args) -> int:
     try:
         pixels = render_frame(beacon, camera, pose, width, height, sensor, np.random.default_rng(args.seed))
     except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error)))
     gravity = None if args.no_gravity else (pose.rotation_wc.T @ [0.0, 0.0, -1.0]).tolist()
     raw, meta = write_fixture(args.out, pixels, fixture_meta(camera, width, height, pose, gravity_camera=gravity))
     print(f"wrote {raw} and {meta}")
+    if args.png:
+        import cv2
+
+        png = raw.with_suffix(".png")
+        png.write_bytes(cv2.imencode(".png", pixels)[1].tobytes())  # 8-bit grey, lossless: the frame's own pixels
+        print(f"wrote {png}")
     return 0
 
 
@@ -262,9 +286,8 @@ def _run_simulate(args) -> int:
             scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
         stems = write_series(scene, args.out, args.workers, bursts=args.bursts)
     except (OSError, ValueError, ValidationError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    print(f"wrote {len(stems)} fixtures ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
+        return report_bad_input(BadInput(str(error)))
+    print(f"wrote {plural(len(stems), 'fixture')} ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
 
 
@@ -314,8 +337,7 @@ def _run_partial(args) -> int:
     from simulator.reports import print_figures
 
     if args.frames < 1 or min(args.scales) <= 0:
-        print("error: --frames must be at least 1 and every --scales positive", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput("--frames must be at least 1 and every --scales positive"), args.json)
     config = PartialConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                            seed=args.seed)
     report = run_partial(config, args.workers)
@@ -349,7 +371,7 @@ def _print_report(report: dict, as_json: bool) -> None:
     for failure in report.get("failures", [])[:20]:
         print(f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
               f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}")
-    print(f"  wall time    {report['wall_s']:.0f} s on {report['workers']} workers (render + locate)")
+    print(f"  wall time    {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')} (render + locate)")
     print_figures(report.get("figures", []), as_json)
 
 
@@ -361,8 +383,7 @@ def _run_grid_bench(args) -> int:
             report = bench_grid(args.figures, args.scale, args.seed, args.workers, args.limit, args.scene,
                                 args.yaw_jitter)
         except ValueError as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
+            return report_bad_input(BadInput(str(error)), args.json)
     else:
         profile = None
         if args.profile is not None:
@@ -373,8 +394,8 @@ def _run_grid_bench(args) -> int:
             try:
                 profile = DeviceProfile.model_validate_json(args.profile.read_text())
             except (OSError, ValidationError) as error:
-                print(f"error: --profile {args.profile}: {str(error).splitlines()[0]}", file=sys.stderr)
-                return 2
+                problem = BadInput(f"--profile {describe_file_error(args.profile, error)}", field="profile")
+                return report_bad_input(problem, args.json)
         report = bench_real(args.figures, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
                             args.workers, args.limit, profile)
     _write_report(report, args.figures)
@@ -387,9 +408,8 @@ def _run_calibration_bench(args) -> int:
 
     corner_views = CORNER_VIEWS if args.corner_views is None else args.corner_views
     if args.views < 3 or args.scale <= 0 or not 0 <= corner_views <= args.views:
-        print("error: --views must be at least 3, --scale positive and --corner-views within 0..views",
-              file=sys.stderr)
-        return 2
+        problem = BadInput("--views must be at least 3, --scale positive and --corner-views within 0..views")
+        return report_bad_input(problem, args.json)
     result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets,
                                corner_views=corner_views)
     profile = result["report"]["profile"]
@@ -426,8 +446,7 @@ def _run_fidelity(args) -> int:
     try:
         report = bench_fidelity(args.figures, args.distances, blender=args.blender)
     except RuntimeError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return report_bad_input(BadInput(str(error), field="blender"), args.json)
     _write_report(report, args.figures)
     print(json.dumps(report, indent=2) if args.json else format_fidelity(report))
     print_figures(report.get("figures", []), args.json)
@@ -441,8 +460,8 @@ def _run_render_speed(args) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print(f"render {report['scene']} sample {report['sample']}, {report['frame']}, {report['repeats']} runs, "
-          f"{report['cpu_count']} cores")
+    print(f"render {report['scene']} sample {report['sample']}, {report['frame']}, "
+          f"{plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}")
     print(f"median {report['median_ms']:.0f} ms wall (max {report['max_ms']:.0f} ms), {report['cpu_median_ms']:.0f} ms CPU; "
           f"load average {report['load_average_1min']:.1f}")
     print(f"for scale: one full-frame Gaussian draw takes {report['gaussian_noise_median_ms']:.0f} ms")
@@ -458,16 +477,17 @@ def _run_speed(args) -> int:
             print(json.dumps(many, indent=2))
             return 0
         rounds = ", ".join(f"{r:.2f}" for r in many["round_median_ratios"])
-        print(f"{many['frames']} frames at {many['distances_m']} m, {many['rounds']} rounds, {many['cpu_count']} cores")
+        print(f"{plural(many['frames'], 'frame')} at {many['distances_m']} m, {plural(many['rounds'], 'round')}, "
+              f"{plural(many['cpu_count'], 'core')}")
         print(f"pipeline / cv2.threshold: median {many['median_ratio_to_threshold']:.2f} "
               f"(p90 {many['p90_ratio']:.2f}; per round {rounds}); pipeline median {many['median_ms']:.2f} ms, "
-              f"{many['refusals']} refusals")
+              f"{plural(many['refusals'], 'refusal')}")
         return 0
     report = run_speed(args.repeats, args.distance, gravity=not args.no_gravity)
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print(f"frame {report['frame']}, {report['repeats']} runs, {report['cpu_count']} cores")
+    print(f"frame {report['frame']}, {plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}")
     print(f"pipeline median {report['median_ms']:.2f} ms (p90 {report['p90_ms']:.2f} ms)")
     print(f"cv2.threshold median {report['threshold_median_ms']:.2f} ms, ratio {report['ratio_to_threshold']:.2f}")
     for stage, ms in report["stage_median_ms"].items():
@@ -480,9 +500,9 @@ def _run_robustness(args) -> int:
 
     unknown = sorted(set(args.effects) - set(GROUPS))
     if unknown or args.frames < 1 or min(args.scales) <= 0:
-        print(f"error: --frames must be at least 1, every --scales positive and --effects among {', '.join(GROUPS)}"
-              f"{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}", file=sys.stderr)
-        return 2
+        problem = BadInput(f"--frames must be at least 1, every --scales positive and --effects among "
+                           f"{', '.join(GROUPS)}{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}")
+        return report_bad_input(problem, args.json)
     config = RobustnessConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                               effects=tuple(args.effects), seed=args.seed)
     report = run_robustness(config, args.workers)

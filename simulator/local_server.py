@@ -31,7 +31,7 @@ class LocalServer:
         self.url = f"http://127.0.0.1:{self.port}"
         self.log_path = self.data_dir.parent / f"lumipose-serve-{self.port}.log"
         self._args = [sys.executable, "-m", "lumipose_cli", "serve", "--port", str(self.port),
-                      "--data", str(self.data_dir), *serve_args]
+                      "--data-dir", str(self.data_dir), *serve_args]
         self._timeout_s = startup_timeout_s
         self.process: subprocess.Popen | None = None
 

@@ -194,11 +194,22 @@ def exposure_polygons_px(points_m: np.ndarray, camera: CameraIntrinsics, pose: C
     def at(instant: float) -> np.ndarray:
         return world_polygon_px(points_m, camera, pose, width, height, max_step_px, replace(motion, instant=instant))
 
-    travel_px = float(np.max(np.linalg.norm(at(1.0) - at(0.0), axis=1)))  # the same points: the same densifying
+    start, end = at(0.0), at(1.0)  # the same points: the same densifying
+    travel_px = float(np.max(np.linalg.norm(end - start, axis=1)[_near_frame(start, end, width, height)]))
     instants = min(MAX_INSTANTS, int(np.ceil(travel_px / step_px)))
     if instants <= 1:
         return seen, ()
     return seen, tuple(at((k + 0.5) / instants) for k in range(instants))
+
+
+def _near_frame(start_px: np.ndarray, end_px: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Which points stay within the frame enlarged by half its size over the exposure (all of them
+    when none does). A polygon cut at the near plane (a wall beside the camera) has points projected
+    far out whose travel would ask for the most instants while only the part in the frame is drawn."""
+    low, high = np.minimum(start_px, end_px), np.maximum(start_px, end_px)
+    near = ((low[:, 0] > -width / 2) & (high[:, 0] < 1.5 * width)
+            & (low[:, 1] > -height / 2) & (high[:, 1] < 1.5 * height))
+    return near if near.any() else np.ones(len(near), dtype=bool)
 
 
 def coverage_map(outline_px: np.ndarray | Sequence[np.ndarray], width: int, height: int,

@@ -23,6 +23,7 @@ from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from shared_schemas import CameraIntrinsics
+from shared_schemas.cli import plural
 from simulator.benchmarks import calibration, ellipse_test, position_seen_m, summarize
 from simulator.sampling import SamplePose, parallel_map, render_pose
 from simulator.scene import Scene, readout_motion
@@ -175,7 +176,7 @@ def write_outcomes(outcomes: list[Outcome], path: Path) -> None:
 def format_table(summary: dict, title: str) -> str:
     """The summary as the paper's table (mm), as plain text."""
     if "mean_mm" not in summary:
-        return f"{title}: no fix within the margin in {summary['samples']} samples {summary['refusals']}"
+        return f"{title}: no fix within the margin in {plural(summary['samples'], 'sample')} {summary['refusals']}"
     return "\n".join([
         title,
         f"  mean error   {summary['mean_mm']:8.3f} mm",
@@ -183,7 +184,7 @@ def format_table(summary: dict, title: str) -> str:
         f"  min error    {summary['min_mm']:8.3f} mm",
         f"  max error    {summary['max_mm']:8.3f} mm",
         f"  p95          {summary['p95_mm']:8.3f} mm",
-        f"  coverage     {summary['coverage_pct']:8.2f} %  ({summary['samples']} samples, "
+        f"  coverage     {summary['coverage_pct']:8.2f} %  ({plural(summary['samples'], 'sample')}, "
         f"{summary['no_fix']} without a fix, {summary['outliers']} outliers > {OUTLIER_M * 1000:.0f} mm)",
         f"  refusals     {summary['refusals'] or 'none'}",
     ] + _calibration_line(summary) + _panel_rows_line(summary))

@@ -27,6 +27,7 @@ import numpy as np
 from server.fov import fov_grid, grid_points
 from server.geometry import rotation_from_ypr
 from shared_schemas import device_profiles
+from shared_schemas.api import cell_label
 from simulator import trajectories
 from simulator.bursts import burst_scenes, burst_span_s, capture_starts, render_burst
 from simulator.fixtures import write_fixture
@@ -43,7 +44,7 @@ class SamplePose:
     t_s: float
     position_m: tuple[float, float, float]
     ypr_deg: tuple[float, float, float]
-    label: str = ""  # e.g. the grid cell "(-8, 11)"
+    label: str = ""  # e.g. the grid cell "-8,11" (shared_schemas.api.cell_label)
     velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)  # during readout, map frame
     angular_velocity_dps: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
@@ -84,14 +85,14 @@ def _path_positions(scene: Scene, path) -> tuple[np.ndarray, np.ndarray, list[st
         return np.array([p.t_s for p in path.poses]), positions, [""] * len(positions)
     if isinstance(path, FovGridSeries):
         labels, positions = fov_grid_positions(scene, path)
-        return np.zeros(len(positions)), positions, [f"({i}, {j})" for i, j in labels]
+        return np.zeros(len(positions)), positions, [cell_label(i, j) for i, j in labels]
     if isinstance(path, GridSeries):
         xs = np.arange(path.x_m[0], path.x_m[1] + path.x_m[2] * 1e-6, path.x_m[2])
         ys = np.arange(path.y_m[1], path.y_m[0] - path.y_m[2] * 1e-6, -path.y_m[2])  # top row first, as the paper
         positions = np.array([(x, y, path.height_m) for y in ys for x in xs])
         # cell labels counted from the grid's centre, as the paper labels its bench
         centre = [(path.x_m[0] + xs[-1]) / 2, (path.y_m[0] + ys[0]) / 2]
-        labels = [f"({round((x - centre[0]) / path.x_m[2])}, {round((y - centre[1]) / path.y_m[2])})"
+        labels = [cell_label(round((x - centre[0]) / path.x_m[2]), round((y - centre[1]) / path.y_m[2]))
                   for x, y, _ in positions]
         return np.zeros(len(positions)), positions, labels
     if isinstance(path, TrajectorySeries):
@@ -183,8 +184,10 @@ def _simulator_block(scene: Scene, sample: SamplePose) -> dict:
             "angular_velocity_dps": list(sample.angular_velocity_dps)}
 
 
-def progress(done: int, total: int, label: str, stream=sys.stderr) -> None:
-    """A one-line progress bar on a terminal; every tenth on a log."""
+def progress(done: int, total: int, label: str, stream=None) -> None:
+    """A one-line progress bar on a terminal; every tenth on a log. `stream` defaults to sys.stderr as it is
+    now (read at each call: a default bound at import would keep a stream replaced and closed since)."""
+    stream = stream or sys.stderr
     if stream.isatty():
         filled = int(30 * done / max(total, 1))
         print(f"\r{label} [{'#' * filled}{'.' * (30 - filled)}] {done}/{total}", end="\n" if done == total else "",

@@ -26,6 +26,7 @@ from server.camera import intrinsics_from_profile
 from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr, world_to_camera
 from server.vlc.capture import ID_EXPOSURE_S
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, PanelShape, device_profiles
+from shared_schemas.cli import describe_file_error
 from shared_schemas.models import Facing, Strict, Vec3
 from simulator.chain import ChainSpec, circle_of_confusion_px, develop
 from simulator.motion import MotionSpec, draw_velocities
@@ -365,7 +366,10 @@ def find_scene(name_or_path: str) -> Scene:
     if not path.exists():
         bundled = ", ".join(sorted(p.stem for p in SCENES_DIR.glob("*.json")))
         raise ValueError(f"scene '{name_or_path}' is neither a file nor a bundled scene ({bundled})")
-    return load_scene(path)
+    try:
+        return load_scene(path)
+    except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
+        raise ValueError(f"cannot read the scene {describe_file_error(path, error)}") from None
 
 
 def _beacon_outline_m(beacon: Beacon, camera: CameraIntrinsics, distance_m: float) -> np.ndarray:

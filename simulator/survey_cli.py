@@ -6,14 +6,17 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+from shared_schemas.cli import plural
+
 
 def add_survey_bench(benches) -> None:
     bench = benches.add_parser("survey",
                                help="beacon survey of an office of 4 or 9 panels against the truth (issue 14)")
-    bench.add_argument("--panels", type=int, nargs="+", default=[4, 9], choices=[4, 9])
+    bench.add_argument("--panels", type=int, nargs="+", default=[4, 9], choices=[4, 9],
+                       help="offices to survey, by panel count")
     bench.add_argument("--frames", type=int, default=40, help="survey frames per office")
     bench.add_argument("--scale", type=float, default=None, help="of the Mi 8 front resolution (default: 0.5)")
-    bench.add_argument("--seed", type=int, default=1)
+    bench.add_argument("--seed", type=int, default=1, help="random seed")
     bench.add_argument("--walk", choices=["zigzag", "spiral", "none"], default="zigzag",
                        help="the office walk positioned with the surveyed and the true map (none: skip)")
     bench.add_argument("--luminance-spread", type=float, default=0.0,
@@ -21,7 +24,7 @@ def add_survey_bench(benches) -> None:
     bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
     bench.add_argument("--fixtures", type=Path, default=None,
                        help="also write each office's frames, labels.json and sketch.json here (for `lumipose survey`)")
-    bench.add_argument("--json", action="store_true")
+    bench.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     bench.set_defaults(run=_run_survey_bench)
 
 
@@ -58,7 +61,7 @@ def _print(report: dict) -> None:
         for label in ("surveyed_map", "true_map"):
             s = walk[label]
             f = s["fixes"]
-            print(f"  {label:>13}: {s['captures']} captures, cover {s['coverage_pct']:.1f} %, "
+            print(f"  {label:>13}: {plural(s['captures'], 'capture')}, cover {s['coverage_pct']:.1f} %, "
                   f"mean {_fmt(f['mean_mm'])}, "
                   f"p95 {_fmt(f['p95_mm'])}, max {_fmt(f['max_mm'])}, ID errors {s['id_errors']}")
 

@@ -11,13 +11,13 @@ DEFAULT_DISTANCES = [1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0]
 
 def add_vlc_benches(benches) -> None:
     vlc = benches.add_parser("vlc", help="VLC ID success against distance, single frame and combined (Fig. 16)")
-    vlc.add_argument("--distances", type=float, nargs="+", default=DEFAULT_DISTANCES)
+    vlc.add_argument("--distances", type=float, nargs="+", default=DEFAULT_DISTANCES, help="camera to panel, metres")
     vlc.add_argument("--sides", type=float, nargs="+", default=[0.174],
                      help="panel sizes, metres: a square's side, a rectangle's long side, a circle's diameter")
     vlc.add_argument("--shape", choices=["square", "rect", "circle"], default="square",
                      help="panel shape (rect: --aspect x as wide as long)")
     vlc.add_argument("--aspect", type=float, default=0.25, help="a rect's short side over its long side")
-    vlc.add_argument("--trials", type=int, default=100)
+    vlc.add_argument("--trials", type=int, default=100, help="per point")
     vlc.add_argument("--max-frames", type=int, default=12, help="ID frames combined at most")
     vlc.add_argument("--exposures", type=float, nargs="+", default=None,
                      help="exposure sweep (s) at the first distance instead of the distance sweep")
@@ -26,26 +26,27 @@ def add_vlc_benches(benches) -> None:
                           "room path (named, located), per --shares; at the first of --distances (default 1.2 m)")
     vlc.add_argument("--shares", type=float, nargs="+", default=None,
                      help="--cut: shares of the panel's rows (bottom) or columns (side) in view")
-    vlc.add_argument("--seed", type=int, default=1)
-    vlc.add_argument("--workers", type=int, default=None)
+    vlc.add_argument("--seed", type=int, default=1, help="random seed")
+    vlc.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     vlc.add_argument("--figures", type=Path, default=None, metavar="DIR",
                      help="write the success against distance (vlc-distance.png, vlc-rect.png, vlc-circle.png; "
                           "--cut: vlc-cut.png against share) into this folder (default: no figures)")
-    vlc.add_argument("--json", action="store_true")
+    vlc.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     vlc.set_defaults(run=_run_vlc)
     office = benches.add_parser("office", help="the paper's office walks with four coded beacons (Figs. 17-18)")
-    office.add_argument("--walks", nargs="+", default=["zigzag", "spiral"], choices=["zigzag", "spiral"])
+    office.add_argument("--walks", nargs="+", default=["zigzag", "spiral"], choices=["zigzag", "spiral"],
+                        help="walks to run")
     office.add_argument("--pose-scale", type=float, default=None,
                         help="pose frames, of the Mi 8 front resolution (default: the scene's, 0.5)")
     office.add_argument("--id-frames", type=int, default=4, help="ID frames beside each pose frame")
     office.add_argument("--inset", type=float, default=0.0, help="walk this far inside the area, metres")
     office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")
-    office.add_argument("--seed", type=int, default=1)
-    office.add_argument("--workers", type=int, default=None)
+    office.add_argument("--seed", type=int, default=1, help="random seed")
+    office.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     office.add_argument("--figures", type=Path, default=None, metavar="DIR",
                         help="write one PNG per walk (office-zigzag.png, office-spiral.png) into this folder "
                              "(default: no figures)")
-    office.add_argument("--json", action="store_true")
+    office.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     office.set_defaults(run=_run_office)
 
 

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from server.options import LocateOptions
 from server.tracking.devices import DeviceRules
-from shared_schemas import load_map
+from shared_schemas import find_map_file, load_map
+from shared_schemas.cli import describe_file_error
 
 
 class Settings(BaseSettings):
@@ -21,7 +23,10 @@ class Settings(BaseSettings):
     host: str = "127.0.0.1"
     port: int = Field(default=8000, ge=0, le=65535)
     workers: int = Field(default=1, ge=1)
-    map: Path | None = Field(default=None, description="startup map; default: the bundled demo map")
+    map: Path | None = Field(
+        default=None,
+        description="startup map: a file, or a map's name (stored in data_dir, or bundled); default: the demo map",
+    )
     data_dir: Path = Path("data")
     api_key: str | None = Field(default=None, description="required for writes (maps, samples) when set")
     max_upload_mb: float = Field(default=64.0, gt=0, description="limit on the upload, compressed or not")
@@ -41,16 +46,18 @@ class Settings(BaseSettings):
     cors_origins: list[str] = Field(default_factory=lambda: ["*"])
     session_idle_s: float = Field(default=600.0, gt=0, description="a device silent for longer loses its session")
     max_devices: int = Field(default=1000, ge=1, description="device sessions kept per worker")
+    log_level: Literal["critical", "error", "warning", "info", "debug"] = "info"
 
-    @field_validator("map")
-    @classmethod
-    def _map_loads(cls, value: Path | None) -> Path | None:
-        if value is not None:
+    @model_validator(mode="after")
+    def _map_loads(self) -> Settings:
+        # after the fields, since a map's name may be one stored in data_dir; the workers get the file's path
+        if self.map is not None:
+            self.map = find_map_file(self.map, self.data_dir)  # its ValueError names both readings
             try:
-                load_map(value)
+                load_map(self.map)
             except (OSError, ValueError) as error:
-                raise ValueError(f"cannot load map {value}: {error}") from None
-        return value
+                raise ValueError(f"cannot load {describe_file_error(self.map, error)}") from None
+        return self
 
     @field_validator("api_key")
     @classmethod

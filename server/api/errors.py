@@ -47,6 +47,8 @@ STORE_STATUS = {
     "damaged_profile": 409,
     "damaged_sample": 409,
     "bundled_profile": 409,
+    "active_map": 409,
+    "fixed_map": 409,
 }
 
 

@@ -14,6 +14,7 @@ from server.api.metrics import Metrics, MetricsMiddleware
 from server.api.routes import calibrations, health, locate, maps, profiles, samples, surveys
 from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
+from shared_schemas.api import RESULT_HEADER
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -54,7 +55,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         allow_origins=settings.cors_origins,
         allow_methods=["*"],
         allow_headers=["*"],
-        expose_headers=["X-Lumipose-Frame"],
+        expose_headers=["X-Lumipose-Frame", RESULT_HEADER],
     )
     app.add_middleware(BugCatcher, on_bug=metrics.server_errors.inc)
     app.add_middleware(MetricsMiddleware, metrics=metrics)

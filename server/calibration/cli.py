@@ -5,10 +5,11 @@ Exit codes: 0 calibrated (or the board written), 1 the set refused (the advice i
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_REFUSED, EXIT_BAD_INPUT = 0, 1, 2
+from shared_schemas.cli import BadInput, describe_file_error, describe_validation_error, report_bad_input
+
+EXIT_OK, EXIT_REFUSED = 0, 1
 DICTIONARIES = (
     "DICT_4X4_50",
     "DICT_4X4_100",
@@ -28,11 +29,13 @@ def add_commands(commands) -> None:
     steps = calibrate.add_subparsers(dest="step", required=True)
     board = steps.add_parser("board", help="write a printable ChArUco board and its spec (board.json)")
     board.add_argument("--out", type=Path, required=True, help="board.pdf (to print) or board.png (for a screen)")
-    board.add_argument("--squares", default="11x8", help="squares across x down (default 11x8: A4 landscape)")
-    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square (default 24)")
-    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default 0.6 of a square)")
-    board.add_argument("--dictionary", default="DICT_5X5_100", choices=DICTIONARIES)
-    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels (default 600)")
+    board.add_argument("--squares", default="11x8", help="squares across x down (default: 11x8, A4 landscape)")
+    board.add_argument("--square-mm", type=float, default=24.0, help="side of a square")
+    board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default: 0.6 of a square)")
+    board.add_argument(
+        "--dictionary", default="DICT_5X5_100", choices=DICTIONARIES, help="ArUco dictionary of the markers"
+    )
+    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
     board.set_defaults(run=_run_board)
     camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
     camera.add_argument("photos", type=Path, nargs="+", help="PNG or JPEG photos of the board, grey or colour")
@@ -44,9 +47,9 @@ def add_commands(commands) -> None:
     camera.set_defaults(run=_run_camera)
 
 
-def _fail(message: str) -> int:
-    print(f"error: {message}", file=sys.stderr)
-    return EXIT_BAD_INPUT
+def _fail(message: str, as_json: bool = False, field: str | None = None) -> int:
+    """Bad input: `error: ...` on stderr, or the contract's ErrorBody on stdout with --json; exit 2."""
+    return report_bad_input(BadInput(message, field=field), as_json=as_json)
 
 
 def _run_board(args) -> int:
@@ -70,8 +73,7 @@ def _run_board(args) -> int:
         )
         printed = write_board(spec, args.out, args.dpi)
     except ValidationError as error:
-        problem = error.errors()[0]
-        return _fail(f"{'.'.join(map(str, problem['loc'])) or 'board'}: {problem['msg']}")
+        return _fail(describe_validation_error(error, "board"))
     except (ValueError, OSError) as error:
         return _fail(str(error))
     print(
@@ -101,7 +103,7 @@ def _device(text: str):
     try:
         return DeviceProfile.model_validate_json(path.read_text())
     except (ValidationError, OSError, UnicodeDecodeError) as error:
-        raise ValueError(f"--device {path} is not a device profile: {str(error).splitlines()[0]}") from None
+        raise ValueError(f"--device is not a device profile: {describe_file_error(path, error)}") from None
 
 
 def _run_camera(args) -> int:
@@ -114,23 +116,20 @@ def _run_camera(args) -> int:
     try:
         spec = BoardSpec.model_validate_json(args.board.read_text())
     except (OSError, UnicodeDecodeError) as error:
-        return _fail(f"cannot read --board {args.board}: {error}")
+        return _fail(f"cannot read --board {args.board}: {error}", args.json, "board")
     except ValidationError as error:
-        problem = error.errors()[0]
-        return _fail(
-            f"--board {args.board} is not a board spec: {'.'.join(map(str, problem['loc']))}: {problem['msg']}"
-        )
+        return _fail(f"--board is not a board spec: {describe_file_error(args.board, error)}", args.json, "board")
     try:
         device = _device(args.device)
     except ValueError as error:
-        return _fail(str(error))
+        return _fail(str(error), args.json, "device")
     try:
         photos = [(str(path), path.read_bytes()) for path in args.photos]
         views, skipped = find_views(photos, spec)
     except OSError as error:
-        return _fail(f"cannot read a photo: {error}")
+        return _fail(f"cannot read a photo: {error}", args.json, "photos")
     except PhotoError as error:
-        return _fail(str(error))
+        return _fail(str(error), args.json, "photos")
     if not views:
         report = no_board_report(skipped)
         print(report.model_dump_json(by_alias=True, indent=2) if args.json else format_report(report))
@@ -138,7 +137,7 @@ def _run_camera(args) -> int:
     try:
         report = calibrate(views, spec, device, args.profile_id)
     except CalibrationInputError as error:
-        return _fail(str(error))
+        return _fail(str(error), args.json)
     report = report.model_copy(update={"views": report.views + skipped})
     if args.out is not None and report.profile is not None:
         args.out.write_text(report.profile.model_dump_json(indent=2, exclude_none=True) + "\n")

@@ -11,7 +11,9 @@ import re
 import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_REFUSED, EXIT_BAD_INPUT = 0, 1, 2
+from shared_schemas.cli import BadInput, describe_file_error, read_map_argument, report_bad_input
+
+EXIT_OK, EXIT_REFUSED = 0, 1
 
 
 def add_survey_command(commands) -> None:
@@ -19,7 +21,11 @@ def add_survey_command(commands) -> None:
         "survey", help="survey a room's panels from frames taken from the floor (bundle adjustment)"
     )
     parser.add_argument("frames", type=Path, nargs="+", help="recorded frames: NAME.json (beside NAME.y/.yuv/.png)")
-    parser.add_argument("--map", type=Path, required=True, help="the sketch: the room's panels (IDs, shapes, sizes)")
+    parser.add_argument(
+        "--map",
+        required=True,
+        help="the sketch: the room's panels (IDs, shapes, sizes), a map file or a bundled map's name",
+    )
     parser.add_argument("--anchor", type=int, required=True, help="the panel whose sketch centre and yaw fix the map")
     parser.add_argument("--out", type=Path, required=True, help="where to write the surveyed map")
     parser.add_argument("--labels", type=Path, help="JSON: a frame's file name -> list of PanelLabel")
@@ -77,35 +83,29 @@ def run_survey_command(args) -> int:
     from server.outcomes import FrameError
     from server.survey.rules import SurveyInputError, SurveyRefused
     from server.survey.run import SurveyFrame, survey
-    from shared_schemas import load_map
     from shared_schemas.api import NAME_PATTERN
 
     name = args.name or args.out.stem
-    if not re.match(NAME_PATTERN, name):
-        print(f"error: map name '{name}' must match {NAME_PATTERN} (give --name)", file=sys.stderr)
-        return EXIT_BAD_INPUT
     try:
-        sketch = load_map(args.map)
-    except (OSError, ValueError) as error:
-        print(f"error: cannot read sketch {args.map}: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    try:
-        labels = _read_labels(args.labels, args.frames)
-    except (OSError, ValueError, ValidationError) as error:
-        print(f"error: cannot read labels {args.labels}: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    frames = []
-    for path, frame_labels in zip(args.frames, labels, strict=True):
+        if not re.match(NAME_PATTERN, name):
+            raise BadInput(f"map name '{name}' must match {NAME_PATTERN} (give --name)", field="name")
+        sketch = read_map_argument(args.map)
         try:
-            frames.append(SurveyFrame(str(path), read_fixture(path), frame_labels))
-        except FrameError as error:
-            print(f"error: frame {path}: {error}", file=sys.stderr)
-            return EXIT_BAD_INPUT
-    try:
-        report = survey(frames, sketch, args.anchor, name)
-    except SurveyInputError as error:
-        print(f"error: {error.message}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+            labels = _read_labels(args.labels, args.frames)
+        except (OSError, ValueError, ValidationError) as error:
+            raise BadInput(f"cannot read labels {describe_file_error(args.labels, error)}", field="labels") from None
+        frames = []
+        for path, frame_labels in zip(args.frames, labels, strict=True):
+            try:
+                frames.append(SurveyFrame(str(path), read_fixture(path), frame_labels))
+            except FrameError as error:
+                raise BadInput(f"frame {path}: {error}", field=error.field, error="bad_frame") from None
+        try:
+            report = survey(frames, sketch, args.anchor, name)
+        except SurveyInputError as error:
+            raise BadInput(error.message, field=error.field) from None
+    except BadInput as problem:
+        return report_bad_input(problem, as_json=args.json)
     except SurveyRefused as error:
         print(f"refused: {error.message}", file=sys.stderr)
         return EXIT_REFUSED

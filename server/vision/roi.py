@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from server.outcomes import Refusal
@@ -106,16 +107,13 @@ def find_roi(
     cut by the frame border: see `contour.find_beacon_blob`); `view` places a window."""
     height, width = pixels.shape
     step, origin = view.grid(pixels.shape, rules)
-    small = coarse_view(pixels, step, origin)
-    levels = view.levels or coarse_levels(small)
+    mask, levels = _coarse_mask(pixels, rules, view)
     if levels.contrast < rules.min_contrast_dn:
         return Refusal(
             FailureReason.no_beacon,
             f"nothing stands out of the background (contrast {levels.contrast:.0f} DN)",
         )
-    # No blur here: it would spread a panel a few pixels from the frame edge onto the border
-    # of the small view, and at this scale the panel stands hundreds of DN above the noise.
-    blob = find_beacon_blob(threshold(small, levels), blob_rules, look)
+    blob = find_beacon_blob(mask, blob_rules, look)
     if isinstance(blob, Refusal):
         return blob
     x, y, w, h = blob.bounding_box
@@ -129,3 +127,27 @@ def find_roi(
         levels=levels,
         step=step,
     )
+
+
+def _coarse_mask(pixels: np.ndarray, rules: CoarseRules, view: FrameView) -> tuple[np.ndarray, Levels]:
+    """The coarse view's mask above the mid level, and the levels."""
+    step, origin = view.grid(pixels.shape, rules)
+    small = coarse_view(pixels, step, origin)
+    levels = view.levels or coarse_levels(small)
+    # No blur here: it would spread a panel a few pixels from the frame edge onto the border
+    # of the small view, and at this scale the panel stands hundreds of DN above the noise.
+    return threshold(small, levels), levels
+
+
+def brightest_blob_px(
+    pixels: np.ndarray, rules: RoiRules = RoiRules(), view: FrameView = FrameView()
+) -> np.ndarray | None:
+    """The outer contour (N, 2) in frame pixels of the largest blob `find_roi` judged, or None: what a
+    refusal at this stage saw (for pictures; `server.diagnostics`)."""
+    step, origin = view.grid(pixels.shape, rules)
+    mask, _ = _coarse_mask(pixels, rules, view)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
+        return None
+    largest = max(contours, key=cv2.contourArea).reshape(-1, 2)
+    return coarse_to_frame(largest, step, pixels.shape[:2], origin)

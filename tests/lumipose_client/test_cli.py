@@ -3,11 +3,15 @@
 import json
 import shutil
 
+import pytest
+
 import cv2
 import numpy as np
 
 from lumipose_cli.main import main
 from lumipose_client import read_fixture_files
+from shared_schemas import DEMO_MAP_PATH, load_map
+from shared_schemas.api import cell_truth_m
 from tests.conftest import API_KEY, FIXTURE
 
 
@@ -64,8 +68,8 @@ def test_client_profiles_put_list_get_delete(server_url, capsys, tmp_path):
     assert "stored profile 'cli-calibrated' (3880x5184, calibrated)" in capsys.readouterr().out
     assert main([*url, "profiles", "list"]) == 0
     listed = capsys.readouterr().out
-    assert "cli-calibrated  3880x5184  front  calibrated  (stored)" in listed
-    assert "xiaomi-mi8-rear  3024x4032  rear  datasheet  (bundled)" in listed
+    assert "cli-calibrated    3880x5184  front  calibrated  stored " in listed
+    assert "xiaomi-mi8-rear   3024x4032  rear   datasheet   bundled" in listed
     assert main([*url, "profiles", "get", "cli-calibrated"]) == 0
     assert json.loads(capsys.readouterr().out)["intrinsics"]["fx"] == stored.intrinsics.fx
     assert main([*url, "profiles", "delete", "cli-calibrated", "xiaomi-mi8-front"]) == 2
@@ -73,3 +77,72 @@ def test_client_profiles_put_list_get_delete(server_url, capsys, tmp_path):
     assert "deleted profile cli-calibrated" in captured.out and "bundled_profile" in captured.err
     assert main([*url, "profiles", "get", "cli-calibrated"]) == 2
     assert "no device profile 'cli-calibrated'" in capsys.readouterr().err
+
+
+def test_url_and_key_after_the_verb_or_from_the_environment(server_url, capsys, monkeypatch):
+    assert main(["client", "locate", str(FIXTURE), "--url", server_url, "--compress", "none"]) == 0
+    assert json.loads(capsys.readouterr().out)["ok"]
+    monkeypatch.setenv("LUMIPOSE_URL", server_url)
+    monkeypatch.setenv("LUMIPOSE_API_KEY", "wrong")
+    assert main(["client", "maps", "list"]) == 0
+    assert "* test-bench" in capsys.readouterr().out
+    assert main(["client", "--api-key", "wrong", "maps", "activate", "test-bench", "--api-key", API_KEY]) == 0
+    assert capsys.readouterr().out == "active map: test-bench\n"
+    assert main(["client", "maps", "activate", "test-bench"]) == 2  # the environment's key
+    assert "HTTP 401 unauthorized" in capsys.readouterr().err
+
+
+def test_a_negative_cell_label_is_a_value_not_a_flag(server_url, capsys):
+    assert main(["client", "samples", "store", str(FIXTURE), "--label", "-8,11", "--url", server_url,
+                 "--api-key", API_KEY, "--json"]) == 0
+    (stored,) = json.loads(capsys.readouterr().out)
+    assert stored["label"] == "-8,11" and stored["result"]["ok"]
+    assert main(["client", "--url", server_url, "samples", "evaluate", "--json"]) == 0
+    rows = {row["id"]: row for row in json.loads(capsys.readouterr().out)["rows"]}
+    assert rows[stored["id"]]["label"] == "-8,11" and cell_truth_m("-8,11", 0.05) == pytest.approx([-0.4, 0.55, 0])
+    assert main(["client", "--url", server_url, "--api-key", API_KEY, "samples", "delete", stored["id"]]) == 0
+
+
+def test_json_errors_are_the_contracts_error_body(server_url, capsys, tmp_path):
+    cases = [
+        (["--url", "http://127.0.0.1:9", "maps", "list"], "unreachable", "url"),
+        (["--url", server_url, "profiles", "get", "no-such-profile"], "not_found", "profile_id"),  # the server's
+        (["--url", server_url, "maps", "put", str(tmp_path / "missing.json")], "bad_input", None),
+        (["--url", server_url, "--api-key", API_KEY, "maps", "delete", "test-bench"], "active_map", "name"),
+        (["--url", server_url, "locate", str(tmp_path / "missing.json")], "bad_input", None),
+    ]
+    for argv, error, field in cases:
+        assert main(["client", *argv, "--json"]) == 2, argv
+        out = capsys.readouterr().out
+        body = json.loads(out)
+        assert (body["error"], body["field"]) == (error, field), out
+        assert body["message"]
+    assert main(["client", "--url", server_url, "profiles", "get", "no-such-profile"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "error: HTTP 404 not_found: no device profile 'no-such-profile'" in captured.err
+
+
+def test_map_names_or_files_and_maps_delete(server_url, capsys, tmp_path):
+    url = ["--url", server_url, "--api-key", API_KEY]
+    assert main(["client", "locate", str(FIXTURE), "--map", str(DEMO_MAP_PATH), *url]) == 0  # the file's name is sent
+    assert json.loads(capsys.readouterr().out)["ok"]
+    room = tmp_path / "cli-room.json"
+    room.write_text(load_map().model_copy(update={"name": "cli-room"}).model_dump_json(by_alias=True))
+    assert main(["client", "locate", str(FIXTURE), "--map", str(room), *url]) == 2
+    assert f"the service has no map 'cli-room' (read from {room}): store it with `lumipose client maps put {room}`" \
+        in capsys.readouterr().err
+    assert main(["client", "maps", "put", str(room), *url]) == 0
+    assert main(["client", "locate", str(FIXTURE), "--map", str(room), *url]) == 0
+    moved = load_map().model_copy(update={"name": "cli-room", "beacons": []})
+    moved.beacons.append(load_map().beacons[0].model_copy(update={"center_m": [1.0, 0.0, 1.0]}))
+    edited = tmp_path / "edited.json"
+    edited.write_text(moved.model_dump_json(by_alias=True))
+    capsys.readouterr()
+    assert main(["client", "samples", "evaluate", "--map", str(edited), *url, "--json"]) == 2
+    body = json.loads(capsys.readouterr().out)
+    assert body["error"] == "map_differs" and f"the service's map 'cli-room' differs from {edited}" in body["message"]
+    assert main(["client", "locate", str(FIXTURE), "--map", "cli-room", *url]) == 0
+    assert main(["client", "maps", "delete", "cli-room", *url]) == 0
+    assert "deleted map cli-room" in capsys.readouterr().out
+    assert main(["client", "maps", "delete", "test-bench", *url]) == 2
+    assert "active_map" in capsys.readouterr().err

@@ -31,6 +31,35 @@ def test_startup_map_is_the_default_and_stored_maps_override(tmp_path):
     assert store.get("office") == moved and {s.source for s in store.summaries()} == {"bundled", "stored"}
 
 
+def test_only_stored_maps_not_active_are_deleted(tmp_path):
+    startup = tmp_path / "office.json"
+    startup.write_text(load_map().model_copy(update={"name": "office"}).model_dump_json(by_alias=True))
+    store = MapStore(tmp_path / "data", startup)
+    store.put("room", _room(2))
+    store.put("test-bench", _room(1).model_copy(update={"name": "test-bench"}))  # hides the bundled map
+    refusals = {}
+    for name in ("office", "missing", "../x"):
+        with pytest.raises(StoreError) as refused:
+            store.delete(name)
+        refusals[name] = refused.value.code
+    assert refusals == {"office": "active_map", "missing": "not_found", "../x": "bad_name"}
+    store.set_active("room")
+    with pytest.raises(StoreError) as refused:
+        store.delete("room")
+    assert refused.value.code == "active_map" and "activate another map" in refused.value.message
+    store.set_active("test-bench")
+    store.delete("room")
+    store.set_active("office")
+    store.delete("test-bench")  # the stored one: the bundled map of that name shows again
+    with pytest.raises(StoreError) as refused:
+        store.delete("test-bench")
+    assert refused.value.code == "fixed_map" and "bundled map" in refused.value.message
+    (tmp_path / "data" / "maps" / "hall.json").write_text("{damaged")
+    store.delete("hall")
+    assert {s.name: s.source for s in store.summaries()} == {"test-bench": "bundled", "office": "startup"}
+    assert store.damaged() == []
+
+
 def test_a_replaced_map_file_is_read_again(tmp_path):
     store = MapStore(tmp_path)
     first = load_map().model_copy(update={"name": "room"})

@@ -165,3 +165,13 @@ def test_the_scene_path_draws_the_chains_motion_on_the_sensors_own_rows():
     assert not np.array_equal(frames[0], frames[1])
     assert walking > still  # the blur stretches the clipped panel along the walk
     assert binned == pytest.approx(walking, rel=0.03)
+
+
+def test_the_instants_follow_the_part_in_the_frame_not_points_projected_far_out():
+    """A wall beside the camera (cut at the near plane) projects points far off the frame; its blur
+    takes as many instants as its part in the frame moves (the office window: 256 -> about 12)."""
+    wall_m = np.array([[-0.5, -0.3, 0.001], [-0.5, -0.3, 2.0], [-0.5, 0.3, 2.0], [-0.5, 0.3, 0.001]])
+    motion = ReadoutMotion(np.array([0.8, 0.0, 0.0]), np.zeros(3), ROW_TIME_S, 0.0084)
+    outline, during = exposure_polygons_px(wall_m, CAMERA, STILL, WIDTH, HEIGHT, 1.0, motion)
+    assert np.abs(outline).max() > 10 * WIDTH  # points projected far out ...
+    assert 1 < len(during) < 256  # ... do not set the number of instants

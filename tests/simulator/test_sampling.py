@@ -22,8 +22,8 @@ def small_bench(**series) -> Scene:
 def test_paper_grid_has_391_points_in_the_papers_order():
     poses = series_poses(find_scene("paper-bench"))
     assert len(poses) == 391
-    assert (poses[0].label, poses[0].position_m) == ("(-8, 11)", (-0.4, 0.55, 0.0))
-    assert (poses[-1].label, poses[-1].position_m) == ("(8, -11)", (0.4, -0.55, 0.0))
+    assert (poses[0].label, poses[0].position_m) == ("-8,11", (-0.4, 0.55, 0.0))
+    assert (poses[-1].label, poses[-1].position_m) == ("8,-11", (0.4, -0.55, 0.0))
     assert all(p.ypr_deg == (0.0, 0.0, 0.0) for p in poses)  # face to face
 
 
@@ -31,7 +31,7 @@ def test_rotation_variation_is_bounded_and_deterministic():
     series = {"path": {"kind": "grid", "x_m": [-0.1, 0.1, 0.05], "y_m": [-0.1, 0.1, 0.05]},
               "rotation": {"yaw_deg": 5.0, "max_tilt_deg": 3.0, "yaw_jitter_deg": 2.0}}
     poses = series_poses(small_bench(**series))
-    assert len(poses) == 25 and poses[0].label == "(-2, 2)" and poses[0].position_m[:2] == (-0.1, 0.1)
+    assert len(poses) == 25 and poses[0].label == "-2,2" and poses[0].position_m[:2] == (-0.1, 0.1)
     ypr = np.array([p.ypr_deg for p in poses])
     assert np.all(np.abs(ypr[:, 0] - 5.0) <= 2.0) and np.all(np.hypot(ypr[:, 1], ypr[:, 2]) <= 3.0)
     assert np.ptp(ypr[:, 1]) > 1.0  # really drawn

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query, Response
 
 from server.api.deps import ServicesDep
 from server.api.errors import ERROR_RESPONSES
@@ -11,19 +13,46 @@ from server.api.locating import locate_upload
 from server.api.params import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
 from server.api.routes import DAMAGED_RESPONSES
 from shared_schemas import LocateResult
+from shared_schemas.api import RESULT_HEADER, result_header
 
 router = APIRouter(prefix="/v1", tags=["locate"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
 
+AnnotateQuery = Annotated[
+    bool,
+    Query(description=f"answer with a PNG of what the pipeline saw, the result in the {RESULT_HEADER} header"),
+]
+PICTURE_RESPONSE: dict[int | str, dict[str, Any]] = {
+    200: {
+        "description": f"the result; with `annotate=1` a PNG, the result (compact JSON) in {RESULT_HEADER}",
+        "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}},
+        "headers": {RESULT_HEADER: {"description": "with annotate=1: the result", "schema": {"type": "string"}}},
+    }
+}
 
-@router.post("/locate", response_model=LocateResult, openapi_extra=FRAME_REQUEST_BODY, responses=DAMAGED_RESPONSES)
+
+@router.post(
+    "/locate",
+    response_model=LocateResult,
+    openapi_extra=FRAME_REQUEST_BODY,
+    responses={**DAMAGED_RESPONSES, **PICTURE_RESPONSE},
+)
 async def locate_frame(
-    services: ServicesDep, upload: UploadDep, query: QueryDep, device: DeviceHeader = None, map: MapQuery = None
-) -> LocateResult:
+    services: ServicesDep,
+    upload: UploadDep,
+    query: QueryDep,
+    device: DeviceHeader = None,
+    map: MapQuery = None,
+    annotate: AnnotateQuery = False,
+) -> LocateResult | Response:
     """Locate the camera. 200 with `ok: false` and a `reason` when the frame holds no usable beacon.
 
     With `X-Lumipose-Device` on a map of several beacons, the frame joins the device's session:
     ID frames (`frame_kind: id`) wait for its next pose frame (reason `id_frame`), and pose frames
     get beacon IDs from them and from the track, and a motion-filtered `track` (docs/vlc.md).
+    With `annotate=1` the answer is a PNG of what the pipeline saw (panel, contour, sides, corners,
+    centre, the result or the refusal) and the result travels in the `X-Lumipose-Result` header.
     """
-    located = await locate_upload(services, upload, map, query, device)
+    located = await locate_upload(services, upload, map, query, device, annotated=annotate)
+    if located.picture is not None:
+        return Response(located.picture, media_type="image/png", headers={RESULT_HEADER: result_header(located.result)})
     return located.result

@@ -1,15 +1,17 @@
-"""Beacon maps: list, get, replace (validated, atomic), and the active map."""
+"""Beacon maps: list, get, replace (validated, atomic), delete a stored one, and the active map."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from typing import Any
+
+from fastapi import APIRouter, Response
 from starlette.concurrency import run_in_threadpool
 
 from server.api.deps import ServicesDep, WriteAccess
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
 from server.api.routes import DAMAGED_RESPONSES
-from shared_schemas import BeaconMap
+from shared_schemas import BeaconMap, ErrorBody
 from shared_schemas.api import ActiveMap, MapSummary
 
 router = APIRouter(prefix="/v1/maps", tags=["maps"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
@@ -41,3 +43,18 @@ async def get_map(name: str, services: ServicesDep) -> BeaconMap:
 async def put_map(name: str, beacon_map: BeaconMap, services: ServicesDep) -> BeaconMap:
     """Replace (or create) the map `name`; the body's `name` must match."""
     return await run_in_threadpool(services.maps.put, name, beacon_map)
+
+
+DELETE_RESPONSES: dict[int | str, dict[str, Any]] = {
+    409: {
+        "model": ErrorBody,
+        "description": "`active_map`: activate another map first; `fixed_map`: the bundled or startup map",
+    }
+}
+
+
+@router.delete("/{name}", status_code=204, dependencies=[WriteAccess], responses=DELETE_RESPONSES)
+async def delete_map(name: str, services: ServicesDep) -> Response:
+    """Remove a stored map, also a damaged one; the active map and the bundled or startup map are refused (409)."""
+    await run_in_threadpool(services.maps.delete, name)
+    return Response(status_code=204)

@@ -23,7 +23,14 @@ def test_maps_list_get_put_and_activate(client):
     assert client.get_map("office-a") == office
     assert client.set_active_map("office-a").name == "office-a"
     assert client.active_map().name == "office-a" and client.health().active_map == "office-a"
+    refused = _refusal(lambda: client.delete_map("office-a"))
+    assert (refused.status, refused.body.error) == (409, "active_map") and "activate another" in refused.body.message
     client.set_active_map("test-bench")
+    refused = _refusal(lambda: client.delete_map("test-bench"))
+    assert (refused.status, refused.body.error) == (409, "active_map")
+    client.delete_map("office-a")
+    assert "office-a" not in {summary.name for summary in client.maps()}
+    assert _refusal(lambda: client.delete_map("office-a")).status == 404
 
 
 def test_writes_need_the_key(server_url, fixture_frame):

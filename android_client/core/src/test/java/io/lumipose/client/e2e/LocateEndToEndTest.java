@@ -76,7 +76,7 @@ class LocateEndToEndTest {
         dataDir = Files.createTempDirectory("lumipose-e2e");
         log = dataDir.resolve("serve.log");
         List<String> cmd = Arrays.asList(exe.toString(), "serve", "--host", "127.0.0.1", "--port",
-                String.valueOf(port), "--data", dataDir.resolve("data").toString(), "--api-key", KEY,
+                String.valueOf(port), "--data-dir", dataDir.resolve("data").toString(), "--api-key", KEY,
                 "--log-level", "warning");
         server = new ProcessBuilder(cmd).directory(Repo.root().toFile()).redirectErrorStream(true)
                 .redirectOutput(log.toFile()).start();

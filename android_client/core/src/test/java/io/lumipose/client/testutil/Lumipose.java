@@ -116,7 +116,7 @@ public final class Lumipose {
             Path data = Files.createTempDirectory("lumipose-replay");
             Path log = data.resolve("serve.log");
             Process p = command(Arrays.asList("serve", "--host", "127.0.0.1", "--port", String.valueOf(port),
-                    "--data", data.resolve("data").toString(), "--api-key", KEY, "--log-level", "warning"))
+                    "--data-dir", data.resolve("data").toString(), "--api-key", KEY, "--log-level", "warning"))
                     .redirectOutput(log.toFile()).start();
             Serve serve = new Serve("http://127.0.0.1:" + port, p, log);
             long deadline = System.nanoTime() + TimeUnit.SECONDS.toNanos(90);

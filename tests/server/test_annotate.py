@@ -1,0 +1,120 @@
+"""Pictures of what the pipeline saw (`lumipose locate --annotate`, `server.annotate`): the markers
+land on the corners found, a refusal is pictured with its reason, a room's panels each get theirs."""
+
+import json
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from lumipose_cli.main import main
+from server.annotate import CONTOUR, CORNER, REFUSED, annotate, display_px, display_scale, enlarged_part
+from server.diagnostics import Diagnostics
+from server.ingest import LumaFrame, read_fixture
+from server.locator import locate
+from server.options import LocateOptions
+from server.outcomes import located
+from server.pipeline import PipelineOptions
+from server.rooms import locate_panel
+from server.vision.beacons import find_beacon_blobs
+from shared_schemas import DEMO_MAP_PATH, BeaconIdSource, FailureReason, load_map
+from tests.conftest import FIXTURE
+from tests.helpers import TWO_PANELS, WIDTH, two_panel_frame
+
+
+def _annotated(frame: LumaFrame, beacon_map=None):
+    diagnostics = Diagnostics()
+    options = LocateOptions(pipeline=PipelineOptions(diagnostics=diagnostics))
+    result = locate(frame, beacon_map or load_map(DEMO_MAP_PATH), options)
+    return result, diagnostics, annotate(frame, diagnostics, result)
+
+
+def _decoded(png: bytes) -> np.ndarray:
+    image = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR)
+    assert image is not None and image.ndim == 3
+    return image
+
+
+def _marker_pixels(image, corners_px, sights, result, size) -> np.ndarray:
+    """The display pixels (BGR) where the main view draws `corners_px` (frame pixels)."""
+    part = enlarged_part(sights, result, size)
+    points = np.rint(display_px(np.asarray(corners_px), part, display_scale(part[2] - part[0], part[3] - part[1])))
+    return np.array([image[int(y), int(x)] for x, y in points])
+
+
+def _near(image: np.ndarray, colour, tolerance: int = 40) -> np.ndarray:
+    return np.all(np.abs(image.astype(int) - colour) <= tolerance, axis=-1)
+
+
+def test_the_corners_are_marked_where_the_pipeline_found_them():
+    frame = read_fixture(FIXTURE)
+    plain = locate(frame, load_map(DEMO_MAP_PATH))
+    result, diagnostics, png = _annotated(frame)
+    assert result.ok and result.position_m == plain.position_m  # recording changes nothing
+    [sight] = diagnostics.panels
+    assert sight.contour_px is not None and sight.sides_px.shape == (4, 25, 2) and sight.roi_px is not None
+    image = _decoded(png)
+    assert 600 <= image.shape[1] <= 2000 and 500 <= image.shape[0] <= 2000
+    height, width = frame.pixels.shape
+    markers = _marker_pixels(image, result.corners_px, diagnostics.panels, result, (width, height))
+    assert (markers == CORNER).all(), markers
+    # only the markers and numbers are pure green: a picture painted green all over would not pass
+    assert (image == CORNER).all(axis=-1).mean() < 0.01
+    # the sub-pixel sides pass within a pixel of the corners they meet at (the lines are the corners' own)
+    assert np.abs(sight.sides_px[:, 0] - sight.sides_px[[3, 0, 1, 2], -1]).max() < 1e-6
+
+
+def test_a_refusal_is_pictured_with_the_blob_found_and_its_reason():
+    frame = read_fixture(FIXTURE)
+    pixels = np.full_like(frame.pixels, 12)
+    cv2.circle(pixels, (480, 700), 70, 250, -1)  # a round lamp, not the square panel
+    result, diagnostics, png = _annotated(replace(frame, pixels=pixels))
+    assert not result.ok and result.reason is FailureReason.not_a_square
+    [sight] = diagnostics.panels
+    assert sight.contour_px is not None and sight.sides_px is None
+    image = _decoded(png)
+    assert _near(image, CONTOUR).sum() > 100  # the lamp's contour is drawn
+    assert _near(image, REFUSED).sum() > 50  # and the reason, in the refusal's colour
+    assert not (image == CORNER).all(axis=-1).any()  # no corners: there is no fix
+
+
+def test_a_frame_without_anything_is_the_whole_frame_with_the_reason():
+    frame = read_fixture(FIXTURE)
+    result, diagnostics, png = _annotated(replace(frame, pixels=np.full_like(frame.pixels, 12)))
+    assert result.reason is FailureReason.no_beacon and diagnostics.panels[0].roi_px is None
+    image = _decoded(png)
+    assert _near(image, REFUSED).sum() > 50
+
+
+def test_each_panel_of_a_room_is_marked_in_the_whole_frame():
+    frame = two_panel_frame()
+    found = find_beacon_blobs(frame.pixels)
+    diagnostics = Diagnostics()
+    fixes = []
+    for blob in found.blobs:
+        beacon = TWO_PANELS.beacons[0] if blob.centroid_px[0] < WIDTH / 2 else TWO_PANELS.beacons[1]
+        others = [b for b in found.blobs if b is not blob]
+        options = PipelineOptions(diagnostics=diagnostics)
+        fixes.append(locate_panel(frame, blob, others, beacon, BeaconIdSource.vlc, options, found.levels))
+    assert sorted(s.beacon_id for s in diagnostics.panels) == [17, 42]
+    # each panel's crop lands back on the frame: the sights carry the frame's corners
+    for sight, fix in zip(diagnostics.panels, fixes, strict=True):
+        np.testing.assert_allclose(sight.outcome.corners_px, fix.corners_px)
+        assert sight.contour_px[:, 0].min() > fix.corners_px[:, 0].min() - 3
+    result = located(fixes[0])
+    image = _decoded(annotate(frame, diagnostics, result))
+    height, width = frame.pixels.shape
+    for fix in fixes:
+        markers = _marker_pixels(image, fix.corners_px, diagnostics.panels, result, (width, height))
+        assert (markers == CORNER).all(), markers
+
+
+def test_locate_annotate_writes_the_picture_and_says_when_it_cannot(tmp_path, capsys):
+    picture = tmp_path / "seen.png"
+    assert main(["locate", str(FIXTURE), "--annotate", str(picture), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ok"]
+    assert _decoded(picture.read_bytes()).shape[0] > 500
+    nowhere = tmp_path / "missing" / "seen.png"
+    assert main(["locate", str(FIXTURE), "--annotate", str(nowhere), "--json"]) == 2
+    error = json.loads(capsys.readouterr().out)
+    assert error["field"] == "annotate" and str(nowhere) in error["message"]

@@ -1,0 +1,26 @@
+"""Frames listed as shot, sent as the app sends its captures: a burst's ID frames, then its pose frame."""
+
+from shared_schemas import FrameKind
+from shared_schemas.captures import all_located, bursts_in_upload_order
+
+P, I = FrameKind.pose, FrameKind.id
+
+
+def test_each_capture_sends_its_id_frames_before_its_pose_frame():
+    assert bursts_in_upload_order([P, I, I, P, I, P]) == [[1, 2, 0], [4, 3], [5]]
+
+
+def test_id_frames_before_any_pose_frame_and_pose_frames_alone():
+    assert bursts_in_upload_order([I, I, P, P]) == [[0, 1], [2], [3]]
+    assert bursts_in_upload_order([]) == []
+
+
+def test_a_series_is_located_when_every_frame_has_a_fix_or_was_kept_for_its_session():
+    from shared_schemas import FailureReason, LocateResult
+
+    fix = LocateResult(ok=True, position_m=[0, 0, 1], yaw_pitch_roll_deg=[0, 0, 0], beacon_id=1)
+    kept = LocateResult(ok=False, reason=FailureReason.id_frame, message="ID frame kept")
+    lost = LocateResult(ok=False, reason=FailureReason.unknown_beacon, message="no ID")
+    assert all_located([kept, kept, fix])
+    assert not all_located([kept, lost, fix])
+    assert not all_located([kept])  # one ID frame alone: no fix, as before
