@@ -269,6 +269,9 @@ def plot_scatter(outcomes: list[Outcome], path: Path, title: str, margin_m: floa
         vectors.quiverkey(quiver, 0.82, 1.015, reference_mm / 1000 * magnify, f"{reference_mm:g} mm error",
                           labelpos="E", coordinates="axes", color="black", fontproperties={"size": 8})
         figure.colorbar(quiver, ax=vectors, label="2D error (mm)", shrink=0.8)
+        reach = float(np.abs(shown).max()) + 0.5 * _spacing_m(true)  # the longest arrow stays inside the axes
+        vectors.set_xlim(true[:, 0].min() - reach, true[:, 0].max() + reach)
+        vectors.set_ylim(true[:, 1].min() - reach, true[:, 1].max() + reach)
         vectors.set_title(f"{title}\nerror vectors, drawn {magnify:.0f}x their length", fontsize=10, loc="left")
     else:
         vectors.set_title(title, fontsize=10, loc="left")
