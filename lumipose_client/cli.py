@@ -1,7 +1,7 @@
 """`lumipose client ...`: the service from the command line, through the Python client.
 
 Exit codes as `lumipose locate`: 0 success (a fix), 1 no fix, 2 a refused request or bad input.
-Only the client and the contract are imported here; the figures of `samples evaluate --plots`
+Only the client and the contract are imported here; the figures of `samples evaluate --figures`
 come from whoever builds the command line (`lumipose_cli.main` hands in the simulator's).
 """
 
@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import re
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
@@ -38,7 +39,7 @@ NEGATIVE_NUMBER_OR_CELL = re.compile(r"^-\d+$|^-\d*\.\d+$|^-\d+,-?\d+$")
 MAP_HELP = "a map's name, or a map file (its name is sent: the service must hold that map, see `maps put`)"
 
 Model = TypeVar("Model", bound=BaseModel)
-PlotEvaluation = Callable[[Evaluation, Path], list[Path]]  # (report, folder) -> the figure files written
+PlotEvaluation = Callable[[Evaluation, Path, float], list[Path]]  # (report, folder, cell m) -> the figures written
 
 
 def _add_shared_options(parser: argparse.ArgumentParser, top: bool) -> None:
@@ -70,7 +71,7 @@ def _verb(actions, name: str, run: Callable[[Client, argparse.Namespace], int], 
 
 
 def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> None:
-    """Add `client ...` to an argparse subparsers object; `samples evaluate --plots` exists when
+    """Add `client ...` to an argparse subparsers object; `samples evaluate --figures` exists when
     `plot_evaluation` is given."""
     client = commands.add_parser("client", help="talk to a running Lumipose service")
     _add_shared_options(client, top=True)
@@ -101,7 +102,14 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     evaluate.add_argument("--map", help=MAP_HELP + ", to re-locate every sample in (default: the active map)")
     evaluate.add_argument("--cell", type=float, default=0.05, help="grid cell side for 'i,j' labels, metres")
     if plot_evaluation is not None:
-        evaluate.add_argument("--plots", type=Path, help="write the paper's Figs. 13-14 (scatter, heat map) here")
+        evaluate.add_argument(
+            "--figures",
+            type=Path,
+            default=None,
+            metavar="DIR",
+            help="write the paper's Figs. 13-14 (samples_scatter.png, samples_heatmap.png in "
+            "--cell cells) into this folder (default: no figures)",
+        )
     evaluate.set_defaults(plot_evaluation=plot_evaluation)
 
     maps = actions.add_parser("maps", help="beacon maps")
@@ -277,9 +285,11 @@ def _delete_samples(client: Client, args) -> int:
 
 def _evaluate(client: Client, args) -> int:
     report = client.evaluate_samples(map=_served_map_name(client, args.map), cell_m=args.cell)
-    figures = args.plot_evaluation(report, args.plots) if getattr(args, "plots", None) else []
+    figures = args.plot_evaluation(report, args.figures, args.cell) if getattr(args, "figures", None) else []
     if args.json:
         _print(report)
+        for figure in figures:  # stdout is the report
+            print(f"  figure {figure}", file=sys.stderr)
         return 0
     print(
         f"map {report.map}: {plural(report.samples, 'sample')}, {report.with_truth} with truth, "
@@ -291,7 +301,7 @@ def _evaluate(client: Client, args) -> int:
             f"min {report.min_mm:.2f}  max {report.max_mm:.2f}"
         )
     for figure in figures:
-        print(f"wrote {figure}")
+        print(f"  figure {figure}")
     return 0
 
 

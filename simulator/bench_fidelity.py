@@ -130,7 +130,7 @@ def blender_row(distance_m: float, profile_id: str = "xiaomi-mi8-rear") -> dict:
             "ratio": blender / exact_length}
 
 
-def bench_fidelity(out_dir: Path, distances_m: list[float] | None = None,
+def bench_fidelity(figures_dir: Path | None, distances_m: list[float] | None = None,
                    overexposures: tuple[float, ...] = (0.8, 4.0), blender: bool = False) -> dict:
     distances_m = distances_m or [round(1.0 + 0.1 * k, 1) for k in range(21)]
     rows = [fidelity_row(d, o) for o in overexposures for d in distances_m]
@@ -142,31 +142,35 @@ def bench_fidelity(out_dir: Path, distances_m: list[float] | None = None,
         ratios = np.array([r["ratio"] for r in rows if r["overexposure"] == o])
         summary[_name(o)] = {"mean_ratio": float(ratios.mean()), "std_ratio": float(ratios.std()),
                               "min_ratio": float(ratios.min()), "max_ratio": float(ratios.max())}
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    figure = out_dir / "fidelity.png"
-    _plot(rows, overexposures, figure)
-    return {"title": "simulation fidelity (Fig. 10): top side, our renderer / exact projection",
-            "rows": rows, "summary": summary, "paper": PAPER_FIG_10, "figures": [str(figure)]}
+    report = {"title": "simulation fidelity (Fig. 10): top side, our renderer / exact projection",
+              "rows": rows, "summary": summary, "paper": PAPER_FIG_10}
+    if figures_dir is not None:
+        Path(figures_dir).mkdir(parents=True, exist_ok=True)
+        figure = Path(figures_dir) / "fidelity.png"
+        plot_fidelity(rows, figure)
+        report["figures"] = [str(figure)]
+    return report
 
 
 def _name(overexposure) -> str:
     return "Blender (Cycles), unclipped" if overexposure == "blender" else f"ours, panel {overexposure:g}x saturation"
 
 
-def _plot(rows: list[dict], overexposures, path: Path) -> None:
+def plot_fidelity(rows: list[dict], path: Path) -> None:
+    """The top-side ratio against distance, one line per exposure (and Blender); the legend below."""
     from simulator.reports import pyplot
 
     plt = pyplot()
-    figure, axes = plt.subplots(figsize=(8, 4.5))
-    for o in overexposures:
+    figure, axes = plt.subplots(figsize=(8, 5))
+    # lines that coincide (ours unclipped and Blender sit on 1.0) each keep a marker and dash of their own
+    for style, o in zip(("o-", "s--", "^:"), dict.fromkeys(r["overexposure"] for r in rows), strict=False):
         part = [r for r in rows if r["overexposure"] == o]
-        axes.plot([r["distance_m"] for r in part], [r["ratio"] for r in part], "o-", label=_name(o))
+        axes.plot([r["distance_m"] for r in part], [r["ratio"] for r in part], style, mfc="none", label=_name(o))
     axes.axhline(PAPER_FIG_10["mean_ratio"], color="grey", linestyle="--", label="paper: real / Blender, mean")
     axes.axhline(1.0, color="black", linewidth=0.8)
     axes.set(xlabel="distance (m)", ylabel="top side ratio", title="Simulation fidelity: rendered / exact projection",
              ylim=(0.96, 1.02))
-    axes.legend(fontsize=8)
+    axes.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)

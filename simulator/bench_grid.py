@@ -25,6 +25,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from server.camera import intrinsics_from_profile
 from server.pipeline import PipelineOptions
 from shared_schemas import DeviceProfile, device_profiles
@@ -90,31 +92,40 @@ def reports_grid_extent(scene: Scene) -> tuple[float, float]:
     return (max(xs) - min(xs)) / 2, (max(ys) - min(ys)) / 2
 
 
-def run_grid_bench(scene: Scene, out_dir: Path, title: str, workers: int | None = None,
+def run_grid_bench(scene: Scene, figures_dir: Path | None, title: str, workers: int | None = None,
                    pipeline_camera=None, limit: int | None = None) -> dict:
-    """Locate every sample of the scene's series; write table (JSON, text), outcomes and figures."""
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    samples = series_poses(scene)
-    if limit is not None:
-        samples = samples[::max(1, len(samples) // limit)][:limit]
+    """Locate every sample of the scene's series (or about `limit` of them, evenly spread); the table, and
+    with `figures_dir` the figures plus the data they were drawn from (scene.json, outcomes.json) there."""
+    planned = series_poses(scene)
+    samples = planned if limit is None else planned[::max(1, len(planned) // limit)][:limit]
     jobs = [reports.LocateJob(scene, sample, PipelineOptions(), pipeline_camera) for sample in samples]
     start = time.perf_counter()
     outcomes = reports.locate_series(jobs, workers, title)
     wall_s = time.perf_counter() - start
-    summary = reports.table(outcomes)
-    (out_dir / "scene.json").write_text(scene.to_json())
-    reports.write_outcomes(outcomes, out_dir / "outcomes.json")
-    figures = [out_dir / f"{scene.name}-scatter.png"]
+    report = {"title": title, "scene": scene.name, "summary": reports.table(outcomes),
+              "failures": reports.failures(outcomes), "wall_s": wall_s, "workers": workers or os.cpu_count()}
+    if figures_dir is not None:
+        report["figures"] = [str(f) for f in write_grid_figures(scene, outcomes, Path(figures_dir), title, planned)]
+    return report
+
+
+def write_grid_figures(scene: Scene, outcomes: list[reports.Outcome], figures_dir: Path, title: str,
+                       planned: list) -> list[Path]:
+    """Scatter (and for a grid, the heat map over the whole planned grid) with scene.json and outcomes.json."""
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    (figures_dir / "scene.json").write_text(scene.to_json())
+    reports.write_outcomes(outcomes, figures_dir / "outcomes.json")
+    figures = [figures_dir / f"{scene.name}-scatter.png"]
     reports.plot_scatter(outcomes, figures[0], title)
-    if scene.series.path.kind in ("fov_grid", "grid"):  # a walk's positions make no heat map
-        figures.append(out_dir / f"{scene.name}-heatmap.png")
-        reports.plot_heatmap(outcomes, figures[1], title)
-    return {"title": title, "scene": scene.name, "summary": summary, "failures": reports.failures(outcomes),
-            "wall_s": wall_s, "workers": workers or os.cpu_count(), "figures": [str(f) for f in figures]}
+    path = scene.series.path
+    if path.kind in ("fov_grid", "grid"):  # a walk's positions make no heat map
+        cell_m = path.cell_m if path.kind == "fov_grid" else path.x_m[2]
+        figures.append(figures_dir / f"{scene.name}-heatmap.png")
+        reports.plot_heatmap(outcomes, figures[1], title, cell_m, np.array([p.position_m[:2] for p in planned]))
+    return figures
 
 
-def bench_grid(out_dir: Path, scale: float = 1.0, seed: int | None = None, workers: int | None = None,
+def bench_grid(figures_dir: Path | None, scale: float = 1.0, seed: int | None = None, workers: int | None = None,
                limit: int | None = None, scene_name: str | None = None, yaw_jitter_deg: float = 0.0) -> dict:
     """The paper's grid, or the series of any scene file (`scene_name`) at its own resolution."""
     if scene_name is None:
@@ -125,13 +136,13 @@ def bench_grid(out_dir: Path, scale: float = 1.0, seed: int | None = None, worke
         if seed is not None:
             scene = scene.model_copy(update={"seed": seed})
         title = f"scene {scene.name}"
-    report = run_grid_bench(scene, out_dir, title, workers, limit=limit)
+    report = run_grid_bench(scene, figures_dir, title, workers, limit=limit)
     if scene_name is None:
         report["paper"] = PAPER_TABLE_1
     return report
 
 
-def bench_real(out_dir: Path, bench: RealBench = RealBench(), scale: float = 1.0, seed: int | None = None,
+def bench_real(figures_dir: Path | None, bench: RealBench = RealBench(), scale: float = 1.0, seed: int | None = None,
                workers: int | None = None, limit: int | None = None, profile: DeviceProfile | None = None) -> dict:
     """The real-like bench located with the true lens, the datasheet pinhole (`bench.calibrated` False) or a
     calibrated `profile` (scaled and cropped to the bench's frames as any frame naming it)."""
@@ -145,7 +156,7 @@ def bench_real(out_dir: Path, bench: RealBench = RealBench(), scale: float = 1.0
         title = "real-like bench, 1 m, datasheet pinhole"
     else:
         title = "real-like bench, 1 m, true lens"
-    report = run_grid_bench(scene, out_dir, title, workers, pipeline_camera, limit)
+    report = run_grid_bench(scene, figures_dir, title, workers, pipeline_camera, limit)
     report["paper"] = PAPER_TABLE_2
     report["bench"] = bench.__dict__
     if profile is not None:

@@ -247,7 +247,7 @@ def plot_walk(report: dict, path: Path) -> None:
     _, area = _walk(OfficeConfig(**report["config"]), pose_scene)
     colours = dict(zip(sorted(b.id for b in beacon_map.beacons), ["tab:blue", "tab:orange", "tab:green", "tab:red"]))
     records = report["records"]
-    fig, ax = plt.subplots(figsize=(5.0, 6.6))
+    fig, ax = plt.subplots(figsize=(5.4, 7.6))
     for b in beacon_map.beacons:  # each beacon's quarter of the area, softly coloured
         qx = area.x_min_m if b.center_m[0] < 0 else 0.0
         qy = area.y_min_m if b.center_m[1] < 0 else 0.0
@@ -255,18 +255,20 @@ def plot_walk(report: dict, path: Path) -> None:
         s = b.size_m
         ax.add_patch(plt.Rectangle((b.center_m[0] - s / 2, b.center_m[1] - s / 2), s, s, color=colours[b.id]))
         ax.annotate(f"ID {b.id}", (b.center_m[0], b.center_m[1] + 0.12), ha="center", fontsize=8)
-    truth = np.array([r["truth_m"] for r in records])
-    ax.plot(truth[:, 0], truth[:, 1], "-", color="darkorange", lw=1.0, label="true path")
     for beacon_id, colour in colours.items():
         fixes = np.array([r["fix_m"] for r in records if r["ok"] and r["beacon_id"] == beacon_id])
         if len(fixes):
             ax.plot(fixes[:, 0], fixes[:, 1], ".", color=colour, ms=4, label=f"fixes from ID {beacon_id}")
     filtered = np.array([r["filtered_m"] for r in records if "filtered_m" in r])
     if len(filtered):
-        ax.plot(filtered[:, 0], filtered[:, 1], "-", color="k", lw=0.6, alpha=0.7, label="filtered track")
+        ax.plot(filtered[:, 0], filtered[:, 1], "-", color="tab:purple", lw=2.6, alpha=0.45, label="filtered track",
+                zorder=3)  # wide and pale under the truth: both stay visible where they coincide
+    # the truth last and dashed in black, a colour no beacon has, so the track cannot hide it
+    truth = np.array([r["truth_m"] for r in records])
+    ax.plot(truth[:, 0], truth[:, 1], "--", color="black", lw=0.9, label="true path", zorder=4)
     missed = np.array([r["truth_m"] for r in records if not r["ok"]])
     if len(missed):
-        ax.plot(missed[:, 0], missed[:, 1], "x", color="grey", ms=5, label="no fix")
+        ax.plot(missed[:, 0], missed[:, 1], "x", color="black", ms=6, mew=1.5, label="no fix", zorder=5)
     s = report["summary"]
     ax.set_title(f"{report['config']['walk']}: mean {s['fixes']['mean_mm']:.1f} mm, coverage {s['coverage_pct']:.1f} %, "
                  f"ID errors {s['id_errors']}", fontsize=9)
@@ -275,7 +277,7 @@ def plot_walk(report: dict, path: Path) -> None:
     ax.set_aspect("equal")
     ax.set_xlabel("X (m)")
     ax.set_ylabel("Y (m)")
-    ax.legend(fontsize=6, loc="upper right")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=3, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -387,7 +387,7 @@ def format_partial(report: dict) -> str:
 def plot_partial(report: dict, path: Path) -> None:
     """2D error against visible share, one panel per resolution, coloured by distance; refusals as x
     along the bottom."""
-    from simulator.reports import pyplot
+    from simulator.reports import plain_log_axis, pyplot
 
     plt = pyplot()
     scales = report["config"]["scales"]
@@ -416,7 +416,7 @@ def plot_partial(report: dict, path: Path) -> None:
                 color=colours[distance],
                 label=f"{distance:g} m refused ({len(refused)})" if refused else "_nolegend_",
             )
-        panel.axhline(OFF_M * 1000, color="red", linestyle=":", linewidth=1)
+        panel.axhline(OFF_M * 1000, color="red", linestyle=":", linewidth=1, label=f"{OFF_M * 1000:g} mm: off")
         panel.set_yscale("log")
         panel.set(
             xlim=(15, 100),
@@ -425,6 +425,7 @@ def plot_partial(report: dict, path: Path) -> None:
             ylabel="2D error (mm)",
             title=f"{width} x {height}",
         )
+        plain_log_axis(panel.yaxis)
         panel.legend(fontsize=7, loc="upper right")
     figure.suptitle("cut panels: error against visible share (x = refused)")
     figure.tight_layout()

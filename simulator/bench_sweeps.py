@@ -66,15 +66,17 @@ def _sweep(scenes: list[tuple[float, Scene]], key: str, workers: int | None) -> 
     return rows
 
 
-def _sweep_report(rows: list[dict], key: str, out_dir: Path, name: str, title: str, xlabel: str) -> dict:
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    figure = out_dir / f"{name}-sweep.png"
-    reports.plot_sweep(rows, key, figure, title, xlabel)
-    return {"title": f"{name} sweep", "rows": rows, "figures": [str(figure)]}
+def _sweep_report(rows: list[dict], key: str, figures_dir: Path | None, name: str, title: str, xlabel: str) -> dict:
+    report: dict = {"title": f"{name} sweep", "rows": rows}
+    if figures_dir is not None:
+        Path(figures_dir).mkdir(parents=True, exist_ok=True)
+        figure = Path(figures_dir) / f"{name}-sweep.png"
+        reports.plot_sweep(rows, key, figure, title, xlabel)
+        report["figures"] = [str(figure)]
+    return report
 
 
-def bench_distance(out_dir: Path, distances_m: list[float] | None = None, scale: float = 1.0,
+def bench_distance(figures_dir: Path | None, distances_m: list[float] | None = None, scale: float = 1.0,
                    seed: int | None = None, workers: int | None = None, yaw_jitter_deg: float = 0.0) -> dict:
     distances_m = distances_m or [round(1.0 + 0.1 * k, 1) for k in range(21)]
     base = grid_scene(scale, seed)
@@ -82,15 +84,16 @@ def bench_distance(out_dir: Path, distances_m: list[float] | None = None, scale:
                   workers)
     title = "2D error against distance (5 x 5 grid over the FOV" + (
         f", yaw +-{yaw_jitter_deg:g} deg)" if yaw_jitter_deg else ", face to face)")
-    return _sweep_report(rows, "distance_m", out_dir, "distance", title, "camera to panel distance (m)")
+    return _sweep_report(rows, "distance_m", figures_dir, "distance", title, "camera to panel distance (m)")
 
 
-def bench_tilt(out_dir: Path, tilts_deg: list[float] | None = None, scale: float = 1.0, seed: int | None = None,
-               workers: int | None = None) -> dict:
+def bench_tilt(figures_dir: Path | None, tilts_deg: list[float] | None = None, scale: float = 1.0,
+               seed: int | None = None, workers: int | None = None) -> dict:
     tilts_deg = tilts_deg or [2.5 * k for k in range(7)]
     base = grid_scene(scale, seed)
     rows = _sweep([(t, tilt_scene(base, t)) for t in tilts_deg], "tilt_deg", workers)
-    return _sweep_report(rows, "tilt_deg", out_dir, "tilt", "2D error against tilt (1 m, 3 x 3 points x 4 directions)",
+    return _sweep_report(rows, "tilt_deg", figures_dir, "tilt",
+                         "2D error against tilt (1 m, 3 x 3 points x 4 directions)",
                          "camera tilt (degrees)")
 
 

@@ -187,7 +187,7 @@ def plot_vlc(reports: list[dict], path, title: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
     panels = sorted({(r.get("shape", "square"), r["side_m"]) for r in reports})
     for shape, side in panels:
         rows = sorted((r for r in reports if (r.get("shape", "square"), r["side_m"]) == (shape, side)),
@@ -203,7 +203,7 @@ def plot_vlc(reports: list[dict], path, title: str) -> None:
     ax.set_ylim(-5, 105)
     ax.grid(alpha=0.3)
     ax.set_title(title)
-    ax.legend(fontsize=7, loc="center right")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)  # off the data
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -342,7 +342,7 @@ def plot_cut(reports: list[dict], path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
     for edge, label in (("bottom", "cut by the bottom border (rows lost)"), ("side", "cut by a side (rows kept)")):
         rows = sorted((r for r in reports if r["edge"] == edge), key=lambda r: r["share"])
         if rows:
@@ -354,7 +354,7 @@ def plot_cut(reports: list[dict], path) -> None:
     side = reports[0]["side_m"] if reports else 0.6
     distance = reports[0]["distance_m"] if reports else 1.2
     ax.set_title(f"a {side} m panel cut by the frame border, {distance} m, one 1/8000 s frame")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -1,5 +1,5 @@
 """Simulator subcommands of `lumipose`: `render`, `simulate` and `bench ...`, and the figures of
-`lumipose client samples evaluate --plots` (`plot_sample_evaluation`)."""
+`lumipose client samples evaluate --figures` (`plot_sample_evaluation`)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,9 @@ from shared_schemas import DEMO_MAP_NAME, device_profiles
 from shared_schemas.cli import BadInput, describe_file_error, plural, read_map_argument, report_bad_input
 
 # simulator.bench_robustness.GROUPS, without importing the renderer for every `lumipose --help`
+# every command that draws: `--figures DIR`, no figures unless asked; the data drawn from goes beside them
+FIGURES_HELP = "write {pngs} into this folder, with {data} beside them (default: no figures, nothing written)"
+
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
                      "motion", "panel")
 
@@ -78,8 +81,9 @@ def add_commands(commands) -> None:
                          help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
     partial.add_argument("--seed", type=int, default=1, help="random seed")
     partial.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    partial.add_argument("--out", type=Path, default=None,
-                         help="also write partial.json and partial.png (error against visible share) here")
+    partial.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                         help="write partial.png (error against visible share) here, with partial.json beside it "
+                              "(default: no figures)")
     partial.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     partial.set_defaults(run=_run_partial)
     robustness = benches.add_parser("robustness", help="what each stage of a phone's image chain costs (issue 13)")
@@ -125,7 +129,8 @@ def add_commands(commands) -> None:
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
                             ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
         grid = benches.add_parser(name, help=help_text)
-        grid.add_argument("--out", type=Path, default=Path(f"reports/{name}"), help="report folder")
+        grid.add_argument("--figures", type=Path, default=None, metavar="DIR", help=FIGURES_HELP.format(
+            pngs="the scatter and heat map", data="report.json, outcomes.json and scene.json"))
         grid.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
         grid.add_argument("--seed", type=int, default=None, help="random seed (default: the scene file's)")
         grid.add_argument("--limit", type=int, default=None, help="only about N evenly spread grid points")
@@ -151,7 +156,8 @@ def add_commands(commands) -> None:
     tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
     tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees (default: 0 to 15 by 2.5)")
     for sweep, name in ((distance, "distance"), (tilt, "tilt")):
-        sweep.add_argument("--out", type=Path, default=Path(f"reports/{name}"), help="report folder")
+        sweep.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                           help=FIGURES_HELP.format(pngs=f"{name}-sweep.png", data="report.json"))
         sweep.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
         sweep.add_argument("--seed", type=int, default=None, help="random seed (default: the scene file's)")
         sweep.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
@@ -172,7 +178,8 @@ def add_commands(commands) -> None:
     calibration.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     calibration.set_defaults(run=_run_calibration_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
-    fidelity.add_argument("--out", type=Path, default=Path("reports/fidelity"), help="report folder")
+    fidelity.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                          help=FIGURES_HELP.format(pngs="fidelity.png", data="report.json"))
     fidelity.add_argument("--distances", type=float, nargs="+", default=None,
                           help="metres (default: 1.0 to 3.0 by 0.1)")
     fidelity.add_argument("--blender", action="store_true", help="also render each view with Blender (needs bpy)")
@@ -191,9 +198,10 @@ def add_commands(commands) -> None:
     add_survey_bench(benches)
 
 
-def plot_sample_evaluation(report, folder: Path) -> list[Path]:
+def plot_sample_evaluation(report, folder: Path, cell_m: float) -> list[Path]:
     """The paper's Figs. 13-14 (scatter, heat map) of the service's sample evaluation (a
-    shared_schemas.api.Evaluation): `lumipose client samples evaluate --plots DIR`."""
+    shared_schemas.api.Evaluation): `lumipose client samples evaluate --figures DIR`; heat-map cells of
+    `cell_m` (the `--cell` the 'i,j' labels were read with), cells without a sample shown as not run."""
     from simulator.reports import Outcome, plot_heatmap, plot_scatter
 
     outcomes = [Outcome(index=i, label=row.label or row.id, true_m=tuple(row.truth_m),
@@ -205,7 +213,7 @@ def plot_sample_evaluation(report, folder: Path) -> list[Path]:
     folder.mkdir(parents=True, exist_ok=True)
     scatter, heatmap = folder / "samples_scatter.png", folder / "samples_heatmap.png"
     plot_scatter(outcomes, scatter, f"stored samples, map {report.map}")
-    plot_heatmap(outcomes, heatmap, f"2D error, map {report.map}")
+    plot_heatmap(outcomes, heatmap, f"2D error, map {report.map}", cell_m)
     return [scatter, heatmap]
 
 
@@ -326,32 +334,35 @@ def _run_accuracy(args) -> int:
 
 def _run_partial(args) -> int:
     from simulator.bench_partial import PartialConfig, format_partial, plot_partial, run_partial
+    from simulator.reports import print_figures
 
     if args.frames < 1 or min(args.scales) <= 0:
         return report_bad_input(BadInput("--frames must be at least 1 and every --scales positive"), args.json)
     config = PartialConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
                            seed=args.seed)
     report = run_partial(config, args.workers)
-    if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "partial.json").write_text(json.dumps(report, indent=2) + "\n")
-        plot_partial(report, args.out / "partial.png")
-        report["figures"] = [str(args.out / "partial.png")]
-    if args.json:
-        print(json.dumps(report, indent=2))
-        return 0
-    print(format_partial(report))
-    for figure in report.get("figures", []):
-        print(f"  figure {figure}")
+    if args.figures is not None:
+        args.figures.mkdir(parents=True, exist_ok=True)
+        (args.figures / "partial.json").write_text(json.dumps(report, indent=2) + "\n")
+        plot_partial(report, args.figures / "partial.png")
+        report["figures"] = [str(args.figures / "partial.png")]
+    print(json.dumps(report, indent=2) if args.json else format_partial(report))
+    print_figures(report.get("figures", []), args.json)
     return 0
 
 
-def _print_report(report: dict, as_json: bool) -> None:
-    from simulator.reports import format_table
+def _write_report(report: dict, figures_dir: Path | None) -> None:
+    """report.json beside the figures (the data they were drawn from)."""
+    if figures_dir is not None:
+        (figures_dir / "report.json").write_text(json.dumps(report, indent=2) + "\n")
 
-    (Path(report.get("out", ".")) / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+
+def _print_report(report: dict, as_json: bool) -> None:
+    from simulator.reports import format_table, print_figures
+
     if as_json:
         print(json.dumps(report, indent=2))
+        print_figures(report.get("figures", []), as_json)
         return
     print(format_table(report["summary"], report["title"]))
     paper = report.get("paper")
@@ -361,8 +372,7 @@ def _print_report(report: dict, as_json: bool) -> None:
         print(f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
               f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}")
     print(f"  wall time    {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')} (render + locate)")
-    for figure in report.get("figures", []):
-        print(f"  figure {figure}")
+    print_figures(report.get("figures", []), as_json)
 
 
 def _run_grid_bench(args) -> int:
@@ -370,7 +380,8 @@ def _run_grid_bench(args) -> int:
 
     if args.bench_name == "grid":
         try:
-            report = bench_grid(args.out, args.scale, args.seed, args.workers, args.limit, args.scene, args.yaw_jitter)
+            report = bench_grid(args.figures, args.scale, args.seed, args.workers, args.limit, args.scene,
+                                args.yaw_jitter)
         except ValueError as error:
             return report_bad_input(BadInput(str(error)), args.json)
     else:
@@ -385,9 +396,9 @@ def _run_grid_bench(args) -> int:
             except (OSError, ValidationError) as error:
                 problem = BadInput(f"--profile {describe_file_error(args.profile, error)}", field="profile")
                 return report_bad_input(problem, args.json)
-        report = bench_real(args.out, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
+        report = bench_real(args.figures, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
                             args.workers, args.limit, profile)
-    report["out"] = str(args.out)
+    _write_report(report, args.figures)
     _print_report(report, args.json)
     return 0
 
@@ -414,27 +425,31 @@ def _run_calibration_bench(args) -> int:
 
 def _run_sweep(args) -> int:
     from simulator.bench_sweeps import bench_distance, bench_tilt, format_sweep
+    from simulator.reports import print_figures
 
     if args.bench_name == "distance":
-        report = bench_distance(args.out, args.distances, args.scale, args.seed, args.workers, args.yaw_jitter)
+        report = bench_distance(args.figures, args.distances, args.scale, args.seed, args.workers, args.yaw_jitter)
         text = format_sweep(report, "distance_m", "m")
     else:
-        report = bench_tilt(args.out, args.tilts, args.scale, args.seed, args.workers)
+        report = bench_tilt(args.figures, args.tilts, args.scale, args.seed, args.workers)
         text = format_sweep(report, "tilt_deg", "deg")
-    (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-    print(json.dumps(report, indent=2) if args.json else text + "\n  figure " + report["figures"][0])
+    _write_report(report, args.figures)
+    print(json.dumps(report, indent=2) if args.json else text)
+    print_figures(report.get("figures", []), args.json)
     return 0
 
 
 def _run_fidelity(args) -> int:
     from simulator.bench_fidelity import bench_fidelity, format_fidelity
+    from simulator.reports import print_figures
 
     try:
-        report = bench_fidelity(args.out, args.distances, blender=args.blender)
+        report = bench_fidelity(args.figures, args.distances, blender=args.blender)
     except RuntimeError as error:
         return report_bad_input(BadInput(str(error), field="blender"), args.json)
-    (args.out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-    print(json.dumps(report, indent=2) if args.json else format_fidelity(report) + "\n  figure " + report["figures"][0])
+    _write_report(report, args.figures)
+    print(json.dumps(report, indent=2) if args.json else format_fidelity(report))
+    print_figures(report.get("figures", []), args.json)
     return 0
 
 

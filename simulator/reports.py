@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -213,86 +214,177 @@ def pyplot():
     return plt
 
 
+def print_figures(paths: list[Path] | list[str], as_json: bool) -> None:
+    """Every command that draws says where: "figure PATH" lines on stdout (stderr under --json, whose
+    stdout is the report)."""
+    for path in paths:
+        print(f"  figure {path}", file=sys.stderr if as_json else sys.stdout)
+
+
+def plain_log_axis(axis) -> None:
+    """Decimal tick labels (0.2, 1, 50) on a log axis instead of 2x10^-1; the minor ticks labelled only
+    when the axis spans less than two decades (call it once the limits are set)."""
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
+    low, high = sorted(axis.get_view_interval())
+    axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.set_minor_formatter(FuncFormatter(_minor_label) if low > 0 and math.log10(high / low) < 2.0
+                             else NullFormatter())
+
+
+def _minor_label(value: float, _position) -> str:
+    """2, 3 and 5 times a power of ten: enough to read a value, few enough not to crowd."""
+    mantissa = round(value / 10.0 ** math.floor(math.log10(value)), 6) if value > 0 else 0
+    return f"{value:g}" if mantissa in (2, 3, 5) else ""
+
+
+def nice_length(value: float) -> float:
+    """The largest 1-2-5 number not above `value` (a reference arrow's length)."""
+    if not value > 0:
+        return 1.0
+    power = 10.0 ** math.floor(math.log10(value))
+    return max(step * power for step in (1.0, 2.0, 5.0) if step * power <= value * (1 + 1e-9))
+
+
 def plot_scatter(outcomes: list[Outcome], path: Path, title: str, margin_m: float = OUTLIER_M) -> None:
-    """Fig. 11/13: true positions (black +), estimates (blue o, red o beyond the margin), no fix (red x).
-
-    A second panel draws each error vector magnified, since millimetre errors vanish at the
-    scale of the grid.
-    """
+    """Fig. 11/13, readable at millimetres: left, each error as an arrow at its true position, magnified
+    by a stated factor, with a labelled reference arrow; right, every error from its own true position
+    (mm), so that errors a hundred times smaller than the grid's cells can be compared. No fix: red x."""
     plt = pyplot()
-    true = np.array([o.true_m[:2] for o in outcomes])
+    true = np.array([o.true_m[:2] for o in outcomes]).reshape(-1, 2)
     fixed = [o for o in outcomes if o.estimate_m is not None]
-    estimates = np.array([o.estimate_m[:2] for o in fixed]).reshape(-1, 2)
-    errors = np.array([o.error_2d_m for o in fixed])
+    offsets_mm = np.array([np.subtract(o.estimate_m[:2], o.true_m[:2]) for o in fixed]).reshape(-1, 2) * 1000
+    at_m = np.array([o.true_m[:2] for o in fixed]).reshape(-1, 2)
+    errors_mm = np.hypot(offsets_mm[:, 0], offsets_mm[:, 1])
+    good = errors_mm <= margin_m * 1000
     missing = np.array([o.true_m[:2] for o in outcomes if o.estimate_m is None]).reshape(-1, 2)
-    figure, (left, right) = plt.subplots(1, 2, figsize=(13, 7.5))
-    left.plot(true[:, 0], true[:, 1], "k+", markersize=6, label="true position")
-    good = errors <= margin_m
-    left.plot(estimates[good, 0], estimates[good, 1], "o", mfc="none", mec="tab:blue", markersize=5,
-              label="estimate")
+    figure, (vectors, spread) = plt.subplots(1, 2, figsize=(13, 6.8), gridspec_kw={"width_ratios": [1.25, 1]})
+    vectors.plot(true[:, 0], true[:, 1], "+", color="0.6", markersize=4, label="true position", zorder=1)
+    if good.any():
+        reference_mm = nice_length(float(np.percentile(errors_mm[good], 95)))
+        magnify = 0.6 * _spacing_m(true) / (reference_mm / 1000)  # a p95-sized error spans ~0.6 of a cell
+        shown = offsets_mm[good] / 1000 * magnify
+        quiver = vectors.quiver(at_m[good, 0], at_m[good, 1], shown[:, 0], shown[:, 1], errors_mm[good],
+                                angles="xy", scale_units="xy", scale=1, cmap="viridis", width=0.004, zorder=2)
+        vectors.quiverkey(quiver, 0.82, 1.015, reference_mm / 1000 * magnify, f"{reference_mm:g} mm error",
+                          labelpos="E", coordinates="axes", color="black", fontproperties={"size": 8})
+        figure.colorbar(quiver, ax=vectors, label="2D error (mm)", shrink=0.8)
+        reach = float(np.abs(shown).max()) + 0.5 * _spacing_m(true)  # the longest arrow stays inside the axes
+        vectors.set_xlim(true[:, 0].min() - reach, true[:, 0].max() + reach)
+        vectors.set_ylim(true[:, 1].min() - reach, true[:, 1].max() + reach)
+        vectors.set_title(f"{title}\nerror vectors, drawn {magnify:.0f}x their length", fontsize=10, loc="left")
+    else:
+        vectors.set_title(title, fontsize=10, loc="left")
     if (~good).any():
-        left.plot(estimates[~good, 0], estimates[~good, 1], "o", mfc="none", mec="red", markersize=6,
-                  label=f"outlier (> {margin_m * 1000:.0f} mm)")
+        vectors.plot(at_m[~good, 0], at_m[~good, 1], "o", mfc="none", mec="red", markersize=7,
+                     label=f"outlier (> {margin_m * 1000:.0f} mm)", zorder=3)
     if len(missing):
-        left.plot(missing[:, 0], missing[:, 1], "x", color="red", markersize=7, label="no fix")
-    left.set(xlabel="X (m)", ylabel="Y (m)", title=title, aspect="equal")
-    left.legend(loc="upper right", fontsize=8)
-    if len(fixed):
-        shown = np.clip(errors, 0, margin_m)
-        scale_m = 0.02 / max(np.percentile(shown, 95), 1e-5)  # a p95 error is drawn 2 cm long
-        delta = (estimates - np.array([o.true_m[:2] for o in fixed])) * scale_m
-        quiver = right.quiver(estimates[:, 0] - delta[:, 0] / scale_m, estimates[:, 1] - delta[:, 1] / scale_m,
-                              delta[:, 0], delta[:, 1], shown * 1000, angles="xy", scale_units="xy", scale=1,
-                              cmap="viridis", width=0.004)
-        figure.colorbar(quiver, ax=right, label="2D error (mm)", shrink=0.8)
-        right.set(title=f"error vectors x{scale_m:.3g}", xlabel="X (m)", aspect="equal")
-        right.set_xlim(left.get_xlim())
-        right.set_ylim(left.get_ylim())
-    if len(missing):
-        right.plot(missing[:, 0], missing[:, 1], "x", color="red", markersize=7)
+        vectors.plot(missing[:, 0], missing[:, 1], "x", color="red", markersize=7, label="no fix", zorder=3)
+    vectors.set(xlabel="X (m)", ylabel="Y (m)", aspect="equal")
+    vectors.legend(loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3, fontsize=8, frameon=False)
+    spread.axhline(0, color="0.7", linewidth=0.8)
+    spread.axvline(0, color="0.7", linewidth=0.8)
+    if good.any():
+        spread.scatter(offsets_mm[good, 0], offsets_mm[good, 1], s=10, c=errors_mm[good], cmap="viridis",
+                       alpha=0.8, label="estimate - truth")
+        p95 = float(np.percentile(errors_mm[good], 95))
+        spread.add_patch(plt.Circle((0, 0), p95, fill=False, linestyle="--", color="black", linewidth=0.8,
+                                    label=f"p95 {p95:.2f} mm"))
+        reach = 1.15 * float(errors_mm[good].max())
+        spread.set_xlim(-reach, reach)
+        spread.set_ylim(-reach, reach)
+        spread.legend(loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=2, fontsize=8, frameon=False)
+    lost = f"not shown: {len(missing)} without a fix, {int((~good).sum())} outliers" if len(missing) or (~good).any() \
+        else "every sample fixed within the margin"
+    spread.set(xlabel="X error (mm)", ylabel="Y error (mm)", aspect="equal")
+    spread.set_title(f"each error from its own true position\n{int(good.sum())} fixes; {lost}", fontsize=10,
+                     loc="left")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
 
 
-def plot_heatmap(outcomes: list[Outcome], path: Path, title: str, margin_m: float = OUTLIER_M) -> None:
-    """Fig. 12/14: 2D error over the grid (mm); no fix is grey, outliers are clipped at the margin."""
+def _spacing_m(points: np.ndarray) -> float:
+    """The typical distance between neighbouring points (the grid's cell), for sizing arrows."""
+    if len(points) < 2:
+        return OUTLIER_M
+    gaps = np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(gaps, np.inf)
+    return float(np.median(gaps.min(axis=1))) or OUTLIER_M
+
+
+def plot_heatmap(outcomes: list[Outcome], path: Path, title: str, cell_m: float = OUTLIER_M,
+                 planned_m: np.ndarray | None = None, margin_m: float = OUTLIER_M) -> dict:
+    """Fig. 12/14: 2D error (mm) in cells of `cell_m` at the samples run; outliers clipped at the margin.
+
+    Cells with no fix (red) are told apart from cells not run (hatched): a `--limit` run or a few stored
+    samples cover part of the grid (`planned_m`: every position of the full series, for the extent), and
+    coverage is over what was run. Returns the counts drawn: {"run", "no_fix", "not_run"} cells.
+    """
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
     plt = pyplot()
-    true = np.array([o.true_m[:2] for o in outcomes])
-    xs, ys = np.unique(np.round(true[:, 0], 6)), np.unique(np.round(true[:, 1], 6))
-    grid = np.full((len(ys), len(xs)), np.nan)
-    for o, (x, y) in zip(outcomes, true):
-        grid[np.searchsorted(ys, round(y, 6)), np.searchsorted(xs, round(x, 6))] = min(o.error_2d_m, margin_m)
-    figure, axes = plt.subplots(figsize=(6.5, 7.5))
-    cmap = plt.get_cmap("viridis").with_extremes(bad="lightgrey")
-    step_x = xs[1] - xs[0] if len(xs) > 1 else 0.05
-    step_y = ys[1] - ys[0] if len(ys) > 1 else 0.05
-    image = axes.imshow(np.ma.masked_invalid(grid) * 1000, origin="lower", cmap=cmap,
-                        extent=[xs[0] - step_x / 2, xs[-1] + step_x / 2, ys[0] - step_y / 2, ys[-1] + step_y / 2])
-    figure.colorbar(image, ax=axes, label="2D error (mm); grey = no fix", shrink=0.8)
-    axes.set(xlabel="X (m)", ylabel="Y (m)", title=title)
+    run = np.array([o.true_m[:2] for o in outcomes]).reshape(-1, 2)
+    extent_points = run if planned_m is None else np.vstack([run, np.asarray(planned_m)[:, :2]])
+    origin = extent_points.min(axis=0)
+    columns, rows = (np.rint((extent_points.max(axis=0) - origin) / cell_m).astype(int) + 1).tolist()
+    cells = np.rint((run - origin) / cell_m).astype(int)
+    errors: dict[tuple[int, int], list[float]] = {}
+    for outcome, (i, j) in zip(outcomes, cells, strict=True):
+        errors.setdefault((int(j), int(i)), []).append(outcome.error_2d_m)
+    error = np.full((rows, columns), np.nan)
+    no_fix = np.zeros((rows, columns), dtype=bool)
+    for (j, i), values in errors.items():
+        fixed = [v for v in values if math.isfinite(v)]
+        if fixed:
+            error[j, i] = min(float(np.mean(fixed)), margin_m) * 1000
+        else:
+            no_fix[j, i] = True
+    counts = {"run": len(errors), "no_fix": int(no_fix.sum()), "not_run": rows * columns - len(errors)}
+    figure, axes = plt.subplots(figsize=(6.5, 7.8))
+    extent = (origin[0] - cell_m / 2, origin[0] + (columns - 0.5) * cell_m,
+              origin[1] - cell_m / 2, origin[1] + (rows - 0.5) * cell_m)
+    axes.add_patch(plt.Rectangle((extent[0], extent[2]), extent[1] - extent[0], extent[3] - extent[2],
+                                 facecolor="white", edgecolor="0.75", hatch="///", zorder=0))
+    image = axes.imshow(np.ma.masked_invalid(error), origin="lower", cmap="viridis", extent=extent, zorder=1,
+                        vmin=0, interpolation="nearest")
+    axes.imshow(np.ma.masked_where(~no_fix, no_fix), origin="lower", cmap=ListedColormap(["tab:red"]),
+                extent=extent, zorder=1, interpolation="nearest")
+    figure.colorbar(image, ax=axes, label=f"2D error (mm), clipped at {margin_m * 1000:.0f} mm", shrink=0.8)
+    fixed_cells = counts["run"] - counts["no_fix"]
+    axes.set(xlabel="X (m)", ylabel="Y (m)")
+    axes.set_title(f"{title}\n{fixed_cells} of {counts['run']} cells run have a fix "
+                   f"({100 * fixed_cells / max(counts['run'], 1):.1f} %), {cell_m * 1000:g} mm cells", fontsize=10)
+    axes.legend(handles=[Patch(facecolor="tab:red", label=f"no fix ({counts['no_fix']})"),
+                         Patch(facecolor="white", edgecolor="0.6", hatch="///",
+                               label=f"not run ({counts['not_run']})")],
+                loc="upper left", bbox_to_anchor=(0.0, -0.07), ncol=2, fontsize=8, frameon=False)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
+    return counts
 
 
 def plot_sweep(rows: list[dict], key: str, path: Path, title: str, xlabel: str) -> None:
-    """Mean and max 2D error (mm) and coverage (%) against `key` of each row."""
+    """Mean and max 2D error (mm, log) and coverage (%) against `key` of each row; the legend below."""
     plt = pyplot()
     x = [row[key] for row in rows]
-    figure, error_axes = plt.subplots(figsize=(8, 4.5))
+    figure, error_axes = plt.subplots(figsize=(8, 5))
     mean = [row["summary"].get("mean_mm", math.nan) for row in rows]
     peak = [row["summary"].get("max_mm", math.nan) for row in rows]
     error_axes.plot(x, mean, "o-", label="mean 2D error")
     error_axes.plot(x, peak, "s--", label="max 2D error")
-    error_axes.set(xlabel=xlabel, ylabel="error (mm)", title=title)
+    error_axes.set(xlabel=xlabel, ylabel="error (mm, log scale)", title=title)
     error_axes.set_yscale("log")
+    plain_log_axis(error_axes.yaxis)
     coverage_axes = error_axes.twinx()
     coverage_axes.plot(x, [row["summary"]["coverage_pct"] for row in rows], "^:", color="tab:green",
                        label="coverage")
     coverage_axes.set(ylabel="coverage (%)", ylim=(0, 105))
     lines = error_axes.get_lines() + coverage_axes.get_lines()
-    error_axes.legend(lines, [line.get_label() for line in lines], loc="lower right", fontsize=8)
+    error_axes.legend(lines, [line.get_label() for line in lines], loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                      ncol=3, fontsize=8, frameon=False)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -29,7 +28,9 @@ def add_vlc_benches(benches) -> None:
                      help="--cut: shares of the panel's rows (bottom) or columns (side) in view")
     vlc.add_argument("--seed", type=int, default=1, help="random seed")
     vlc.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    vlc.add_argument("--figure", type=Path, default=None, help="PNG of success against distance (--cut: share)")
+    vlc.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                     help="write the success against distance (vlc-distance.png, vlc-rect.png, vlc-circle.png; "
+                          "--cut: vlc-cut.png against share) into this folder (default: no figures)")
     vlc.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     vlc.set_defaults(run=_run_vlc)
     office = benches.add_parser("office", help="the paper's office walks with four coded beacons (Figs. 17-18)")
@@ -42,13 +43,16 @@ def add_vlc_benches(benches) -> None:
     office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")
     office.add_argument("--seed", type=int, default=1, help="random seed")
     office.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    office.add_argument("--figures", type=Path, default=None, help="folder for one PNG per walk")
+    office.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                        help="write one PNG per walk (office-zigzag.png, office-spiral.png) into this folder "
+                             "(default: no figures)")
     office.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     office.set_defaults(run=_run_office)
 
 
 def _run_vlc(args) -> int:
     from simulator.bench_vlc import VlcConfig, plot_vlc, run_vlc
+    from simulator.reports import print_figures
 
     if args.cut:
         return _run_cut(args)
@@ -65,12 +69,14 @@ def _run_vlc(args) -> int:
         for side in args.sides:
             for distance in args.distances:
                 reports.append(run_vlc(replace(base, distance_m=distance, side_m=side), args.workers))
-    if args.figure and not args.exposures:
+    figures = []
+    if args.figures and not args.exposures:
         title = "ID success, 1/8000 s ID frames, 256 candidate IDs"
-        plot_vlc(reports, args.figure, title if args.shape == "square" else f"{title}, {args.shape}")
-        print(f"wrote {args.figure}", file=sys.stderr)
+        figures.append(_figure_path(args.figures, _vlc_figure_name(args.shape, args.sides)))
+        plot_vlc(reports, figures[0], title if args.shape == "square" else f"{title}, {args.shape}")
     if args.json:
-        print(json.dumps({"vlc": reports}, indent=2, default=float))
+        print(json.dumps({"vlc": reports, "figures": [str(f) for f in figures]}, indent=2, default=float))
+        print_figures(figures, args.json)
         return 0
     print(f"{'shape':>6} {'side':>6} {'dist':>5} {'exposure':>9} {'chips/fr':>8} {'single':>7} {'combined':>8} "
           f"{'frames':>6} {'max':>4} {'wrong':>5}")
@@ -79,11 +85,25 @@ def _run_vlc(args) -> int:
         print(f"{r['shape']:>6} {r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} "
               f"{s['chips_per_frame']:8.1f} {s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} "
               f"{c['max_frames_used']:4d} {s['confident_wrong'] + c['confident_wrong']:5d}")
+    print_figures(figures, args.json)
     return 0
+
+
+def _vlc_figure_name(shape: str, sides: list[float]) -> str:
+    """vlc-distance.png for the paper's 0.174 m square, vlc-distance-0.6m.png for others, vlc-rect.png ..."""
+    if shape != "square":
+        return f"vlc-{shape}.png"
+    return "vlc-distance.png" if sides == [0.174] else "vlc-distance-" + "-".join(f"{s:g}m" for s in sides) + ".png"
+
+
+def _figure_path(folder: Path, name: str) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder / name
 
 
 def _run_cut(args) -> int:
     from simulator.bench_vlc import CutConfig, plot_cut, run_cut
+    from simulator.reports import print_figures
 
     distance = args.distances[0] if args.distances != DEFAULT_DISTANCES else 1.2
     reports = []
@@ -92,17 +112,20 @@ def _run_cut(args) -> int:
         for share in shares:
             config = CutConfig(share=share, edge=edge, distance_m=distance, trials=args.trials, seed=args.seed)
             reports.append(run_cut(config, args.workers))
-    if args.figure:
-        plot_cut(reports, args.figure)
-        print(f"wrote {args.figure}", file=sys.stderr)
+    figures = []
+    if args.figures:
+        figures.append(_figure_path(args.figures, "vlc-cut.png"))
+        plot_cut(reports, figures[0])
     if args.json:
-        print(json.dumps({"vlc_cut": reports}, indent=2, default=float))
+        print(json.dumps({"vlc_cut": reports, "figures": [str(f) for f in figures]}, indent=2, default=float))
+        print_figures(figures, args.json)
         return 0
     print(f"{'edge':>6} {'share':>5} {'rows':>5} {'chips':>5} {'named':>6} {'wrong':>5} {'located':>7} {'mean mm':>7} "
           f"{'max mm':>6}  refusals")
     for r in reports:
         print(f"{r['edge']:>6} {r['share']:5.2f} {r['rows']:5.0f} {r['chips']:5.1f} {r['named_pct']:5.0f}% "
               f"{r['named_wrong']:5d} {r['located']:7d} {r['mean_mm']:7.1f} {r['max_mm']:6.1f}  {r['refusals']}")
+    print_figures(figures, args.json)
     return 0
 
 
@@ -112,18 +135,19 @@ def _fmt(value) -> str:
 
 def _run_office(args) -> int:
     from simulator.bench_office import OfficeConfig, plot_walk, run_office
+    from simulator.reports import print_figures
 
     config = OfficeConfig(pose_scale=args.pose_scale, id_frames=args.id_frames, inset_m=args.inset,
                           max_captures=args.limit, seed=args.seed)
     reports = run_office(config, tuple(args.walks), args.workers)
-    if args.figures:
-        args.figures.mkdir(parents=True, exist_ok=True)
-        for report in reports:
-            path = args.figures / f"office-{report['config']['walk']}.png"
-            plot_walk(report, path)
-            print(f"wrote {path}", file=sys.stderr)
+    figures = []
+    for report in reports if args.figures else []:
+        figures.append(_figure_path(args.figures, f"office-{report['config']['walk']}.png"))
+        plot_walk(report, figures[-1])
     if args.json:
-        print(json.dumps({"office": [{k: r[k] for k in ("config", "summary", "stats")} for r in reports]}, indent=2))
+        print(json.dumps({"office": [{k: r[k] for k in ("config", "summary", "stats")} for r in reports],
+                          "figures": [str(f) for f in figures]}, indent=2))
+        print_figures(figures, args.json)
         return 0
     print(f"{'walk':>7} {'captures':>8} {'cover':>6} {'mean':>6} {'p95':>6} {'max':>6} {'filt.mean':>9} "
           f"{'ID err':>6} {'vlc':>4} {'carried':>7} {'outl':>4} {'trans.cover':>11} {'trans.mean':>10}  (2D, mm)")
@@ -134,4 +158,5 @@ def _run_office(args) -> int:
               f"{s['id_errors']:6d} {s['ids_by_vlc']:4d} {s['ids_carried']:7d} {s['outliers']:4d} "
               f"{s['transition_coverage_pct']:10.1f}% {_fmt(s['transition_fixes']['mean_mm']):>10}")
         print(f"{'':>7} refusals: {s['refusals']}")
+    print_figures(figures, args.json)
     return 0

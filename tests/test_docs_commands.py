@@ -182,7 +182,7 @@ def test_every_documented_command_and_flag_exists(tree):
 @pytest.mark.parametrize(
     ("line", "expected"),
     [
-        ("lumipose bench grid|render [--out DIR] [--json]", ["no flag --out on `lumipose bench render`"]),
+        ("lumipose bench grid|render [--figures DIR] [--json]", ["no flag --figures on `lumipose bench render`"]),
         ("lumipose bench grid --limit 20 --nope", ["no flag --nope on `lumipose bench grid`"]),
         ("lumipose client [--url URL] locate FRAME | samples store|list | maps list|get", []),
         ("lumipose client locate FRAME | maps frobnicate", ["no command `frobnicate` in `lumipose client maps`"]),

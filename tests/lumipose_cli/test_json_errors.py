@@ -25,7 +25,7 @@ CASES = {  # argv ("TMP/" is the test's folder), then the ErrorBody's error and 
     "bench partial": (["bench", "partial", "--frames", "0"], "bad_input", None),
     "bench robustness": (["bench", "robustness", "--effects", "fog"], "bad_input", None),
     "bench calibration": (["bench", "calibration", "--views", "1"], "bad_input", None),
-    "bench bench-real": (["bench", "bench-real", "--profile", "TMP/missing.json", "--out", "TMP/"], "bad_input",
+    "bench bench-real": (["bench", "bench-real", "--profile", "TMP/missing.json", "--figures", "TMP/"], "bad_input",
                          "profile"),
     "bench load": (["bench", "load", "--clients", "0"], "bad_input", "clients"),
 }

@@ -34,12 +34,12 @@ def test_bench_load_offers_the_frames_the_bench_knows():
 
 
 def test_the_client_plots_only_with_the_plotting_it_is_given(capsys):
-    assert build_parser().parse_args(["client", "samples", "evaluate", "--plots", "out"]).plot_evaluation
+    assert build_parser().parse_args(["client", "samples", "evaluate", "--figures", "out"]).plot_evaluation
     parser = argparse.ArgumentParser()
     add_client_commands(parser.add_subparsers())
     with pytest.raises(SystemExit):
-        parser.parse_args(["client", "samples", "evaluate", "--plots", "out"])
-    assert "unrecognized arguments: --plots" in capsys.readouterr().err
+        parser.parse_args(["client", "samples", "evaluate", "--figures", "out"])
+    assert "unrecognized arguments: --figures" in capsys.readouterr().err
 
 
 def parser_tree(parser: argparse.ArgumentParser, path: str = "lumipose"):

@@ -28,7 +28,7 @@ def test_client_store_list_evaluate(server_url, capsys, tmp_path):
     sample_id = capsys.readouterr().out.split()[0]
     assert main(["client", "--url", server_url, "samples", "list"]) == 0
     assert sample_id in capsys.readouterr().out
-    assert main(["client", "--url", server_url, "samples", "evaluate", "--plots", str(tmp_path)]) == 0
+    assert main(["client", "--url", server_url, "samples", "evaluate", "--figures", str(tmp_path)]) == 0
     assert "coverage 100.0 %" in capsys.readouterr().out
     assert (tmp_path / "samples_scatter.png").stat().st_size > 10_000
     assert (tmp_path / "samples_heatmap.png").stat().st_size > 5_000

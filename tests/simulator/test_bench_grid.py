@@ -60,7 +60,7 @@ def test_fidelity_of_an_unclipped_panel_is_one():
 
 
 def test_cli_bench_grid_writes_table_and_figures(tmp_path, capsys):
-    assert main(["bench", "grid", "--out", str(tmp_path), "--scale", "0.25", "--limit", "5", "--workers", "1"]) == 0
+    assert main(["bench", "grid", "--figures", str(tmp_path), "--scale", "0.25", "--limit", "5", "--workers", "1"]) == 0
     printed = capsys.readouterr().out
     assert "mean error" in printed and "paper        mean 7.49 mm" in printed
     report = json.loads((tmp_path / "report.json").read_text())
@@ -77,7 +77,7 @@ def test_cli_bench_grid_on_any_scene_file(tmp_path, capsys):
                                   "series": {"path": {"kind": "poses", "poses": [{"position_m": [0.1, 0.1, 0.0]},
                                                                                  {"position_m": [-0.2, 0.0, 0.0]}]}}})
     (tmp_path / "mine.json").write_text(scene.to_json())
-    assert main(["bench", "grid", "--scene", str(tmp_path / "mine.json"), "--out", str(tmp_path / "r"),
+    assert main(["bench", "grid", "--scene", str(tmp_path / "mine.json"), "--figures", str(tmp_path / "r"),
                  "--workers", "1"]) == 0
     report = json.loads((tmp_path / "r" / "report.json").read_text())
     assert report["scene"] == "mine" and report["summary"]["samples"] == 2 and "paper" not in report

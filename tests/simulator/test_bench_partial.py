@@ -141,7 +141,7 @@ def test_run_tabulates_every_bin_and_every_refusal_has_its_reason():
 
 def test_cli_bench_partial_prints_json_and_writes_the_plot(tmp_path, capsys):
     argv = ["bench", "partial", "--scales", "0.1", "--distances", "2", "--frames", "2", "--workers", "1"]
-    assert main([*argv, "--json", "--out", str(tmp_path)]) == 0
+    assert main([*argv, "--json", "--figures", str(tmp_path)]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["config"]["frames"] == 2 and len(report["frames"]) == 2
     assert (tmp_path / "partial.png").stat().st_size > 0 and (tmp_path / "partial.json").exists()

@@ -19,12 +19,16 @@ def test_vlc_bench_reports_single_and_combined_rates(tmp_path):
     assert path.stat().st_size > 1000
 
 
-def test_vlc_bench_command_prints_json():
+def test_vlc_bench_command_prints_json(tmp_path):
     out = subprocess.run([sys.executable, "-m", "lumipose_cli", "bench", "vlc", "--distances", "2.0", "--trials", "1",
-                          "--max-frames", "10", "--workers", "1", "--json"],
+                          "--max-frames", "10", "--workers", "1", "--json", "--figures", str(tmp_path)],
                          capture_output=True, text=True, check=True, timeout=300)
-    report = json.loads(out.stdout)["vlc"][0]
+    printed = json.loads(out.stdout)
+    report = printed["vlc"][0]
     assert report["distance_m"] == 2.0 and report["trials"] == 1
+    # --figures DIR: the figure's path in the JSON and on stderr (stdout stays the JSON)
+    assert printed["figures"] == [str(tmp_path / "vlc-distance.png")] and (tmp_path / "vlc-distance.png").exists()
+    assert f"figure {tmp_path / 'vlc-distance.png'}" in out.stderr
 
 
 def test_walk_summary_counts_coverage_id_errors_and_transitions():
