@@ -43,7 +43,7 @@ def test_a_bad_scene_profile_or_labels_file_names_the_field(tmp_path, capsys):
     profile.write_text('{"id": "p"}')
     assert main(["client", "--url", "http://127.0.0.1:9", "profiles", "put", str(profile)]) == 2
     assert f"{profile}: " in _one_short_line(capsys.readouterr().err)
-    assert main(["bench", "bench-real", "--profile", str(profile), "--out", str(tmp_path / "r")]) == 2
+    assert main(["bench", "bench-real", "--profile", str(profile), "--figures", str(tmp_path / "r")]) == 2
     assert f"--profile {profile}: " in _one_short_line(capsys.readouterr().err)
 
     labels = tmp_path / "labels.json"
