@@ -18,6 +18,19 @@ ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "no
                      "motion", "panel")
 
 
+def add_bench_flags(parser, *, seed: int | None | bool = 1, workers: bool = True, figures: str | None = None) -> None:
+    """The flags the benches share, meaning the same on each: `--seed` (an int default, None: the scene file's,
+    False: none), `--workers`, `--figures DIR` (its help says what is drawn) and `--json`."""
+    if seed is not False:
+        parser.add_argument("--seed", type=int, default=seed,
+                            help="random seed" + (" (default: the scene file's)" if seed is None else ""))
+    if workers:
+        parser.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    if figures is not None:
+        parser.add_argument("--figures", type=Path, default=None, metavar="DIR", help=figures)
+    parser.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+
+
 def add_commands(commands) -> None:
     render = commands.add_parser("render", help="render a fixture (NAME.y + NAME.json) for a given pose")
     render.add_argument("out", type=Path, help="output stem, e.g. out/frame1")
@@ -64,9 +77,7 @@ def add_commands(commands) -> None:
     accuracy.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
     accuracy.add_argument("--max-tilt", type=float, default=10.0, help="largest random camera tilt, degrees")
     accuracy.add_argument("--gravity-sigma", type=float, default=0.1, help="gravity sensor error, degrees")
-    accuracy.add_argument("--seed", type=int, default=1, help="random seed")
-    accuracy.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    accuracy.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(accuracy)
     accuracy.add_argument("--renderer", choices=["ours", "blender", "both"], default="ours",
                           help="blender: Cycles' radiance through the same sensor (needs bpy); both: the same frames "
                                "from each, and the ratio of their mean errors")
@@ -79,12 +90,8 @@ def add_commands(commands) -> None:
     partial.add_argument("--frames", type=int, default=40, help="per distance and resolution")
     partial.add_argument("--scales", type=float, nargs="+", default=[1.0, 0.25],
                          help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
-    partial.add_argument("--seed", type=int, default=1, help="random seed")
-    partial.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    partial.add_argument("--figures", type=Path, default=None, metavar="DIR",
-                         help="write partial.png (error against visible share) here, with partial.json beside it "
-                              "(default: no figures)")
-    partial.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(partial, figures="write partial.png (error against visible share) here, with partial.json "
+                                     "beside it (default: no figures)")
     partial.set_defaults(run=_run_partial)
     robustness = benches.add_parser("robustness", help="what each stage of a phone's image chain costs (issue 13)")
     robustness.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0], help="camera to beacon, metres")
@@ -94,9 +101,7 @@ def add_commands(commands) -> None:
     robustness.add_argument("--effects", nargs="+", default=list(ROBUSTNESS_GROUPS), metavar="GROUP",
                             help="effect groups: " + ", ".join(ROBUSTNESS_GROUPS[1:]) + " (the references no chain, "
                                  "ISP off and ISP on always run)")
-    robustness.add_argument("--seed", type=int, default=1, help="random seed")
-    robustness.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    robustness.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(robustness)
     robustness.set_defaults(run=_run_robustness)
     speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
     speed.add_argument("--repeats", type=int, default=50, help="timed runs")
@@ -105,7 +110,7 @@ def add_commands(commands) -> None:
     speed.add_argument("--frames", type=int, default=None,
                        help="instead: N accuracy-bench frames per distance (1, 2, 3 m), the median ratio over them")
     speed.add_argument("--rounds", type=int, default=5, help="with --frames: passes over all the frames")
-    speed.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(speed, seed=False, workers=False)
     speed.set_defaults(run=_run_speed)
     load = benches.add_parser("load", help="the HTTP service under concurrent clients (over 3 minutes by default)",
                               description="The HTTP service under concurrent clients (its own server, or --url). One "
@@ -129,13 +134,10 @@ def add_commands(commands) -> None:
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
                             ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
         grid = benches.add_parser(name, help=help_text)
-        grid.add_argument("--figures", type=Path, default=None, metavar="DIR", help=FIGURES_HELP.format(
+        add_bench_flags(grid, seed=None, figures=FIGURES_HELP.format(
             pngs="the scatter and heat map", data="report.json, outcomes.json and scene.json"))
         grid.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
-        grid.add_argument("--seed", type=int, default=None, help="random seed (default: the scene file's)")
         grid.add_argument("--limit", type=int, default=None, help="only about N evenly spread grid points")
-        grid.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-        grid.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
         if name == "bench-real":
             grid.add_argument("--uncalibrated", action="store_true",
                               help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
@@ -156,17 +158,12 @@ def add_commands(commands) -> None:
     tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
     tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees (default: 0 to 15 by 2.5)")
     for sweep, name in ((distance, "distance"), (tilt, "tilt")):
-        sweep.add_argument("--figures", type=Path, default=None, metavar="DIR",
-                           help=FIGURES_HELP.format(pngs=f"{name}-sweep.png", data="report.json"))
+        add_bench_flags(sweep, seed=None, figures=FIGURES_HELP.format(pngs=f"{name}-sweep.png", data="report.json"))
         sweep.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
-        sweep.add_argument("--seed", type=int, default=None, help="random seed (default: the scene file's)")
-        sweep.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-        sweep.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
         sweep.set_defaults(run=_run_sweep, bench_name=name)
     calibration = benches.add_parser("calibration", help="camera calibration on rendered ChArUco photos (issue 14)")
     calibration.add_argument("--views", type=int, default=20, help="photos per set")
     calibration.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
-    calibration.add_argument("--seed", type=int, default=1, help="random seed")
     calibration.add_argument("--lens", choices=["phone", "phone-k3", "bench-real"], default="phone",
                              help="phone: a phone-like Mi 8 front lens (k3 0); phone-k3: the same with k3 0.002; "
                                   "bench-real: `bench bench-real`'s lens")
@@ -175,20 +172,19 @@ def add_commands(commands) -> None:
                                   "(default 12: three per corner)")
     calibration.add_argument("--no-poor-sets", action="store_true", help="skip the frontal and corner-only sets")
     calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
-    calibration.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(calibration, workers=False)
     calibration.set_defaults(run=_run_calibration_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
-    fidelity.add_argument("--figures", type=Path, default=None, metavar="DIR",
-                          help=FIGURES_HELP.format(pngs="fidelity.png", data="report.json"))
     fidelity.add_argument("--distances", type=float, nargs="+", default=None,
                           help="metres (default: 1.0 to 3.0 by 0.1)")
     fidelity.add_argument("--blender", action="store_true", help="also render each view with Blender (needs bpy)")
-    fidelity.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(fidelity, seed=False, workers=False,
+                    figures=FIGURES_HELP.format(pngs="fidelity.png", data="report.json"))
     fidelity.set_defaults(run=_run_fidelity)
     render_speed = benches.add_parser("render", help="time to render one full-resolution frame of a scene")
     render_speed.add_argument("--scene", default="paper-bench", help="a scene file or a bundled scene")
     render_speed.add_argument("--repeats", type=int, default=10, help="timed renders")
-    render_speed.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(render_speed, seed=False, workers=False)
     render_speed.set_defaults(run=_run_render_speed)
     from simulator.vlc_cli import add_vlc_benches  # `bench vlc` and `bench office` (issue 4)
 

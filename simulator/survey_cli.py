@@ -6,6 +6,8 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+from simulator.cli import add_bench_flags
+
 from shared_schemas.cli import plural
 
 
@@ -16,7 +18,6 @@ def add_survey_bench(benches) -> None:
                        help="offices to survey, by panel count")
     bench.add_argument("--frames", type=int, default=40, help="survey frames per office")
     bench.add_argument("--scale", type=float, default=None, help="of the Mi 8 front resolution (default: 0.5)")
-    bench.add_argument("--seed", type=int, default=1, help="random seed")
     bench.add_argument("--walk", choices=["zigzag", "spiral", "none"], default="zigzag",
                        help="the office walk positioned with the surveyed and the true map (none: skip)")
     bench.add_argument("--luminance-spread", type=float, default=0.0,
@@ -24,7 +25,7 @@ def add_survey_bench(benches) -> None:
     bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
     bench.add_argument("--fixtures", type=Path, default=None,
                        help="also write each office's frames, labels.json and sketch.json here (for `lumipose survey`)")
-    bench.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(bench, workers=False)
     bench.set_defaults(run=_run_survey_bench)
 
 

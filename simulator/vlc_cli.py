@@ -6,6 +6,8 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+from simulator.cli import add_bench_flags
+
 DEFAULT_DISTANCES = [1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0]
 
 
@@ -26,12 +28,9 @@ def add_vlc_benches(benches) -> None:
                           "room path (named, located), per --shares; at the first of --distances (default 1.2 m)")
     vlc.add_argument("--shares", type=float, nargs="+", default=None,
                      help="--cut: shares of the panel's rows (bottom) or columns (side) in view")
-    vlc.add_argument("--seed", type=int, default=1, help="random seed")
-    vlc.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    vlc.add_argument("--figures", type=Path, default=None, metavar="DIR",
-                     help="write the success against distance (vlc-distance.png, vlc-rect.png, vlc-circle.png; "
-                          "--cut: vlc-cut.png against share) into this folder (default: no figures)")
-    vlc.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(vlc, figures="write the success against distance (vlc-distance.png, vlc-rect.png, "
+                                 "vlc-circle.png; --cut: vlc-cut.png against share) into this folder "
+                                 "(default: no figures)")
     vlc.set_defaults(run=_run_vlc)
     office = benches.add_parser("office", help="the paper's office walks with four coded beacons (Figs. 17-18)")
     office.add_argument("--walks", nargs="+", default=["zigzag", "spiral"], choices=["zigzag", "spiral"],
@@ -41,12 +40,8 @@ def add_vlc_benches(benches) -> None:
     office.add_argument("--id-frames", type=int, default=4, help="ID frames beside each pose frame")
     office.add_argument("--inset", type=float, default=0.0, help="walk this far inside the area, metres")
     office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")
-    office.add_argument("--seed", type=int, default=1, help="random seed")
-    office.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    office.add_argument("--figures", type=Path, default=None, metavar="DIR",
-                        help="write one PNG per walk (office-zigzag.png, office-spiral.png) into this folder "
-                             "(default: no figures)")
-    office.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    add_bench_flags(office, figures="write one PNG per walk (office-zigzag.png, office-spiral.png) into this "
+                                    "folder (default: no figures)")
     office.set_defaults(run=_run_office)
 
 
