@@ -371,10 +371,13 @@ class MapStore:
     startup_map: Path | None = None
     _damage: Damage = field(init=False, repr=False, compare=False)
     _files: _JsonFolder[BeaconMap] = field(init=False, repr=False, compare=False)
+    # one activation or deletion at a time in this process: a map is not deleted while it is being activated
+    _choosing: threading.Lock = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_damage", Damage(self.data_dir))
         object.__setattr__(self, "_files", _JsonFolder(self.data_dir, "maps", "map", BeaconMap, self._damage))
+        object.__setattr__(self, "_choosing", threading.Lock())
         self.recover()
 
     @cached_property
@@ -410,9 +413,10 @@ class MapStore:
         return name if name in self._names() else self.default_name()
 
     def set_active(self, name: str) -> None:
-        self.get(name)
-        with _data_lock(self.data_dir, exclusive=False):
-            write_atomic(self.data_dir / ACTIVE_MAP_FILE, ActiveMap(name=name).model_dump_json().encode())
+        with self._choosing:
+            self.get(name)
+            with _data_lock(self.data_dir, exclusive=False):
+                write_atomic(self.data_dir / ACTIVE_MAP_FILE, ActiveMap(name=name).model_dump_json().encode())
         self._damage.update(ACTIVE_MAP_FILE, {})
 
     def _readable(self) -> list[tuple[str, str, BeaconMap]]:
@@ -457,13 +461,20 @@ class MapStore:
 
     def delete(self, name: str) -> None:
         """Remove a stored map, also a damaged one. The active map (`active_map`) and the bundled and
-        startup maps (`fixed_map`: not in the data folder) are refused, so no request loses its map."""
-        if _check_name(name) == self.active_name():
-            raise StoreError(
-                "active_map", f"'{name}' is the active map: activate another map before deleting it", field="name"
-            )
-        if self._files.delete(name):
-            return
+        startup maps (`fixed_map`: the startup map even when its file is in the data folder, `serve --map
+        NAME`, or the service would not start again) are refused, so no request loses its map."""
+        with self._choosing:
+            if _check_name(name) == self.active_name():
+                raise StoreError(
+                    "active_map", f"'{name}' is the active map: activate another map before deleting it", field="name"
+                )
+            stored = self._files.path / f"{name}.json"
+            if self.startup_map is not None and stored.resolve() == self.startup_map.resolve():
+                raise StoreError(
+                    "fixed_map", f"'{name}' is the map the service started with (--map): it cannot be deleted", "name"
+                )
+            if self._files.delete(name):
+                return
         if name in self._fixed:
             source = self._fixed[name][0]
             raise StoreError(

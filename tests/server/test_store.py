@@ -6,6 +6,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 import uuid
 from pathlib import Path
@@ -58,6 +59,50 @@ def test_only_stored_maps_not_active_are_deleted(tmp_path):
     store.delete("hall")
     assert {s.name: s.source for s in store.summaries()} == {"test-bench": "bundled", "office": "startup"}
     assert store.damaged() == []
+
+
+def test_the_startup_map_stored_in_the_data_folder_is_not_deleted(tmp_path):
+    # `serve --data-dir data --map room` starts from data/maps/room.json: deleting it would stop the next start
+    MapStore(tmp_path).put("room", _room(2))
+    store = MapStore(tmp_path, tmp_path / "maps" / "room.json")
+    store.put("hall", _room(1).model_copy(update={"name": "hall"}))
+    store.set_active("hall")
+    with pytest.raises(StoreError) as refused:
+        store.delete("room")
+    assert refused.value.code == "fixed_map" and "started with" in refused.value.message
+    assert (tmp_path / "maps" / "room.json").exists()
+
+
+def test_many_threads_activating_and_deleting_never_lose_the_active_map(tmp_path):
+    store = MapStore(tmp_path)
+    names = [f"room{i}" for i in range(6)]
+    maps = {name: _room(1).model_copy(update={"name": name}) for name in names}
+    for name in names:
+        store.put(name, maps[name])
+    errors: list[BaseException] = []
+
+    def churn(worker: int) -> None:
+        for step in range(30):
+            name = names[(worker + step) % len(names)]
+            try:
+                if (worker + step) % 2:
+                    store.set_active(name)
+                else:
+                    store.delete(name)
+                    store.put(name, maps[name])
+            except StoreError as error:
+                if error.code not in ("active_map", "not_found"):
+                    errors.append(error)
+            except BaseException as error:  # anything else is a bug
+                errors.append(error)
+
+    threads = [threading.Thread(target=churn, args=(worker,)) for worker in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+    assert store.get(store.active_name()) is not None  # the active map is always there to locate in
 
 
 def test_a_replaced_map_file_is_read_again(tmp_path):
