@@ -21,7 +21,12 @@ from pydantic import BaseModel
 from lumipose_client.client import AnnotatedResult, Client, LumiposeError, read_fixture_files
 from shared_schemas import BeaconMap, DeviceProfile, LocateResult
 from shared_schemas.api import Evaluation
-from shared_schemas.captures import add_frame_series_arguments, all_located, annotation_path, bursts_in_upload_order
+from shared_schemas.captures import (
+    add_frame_series_arguments,
+    all_located,
+    annotation_paths,
+    bursts_in_upload_order,
+)
 from shared_schemas.cli import (
     BadInput,
     check_beacon_id,
@@ -224,12 +229,12 @@ def _locate(client: Client, args) -> int:
         return _locate_photos(client, args, photos)
     frames = [read_fixture_files(path) for path in args.frames]
     map_name = _served_map_name(client, args.map)
-    if args.beacon_id is not None:
-        beacon_map = client.get_map(map_name or client.active_map().name)
-        try:
-            check_beacon_id(args.beacon_id, beacon_map)
-        except BadInput as problem:
-            return report_bad_input(problem, as_json=args.json)
+    try:
+        pictures = annotation_paths(args.annotate, args.frames)
+        if args.beacon_id is not None:
+            check_beacon_id(args.beacon_id, client.get_map(map_name or client.active_map().name))
+    except BadInput as problem:
+        return report_bad_input(problem, as_json=args.json)
     results: dict[int, LocateResult] = {}
     for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
         for index in capture:
@@ -243,8 +248,9 @@ def _locate(client: Client, args) -> int:
                 annotate=args.annotate is not None,
             )
             if isinstance(answer, AnnotatedResult):
-                picture = annotation_path(args.annotate, args.frames[index], several=len(frames) > 1)
-                picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
+                answer_picture = pictures[index]
+                assert answer_picture is not None  # asked for with --annotate
+                answer_picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
                 answer = answer.result
             results[index] = answer
         for index in sorted(capture):

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME
-from shared_schemas.captures import add_frame_series_arguments, annotation_path
+from shared_schemas.captures import add_frame_series_arguments, annotation_paths
 from shared_schemas.cli import (
     EXIT_NO_FIX,
     EXIT_OK,
@@ -83,6 +83,7 @@ def run_locate(args) -> int:
         profiles, profile = read_profiles(args.profile)
         beacon_map = read_map(args.map, args.data_dir)
         check_beacon_id(args.beacon_id, beacon_map)
+        pictures = annotation_paths(args.annotate, args.frames)
         frames = [read_frame(path, profiles, profile, args.camera) for path in args.frames]
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
@@ -91,7 +92,8 @@ def run_locate(args) -> int:
     results: dict[int, LocateResult] = {}
     for capture in bursts_in_upload_order([frame.meta.frame_kind for frame in frames]):
         for index in capture:
-            diagnostics = Diagnostics() if args.annotate else None
+            picture = pictures[index]
+            diagnostics = Diagnostics() if picture is not None else None
             results[index] = locate(
                 frames[index],
                 beacon_map,
@@ -100,9 +102,8 @@ def run_locate(args) -> int:
                 device_id=args.device,
                 devices=devices,
             )
-            if diagnostics is not None:
+            if picture is not None and diagnostics is not None:
                 try:
-                    picture = annotation_path(args.annotate, args.frames[index], several=len(frames) > 1)
                     write_annotation(picture, frames[index], diagnostics, results[index])
                 except BadInput as problem:
                     return report_bad_input(problem, as_json=args.json)
@@ -190,10 +191,10 @@ def print_result(result, frame, as_json: bool, beacon_map=None) -> None:
         f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
         f"   gravity prior {'used' if result.gravity_used else 'not used'}"
     )
-    print(
-        f"quality   reprojection {number(result.reprojection_error_px, 3)} px, "
-        f"ambiguity ratio {number(result.ambiguity_ratio)}, {result.timing_ms['total']:.1f} ms"
-    )
+    # an outline fit (a cut panel, a rectangle, a circle) has no square's two poses to compare
+    ambiguity = "n/a" if result.ambiguity_ratio is None else number(result.ambiguity_ratio)
+    reprojection = "n/a" if result.reprojection_error_px is None else f"{number(result.reprojection_error_px, 3)} px"
+    print(f"quality   reprojection {reprojection}, ambiguity ratio {ambiguity}, {result.timing_ms['total']:.1f} ms")
     truth = frame.meta.ground_truth
     if truth is not None:
         dx, dy, dz = (a - b for a, b in zip((x, y, z), truth.position_m, strict=True))

@@ -11,6 +11,7 @@ import argparse
 from collections.abc import Sequence
 from pathlib import Path
 
+from shared_schemas.cli import BadInput
 from shared_schemas.models import FailureReason, FrameKind, LocateResult
 
 
@@ -67,3 +68,20 @@ def annotation_path(annotate: Path, frame_path: Path, several: bool) -> Path:
     """Where `--annotate PNG` puts a frame's picture: PNG itself for one frame; for several, one each
     beside it, named PNG's stem, '-', the frame's stem."""
     return annotate.with_name(f"{annotate.stem}-{frame_path.stem}.png") if several else annotate
+
+
+def annotation_paths(annotate: Path | None, frames: Sequence[Path]) -> list[Path | None]:
+    """Each frame's picture for `--annotate PNG` (`annotation_path`), or None without the flag. Two frames
+    whose pictures would land on one file (a/x.json and b/x.json) are refused before any work."""
+    if annotate is None:
+        return [None] * len(frames)
+    pictures = [annotation_path(annotate, frame, several=len(frames) > 1) for frame in frames]
+    seen: dict[Path, Path] = {}
+    for frame, picture in zip(frames, pictures, strict=True):
+        if picture in seen:
+            raise BadInput(
+                f"--annotate: {seen[picture]} and {frame} would both write {picture} (frames with one name)",
+                field="annotate",
+            )
+        seen[picture] = frame
+    return list(pictures)

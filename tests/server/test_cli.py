@@ -26,3 +26,13 @@ def test_locate_uses_a_given_profile_file_and_refuses_unknown_or_taken_ids(tmp_p
     assert main(["locate", str(frame), "--profile", str(broken)]) == 2
     err = capsys.readouterr().err
     assert f"cannot read the device profile {broken}" in err and "width" in err
+
+
+def test_locate_prints_an_outline_fix_which_has_no_ambiguity_ratio(tmp_path, capsys):
+    # 2.5 m below the panel at quarter size: the outline path fixes it (no square's two poses to compare)
+    stem = str(tmp_path / "far")
+    assert main(["render", stem, "--scale", "0.25", "--position", "0.1", "0.2", "-1.5"]) == 0
+    capsys.readouterr()
+    assert main(["locate", f"{stem}.json"]) == 0
+    out = capsys.readouterr().out
+    assert "ambiguity ratio n/a" in out and "pose from the visible outline" in out

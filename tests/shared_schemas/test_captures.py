@@ -24,3 +24,22 @@ def test_a_series_is_located_when_every_frame_has_a_fix_or_was_kept_for_its_sess
     assert all_located([kept, kept, fix])
     assert not all_located([kept, lost, fix])
     assert not all_located([kept])  # one ID frame alone: no fix, as before
+
+
+def test_annotation_paths_one_picture_per_frame_and_no_two_on_one_file():
+    from pathlib import Path
+
+    import pytest
+
+    from shared_schemas.captures import annotation_paths
+    from shared_schemas.cli import BadInput
+
+    assert annotation_paths(None, [Path("a.json")]) == [None]
+    assert annotation_paths(Path("out/seen.png"), [Path("a.json")]) == [Path("out/seen.png")]
+    assert annotation_paths(Path("out/seen.png"), [Path("w/a.json"), Path("w/b.json")]) == [
+        Path("out/seen-a.png"),
+        Path("out/seen-b.png"),
+    ]
+    with pytest.raises(BadInput) as refused:
+        annotation_paths(Path("seen.png"), [Path("a/x.json"), Path("b/x.json")])
+    assert refused.value.body.field == "annotate" and "a/x.json and b/x.json" in str(refused.value)
