@@ -33,6 +33,7 @@ from shared_schemas.cli import (
     describe_file_error,
     plural,
     read_map_argument,
+    reads_environment,
     report_bad_input,
 )
 
@@ -55,7 +56,6 @@ def _add_shared_options(parser: argparse.ArgumentParser, top: bool) -> None:
     def default(value):
         return value if top else argparse.SUPPRESS
 
-    # their variables LUMIPOSE_URL and LUMIPOSE_API_KEY: shared_schemas.cli.CommandParser reads them
     parser.add_argument(
         "--url", default=default(DEFAULT_URL), help=f"service URL (default $LUMIPOSE_URL, else {DEFAULT_URL})"
     )
@@ -78,7 +78,9 @@ def _verb(actions, name: str, run: Callable[[Client, argparse.Namespace], int], 
 def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> None:
     """Add `client ...` to an argparse subparsers object; `samples evaluate --figures` exists when
     `plot_evaluation` is given."""
+    # --url and --api-key read LUMIPOSE_URL and LUMIPOSE_API_KEY, on `client` and every verb under it
     client = commands.add_parser("client", help="talk to a running Lumipose service")
+    reads_environment(client, frozenset({"--url", "--api-key"}))
     _add_shared_options(client, top=True)
     actions = client.add_subparsers(dest="client_command", required=True)
 

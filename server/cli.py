@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME, DEMO_MAP_PATH, device_profiles
-from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, describe_validation_error, report_bad_input
+from shared_schemas.cli import EXIT_BAD_INPUT, BadInput, describe_validation_error, reads_environment, report_bad_input
 from shared_schemas.cli import EXIT_OK as EXIT_FIX
 
 
@@ -68,6 +68,7 @@ def _add_serve(commands) -> None:
     parser = commands.add_parser(
         "serve", help="run the HTTP service (flags or LUMIPOSE_<FLAG> variables)", description=SERVE_ENVIRONMENT
     )
+    reads_environment(parser, "all")
     parser.add_argument("--host", help="default 127.0.0.1; 0.0.0.0 to serve the network")
     parser.add_argument("--port", type=int, help="default 8000")
     parser.add_argument("--workers", type=int, help="worker processes (default 1)")

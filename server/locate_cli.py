@@ -23,12 +23,15 @@ from shared_schemas.cli import (
     check_beacon_id,
     number,
     read_map_argument,
+    reads_environment,
     report_bad_input,
 )
 
 
 def add_locate_command(commands) -> None:
+    # --data-dir reads LUMIPOSE_DATA_DIR: the stored maps of the service on this machine
     parser = commands.add_parser("locate", help="locate the camera from recorded frames")
+    reads_environment(parser, frozenset({"--data-dir"}))
     add_frame_series_arguments(parser)
     parser.add_argument(
         "--map",

@@ -117,21 +117,43 @@ def environment_name(flag: str) -> str:
 
 
 class CommandParser(argparse.ArgumentParser):
-    """An ArgumentParser for the one rule of every `lumipose` command: a flag `--some-flag` not given reads
-    LUMIPOSE_SOME_FLAG; and its usage errors (an unknown flag, a bad value, a missing argument) follow
-    `--json` as every other bad input does: the contract's ErrorBody on stdout, exit 2."""
+    """An ArgumentParser whose usage errors (an unknown flag, a bad value, a missing argument) follow `--json`
+    as every other bad input does (the contract's ErrorBody on stdout, exit 2), and whose `environment`
+    flags not given read LUMIPOSE_<FLAG>.
+
+    Only the flags that configure a deployment read the environment (`serve`: all of its flags; `client`:
+    --url and --api-key; `locate`: --data-dir, the service's folder), so a deployment's variables
+    (LUMIPOSE_MAP, LUMIPOSE_WORKERS, LUMIPOSE_URL, ...) never change what a bench, a render or a survey does.
+    A subcommand inherits its parent's `environment` unless it is given its own."""
 
     _json_errors = False  # shared by a command's subparsers: set when the whole command line is parsed
 
+    def __init__(self, *args, environment: str | frozenset[str] = frozenset(), **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.environment = environment  # "all", or the flags (e.g. "--url") that read their variable
+
+    def add_subparsers(self, **kwargs):  # after `reads_environment`, so that its subcommands inherit it
+        subcommands = super().add_subparsers(**kwargs)
+        add_parser = subcommands.add_parser
+
+        def add_inheriting_parser(name, **options):
+            options.setdefault("environment", self.environment)
+            return add_parser(name, **options)
+
+        subcommands.add_parser = add_inheriting_parser  # type: ignore[method-assign]
+        return subcommands
+
     def parse_args(self, args=None, namespace=None):
         given = sys.argv[1:] if args is None else list(args)
-        CommandParser._json_errors = "--json" in given or _environment_value("--json") in _TRUE
+        CommandParser._json_errors = "--json" in given
         return super().parse_args(given, namespace)
 
     def parse_known_args(self, args=None, namespace=None):
-        # each parser on the command's path (the root, `bench`, `bench load`) reads its own flags' variables
+        # each parser on the command's path (the root, `client`, `client locate`) reads its own flags' variables
         for action in self._actions:
-            self._default_from_environment(action)
+            flag = next((option for option in action.option_strings if option.startswith("--")), None)
+            if flag is not None and (self.environment == "all" or flag in self.environment):
+                self._default_from_environment(action)
         return super().parse_known_args(args, namespace)
 
     def _default_from_environment(self, action: argparse.Action) -> None:
@@ -145,9 +167,9 @@ class CommandParser(argparse.ArgumentParser):
                 self.error(f"{where}: say 1 or 0 (true or false)")
             action.default = (value.lower() in _TRUE) == isinstance(action, argparse._StoreTrueAction)
             return
-        if not isinstance(action, argparse._StoreAction | argparse._AppendAction):
+        if not isinstance(action, argparse._StoreAction):  # a repeatable flag takes its values from the command line
             return
-        many = action.nargs in ("+", "*") or isinstance(action.nargs, int) or isinstance(action, argparse._AppendAction)
+        many = action.nargs in ("+", "*") or isinstance(action.nargs, int)
         try:
             words = _words(value) if many else [value]
             converted = [action.type(word) if callable(action.type) else word for word in words]
@@ -164,6 +186,13 @@ class CommandParser(argparse.ArgumentParser):
         field = flag[1].replace("-", "_").lower() if flag else None
         report_bad_input(BadInput(f"{self.prog}: {message}", field=field), as_json=True)
         sys.exit(EXIT_BAD_INPUT)
+
+
+def reads_environment(parser: argparse.ArgumentParser, flags: str | frozenset[str]) -> argparse.ArgumentParser:
+    """Let `parser`'s `flags` ("all", or e.g. {"--url"}) and its later subcommands' read LUMIPOSE_<FLAG>; a plain
+    ArgumentParser (a package's commands built on their own) just keeps the note."""
+    parser.environment = flags  # type: ignore[attr-defined]
+    return parser
 
 
 def _environment_value(flag: str) -> str | None:

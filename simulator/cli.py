@@ -128,7 +128,7 @@ def add_commands(commands) -> None:
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
     load.add_argument("--url",
                       help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
-                           "no server-side figures then (default: $LUMIPOSE_URL, else our own server)")
+                           "no server-side figures then (default: our own server)")
     load.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     load.set_defaults(run=_run_load)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
