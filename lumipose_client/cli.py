@@ -30,6 +30,7 @@ from shared_schemas.cli import (
     read_map_argument,
     report_bad_input,
 )
+from shared_schemas.fixture_files import photo_type
 
 DEFAULT_URL = "http://127.0.0.1:8000"
 # `client samples store --label -8,11`: argparse reads an argument that starts with '-' as a flag unless it
@@ -178,17 +179,6 @@ def _print(model) -> None:
     print(model.model_dump_json(by_alias=True, indent=2))
 
 
-PHOTO_TYPES = {".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".png": "image/png", ".heic": "image/heic"}
-
-
-def _photo_type(path: Path) -> str | None:
-    """The Content-Type of a photo: a JPEG or HEIC, or a PNG with no frame JSON beside it (a recorded frame)."""
-    suffix = path.suffix.lower()
-    if suffix == ".png" and path.with_suffix(".json").exists():
-        return None
-    return PHOTO_TYPES.get(suffix)
-
-
 def _locate_photos(client: Client, args, photo_types: list[str | None]) -> int:
     """Photos, each on its own (no session: a photo has no timestamp or frame kind); one result each."""
     if not all(photo_types):
@@ -219,7 +209,7 @@ def _print_json(value: list[BaseModel] | dict) -> None:
 def _locate(client: Client, args) -> int:
     """One result (indented JSON) for one frame; for several, one JSON line each, in the order given.
     `--annotate PNG`: the service's picture of each frame (several: PNG-<frame>.png each)."""
-    photos = [_photo_type(path) for path in args.frames]
+    photos = [photo_type(path) for path in args.frames]
     if any(photos):
         return _locate_photos(client, args, photos)
     frames = [read_fixture_files(path) for path in args.frames]
