@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -20,6 +21,7 @@ from shared_schemas import (
     ProfileRef,
     device_profiles,
 )
+from shared_schemas.cli import describe_file_error
 
 
 def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> CameraIntrinsics:
@@ -171,25 +173,38 @@ def frame_camera_used(meta: FrameMeta, camera: CameraIntrinsics, profiles: Profi
     return camera_used(camera, CameraSource.profile, profile_sigma(profile), detail, profile.id)
 
 
-def _words(text: str) -> str:
-    return "".join(ch for ch in text.lower() if ch.isalnum())
+def _words(text: str) -> list[str]:
+    return re.findall(r"[a-z0-9]+", text.lower())
+
+
+def _profile_device(profile: DeviceProfile) -> list[str]:
+    """The words of a profile's name before its camera ('Xiaomi Mi 8 rear camera' -> xiaomi, mi, 8)."""
+    words = _words(profile.name)
+    ends = [index for index, word in enumerate(words) if word in (profile.facing, "camera")]
+    return words[: ends[0]] if ends else words
 
 
 def profile_for_exif(exif: PhotoExif, profiles: ProfileTable) -> DeviceProfile | None:
-    """The profile whose name is the photo's make and model (for example 'Xiaomi' 'MI 8' -> 'Xiaomi Mi 8 rear
-    camera'); of a phone's several cameras, the one whose focal length is nearest the EXIF one, else the rear."""
+    """The profile whose device is the photo's make and model, word for word (for example 'Xiaomi' 'MI 8' ->
+    'Xiaomi Mi 8 rear camera', not 'Xiaomi Mi 8 Lite ...'); of a phone's several cameras, the one whose focal
+    length is nearest the EXIF one, else the rear; a calibrated profile before a datasheet one of the same camera."""
     if not exif.model:
         return None
-    make = _words(exif.make or "")
-    model = _words(exif.model)
-    device = model if model.startswith(make) else make + model
-    matches = [p for p in profiles.values() if _words(p.name).startswith(device)]
+    make, model = _words(exif.make or ""), _words(exif.model)
+    names = (model, make + model) if model[: len(make)] != make else (model,)
+    matches = [p for p in profiles.values() if _profile_device(p) in names]
     if not matches:
         return None
     focal_mm = exif.focal_length_mm
-    if focal_mm is not None:
-        return min(matches, key=lambda p: abs(p.focal_length_m * 1000 - focal_mm))
-    return min(matches, key=lambda p: (p.facing != "rear", p.id))
+    return min(
+        matches,
+        key=lambda p: (
+            0.0 if focal_mm is None else round(abs(p.focal_length_m * 1000 - focal_mm), 1),
+            focal_mm is None and p.facing != "rear",
+            p.intrinsics is None,
+            p.id,
+        ),
+    )
 
 
 def turn_intrinsics(camera: CameraIntrinsics, width: int, height: int, orientation: int) -> CameraIntrinsics:
@@ -285,8 +300,8 @@ def resolve_profile_args(values: Iterable[str]) -> tuple[dict[str, DeviceProfile
             continue
         try:
             given.append(DeviceProfile.model_validate_json(path.read_bytes()))
-        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            raise ValueError(f"cannot read the device profile {path}: {error}") from None
+        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError: named by field
+            raise ValueError(f"cannot read the device profile {describe_file_error(path, error)}") from None
     table = profile_table(given)
     chosen = None
     for value in values:
