@@ -262,10 +262,12 @@ def photo_camera(
     profiles: ProfileTable,
     camera: CameraIntrinsics | None = None,
     profile: DeviceProfile | None = None,
+    ask: tuple[str, str] = ("--profile NAME|FILE", "--camera fx,fy,cx,cy"),
 ) -> PhotoCamera:
     """The intrinsics of a photo of `size` (upright width, height): `camera` as given (upright pixels) >
     `profile` > the profile EXIF make and model name > EXIF's 35 mm equivalent focal length (diagonal rule,
-    principal point at the centre); FrameError asking for --profile or --camera when there is nothing to go on."""
+    principal point at the centre); FrameError asking for `ask` (the command's or the query's way to give a
+    profile, then intrinsics) when there is nothing to go on."""
     width, height = size
     if camera is not None:
         return PhotoCamera(camera, CameraSource.camera, "given intrinsics", None)
@@ -282,8 +284,8 @@ def photo_camera(
         return PhotoCamera(intrinsics, CameraSource.exif_35mm, detail, FOCAL_SIGMA_EXIF_35MM)
     seen = f"EXIF make/model '{exif.make} {exif.model}' matches no profile" if exif.model else "no EXIF camera"
     raise FrameError(
-        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass --profile NAME|FILE "
-        f"(known: {', '.join(sorted(profiles))}) or --camera fx,fy,cx,cy",
+        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass {ask[0]} "
+        f"(known: {', '.join(sorted(profiles))}) or {ask[1]}",
         field="camera",
     )
 

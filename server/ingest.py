@@ -141,17 +141,20 @@ def decode_photo(
     profiles: ProfileTable | None = None,
     camera: CameraIntrinsics | None = None,
     profile: DeviceProfile | None = None,
+    max_pixels: int = MAX_PIXELS,
+    ask: tuple[str, str] | None = None,
 ) -> tuple[LumaFrame, PhotoCamera]:
     """A phone photo (JPEG, PNG, HEIC) as a frame: its luma, EXIF exposure and ISO, and the intrinsics
-    `server.camera.photo_camera` chooses for the upright photo."""
+    `server.camera.photo_camera` chooses for the upright photo (`ask`: how the caller names a profile and
+    intrinsics, for the message when there are none)."""
     try:
-        photo = read_photo(data, name, MAX_PIXELS)
+        photo = read_photo(data, name, max_pixels)
     except PhotoError as error:
         raise FrameError(str(error), field=error.field) from None
     pixels = photo.pixels  # upright (server.photos: one orientation rule on every path)
     height, width = pixels.shape
     table = device_profiles() if profiles is None else profiles
-    chosen = photo_camera(photo.exif, (width, height), table, camera, profile)
+    chosen = photo_camera(photo.exif, (width, height), table, camera, profile, *([ask] if ask else []))
     if photo.exif.orientation != 1:
         chosen = replace(
             chosen, detail=f"{chosen.detail} (photo turned upright: EXIF orientation {photo.exif.orientation})"

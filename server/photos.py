@@ -98,7 +98,8 @@ def photo_size(data: bytes, name: str) -> tuple[int, int]:
 def _check_size(size: tuple[int, int], name: str, max_pixels: int) -> None:
     width, height = size
     if width * height > max_pixels:
-        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than {max_pixels // 1_000_000} megapixels")
+        allowed = f"{max_pixels / 1e6:.4g} megapixels allowed"
+        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than the {allowed}")
 
 
 def _luma(image: Image.Image) -> Image.Image:

@@ -31,7 +31,7 @@ ZSTD_PIECE = 4096
 @dataclass(frozen=True)
 class FrameUpload:
     meta: FrameMeta
-    data: bytes | bytearray  # uncompressed frame bytes as the contract's fixture file holds them
+    data: bytes | bytearray | memoryview  # uncompressed frame bytes as the contract's fixture file holds them
     camera_used: CameraUsed | None = None  # a photo's chosen intrinsics (else the frame JSON's camera says)
 
 

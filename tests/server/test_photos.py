@@ -159,7 +159,7 @@ def test_bad_photos_exit_2_with_the_contract_error(tmp_path, capsys, room):
     huge = tmp_path / "huge.png"
     huge.write_bytes(png_claiming(12_000, 9_000))
     code, error = locate(capsys, huge, room, "--profile", "xiaomi-mi8-rear")
-    assert code == 2 and "12000x9000 pixels, more than 100 megapixels" in error["message"]
+    assert code == 2 and "12000x9000 pixels, more than the 100 megapixels allowed" in error["message"]
     huge.write_bytes(png_claiming(20_000, 20_000))  # beyond Pillow's own bomb limit too
     code, error = locate(capsys, huge, room, "--profile", "xiaomi-mi8-rear")
     assert code == 2 and "more than 100 megapixels" in error["message"]
@@ -189,7 +189,7 @@ def test_photo_over_http_with_a_profile_name(server_url, capsys, tmp_path):
     assert_near_truth(result, 0.005)
     assert result["camera_used"]["source"] == "exif_profile" and "EXIF orientation 6" in result["camera_used"]["detail"]
     assert main(["client", "--url", server_url, "locate", str(photo)]) == 2
-    assert "--profile" in capsys.readouterr().err
+    assert "?profile=" in capsys.readouterr().err  # the service's message names its query parameters
     truncated = tmp_path / "truncated.jpg"
     truncated.write_bytes(photo.read_bytes()[:2000])
     assert main(["client", "--url", server_url, "locate", str(truncated), "--profile", "xiaomi-mi8-rear"]) == 2
@@ -309,3 +309,29 @@ def test_a_mirrored_orientation_is_refused(tmp_path, capsys, room):
     photo.write_bytes(exif_png(upright_frame(), 2))
     code, result = locate(capsys, photo, room, "--profile", "xiaomi-mi8-rear")
     assert code == 2 and result["field"] == "orientation" and "mirrored EXIF orientation 2" in result["message"]
+
+
+def test_a_refusal_says_which_intrinsics_it_tried(tmp_path, capsys, room):
+    photo = tmp_path / "dark.png"
+    photo.write_bytes(exif_png(np.zeros((HEIGHT, WIDTH), np.uint8), 6))
+    code, result = locate(capsys, photo, room, "--profile", "xiaomi-mi8-rear")
+    assert code == 1 and not result["ok"]
+    assert result["camera_used"]["profile"] == "xiaomi-mi8-rear" and "EXIF orientation 6" in result["camera_used"]["detail"]
+
+
+def test_http_caps_a_photo_at_what_a_y8_upload_holds_and_names_query_parameters(server_url, tmp_path):
+    with httpx.Client(base_url=server_url) as http:
+        response = http.post(
+            "/v1/locate", content=png_claiming(3_000, 3_000), headers={"Content-Type": "image/png"},
+            params={"profile": "xiaomi-mi8-rear"},
+        )
+        assert response.status_code == 400, response.text
+        # the session server's max_upload_mb is 4: a Y8 frame of 4 MiB holds 4.194 megapixels
+        assert "3000x3000 pixels, more than the 4.194 megapixels allowed" in response.json()["message"]
+        response = http.post("/v1/locate", content=jpeg(upright_frame()), headers={"Content-Type": "image/jpeg"})
+        message = response.json()["message"]
+        assert response.status_code == 400 and "?profile=ID" in message and "?camera=" in message, message
+        assert "--profile" not in message
+        response = http.post("/v1/locate", content=jpeg(upright_frame()), headers={"Content-Type": "image/jpeg"},
+                             params={"camera": "1,2"})
+        assert response.status_code == 400 and "--camera" not in response.json()["message"]
