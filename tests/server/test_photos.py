@@ -335,3 +335,20 @@ def test_http_caps_a_photo_at_what_a_y8_upload_holds_and_names_query_parameters(
         response = http.post("/v1/locate", content=jpeg(upright_frame()), headers={"Content-Type": "image/jpeg"},
                              params={"camera": "1,2"})
         assert response.status_code == 400 and "--camera" not in response.json()["message"]
+
+
+def test_client_locate_photo_keeps_its_options(server_url, capsys, tmp_path):
+    photo = tmp_path / "photo.jpg"
+    photo.write_bytes(jpeg(upright_frame(), make="Xiaomi", model="MI 8"))
+    picture = tmp_path / "seen.png"
+    url = ["client", "--url", server_url, "locate", str(photo)]
+    assert main([*url, "--annotate", str(picture), "--device", "phone-1"]) == 0
+    assert_near_truth(json.loads(capsys.readouterr().out), 0.005)
+    assert Image.open(picture).format == "PNG"
+    assert main([*url, "--beacon-id", "200", "--json"]) == 2
+    assert json.loads(capsys.readouterr().out)["field"] == "beacon_id"
+    profile = tmp_path / "mine.json"
+    profile.write_text(REAR.model_dump_json())
+    assert main([*url, "--profile", str(profile), "--json"]) == 2
+    error = json.loads(capsys.readouterr().out)
+    assert error["field"] == "profile" and "client profiles put" in error["message"]
