@@ -152,8 +152,8 @@ def _upright_orientation(exif: PhotoExif, name: str) -> int:
     return exif.orientation
 
 
-# EXIF orientation -> the rotation that shows the stored image upright (EXIF 2.3, tag 0x0112)
-_UPRIGHT = {3: Image.Transpose.ROTATE_180, 6: Image.Transpose.ROTATE_270, 8: Image.Transpose.ROTATE_90}
+# EXIF orientation -> the counter-clockwise quarter turns (np.rot90) that show the stored image upright
+_UPRIGHT_TURNS = {3: 2, 6: -1, 8: 1}
 
 
 def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Photo:
@@ -167,18 +167,21 @@ def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Ph
         kind, size = image.format or "", image.size
         try:  # a PNG's EXIF may follow its pixels: reading it can meet the damage too
             exif = read_exif(image)
-            turn = _UPRIGHT.get(_upright_orientation(exif, name))
+            turns = _UPRIGHT_TURNS.get(_upright_orientation(exif, name), 0)
             luma = _luma(image)
             luma.load()
-            if luma.size != size:
-                raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
-            if turn is not None:
-                luma = luma.transpose(turn)
+            if luma is not image:
+                image.close()  # the decoded RGB(A) goes now, before the luma is copied out
             pixels = np.asarray(luma, dtype=np.uint8)
+            luma.close()
         except (OSError, ValueError, SyntaxError) as error:
             if isinstance(error, PhotoError):
                 raise
             raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated: {error})") from None
+    if pixels.shape != (size[1], size[0]):
+        raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
+    if turns:
+        pixels = np.ascontiguousarray(np.rot90(pixels, turns))
     pixels.flags.writeable = False
     return Photo(pixels=pixels, exif=exif, kind=kind)
 
