@@ -53,11 +53,6 @@ class PhotoExif:
     exposure_s: float | None = None
     iso: float | None = None
 
-    @property
-    def turned(self) -> bool:
-        """The displayed image is the stored one turned by a quarter (width and height swap)."""
-        return self.orientation in (5, 6, 7, 8)
-
 
 @dataclass(frozen=True)
 class Photo:
