@@ -36,6 +36,7 @@ from shared_schemas.cli import (
     reads_environment,
     report_bad_input,
 )
+from shared_schemas.fixture_files import photo_type
 
 DEFAULT_URL = "http://127.0.0.1:8000"
 # `client samples store --label -8,11`: argparse reads an argument that starts with '-' as a flag unless it
@@ -92,9 +93,15 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
         "--annotate", type=Path, metavar="PNG", help="also write the service's picture of what its pipeline saw"
     )
     locate.add_argument(
-        "--profile", help="a photo's device profile id, bundled or stored on the service (default: from its EXIF)"
+        "--profile",
+        help="a photo's device profile id, bundled or stored on the service (a file: store it first with "
+        "`client profiles put`) (default: from its EXIF)",
     )
-    locate.add_argument("--camera", metavar="FX,FY,CX,CY[,K1,...]", help="a photo's intrinsics, pixels (default: none)")
+    locate.add_argument(
+        "--camera",
+        metavar="FX,FY,CX,CY[,K1,...]",
+        help="a photo's intrinsics, pixels of the upright photo (default: none)",
+    )
 
     samples = actions.add_parser("samples", help="recorded samples")
     sample_actions = samples.add_subparsers(dest="samples_command", required=True)
@@ -185,35 +192,46 @@ def _print(model) -> None:
     print(model.model_dump_json(by_alias=True, indent=2))
 
 
-PHOTO_TYPES = {".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".png": "image/png", ".heic": "image/heic"}
+def _photo_profile(value: str | None) -> str | None:
+    """`--profile` of a photo sent to the service: an id it knows. The API takes no profile body, and a profile
+    scales to the photo's size and orientation on the service: a file is refused, not silently ignored."""
+    if value is not None and Path(value).is_file():
+        raise BadInput(
+            f"--profile {value}: the service takes a profile id, not a file; store it first with "
+            f"`lumipose client profiles put {value}` and pass its id, or locate the photo locally with "
+            f"`lumipose locate PHOTO --profile {value}`",
+            field="profile",
+        )
+    return value
 
 
-def _photo_type(path: Path) -> str | None:
-    """The Content-Type of a photo: a JPEG or HEIC, or a PNG with no frame JSON beside it (a recorded frame)."""
-    suffix = path.suffix.lower()
-    if suffix == ".png" and path.with_suffix(".json").exists():
-        return None
-    return PHOTO_TYPES.get(suffix)
-
-
-def _locate_photos(client: Client, args, photo_types: list[str | None]) -> int:
-    """Photos, each on its own (no session: a photo has no timestamp or frame kind); one result each."""
+def _locate_photos(
+    client: Client, args, photo_types: list[str | None], map_name: str | None, pictures: list[Path | None]
+) -> int:
+    """Photos, each on its own (a photo has no timestamp or frame kind; `--device` names the session);
+    one result each, and with `--annotate` the service's picture of each."""
     if not all(photo_types):
         raise BadInput("give either photos or recorded frames, not both in one call", field="frames")
-    map_name = _served_map_name(client, args.map)
+    profile = _photo_profile(args.profile)
     results = []
-    for path, content_type in zip(args.frames, photo_types, strict=True):
+    for content_type, path, picture in zip(photo_types, args.frames, pictures, strict=True):
         assert content_type is not None  # all() above
-        result = client.locate_photo(
+        answer = client.locate_photo(
             path.read_bytes(),
             content_type,
             map=map_name,
-            profile=args.profile,
+            profile=profile,
             camera=args.camera,
             beacon_id=args.beacon_id,
+            device=args.device,
+            annotate=picture is not None,
         )
-        print(result.model_dump_json(by_alias=True, indent=2 if len(args.frames) == 1 else None))
-        results.append(result)
+        if isinstance(answer, AnnotatedResult):
+            assert picture is not None  # asked for with --annotate
+            picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
+            answer = answer.result
+        print(answer.model_dump_json(by_alias=True, indent=2 if len(args.frames) == 1 else None))
+        results.append(answer)
     return 0 if all(result.ok for result in results) else 1
 
 
@@ -226,10 +244,8 @@ def _print_json(value: list[BaseModel] | dict) -> None:
 def _locate(client: Client, args) -> int:
     """One result (indented JSON) for one frame; for several, one JSON line each, in the order given.
     `--annotate PNG`: the service's picture of each frame (several: PNG-<frame>.png each)."""
-    photos = [_photo_type(path) for path in args.frames]
-    if any(photos):
-        return _locate_photos(client, args, photos)
-    frames = [read_fixture_files(path) for path in args.frames]
+    photos = [photo_type(path) for path in args.frames]
+    frames = [] if any(photos) else [read_fixture_files(path) for path in args.frames]
     map_name = _served_map_name(client, args.map)
     try:
         pictures = annotation_paths(args.annotate, args.frames)
@@ -237,6 +253,8 @@ def _locate(client: Client, args) -> int:
             check_beacon_id(args.beacon_id, client.get_map(map_name or client.active_map().name))
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
+    if any(photos):
+        return _locate_photos(client, args, photos, map_name, pictures)
     results: dict[int, LocateResult] = {}
     for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
         for index in capture:

@@ -212,17 +212,27 @@ class _Endpoints:
         profile: str | None = None,
         camera: str | None = None,
         beacon_id: int | None = None,
+        device: str | None = None,
+        annotate: bool = False,
     ):
         """Locate the camera of a phone photo (image/jpeg, image/png or image/heic) sent without frame JSON;
-        its camera is the `profile` id (bundled or stored), `camera` 'fx,fy,cx,cy[,k1,...]', or the photo's EXIF."""
-        params = {"map": map, "profile": profile, "camera": camera, "beacon_id": beacon_id}
+        its camera is the `profile` id (bundled or stored), `camera` 'fx,fy,cx,cy[,k1,...]' (pixels of the
+        upright photo), or the photo's EXIF. `device` and `annotate` as for `locate`."""
+        params = {
+            "map": map,
+            "profile": profile,
+            "camera": camera,
+            "beacon_id": beacon_id,
+            "annotate": 1 if annotate else None,
+        }
+        headers = {"Content-Type": content_type} | ({"X-Lumipose-Device": device} if device else {})
         return self._run(
             _Call(
                 "POST",
                 "/v1/locate",
-                _model(LocateResult),
+                _annotated if annotate else _model(LocateResult),
                 params=params,
-                headers={"Content-Type": content_type},
+                headers=headers,
                 content=bytes(data),
             )
         )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -20,6 +21,7 @@ from shared_schemas import (
     ProfileRef,
     device_profiles,
 )
+from shared_schemas.cli import describe_file_error
 
 
 def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> CameraIntrinsics:
@@ -133,7 +135,6 @@ class PhotoCamera:
     source: CameraSource
     detail: str  # for people: which profile, which EXIF values
     focal_sigma_rel: float | None  # None: as given, unknown
-    turn: int = 1  # the EXIF orientation to apply to the stored pixels first (1: none)
     profile: str | None = None
 
     def used(self) -> CameraUsed:
@@ -172,40 +173,87 @@ def frame_camera_used(meta: FrameMeta, camera: CameraIntrinsics, profiles: Profi
     return camera_used(camera, CameraSource.profile, profile_sigma(profile), detail, profile.id)
 
 
-def _words(text: str) -> str:
-    return "".join(ch for ch in text.lower() if ch.isalnum())
+def _words(text: str) -> list[str]:
+    return re.findall(r"[a-z0-9]+", text.lower())
+
+
+def _profile_device(profile: DeviceProfile) -> list[str]:
+    """The words of a profile's name before its camera ('Xiaomi Mi 8 rear camera' -> xiaomi, mi, 8)."""
+    words = _words(profile.name)
+    ends = [index for index, word in enumerate(words) if word in (profile.facing, "camera")]
+    return words[: ends[0]] if ends else words
 
 
 def profile_for_exif(exif: PhotoExif, profiles: ProfileTable) -> DeviceProfile | None:
-    """The profile whose name is the photo's make and model (for example 'Xiaomi' 'MI 8' -> 'Xiaomi Mi 8 rear
-    camera'); of a phone's several cameras, the one whose focal length is nearest the EXIF one, else the rear."""
+    """The profile whose device is the photo's make and model, word for word (for example 'Xiaomi' 'MI 8' ->
+    'Xiaomi Mi 8 rear camera', not 'Xiaomi Mi 8 Lite ...'); of a phone's several cameras, the one whose focal
+    length is nearest the EXIF one, else the rear; a calibrated profile before a datasheet one of the same camera."""
     if not exif.model:
         return None
-    make = _words(exif.make or "")
-    model = _words(exif.model)
-    device = model if model.startswith(make) else make + model
-    matches = [p for p in profiles.values() if _words(p.name).startswith(device)]
+    make, model = _words(exif.make or ""), _words(exif.model)
+    names = (model, make + model) if model[: len(make)] != make else (model,)
+    matches = [p for p in profiles.values() if _profile_device(p) in names]
     if not matches:
         return None
     focal_mm = exif.focal_length_mm
-    if focal_mm is not None:
-        return min(matches, key=lambda p: abs(p.focal_length_m * 1000 - focal_mm))
-    return min(matches, key=lambda p: (p.facing != "rear", p.id))
+    return min(
+        matches,
+        key=lambda p: (
+            0.0 if focal_mm is None else round(abs(p.focal_length_m * 1000 - focal_mm), 1),
+            focal_mm is None and p.facing != "rear",
+            p.intrinsics is None,
+            p.id,
+        ),
+    )
+
+
+def turn_intrinsics(camera: CameraIntrinsics, width: int, height: int, orientation: int) -> CameraIntrinsics:
+    """`camera` of a `width` x `height` image, for that image turned by EXIF `orientation`'s rotation (1, 3, 6, 8).
+
+    Orientation 6 turns the image a quarter clockwise: pixel (u, v) goes to (H-1-v, u), the camera's axes
+    x' = -y, y' = x, so fx' = fy, cx' = H-1-cy, fy' = fx, cy' = cx; Brown-Conrady's tangential terms
+    (2 p1 x y + p2 (r^2 + 2 x^2), p1 (r^2 + 2 y^2) + 2 p2 x y) become p1' = p2, p2' = -p1 (radial terms
+    do not change). Orientation 8 is the other quarter, (u, v) -> (v, W-1-u): p1' = -p2, p2' = p1;
+    orientation 3 the half turn: both principal point coordinates mirror and p1, p2 change sign.
+    """
+    fx, fy, cx, cy = camera.fx, camera.fy, camera.cx, camera.cy
+    k = list(camera.distortion)
+    p1, p2 = (k + [0.0, 0.0, 0.0, 0.0])[2:4]
+    if orientation == 6:
+        fx, fy, cx, cy, p1, p2 = fy, fx, height - 1 - cy, cx, p2, -p1
+    elif orientation == 8:
+        fx, fy, cx, cy, p1, p2 = fy, fx, cy, width - 1 - cx, -p2, p1
+    elif orientation == 3:
+        cx, cy, p1, p2 = width - 1 - cx, height - 1 - cy, -p1, -p2
+    else:
+        return camera
+    if len(k) > 2:
+        k[2:4] = [p1, p2][: len(k) - 2]
+    return camera.model_copy(update={"fx": fx, "fy": fy, "cx": cx, "cy": cy, "distortion": k})
+
+
+def _profile_turn(profile: DeviceProfile, upright: tuple[int, int], orientation: int) -> int:
+    """The quarter turn (an EXIF orientation, 6 or 8; 1: none) from the profile's image to the upright photo.
+
+    A profile of the upright photo's shape is taken as it is. One of the transposed shape was calibrated on the
+    sensor's stored rows: it takes the photo's own quarter turn, or, for a photo its software turned upright
+    already (no quarter in its EXIF), the quarter clockwise of a phone's rear camera held upright.
+    """
+    if upright[0] == upright[1] or (upright[0] > upright[1]) == (profile.width > profile.height):
+        return 1
+    return orientation if orientation in (6, 8) else PORTRAIT_ORIENTATION
 
 
 def _profile_photo_camera(
     profile: DeviceProfile, size: tuple[int, int], exif: PhotoExif, source: CameraSource
 ) -> PhotoCamera:
-    width, height = size
-    turn = 1
-    if (width > height) != (profile.width > profile.height):  # the profile is upright, the photo stored turned
-        turn = exif.orientation if exif.turned else PORTRAIT_ORIENTATION
-        width, height = height, width
-    intrinsics = scaled_profile(profile, width, height, "photo", field="profile")
-    turned = f", turned upright (EXIF orientation {turn})" if turn != 1 else ""
+    turn = _profile_turn(profile, size, exif.orientation)
+    width, height = (size[1], size[0]) if turn in (6, 8) else size  # the photo in the profile's orientation
+    intrinsics = turn_intrinsics(scaled_profile(profile, width, height, "photo", field="profile"), width, height, turn)
+    turned = f", turned as EXIF orientation {turn}" if turn != 1 else ""
     kind = "calibrated" if profile.intrinsics is not None else "datasheet"
     detail = f"{kind} profile '{profile.id}'{turned}"
-    return PhotoCamera(intrinsics, source, detail, profile_sigma(profile), turn, profile.id)
+    return PhotoCamera(intrinsics, source, detail, profile_sigma(profile), profile.id)
 
 
 def photo_camera(
@@ -214,10 +262,12 @@ def photo_camera(
     profiles: ProfileTable,
     camera: CameraIntrinsics | None = None,
     profile: DeviceProfile | None = None,
+    ask: tuple[str, str] = ("--profile NAME|FILE", "--camera fx,fy,cx,cy"),
 ) -> PhotoCamera:
-    """The intrinsics of a photo of `size` (stored width, height): `camera` as given > `profile` > the profile
-    EXIF make and model name > EXIF's 35 mm equivalent focal length (diagonal rule, principal point at the
-    centre); FrameError asking for --profile or --camera when there is nothing to go on."""
+    """The intrinsics of a photo of `size` (upright width, height): `camera` as given (upright pixels) >
+    `profile` > the profile EXIF make and model name > EXIF's 35 mm equivalent focal length (diagonal rule,
+    principal point at the centre); FrameError asking for `ask` (the command's or the query's way to give a
+    profile, then intrinsics) when there is nothing to go on."""
     width, height = size
     if camera is not None:
         return PhotoCamera(camera, CameraSource.camera, "given intrinsics", None)
@@ -234,8 +284,8 @@ def photo_camera(
         return PhotoCamera(intrinsics, CameraSource.exif_35mm, detail, FOCAL_SIGMA_EXIF_35MM)
     seen = f"EXIF make/model '{exif.make} {exif.model}' matches no profile" if exif.model else "no EXIF camera"
     raise FrameError(
-        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass --profile NAME|FILE "
-        f"(known: {', '.join(sorted(profiles))}) or --camera fx,fy,cx,cy",
+        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass {ask[0]} "
+        f"(known: {', '.join(sorted(profiles))}) or {ask[1]}",
         field="camera",
     )
 
@@ -252,8 +302,8 @@ def resolve_profile_args(values: Iterable[str]) -> tuple[dict[str, DeviceProfile
             continue
         try:
             given.append(DeviceProfile.model_validate_json(path.read_bytes()))
-        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError
-            raise ValueError(f"cannot read the device profile {path}: {error}") from None
+        except (OSError, ValueError) as error:  # a pydantic ValidationError is a ValueError: named by field
+            raise ValueError(f"cannot read the device profile {describe_file_error(path, error)}") from None
     table = profile_table(given)
     chosen = None
     for value in values:
@@ -268,7 +318,7 @@ def resolve_profile_args(values: Iterable[str]) -> tuple[dict[str, DeviceProfile
 
 
 def parse_camera_arg(text: str) -> CameraIntrinsics:
-    """`--camera fx,fy,cx,cy[,k1,k2,p1,p2,k3]` (pixels of the stored photo); ValueError names the fault."""
+    """`--camera fx,fy,cx,cy[,k1,k2,p1,p2,k3]` (pixels of the upright photo); ValueError names the fault."""
     try:
         numbers = [float(part) for part in text.split(",")]
     except ValueError:

@@ -7,7 +7,7 @@ never copied (the pixels are a strided view of the bytes).
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -17,9 +17,9 @@ from pydantic import ValidationError
 
 from server.camera import PhotoCamera, ProfileTable, frame_camera_used, photo_camera, resolve_camera
 from server.outcomes import FrameError
-from server.photos import PHOTO_SUFFIXES, PhotoError, read_photo, turn_upright
+from server.photos import PhotoError, read_photo
 from shared_schemas import CameraIntrinsics, CameraUsed, DeviceProfile, FrameFormat, FrameMeta, device_profiles
-from shared_schemas.fixture_files import PNG_SIGNATURE, read_fixture_files
+from shared_schemas.fixture_files import PNG_SIGNATURE, photo_type, read_fixture_files
 from shared_schemas.models import MAX_EXPOSURE_S, MAX_ISO, MIN_EXPOSURE_S, MIN_ISO
 
 MAX_PIXELS = 100_000_000
@@ -141,18 +141,24 @@ def decode_photo(
     profiles: ProfileTable | None = None,
     camera: CameraIntrinsics | None = None,
     profile: DeviceProfile | None = None,
+    max_pixels: int = MAX_PIXELS,
+    ask: tuple[str, str] | None = None,
 ) -> tuple[LumaFrame, PhotoCamera]:
     """A phone photo (JPEG, PNG, HEIC) as a frame: its luma, EXIF exposure and ISO, and the intrinsics
-    `server.camera.photo_camera` chooses (turned upright first when the chosen profile is)."""
+    `server.camera.photo_camera` chooses for the upright photo (`ask`: how the caller names a profile and
+    intrinsics, for the message when there are none)."""
     try:
-        photo = read_photo(data, name, MAX_PIXELS)
+        photo = read_photo(data, name, max_pixels)
     except PhotoError as error:
-        raise FrameError(str(error), field="frame") from None
-    height, width = photo.pixels.shape
-    table = device_profiles() if profiles is None else profiles
-    chosen = photo_camera(photo.exif, (width, height), table, camera, profile)
-    pixels = turn_upright(photo.pixels, chosen.turn)
+        raise FrameError(str(error), field=error.field) from None
+    pixels = photo.pixels  # upright (server.photos: one orientation rule on every path)
     height, width = pixels.shape
+    table = device_profiles() if profiles is None else profiles
+    chosen = photo_camera(photo.exif, (width, height), table, camera, profile, *([ask] if ask else []))
+    if photo.exif.orientation != 1:
+        chosen = replace(
+            chosen, detail=f"{chosen.detail} (photo turned upright: EXIF orientation {photo.exif.orientation})"
+        )
     try:
         meta = FrameMeta(
             width=width,
@@ -170,8 +176,7 @@ def decode_photo(
 
 def is_photo(path: Path) -> bool:
     """A JPEG or HEIC file, or a PNG with no frame JSON beside it (a recorded PNG frame has one)."""
-    suffix = path.suffix.lower()
-    return suffix in PHOTO_SUFFIXES and not (suffix == ".png" and path.with_suffix(".json").exists())
+    return photo_type(path) is not None
 
 
 def read_photo_file(

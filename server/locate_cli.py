@@ -47,7 +47,8 @@ def add_locate_command(commands) -> None:
     parser.add_argument(
         "--camera",
         metavar="FX,FY,CX,CY[,K1,K2,P1,P2,K3]",
-        help="a photo's intrinsics in pixels of the stored image; wins over --profile and EXIF (default: none)",
+        help="a photo's intrinsics in pixels of the upright photo (its EXIF orientation applied); wins over "
+        "--profile and EXIF (default: none)",
     )
     parser.add_argument(
         "--json",

@@ -62,19 +62,19 @@ def locate(
     """
     try:
         result = _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
-        # every fix says which intrinsics it rests on (a photo's may be a rough EXIF guess)
-        return result.model_copy(update={"camera_used": frame.camera_used}) if result.ok else result
+        # every result says which intrinsics it rests on (a photo's may be a rough EXIF guess): a refused
+        # photo's user needs it most, to see whether the camera was the trouble
+        return result.model_copy(update={"camera_used": frame.camera_used})
     except NUMERICAL_ERRORS as error:
         where = _where(error)
         LOG.warning("numerical failure in %s on map '%s': %r", where, beacon_map.name, error, exc_info=True)
         first_line = (_opencv_message(str(error)).strip().splitlines() or [""])[0][:200]
-        return refused(
-            Refusal(
-                FailureReason.numerical_failure,
-                f"the frame's numbers (camera, distortion, gravity, times) or the map's broke the arithmetic "
-                f"in {where}: {'cv2.error' if isinstance(error, cv2.error) else type(error).__name__}: {first_line}",
-            )
+        failure = Refusal(
+            FailureReason.numerical_failure,
+            f"the frame's numbers (camera, distortion, gravity, times) or the map's broke the arithmetic "
+            f"in {where}: {'cv2.error' if isinstance(error, cv2.error) else type(error).__name__}: {first_line}",
         )
+        return refused(failure).model_copy(update={"camera_used": frame.camera_used})
 
 
 def _opencv_message(text: str) -> str:

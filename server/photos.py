@@ -3,8 +3,9 @@
 Luma is taken as the camera made it: a JPEG's own stored Y channel (libjpeg decodes straight to
 grey, no RGB round trip), and for RGB sources the BT.601 luma of the encoded (gamma) values, as
 JPEG and Camera2 compute it. Sizes are checked from the header before anything is decoded (a
-small file may declare 20000 x 20000 pixels). Pixels stay in the stored orientation; `turn_upright`
-applies the EXIF orientation when the caller's camera model needs the displayed one.
+small file may declare 20000 x 20000 pixels). One orientation rule on every path: the pixels are turned
+upright by the EXIF orientation's rotation (1, 3, 6, 8) as they are decoded; mirrored orientations (2, 4,
+5, 7) are refused, as no phone camera writes them. The size of a photo is its upright size.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from PIL import Image, UnidentifiedImageError
 
 MAX_PHOTO_PIXELS = 100_000_000  # as a frame (server.ingest.MAX_PIXELS): a 50 MP phone photo fits twice
 PHOTO_KINDS = ("JPEG", "PNG", "HEIF")
-PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".heic", ".heif")
+MIRRORED_ORIENTATIONS = (2, 4, 5, 7)
 
 try:  # HEIC is optional: without pillow-heif it is refused by name
     from pillow_heif import register_heif_opener
@@ -33,7 +34,11 @@ _EXPOSURE_TIME, _ISO, _FOCAL_LENGTH, _FOCAL_35MM = 0x829A, 0x8827, 0x920A, 0xA40
 
 
 class PhotoError(ValueError):
-    """A photo that cannot be used; the message names it and what is wrong."""
+    """A photo that cannot be used; the message names it and what is wrong, `field` the contract's field."""
+
+    def __init__(self, message: str, field: str = "frame") -> None:
+        super().__init__(message)
+        self.field = field
 
 
 @dataclass(frozen=True)
@@ -44,19 +49,14 @@ class PhotoExif:
     model: str | None = None
     focal_length_mm: float | None = None
     focal_35mm_mm: float | None = None
-    orientation: int = 1  # EXIF 1-8; 5-8 mean the stored image is turned a quarter against the display
+    orientation: int = 1  # EXIF 1-8; 6 and 8 mean the stored image is turned a quarter against the display
     exposure_s: float | None = None
     iso: float | None = None
-
-    @property
-    def turned(self) -> bool:
-        """The displayed image is the stored one turned by a quarter (width and height swap)."""
-        return self.orientation in (5, 6, 7, 8)
 
 
 @dataclass(frozen=True)
 class Photo:
-    pixels: np.ndarray  # (height, width) uint8 luma in the stored orientation, read-only
+    pixels: np.ndarray  # (height, width) uint8 luma, upright (the EXIF orientation applied), read-only
     exif: PhotoExif
     kind: str  # "JPEG", "PNG" or "HEIF"
 
@@ -81,16 +81,20 @@ def _refuse_heic_unreadable(data: bytes, name: str) -> None:
 
 
 def photo_size(data: bytes, name: str) -> tuple[int, int]:
-    """(width, height) from the photo's header, without decoding it; PhotoError when it is no photo."""
+    """The upright (width, height) from the photo's header, without decoding it; PhotoError when it is no photo
+    or is mirrored."""
     _refuse_heic_unreadable(data, name)
     with _open(data, name) as image:
-        return image.size
+        width, height = image.size
+        turned = _upright_orientation(read_exif(image), name) in (6, 8)
+        return (height, width) if turned else (width, height)
 
 
 def _check_size(size: tuple[int, int], name: str, max_pixels: int) -> None:
     width, height = size
     if width * height > max_pixels:
-        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than {max_pixels // 1_000_000} megapixels")
+        allowed = f"{max_pixels / 1e6:.4g} megapixels allowed"
+        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than the {allowed}")
 
 
 def _luma(image: Image.Image) -> Image.Image:
@@ -98,8 +102,9 @@ def _luma(image: Image.Image) -> Image.Image:
         image.draft("L", image.size)  # libjpeg hands out the stored Y channel itself
     if image.mode in ("I;16", "I;16B", "I", "F"):
         raise PhotoError(f"{image.mode} images are not 8-bit; give an 8-bit photo")
-    # Pillow's L conversion is ITU-R BT.601 (299, 587, 114) on the encoded values; alpha is dropped.
-    return image if image.mode == "L" else image.convert("RGB").convert("L")
+    # Pillow's L conversion is ITU-R BT.601 (299, 587, 114) on the encoded values, straight from RGB, RGBA,
+    # palette or CMYK (alpha dropped): one luma image, no full-size RGB copy.
+    return image if image.mode == "L" else image.convert("L")
 
 
 def _positive(value: object) -> float | None:
@@ -132,47 +137,50 @@ def read_exif(image: Image.Image) -> PhotoExif:
     )
 
 
+def _upright_orientation(exif: PhotoExif, name: str) -> int:
+    if exif.orientation in MIRRORED_ORIENTATIONS:
+        raise PhotoError(
+            f"'{name}' has the mirrored EXIF orientation {exif.orientation}, which phone cameras do not write; "
+            "give the photo as the camera stored it (orientation 1, 3, 6 or 8)",
+            field="orientation",
+        )
+    return exif.orientation
+
+
+# EXIF orientation -> the counter-clockwise quarter turns (np.rot90) that show the stored image upright
+_UPRIGHT_TURNS = {3: 2, 6: -1, 8: 1}
+
+
 def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Photo:
-    """The photo's luma (stored orientation) and EXIF; PhotoError names what is wrong."""
+    """The photo's luma, turned upright by its EXIF orientation, and its EXIF; PhotoError names what is wrong.
+
+    Mirrored orientations and too many pixels are refused from the header, before decoding.
+    """
     _refuse_heic_unreadable(data, name)
     with _open(data, name) as image:
         _check_size(image.size, name, max_pixels)
         kind, size = image.format or "", image.size
         try:  # a PNG's EXIF may follow its pixels: reading it can meet the damage too
             exif = read_exif(image)
+            turns = _UPRIGHT_TURNS.get(_upright_orientation(exif, name), 0)
             luma = _luma(image)
             luma.load()
+            if luma is not image:
+                image.close()  # the decoded RGB(A) goes now, before the luma is copied out
             pixels = np.asarray(luma, dtype=np.uint8)
+            luma.close()
         except (OSError, ValueError, SyntaxError) as error:
+            if isinstance(error, PhotoError):
+                raise
             raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated: {error})") from None
     if pixels.shape != (size[1], size[0]):
         raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
+    if turns:
+        pixels = np.ascontiguousarray(np.rot90(pixels, turns))
     pixels.flags.writeable = False
     return Photo(pixels=pixels, exif=exif, kind=kind)
 
 
 def read_grey(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> np.ndarray:
-    """The photo as an 8-bit grey image (height, width), stored orientation; PhotoError names what is wrong."""
+    """The photo as an upright 8-bit grey image (height, width); PhotoError names what is wrong."""
     return read_photo(data, name, max_pixels).pixels
-
-
-# EXIF orientation -> the turn that shows the stored image upright (EXIF 2.3, tag 0x0112)
-_UPRIGHT = {
-    2: Image.Transpose.FLIP_LEFT_RIGHT,
-    3: Image.Transpose.ROTATE_180,
-    4: Image.Transpose.FLIP_TOP_BOTTOM,
-    5: Image.Transpose.TRANSPOSE,
-    6: Image.Transpose.ROTATE_270,
-    7: Image.Transpose.TRANSVERSE,
-    8: Image.Transpose.ROTATE_90,
-}
-
-
-def turn_upright(pixels: np.ndarray, orientation: int) -> np.ndarray:
-    """`pixels` as displayed under EXIF `orientation` (the stored image turned and/or mirrored)."""
-    turn = _UPRIGHT.get(orientation)
-    if turn is None:
-        return pixels
-    turned = np.asarray(Image.fromarray(np.ascontiguousarray(pixels)).transpose(turn))
-    turned.flags.writeable = False
-    return turned

@@ -14,6 +14,23 @@ from shared_schemas.models import FrameFormat, FrameMeta
 
 RAW_SUFFIXES = (".y", ".yuv", ".png")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+# A phone photo's suffix and the Content-Type it is sent with (client) and accepted as (server).
+PHOTO_TYPES = {
+    ".jpg": "image/jpeg",
+    ".jpeg": "image/jpeg",
+    ".png": "image/png",
+    ".heic": "image/heic",
+    ".heif": "image/heif",
+}
+
+
+def photo_type(path: Path) -> str | None:
+    """The Content-Type of a photo file: a JPEG or HEIC/HEIF, or a PNG with no frame JSON beside it (a recorded
+    PNG frame has one); None for anything else."""
+    suffix = path.suffix.lower()
+    if suffix == ".png" and path.with_suffix(".json").exists():
+        return None
+    return PHOTO_TYPES.get(suffix)
 
 
 def fixture_paths(path: Path | str) -> tuple[Path, Path]:

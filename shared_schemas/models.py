@@ -577,7 +577,7 @@ class LocateResult(Strict):
     warnings: list[str] = Field(default_factory=list)
     timing_ms: dict[str, float] = Field(default_factory=dict)
     vlc: VlcReading | None = Field(default=None, description="the ID read by VLC for this fix, when one was read")
-    camera_used: CameraUsed | None = Field(default=None, description="the intrinsics of this fix and how sure")
+    camera_used: CameraUsed | None = Field(default=None, description="the intrinsics of this result and how sure")
     beacons_in_view: int | None = Field(default=None, ge=0, description="beacon-shaped blobs seen in the frame")
     track: TrackState | None = None
 

@@ -26,7 +26,7 @@ from starlette.types import Message, Receive
 from server.api.config import Settings
 from server.api.deps import api_key_problem, require_api_key
 from server.api.errors import ApiError
-from server.api.params import frame_upload, photos_body
+from server.api.params import board_upload, frame_upload, photos_body
 from server.api.upload import receive_body, too_large
 
 
@@ -36,7 +36,7 @@ class GuardedRoute(APIRoute):
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
         needs_key = any(getattr(d, "dependency", None) is require_api_key for d in self.dependencies)
-        takes_frame = any(d.call in (frame_upload, photos_body) for d in self.dependant.dependencies)
+        takes_frame = any(d.call in (frame_upload, board_upload, photos_body) for d in self.dependant.dependencies)
 
         async def guarded(request: Request) -> Response:
             services = request.app.state.services

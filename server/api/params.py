@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Annotated
 
+import numpy as np
 from fastapi import Depends, Header, Query, Request
 from starlette.concurrency import run_in_threadpool
 
@@ -87,19 +88,28 @@ async def frame_upload(
     settings = services.settings
     upload = await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
     if isinstance(upload, PhotoUpload):
-        return await run_in_threadpool(_photo_frame, services, upload, profile, camera)
+        async with services.pipeline_limiter:  # decoding a photo is CPU work like the pipeline's
+            return await run_in_threadpool(_photo_frame, services, upload, profile, camera)
     return upload
 
 
+def photo_pixel_limit(services) -> int:
+    """A photo's pixels over HTTP: no more than a Y8 frame of the upload limit holds (max_upload_mb), so a
+    small, well-compressed PNG cannot make the service decode a hundred megapixels."""
+    return services.settings.max_upload_bytes
+
+
 def _photo_frame(services, upload: PhotoUpload, profile_id: str | None, camera_text: str | None) -> FrameUpload:
-    """A photo as a Y8 frame with the intrinsics `server.camera.photo_camera` chooses (as `lumipose locate PHOTO`)."""
+    """A photo as a Y8 frame with the intrinsics `server.camera.photo_camera` chooses (as `lumipose locate PHOTO`);
+    the luma plane is passed on as decoded, not copied."""
     from server.camera import parse_camera_arg
     from server.ingest import decode_photo
 
     try:
         camera = None if camera_text is None else parse_camera_arg(camera_text)
     except ValueError as error:
-        raise ApiError(400, "bad_frame", str(error), field="camera") from None
+        message = str(error).replace("--camera", "camera")
+        raise ApiError(400, "bad_frame", message, field="camera") from None
     profiles = services.profiles.table(profile_id)
     if profile_id is not None and profile_id not in profiles:
         raise ApiError(
@@ -109,8 +119,27 @@ def _photo_frame(services, upload: PhotoUpload, profile_id: str | None, camera_t
             field="profile",
         )
     profile = None if profile_id is None else profiles[profile_id]
-    frame, _ = decode_photo(bytes(upload.data), "the photo", profiles, camera, profile)
-    return FrameUpload(meta=frame.meta, data=frame.pixels.tobytes(), camera_used=frame.camera_used)
+    limit = photo_pixel_limit(services)
+    ask = ("?profile=ID", "?camera=fx,fy,cx,cy")
+    frame, _ = decode_photo(bytes(upload.data), "the photo", profiles, camera, profile, limit, ask)
+    return FrameUpload(meta=frame.meta, data=frame.pixels.reshape(-1).data, camera_used=frame.camera_used)
+
+
+async def board_upload(request: Request, services: ServicesDep, frame_json: FrameHeader = None) -> np.ndarray:
+    """The luma of a board view's upload: a frame as to /v1/locate, or a photo, which needs no camera (the board
+    is found on the pixels alone), turned upright by its EXIF orientation as every photo is."""
+    from server.ingest import decode_luma
+    from server.photos import PhotoError, read_grey
+
+    settings = services.settings
+    upload = await receive_frame(request, frame_json, settings.max_upload_bytes, settings.read_timeout_s)
+    if not isinstance(upload, PhotoUpload):
+        return decode_luma(upload.data, upload.meta)
+    async with services.pipeline_limiter:
+        try:
+            return await run_in_threadpool(read_grey, bytes(upload.data), "the photo", photo_pixel_limit(services))
+        except PhotoError as error:
+            raise ApiError(400, "bad_frame", str(error), field=error.field) from None
 
 
 async def photos_body(request: Request, services: ServicesDep) -> bytes:
@@ -123,4 +152,5 @@ async def photos_body(request: Request, services: ServicesDep) -> bytes:
 # itself, with its own limits; `server.api.guard` has checked the key and the length before).
 QueryDep = Annotated[LocateQuery, Depends(_locate_query)]
 UploadDep = Annotated[FrameUpload, Depends(frame_upload)]
+BoardPixelsDep = Annotated[np.ndarray, Depends(board_upload)]
 PhotosBodyDep = Annotated[bytes, Depends(photos_body)]

@@ -18,11 +18,12 @@ from starlette.requests import ClientDisconnect, Request
 from server.api.errors import ApiError
 from server.ingest import parse_meta
 from shared_schemas import CameraUsed, FrameFormat, FrameMeta
+from shared_schemas.fixture_files import PHOTO_TYPES as PHOTO_SUFFIX_TYPES
 
 FRAME_HEADER = "X-Lumipose-Frame"
 RAW_TYPES = ("application/octet-stream", "image/png")
 # A phone photo: no frame JSON, the camera from a profile or intrinsics in the query, or the photo's EXIF.
-PHOTO_TYPES = ("image/jpeg", "image/png", "image/heic", "image/heif")
+PHOTO_TYPES = tuple(sorted(set(PHOTO_SUFFIX_TYPES.values())))
 MULTIPART = "multipart/form-data"
 ZSTD_PIECE = 4096
 
@@ -30,7 +31,7 @@ ZSTD_PIECE = 4096
 @dataclass(frozen=True)
 class FrameUpload:
     meta: FrameMeta
-    data: bytes | bytearray  # uncompressed frame bytes as the contract's fixture file holds them
+    data: bytes | bytearray | memoryview  # uncompressed frame bytes as the contract's fixture file holds them
     camera_used: CameraUsed | None = None  # a photo's chosen intrinsics (else the frame JSON's camera says)
 
 

@@ -38,7 +38,9 @@ def add_commands(commands) -> None:
     board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
     board.set_defaults(run=_run_board)
     camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
-    camera.add_argument("photos", type=Path, nargs="+", help="PNG or JPEG photos of the board, grey or colour")
+    camera.add_argument(
+        "photos", type=Path, nargs="+", help="PNG, JPEG or HEIC photos of the board, grey or colour (turned upright)"
+    )
     camera.add_argument("--board", type=Path, required=True, help="the board's spec (board.json)")
     camera.add_argument("--device", required=True, help="the phone's profile: a bundled id or a profile JSON file")
     camera.add_argument("--id", dest="profile_id", default=None, help="id of the calibrated profile")

@@ -1,7 +1,8 @@
 """Calibration photos: the board's views on PNG, JPEG or HEIC photos (read by `server.photos`).
 
-Pixels are taken as stored: an EXIF orientation is ignored, as the app's frames (the sensor's
-own rows) are never turned; a profile calibrated from turned photos would not fit them.
+Photos are turned upright by their EXIF orientation, as every photo is (`server.photos`), in the
+command, the multipart /v1/calibrations and /v1/calibrations/views alike: a profile calibrated from
+portrait photos is portrait, and `server.camera` turns a profile of the transposed shape to fit a photo.
 """
 
 from __future__ import annotations

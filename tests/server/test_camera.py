@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from server.camera import profile_table, resolve_camera
+from server.camera import intrinsics_from_profile, profile_table, resolve_camera
 from server.ingest import decode_frame
 from server.locator import locate
 from server.outcomes import FrameError
-from shared_schemas import load_map
+from shared_schemas import DeviceProfile, device_profiles, load_map
 from tests.helpers import CALIBRATED, DATASHEET, FRONT, LENS_HEIGHT, LENS_WIDTH, calibrated_lens_frame
 
 POSITIONS_M = [(0.05, -0.03, 0.0), (-0.1, 0.08, 0.0), (0.12, 0.1, 0.0)]
@@ -56,3 +56,47 @@ def test_a_table_refuses_an_extra_profile_with_a_taken_id():
         profile_table([FRONT])
     with pytest.raises(ValueError, match="another given profile's id"):
         profile_table([CALIBRATED, DATASHEET])
+
+
+def _named(profile_id: str, name: str, calibrated: bool = False) -> DeviceProfile:
+    rear = device_profiles()["xiaomi-mi8-rear"]
+    intrinsics = intrinsics_from_profile(rear, rear.width, rear.height) if calibrated else None
+    return rear.model_copy(update={"id": profile_id, "name": name, "intrinsics": intrinsics})
+
+
+def test_exif_matches_whole_words_and_prefers_a_calibrated_profile():
+    from server.camera import profile_for_exif
+    from server.photos import PhotoExif
+
+    table = {
+        p.id: p
+        for p in (
+            _named("mi8-lite", "Xiaomi Mi 8 Lite rear camera"),
+            _named("ip13-pro", "Apple iPhone 13 Pro rear camera"),
+            _named("ip13", "Apple iPhone 13 rear camera"),
+            _named("ip13-cal", "Apple iPhone 13 rear camera (calibrated)", calibrated=True),
+        )
+    }
+    assert profile_for_exif(PhotoExif(make="Xiaomi", model="MI 8"), table) is None  # not the Lite
+    assert profile_for_exif(PhotoExif(make="Xiaomi", model="MI 8 Lite"), table).id == "mi8-lite"
+    assert profile_for_exif(PhotoExif(make="Apple", model="iPhone 13"), table).id == "ip13-cal"
+    assert profile_for_exif(PhotoExif(make="Apple", model="iPhone 13", focal_length_mm=4.2), table).id == "ip13-cal"
+    assert profile_for_exif(PhotoExif(make="Apple", model="iPhone 13 Pro"), table).id == "ip13-pro"
+    assert profile_for_exif(PhotoExif(make="Apple", model="iPhone 1"), table) is None
+
+
+def test_a_bad_profile_file_is_named_by_field_not_dumped(tmp_path, capsys):
+    from lumipose_cli.main import main
+
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"id": "x", "width": -3}')
+    for command in (
+        ["locate", "photo.jpg"],
+        ["fov"],
+        ["survey", "p.jpg", "--map", "test-bench", "--anchor", "1", "--out", str(tmp_path / "m.json")],
+    ):
+        code = main([*command, "--profile", str(bad)])
+        err = capsys.readouterr().err
+        assert code == 2, (command, err)
+        assert "cannot read the device profile" in err and str(bad) in err, err
+        assert "errors.pydantic.dev" not in err and "validation error" not in err.lower(), err

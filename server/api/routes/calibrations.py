@@ -19,11 +19,10 @@ from starlette.formparsers import MultiPartException, MultiPartParser
 from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
-from server.api.params import FRAME_REQUEST_BODY, PhotosBodyDep, UploadDep
+from server.api.params import FRAME_REQUEST_BODY, BoardPixelsDep, PhotosBodyDep
 from server.calibration.board import find_board
 from server.calibration.photos import PhotoError, find_views
 from server.calibration.report import CalibrationInputError, calibrate, no_board_report
-from server.ingest import decode_luma
 from shared_schemas import DeviceProfile
 from shared_schemas.calibration import MAX_VIEWS, BoardSpec, BoardView, CalibrationReport, CalibrationRequest
 
@@ -109,15 +108,14 @@ async def _profiles(services: Services) -> dict[str, DeviceProfile]:
 
 @router.post("/views", response_model=BoardView, openapi_extra=FRAME_REQUEST_BODY)
 async def find_view(
-    services: ServicesDep, upload: UploadDep, board: BoardHeader = None, name: NameQuery = "photo"
+    services: ServicesDep, pixels: BoardPixelsDep, board: BoardHeader = None, name: NameQuery = "photo"
 ) -> BoardView:
-    """The board's corners on one photo (a frame upload, as to /v1/locate; its camera is not used).
+    """The board's corners on one photo (a frame upload, as to /v1/locate, or a photo; no camera is needed).
 
     The app keeps these small views and sends them to `POST /v1/calibrations` instead of the photos.
     422 when the board spec is missing or invalid, or when no board is found.
     """
     spec = _board(board, BOARD_HEADER)
-    pixels = decode_luma(upload.data, upload.meta)
     async with services.pipeline_limiter:
         view = await run_in_threadpool(find_board, pixels, spec, name)
     if view is None:

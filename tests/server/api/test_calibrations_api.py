@@ -151,3 +151,23 @@ def test_a_stored_profile_is_a_calibrations_device(client):
         assert unknown.status == 422 and unknown.body.field == "device" and "lab-phone" in unknown.body.message
     finally:
         client.delete_profile("lab-phone")  # the server is the session's: other tests list its profiles
+
+
+def test_a_board_photo_needs_no_camera_and_is_turned_upright(server_url):
+    import io
+
+    from PIL import Image
+
+    photo = photo_set(PoseSet.good)[0][1]
+    local = next(v for v in view_set(PoseSet.good) if v.name == "good-01")
+    headers = {"Content-Type": "image/png", "X-Lumipose-Board": BOARD.model_dump_json()}
+    for orientation, turns in ((1, 0), (6, 1)):  # a phone's stored rows, shown a quarter clockwise
+        exif = Image.Exif()
+        exif[0x0112] = orientation
+        buffer = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(np.rot90(photo, turns))).save(buffer, "PNG", exif=exif.tobytes())
+        response = httpx.post(f"{server_url}/v1/calibrations/views", content=buffer.getvalue(), headers=headers)
+        assert response.status_code == 200, response.text  # no EXIF focal, no ?profile=: the board needs none
+        view = BoardView.model_validate(response.json())
+        assert (view.width, view.height) == (WIDTH, HEIGHT)
+        assert view.corner_ids == local.corner_ids and np.allclose(view.corners_px, local.corners_px, atol=1e-3)
