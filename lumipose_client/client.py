@@ -168,17 +168,8 @@ class _Endpoints:
         With `device`, the frame joins that device's session on the server (ID frames, tracking).
         With `annotate`, an `AnnotatedResult` instead: the result and a PNG of what the pipeline saw.
         """
-        request = _frame_request(meta, data, compress)
-        request["headers"] |= {"X-Lumipose-Device": device} if device else {}
-        return self._run(
-            _Call(
-                "POST",
-                "/v1/locate",
-                _annotated if annotate else _model(LocateResult),
-                params={"map": map, "beacon_id": beacon_id, "gravity": gravity, "annotate": 1 if annotate else None},
-                **request,
-            )
-        )
+        params = {"map": map, "beacon_id": beacon_id, "gravity": gravity}
+        return self._locate_call(params, device, annotate, **_frame_request(meta, data, compress))
 
     def calibrate_view(
         self,
@@ -218,23 +209,16 @@ class _Endpoints:
         """Locate the camera of a phone photo (image/jpeg, image/png or image/heic) sent without frame JSON;
         its camera is the `profile` id (bundled or stored), `camera` 'fx,fy,cx,cy[,k1,...]' (pixels of the
         upright photo), or the photo's EXIF. `device` and `annotate` as for `locate`."""
-        params = {
-            "map": map,
-            "profile": profile,
-            "camera": camera,
-            "beacon_id": beacon_id,
-            "annotate": 1 if annotate else None,
-        }
-        headers = {"Content-Type": content_type} | ({"X-Lumipose-Device": device} if device else {})
+        params = {"map": map, "profile": profile, "camera": camera, "beacon_id": beacon_id}
+        return self._locate_call(params, device, annotate, headers={"Content-Type": content_type}, content=bytes(data))
+
+    def _locate_call(self, params: dict, device: str | None, annotate: bool, **request):
+        """POST /v1/locate of a frame or a photo (`request`: its headers and body), in a device's session when
+        `device` is given; an AnnotatedResult with `annotate`, else a LocateResult."""
+        request["headers"] = request["headers"] | ({"X-Lumipose-Device": device} if device else {})
+        parse = _annotated if annotate else _model(LocateResult)
         return self._run(
-            _Call(
-                "POST",
-                "/v1/locate",
-                _annotated if annotate else _model(LocateResult),
-                params=params,
-                headers=headers,
-                content=bytes(data),
-            )
+            _Call("POST", "/v1/locate", parse, params=params | {"annotate": 1 if annotate else None}, **request)
         )
 
     def maps(self):

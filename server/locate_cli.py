@@ -10,6 +10,7 @@ Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reas
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -199,13 +200,9 @@ def print_result(result, frame, as_json: bool, beacon_map=None) -> None:
     ambiguity = "n/a" if result.ambiguity_ratio is None else number(result.ambiguity_ratio)
     reprojection = "n/a" if result.reprojection_error_px is None else f"{number(result.reprojection_error_px, 3)} px"
     print(f"quality   reprojection {reprojection}, ambiguity ratio {ambiguity}, {result.timing_ms['total']:.1f} ms")
-    truth = frame.meta.ground_truth
-    if truth is not None:
-        dx, dy, dz = (a - b for a, b in zip((x, y, z), truth.position_m, strict=True))
-        print(
-            f"truth     error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.2f} mm, 3D "
-            f"{1000 * (dx * dx + dy * dy + dz * dz) ** 0.5:.2f} mm"
-        )
+    errors = truth_errors_mm(result.position_m, frame)
+    if errors is not None:
+        print(f"truth     error 2D {errors[0]:.2f} mm, 3D {errors[1]:.2f} mm")
     for warning in result.warnings:
         print(f"warning   {warning}")
 
@@ -220,9 +217,9 @@ def print_camera_used(camera_used, result, beacon_map) -> None:
         print("          focal uncertainty unknown (intrinsics as given, not checked here)")
         return
     line = f"          focal uncertainty {100 * sigma:.2g} %"
-    beacon = next((b for b in beacon_map.beacons if b.id == result.beacon_id), None) if beacon_map else None
+    beacon = beacon_map.beacon(result.beacon_id) if beacon_map and result.beacon_id is not None else None
     if result.position_m is not None and beacon is not None:
-        distance_m = sum((a - b) ** 2 for a, b in zip(result.position_m, beacon.center_m, strict=True)) ** 0.5
+        distance_m = math.dist(result.position_m, beacon.center_m)
         line += f", about {1000 * sigma * distance_m:.1f} mm along the ray at this fix's {distance_m:.2f} m"
     print(line)
 
@@ -237,9 +234,14 @@ def print_line(path: Path, result, frame, as_json: bool) -> None:
         return
     assert result.position_m is not None  # outcomes.located sets it
     x, y, z = result.position_m
-    truth = frame.meta.ground_truth
-    error = ""
-    if truth is not None:
-        dx, dy = x - truth.position_m[0], y - truth.position_m[1]
-        error = f"  truth error 2D {1000 * (dx * dx + dy * dy) ** 0.5:.1f} mm"
+    errors = truth_errors_mm(result.position_m, frame)
+    error = "" if errors is None else f"  truth error 2D {errors[0]:.1f} mm"
     print(f"{path.name}  x={x:+.4f} y={y:+.4f} z={z:+.4f} m  beacon {result.beacon_id}{error}")
+
+
+def truth_errors_mm(position_m, frame) -> tuple[float, float] | None:
+    """The fix's 2-D and 3-D distance from the frame's ground truth, in mm; None for a frame without one."""
+    truth = frame.meta.ground_truth
+    if truth is None:
+        return None
+    return 1000 * math.dist(position_m[:2], truth.position_m[:2]), 1000 * math.dist(position_m, truth.position_m)
