@@ -1,0 +1,122 @@
+"""The operator's page in headless Debian Chromium (Playwright), against a real `lumipose serve`.
+
+- `live`: a service with the four-panel room's map, fed a simulated walk by two devices from a thread;
+- `bench`: a service with the paper's one-panel test bench, for stored samples (its own data, so the
+  live one's are untouched);
+- `page`: a fresh browser page per test; when the test ends its screenshot goes to
+  test-artifacts/screenshots/<test>.png, and a request outside the server's origin or an uncaught
+  script error fails the test.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from urllib.parse import urlsplit
+
+import pytest
+
+from lumipose_cli.main import main as lumipose
+from tests.dashboard.live_room import API_KEY, SCREENSHOTS, Feeder, Walk, chromium, render_walk, start_server
+from simulator.local_server import LocalServer
+
+BENCH_SCALE = 0.2  # of the Mi 8 front camera: the bench frames, as the walk's
+
+
+@dataclass(frozen=True)
+class Live:
+    url: str
+    walk: Walk
+    feeder: Feeder
+
+
+@pytest.fixture(scope="session")
+def walk(tmp_path_factory) -> Walk:
+    return render_walk(tmp_path_factory.mktemp("walk"))
+
+
+@pytest.fixture(scope="session")
+def live(walk, tmp_path_factory) -> Iterator[Live]:
+    with start_server(tmp_path_factory.mktemp("live-data"), walk) as server:
+        feeder = Feeder(server.url, walk).start()
+        try:
+            feeder.wait_for_fixes(3)
+            yield Live(server.url, walk, feeder)
+        finally:
+            feeder.stop()
+        assert not feeder.errors, feeder.errors
+        assert "Traceback" not in server.log(), server.log()
+
+
+@dataclass(frozen=True)
+class Bench:
+    url: str
+    frames: list[Path]  # the bench's frames (fixtures), a row of grid cells under the panel, as rendered
+
+
+@pytest.fixture(scope="session")
+def bench(tmp_path_factory) -> Iterator[Bench]:
+    """The paper's bench: a row of eight grid cells rendered once, a service holding the bench's map."""
+    out = tmp_path_factory.mktemp("bench")
+    command = ["simulate", "paper-bench", str(out), "--limit", "8", "--scale", str(BENCH_SCALE), "--workers", "1"]
+    assert lumipose(command) == 0
+    with LocalServer("--api-key", API_KEY, "--map", str(out / "map.json"), "--log-level", "warning",
+                     data_dir=tmp_path_factory.mktemp("bench-data")) as server:
+        yield Bench(server.url, sorted(out.glob("paper-bench_*.json")))
+        assert "Traceback" not in server.log(), server.log()
+
+
+@pytest.fixture(scope="session")
+def browser():
+    with chromium() as launched:
+        yield launched
+
+
+@dataclass
+class PageRecord:
+    """What a page did: every request's URL, console errors, uncaught script errors."""
+
+    requests: list[str] = field(default_factory=list)
+    console_errors: list[str] = field(default_factory=list)
+    page_errors: list[str] = field(default_factory=list)
+
+    def foreign_requests(self) -> list[str]:
+        """Requests to another origin than the first document's (the page the test opened)."""
+        pages = [url for url in self.requests if url.startswith("http")]
+        if not pages:
+            return []
+        origin = urlsplit(pages[0])[:2]
+        return [url for url in self.requests if urlsplit(url)[:2] != origin and not url.startswith("data:")]
+
+
+@pytest.fixture
+def page_record() -> PageRecord:
+    return PageRecord()
+
+
+_screenshots_taken: list[Path] = []
+
+
+@pytest.fixture
+def page(browser, page_record, request):
+    context = browser.new_context(viewport={"width": 1280, "height": 860}, accept_downloads=True)
+    opened = context.new_page()
+    opened.on("request", lambda sent: page_record.requests.append(sent.url))
+    opened.on("console", lambda message: message.type == "error" and page_record.console_errors.append(message.text))
+    opened.on("pageerror", lambda error: page_record.page_errors.append(str(error)))
+    try:
+        yield opened
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        path = SCREENSHOTS / f"{request.node.name}.png"
+        opened.screenshot(path=str(path), full_page=True)
+        _screenshots_taken.append(path)
+    finally:
+        context.close()
+    assert not page_record.page_errors, page_record.page_errors
+    assert not page_record.foreign_requests(), page_record.foreign_requests()
+
+
+def pytest_terminal_summary(terminalreporter) -> None:
+    if _screenshots_taken:
+        terminalreporter.write_line(f"dashboard screenshots ({len(_screenshots_taken)}): {SCREENSHOTS}")
