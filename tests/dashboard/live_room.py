@@ -4,7 +4,7 @@ to it by real HTTP, and headless Debian Chromium (Playwright) to look at the pag
 Used by tests/dashboard/conftest.py and by `python -m tests.dashboard.screenshots` (docs/dashboard.md).
 The walk is the office scene (simulator/scenes/office.json: four coded panels, 17, 42, 99, 200) without
 its window, walked round the four panels' centres at 0.5 m/s, one capture (a pose frame and its ID frames)
-every second, rendered once at a fifth of the Mi 8 front camera's resolution (ID frames at a tenth).
+every 1.5 s, rendered once at a fifth of the Mi 8 front camera's resolution (ID frames at a tenth).
 """
 
 from __future__ import annotations
@@ -26,11 +26,13 @@ from simulator.scene import find_scene
 
 API_KEY = "dashboard-key"
 SCALE = 0.2  # of the Mi 8 front camera's 3880 x 5184: the pipeline stays cheap on 2 cores
-CAPTURES = 12  # one lap: 6 m at 0.5 m/s, a capture every second (the 13th would be the start again)
+CAPTURES = 8  # one lap: 6 m at 0.5 m/s, a capture every 1.5 s (the 9th would be the start again)
 # the four panels' centres, in a loop: the walk passes right under each one
 LAP_M = [[-0.6, -0.9], [0.6, -0.9], [0.6, 0.9], [-0.6, 0.9], [-0.6, -0.9]]
 DEVICES = ("walker-a", "walker-b")  # walker-b walks the same lap half a lap behind
-CAPTURE_PERIOD_S = 0.3  # wall time between one device's captures as fed (the walk's own clock: 1 s)
+# wall time between one device's captures as fed (the walk's own clock: 1.5 s); a pose frame in the room costs
+# the service 0.1-0.9 s of CPU (VLC decoding, outline fits): two devices at this pace keep about one core busy
+CAPTURE_PERIOD_S = 1.0
 SCREENSHOTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "screenshots"
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
@@ -66,7 +68,7 @@ def walk_scene_json() -> str:
     slowly (motion blur costs the rest)."""
     scene = find_scene("office")
     path = scene.series.path.model_copy(update={"kind": "waypoints", "points_m": LAP_M, "area_m": None,
-                                                "speed_mps": 0.5, "frame_interval_s": 1.0})
+                                                "speed_mps": 0.5, "frame_interval_s": 1.5})
     series = scene.series.model_copy(update={"path": path})
     return scene.model_copy(update={"light_sources": [], "series": series}).to_json()
 
@@ -115,17 +117,32 @@ class Feeder:
     posted: list[Posted] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)
     _stop: threading.Event = field(default_factory=threading.Event)
+    _running: threading.Event = field(default_factory=threading.Event)
+    _posting: threading.Lock = field(default_factory=threading.Lock)
     _thread: threading.Thread | None = None
 
     def start(self) -> Feeder:
+        self._running.set()
         self._thread = threading.Thread(target=self._run, name="walk-feeder", daemon=True)
         self._thread.start()
         return self
 
     def stop(self) -> None:
         self._stop.set()
+        self._running.set()
         if self._thread is not None:
             self._thread.join(timeout=10)
+
+    @contextlib.contextmanager
+    def paused(self) -> Iterator[None]:
+        """No capture is posted inside (one being posted is finished first): the live board holds still."""
+        self._running.clear()
+        with self._posting:
+            pass
+        try:
+            yield
+        finally:
+            self._running.set()
 
     def wait_for_fixes(self, count: int, timeout_s: float = 20.0) -> None:
         """Until every device has `count` fixes (raises on a feeder error or the timeout)."""
@@ -141,21 +158,25 @@ class Feeder:
         next_at = time.monotonic()
         with Client(self.url) as client:
             for step in itertools.count():
-                for device, offset in zip(self.devices, offsets, strict=True):
-                    lap, capture = divmod(step + offset, count)
-                    try:
-                        self._post(client, device, capture, round(lap * self.walk.lap_s * 1e9))
-                    except Exception as error:  # noqa: BLE001 - reported by wait_for_fixes and the session's end
-                        self.errors.append(f"{device} capture {capture}: {error!r}")
-                        return
-                next_at += self.period_s
+                self._running.wait()
+                if self._stop.is_set():
+                    return
+                with self._posting:
+                    for device, offset in zip(self.devices, offsets, strict=True):
+                        lap, capture = divmod(step + offset, count)
+                        try:
+                            self._post(client, device, capture, round(lap * self.walk.lap_s * 1e9))
+                        except Exception as error:  # noqa: BLE001 - reported by wait_for_fixes and the session's end
+                            self.errors.append(f"{device} capture {capture}: {error!r}")
+                            return
+                next_at = max(next_at + self.period_s, time.monotonic())
                 if self._stop.wait(max(0.0, next_at - time.monotonic())):
                     return
 
     def _post(self, client: Client, device: str, capture: int, shift_ns: int) -> None:
         for meta, data in self.walk.captures[capture].frames:
             moved = meta.model_copy(update={"timestamp_ns": (meta.timestamp_ns or 0) + shift_ns})
-            result = client.locate(data, moved, device=device, compress=None)
+            result = client.locate(data, moved, map=self.walk.beacon_map.name, device=device, compress=None)
             if moved.frame_kind is FrameKind.pose:
                 self.posted.append(Posted(device, capture, result))
 

@@ -1,0 +1,301 @@
+"""The operator's page (issue 16) in headless Chromium against a real service fed a walk under four panels.
+
+Every check reads the page through the data-testid hooks of the issue's spec and compares it with the
+truth of the simulated walk or with the service's own JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+from urllib.parse import urlsplit
+
+import cv2
+import httpx
+import numpy as np
+import pytest
+
+from lumipose_client import Client, read_fixture_files
+from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, world_to_camera
+from shared_schemas import FailureReason
+from simulator.bench_office import true_beacon
+from simulator.render import CameraPose
+from tests.dashboard.live_room import API_KEY, DEVICES, Walk
+
+FOLLOW_M = 0.05  # a marker to the walk's truth: raw fixes at a fifth resolution are 10-40 mm off
+TIMEOUT_MS = 15_000
+REASONS = {reason.value for reason in FailureReason}
+
+
+def open_view(page, url: str, view: str) -> None:
+    page.goto(f"{url}/dashboard/#{view}")
+    page.get_by_test_id(f"view-{view.split('/')[0]}").wait_for(state="visible", timeout=TIMEOUT_MS)
+
+
+def marker_positions(page) -> dict[str, tuple[float, float]]:
+    return page.evaluate("""() => Object.fromEntries([...document.querySelectorAll('[data-testid="device-marker"]')]
+        .map((g) => [g.dataset.device, [Number(g.dataset.x), Number(g.dataset.y)]]))""")
+
+
+def nearest_truth_m(walk: Walk, x_m: float, y_m: float) -> float:
+    return min(math.dist((x_m, y_m), capture.truth_m[:2]) for capture in walk.captures)
+
+
+def test_markers_follow_the_walk(page, live):
+    open_view(page, live.url, "live")
+    page.wait_for_function("() => document.querySelector('[data-testid=\"live-connection\"]').textContent === 'live'",
+                           timeout=TIMEOUT_MS)
+    panels = page.get_by_test_id("room-map").get_by_test_id("panel")
+    assert sorted(int(panels.nth(k).get_attribute("data-beacon-id")) for k in range(panels.count())) == [
+        beacon.id for beacon in live.walk.beacon_map.beacons]
+    for beacon in live.walk.beacon_map.beacons:  # each panel shows its ID
+        assert str(beacon.id) in page.locator(f'[data-testid="panel"][data-beacon-id="{beacon.id}"]').text_content()
+    page.wait_for_function(f"() => document.querySelectorAll('[data-testid=\"device-marker\"]').length === "
+                           f"{len(DEVICES)}", timeout=TIMEOUT_MS)
+    seen: dict[str, set[tuple[float, float]]] = {device: set() for device in DEVICES}
+    deadline = time.monotonic() + 15.0
+    while min(map(len, seen.values())) < 3 and time.monotonic() < deadline:  # each walks through three places
+        for device, (x_m, y_m) in marker_positions(page).items():
+            assert nearest_truth_m(live.walk, x_m, y_m) < FOLLOW_M, (device, x_m, y_m)
+            seen[device].add((x_m, y_m))
+        page.wait_for_timeout(200)
+    for device in DEVICES:
+        assert len(seen[device]) >= 3, (device, seen[device])
+        marker = page.locator(f'[data-testid="device-marker"][data-device="{device}"]')
+        assert marker.get_by_test_id("device-ellipse").count() == 1
+        assert marker.get_by_test_id("device-track").count() == 1
+        points = marker.get_by_test_id("device-track").get_attribute("points").split()
+        assert len(points) >= 3
+
+
+def test_device_table_shows_rates_latency_and_beacon(page, live):
+    open_view(page, live.url, "live")
+    rows = page.get_by_test_id("device-table").get_by_test_id("device-row")
+    rows.first.wait_for(timeout=TIMEOUT_MS)
+    page.wait_for_function(f"() => document.querySelectorAll('[data-testid=\"device-row\"]').length === "
+                           f"{len(DEVICES)}", timeout=TIMEOUT_MS)
+    board = httpx.get(f"{live.url}/v1/live/devices").json()
+    assert {device["device"] for device in board["devices"]} == set(DEVICES)
+    beacon_ids = {str(beacon.id) for beacon in live.walk.beacon_map.beacons}
+    for device in DEVICES:
+        row = page.locator(f'[data-testid="device-row"][data-device="{device}"]')
+        rate = row.locator('[data-field="fix-rate"]').text_content()
+        assert rate.endswith("Hz") and float(rate.split()[0]) > 0, rate
+        latency = row.locator('[data-field="latency"]').text_content()
+        assert latency.endswith("ms") and float(latency.split()[0]) > 0, latency
+        beacon = row.locator('[data-field="beacon"]').evaluate("cell => cell.firstChild.textContent")
+        assert beacon in beacon_ids, beacon
+        reasons = row.locator('[data-field="refused"] [data-reason]')  # a share per reason, or "none"
+        assert all(reasons.nth(k).get_attribute("data-reason") in REASONS for k in range(reasons.count()))
+    page.locator(f'[data-testid="device-row"][data-device="{DEVICES[1]}"]').click()
+    page.wait_for_url(f"**/dashboard/#frame/{DEVICES[1]}", timeout=TIMEOUT_MS)
+    page.get_by_test_id("view-frame").wait_for(state="visible")
+    page.go_back()
+    page.locator(f'[data-testid="device-marker"][data-device="{DEVICES[0]}"] circle.marker').click()
+    page.wait_for_url(f"**/dashboard/#frame/{DEVICES[0]}", timeout=TIMEOUT_MS)
+
+
+SHOWN_FRAME_JS = """() => {
+    const img = document.querySelector('[data-testid="frame-image"]');
+    if (!img.complete || !img.naturalWidth || !img.src.endsWith(`/${img.dataset.seq}.png`)) return null;
+    const canvas = document.createElement("canvas");
+    [canvas.width, canvas.height] = [img.naturalWidth, img.naturalHeight];
+    const context = canvas.getContext("2d");
+    context.drawImage(img, 0, 0);
+    const rgba = context.getImageData(0, 0, canvas.width, canvas.height).data;
+    let green = 0;  // the corners' discs are pure green (server/annotate.py)
+    for (let k = 0; k < rgba.length; k += 4) green += rgba[k] < 60 && rgba[k + 1] > 200 && rgba[k + 2] < 60;
+    const text = (id) => document.querySelector(`[data-testid="${id}"]`).textContent;
+    return {seq: Number(img.dataset.seq), green, beacon: text("frame-beacon"), pose: text("frame-pose"),
+            reprojection: text("frame-reprojection"), ambiguity: text("frame-ambiguity"), reason: text("frame-reason")};
+}"""
+
+
+def shown_frame(page, seq: int) -> dict:
+    """The frame view once it shows kept frame `seq` with its picture loaded."""
+    page.wait_for_function(f"() => ({SHOWN_FRAME_JS})()?.seq === {seq}", timeout=TIMEOUT_MS)
+    return page.evaluate(SHOWN_FRAME_JS)
+
+
+def pose_of(meta) -> CameraPose:
+    return CameraPose(np.array(meta.ground_truth.position_m), np.array(meta.ground_truth.rotation_wc))
+
+
+def panel_corners_px(beacon, meta) -> np.ndarray:
+    """The beacon's four corners (4, 2) in the frame's pixels for the frame's true pose."""
+    pose = pose_of(meta)
+    in_camera = world_to_camera(beacon_to_world(beacon, beacon_corners_m(beacon)), pose.position_m,
+                                pose.rotation_wc)
+    pixels, _ = cv2.projectPoints(in_camera, np.zeros(3), np.zeros(3), camera_matrix(meta.camera), None)
+    return pixels.reshape(-1, 2)
+
+
+def test_frame_view_outlines_the_panel_under_the_device(page, live):
+    device = DEVICES[0]
+    open_view(page, live.url, f"frame/{device}")
+    with live.feeder.paused():
+        kept = httpx.get(f"{live.url}/v1/live/devices/{device}/frames").json()
+        newest = kept[0]
+        shown = shown_frame(page, newest["seq"])
+        posted = [p for p in live.feeder.posted if p.device == device and p.result.position_m == newest["result"][
+            "position_m"]]
+        assert posted, "the kept frame is one the feeder posted"
+        meta = live.walk.captures[posted[-1].capture].pose_meta
+        result = newest["result"]
+        assert result["ok"], result  # the feeder's frames of the lap are fixes but for a rare pose_uncertain
+        under = true_beacon(list(live.walk.beacon_map.beacons), meta.camera, pose_of(meta), result["center_px"])
+        assert shown["beacon"] == str(under) == str(result["beacon_id"])
+        assert shown["green"] > 40, shown  # four green corner discs in the picture
+        x0, y0, x1, y1 = newest["window_px"]
+        corners = panel_corners_px(live.walk.beacon_map.beacon(under), meta)
+        assert np.all((corners >= [x0, y0]) & (corners <= [x1, y1])), (newest["window_px"], corners)
+        x, y, z = result["position_m"]
+        assert f"{x:.4f}, {y:.4f}, {z:.4f}" in shown["pose"] and "yaw" in shown["pose"]
+        assert shown["reprojection"] == f"{result['reprojection_error_px']:.3f} px"
+        assert shown["reason"] == "—"
+        thumbs = page.get_by_test_id("frame-thumb")
+        assert [int(thumbs.nth(k).get_attribute("data-seq")) for k in range(thumbs.count())] == [
+            frame["seq"] for frame in kept]
+        if len(kept) > 1:  # an older kept frame, chosen from the strip
+            thumbs.nth(len(kept) - 1).click()
+            assert shown_frame(page, kept[-1]["seq"])["green"] > 40
+
+
+def test_map_upload_shows_the_error_at_its_field(page, live, tmp_path):
+    good = json.loads(live.walk.map_path.read_text())
+    bad = {**good, "name": "office-bad", "beacons": [{**good["beacons"][0], "side_m": -0.174}, *good["beacons"][1:]]}
+    bad_file = tmp_path / "office-bad.json"
+    bad_file.write_text(json.dumps(bad, indent=2))
+    refusal = httpx.put(f"{live.url}/v1/maps/office-bad", content=bad_file.read_bytes(),
+                        headers={"X-API-Key": API_KEY, "Content-Type": "application/json"})
+    assert refusal.status_code == 422 and refusal.json()["field"] == "beacons.0.side_m", refusal.text
+
+    open_view(page, live.url, "maps")
+    page.locator('[data-testid="map-row"][data-map="office"][data-active="true"]').wait_for(timeout=TIMEOUT_MS)
+    page.get_by_test_id("map-upload").set_input_files(str(bad_file))
+    assert page.get_by_test_id("map-name").input_value() == "office-bad"  # from the file's name
+    page.get_by_test_id("map-submit").click()
+    message = page.get_by_test_id("map-message")
+    page.wait_for_function("() => document.querySelector('[data-testid=\"map-message\"]').textContent.includes("
+                           "'needs the API key')", timeout=TIMEOUT_MS)
+    assert page.get_by_test_id("map-errors").is_hidden()  # without the key nothing was judged
+
+    page.fill("#api-key", API_KEY)
+    page.get_by_test_id("map-submit").click()
+    marked = page.get_by_test_id("map-error-field")
+    marked.wait_for(timeout=TIMEOUT_MS)
+    assert marked.get_attribute("data-field") == "beacons.0.side_m"
+    assert '"side_m": -0.174' in marked.text_content()
+    assert refusal.json()["message"] in marked.text_content()
+    assert page.locator('[data-testid="map-errors"] .line').count() > 20  # the whole upload, pretty printed
+
+    good_file = tmp_path / "office-copy.json"
+    good_file.write_text(json.dumps({**good, "name": "office-copy"}))
+    page.get_by_test_id("map-upload").set_input_files(str(good_file))
+    page.get_by_test_id("map-submit").click()
+    page.locator('[data-testid="map-row"][data-map="office-copy"]').wait_for(timeout=TIMEOUT_MS)
+    assert "office-copy" in message.text_content() and page.get_by_test_id("map-errors").is_hidden()
+    try:
+        page.locator('[data-testid="map-row"][data-map="office-copy"]').click()
+        page.get_by_test_id("map-activate").click()
+        page.locator('[data-testid="map-row"][data-map="office-copy"][data-active="true"]').wait_for(
+            timeout=TIMEOUT_MS)
+        assert httpx.get(f"{live.url}/v1/maps/active").json()["name"] == "office-copy"
+        assert page.get_by_test_id("map-view").get_by_test_id("panel").count() == len(good["beacons"])
+    finally:
+        httpx.put(f"{live.url}/v1/maps/active", json={"name": "office"}, headers={"X-API-Key": API_KEY})
+
+
+BENCH_CELL_M = 0.05
+STORED = (0, 2, 3, 5, 7)  # of the bench's row of eight frames; frame 1 stored dark (no fix), 4 and 6 not at all
+
+
+def cell_label(meta) -> str:
+    x, y = meta.ground_truth.position_m[:2]
+    return f"{round(x / BENCH_CELL_M)},{round(y / BENCH_CELL_M)}"
+
+
+def test_bench_shows_table_2_of_the_stored_samples(page, bench):
+    with Client(bench.url, api_key=API_KEY) as client:
+        for k in STORED:
+            meta, data = read_fixture_files(bench.frames[k])
+            client.store_sample(data, meta, label=cell_label(meta))
+        dark_meta, dark = read_fixture_files(bench.frames[1])
+        client.store_sample(bytes(len(dark)), dark_meta, label=cell_label(dark_meta))
+    evaluation = httpx.get(f"{bench.url}/v1/samples/evaluation", params={"cell_m": BENCH_CELL_M}).json()
+    assert evaluation["samples"] == len(STORED) + 1 and evaluation["fixes"] == len(STORED)
+
+    open_view(page, bench.url, "bench")
+    table = page.get_by_test_id("bench-table")
+    table.locator('[data-field="samples"]').wait_for(timeout=TIMEOUT_MS)
+    shown = {field: table.locator(f'[data-field="{field}"]').text_content() for field in (
+        "samples", "with_truth", "fixes", "coverage", "mean_mm", "std_mm", "min_mm", "max_mm")}
+    assert shown == {
+        "samples": str(evaluation["samples"]), "with_truth": str(evaluation["with_truth"]),
+        "fixes": str(evaluation["fixes"]), "coverage": f"{evaluation['coverage'] * 100:.1f} %",
+        **{name: f"{evaluation[name]:.2f}" for name in ("mean_mm", "std_mm", "min_mm", "max_mm")},
+    }
+    labels = [cell_label(read_fixture_files(path)[0]) for path in bench.frames]
+    expected = {label: "not-sampled" for label in labels} | {labels[k]: "sampled" for k in STORED} | {
+        labels[1]: "no-fix"}
+    cells = page.get_by_test_id("bench-cell")
+    assert {cells.nth(k).get_attribute("data-cell"): cells.nth(k).get_attribute("data-state")
+            for k in range(cells.count())} == expected  # the planned grid: the span of the stored cells
+    errors = {row["label"]: row["error_2d_mm"] for row in evaluation["rows"] if row["error_2d_mm"] is not None}
+    for label, error_mm in errors.items():
+        assert float(page.locator(f'[data-testid="bench-cell"][data-cell="{label}"]').get_attribute(
+            "data-error-mm")) == pytest.approx(error_mm, abs=1e-3)
+    assert page.get_by_test_id("bench-scatter").get_by_test_id("bench-arrow").count() == len(errors)
+    assert "magnified ×" in page.get_by_test_id("bench-magnification").text_content()
+
+    i_low = int(labels[0].split(",")[0]) - 1
+    page.get_by_test_id("bench-i-range").fill(f"{i_low}..{i_low + 9}")  # one more cell each side
+    page.wait_for_function(f"() => document.querySelectorAll('[data-testid=\"bench-cell\"]').length === "
+                           f"{len(labels) + 2}", timeout=TIMEOUT_MS)
+    assert page.locator(f'[data-testid="bench-cell"][data-cell="{i_low},11"]').get_attribute(
+        "data-state") == "not-sampled"
+
+    downloads = []
+    page.on("download", lambda download: downloads.append(download))
+    page.get_by_test_id("bench-download").click()
+    deadline = time.monotonic() + 10
+    while len(downloads) < 2 and time.monotonic() < deadline:
+        page.wait_for_timeout(100)
+    assert sorted(d.suggested_filename.split("-")[2] for d in downloads) == ["heatmap", "scatter"]
+    for download in downloads:
+        text = open(download.path()).read()
+        assert text.startswith("<?xml") and "<svg" in text and 'xmlns="http://www.w3.org/2000/svg"' in text
+
+
+def test_health_shows_the_version_and_the_locate_rate(page, live):
+    open_view(page, live.url, "health")
+    version = httpx.get(f"{live.url}/healthz").json()["version"]
+    page.wait_for_function(f"() => document.querySelector('[data-testid=\"health-version\"]').textContent === "
+                           f"{json.dumps(version)}", timeout=TIMEOUT_MS)
+    locate = page.locator('[data-testid="health-routes"] tr[data-route="/v1/locate"]')
+    locate.wait_for(timeout=TIMEOUT_MS)
+    rate = locate.locator("td").nth(2).text_content()
+    assert rate.endswith("/s") and float(rate.split()[0]) > 0, rate
+    p50 = locate.locator("td").nth(3).text_content()
+    assert p50.endswith("ms") and float(p50.split()[0]) > 0, p50
+    assert page.get_by_test_id("health-map").text_content() == "office"
+    assert page.get_by_test_id("health-devices").text_content() == str(len(DEVICES))
+    assert re.fullmatch(r"\d\d:\d\d:\d\d", page.get_by_test_id("health-uptime").text_content())
+
+
+def test_every_view_stays_on_the_server_and_logs_no_error(page, page_record, live):
+    open_view(page, live.url, "live")
+    page.locator('[data-testid="device-marker"]').first.wait_for(timeout=TIMEOUT_MS)
+    for view in ("frame", "bench", "maps", "health", "live"):
+        page.get_by_test_id(f"tab-{view}").click()
+        page.get_by_test_id(f"view-{view}").wait_for(state="visible")
+        page.wait_for_timeout(500)  # its requests go out
+    page.get_by_test_id("frame-image").wait_for(state="attached")
+    assert page.get_by_test_id("live-connection").text_content() == "live"
+    paths = {urlsplit(url).path for url in page_record.requests}
+    assert {"/dashboard/", "/v1/live/events", "/v1/samples/evaluation", "/v1/maps", "/v1/status"} <= paths, paths
+    assert any(path.endswith(".png") for path in paths), paths  # a kept frame's picture
+    assert page_record.foreign_requests() == []
+    assert page_record.console_errors == []
