@@ -141,7 +141,7 @@ def _view(
         return np.rint(display_px(points, part, scale) * (1 << SHIFT)).astype(np.int32)
 
     for sight in sights:
-        _draw_sight(image, sight, to_display, labels)
+        _draw_sight(image, sight, to_display, _panel_name(sight, result) if labels else None)
     if not any(isinstance(s.outcome, Fix) for s in sights) and result.ok:  # a fix from no sight
         _draw_fix(image, result.corners_px, result.center_px, to_display, labels)
     return image
@@ -224,7 +224,24 @@ def _polyline(image: np.ndarray, points: np.ndarray, colour: tuple[int, int, int
     cv2.polylines(image, [points.reshape(-1, 1, 2)], closed, colour, 1, cv2.LINE_AA, SHIFT)
 
 
-def _draw_sight(image: np.ndarray, sight: PanelSight, to_display, labels: bool) -> None:
+def _panel_name(sight: PanelSight, result: LocateResult) -> str:
+    """What to call a panel: the result's beacon for the panel that gave the fix; in a device's session,
+    where every panel is measured against one template beacon (`server.tracking.session`), the other
+    panels are unnamed; elsewhere each sight's own beacon."""
+    outcome = sight.outcome
+    gave_fix = (
+        isinstance(outcome, Fix)
+        and outcome.center_px is not None
+        and result.center_px is not None
+        and float(np.hypot(*np.subtract(outcome.center_px, result.center_px))) < 0.5
+    )
+    if gave_fix:
+        return f"beacon {result.beacon_id}"
+    return "panel" if result.track is not None else f"beacon {sight.beacon_id}"
+
+
+def _draw_sight(image: np.ndarray, sight: PanelSight, to_display, name: str | None) -> None:
+    """One panel's sight; `name`: its label, None for none (close-ups)."""
     if sight.roi_px is not None:
         corners = to_display(np.array(sight.roi_px, dtype=float).reshape(2, 2))
         cv2.rectangle(image, tuple(corners[0]), tuple(corners[1]), REGION, 1, cv2.LINE_AA, SHIFT)
@@ -242,9 +259,9 @@ def _draw_sight(image: np.ndarray, sight: PanelSight, to_display, labels: bool) 
             cv2.circle(image, tuple(point), 2 << SHIFT, OUTLINE, -1, cv2.LINE_AA, SHIFT)
     outcome = sight.outcome
     if isinstance(outcome, Fix):
-        _draw_fix(image, outcome.corners_px, outcome.center_px, to_display, labels)
-    if labels:
-        _label_panel(image, sight, to_display)
+        _draw_fix(image, outcome.corners_px, outcome.center_px, to_display, name is not None)
+    if name is not None:
+        _label_panel(image, sight, to_display, name)
 
 
 def _draw_fix(image: np.ndarray, corners_px, center_px, to_display, labels: bool) -> None:
@@ -269,8 +286,8 @@ def _draw_fix(image: np.ndarray, corners_px, center_px, to_display, labels: bool
             cv2.putText(image, str(number), (int(x) - 4, int(y) + 5), FONT, FONT_SCALE, CORNER, 1, cv2.LINE_AA)
 
 
-def _label_panel(image: np.ndarray, sight: PanelSight, to_display) -> None:
-    """The beacon's id above the panel (and, when refused, the reason)."""
+def _label_panel(image: np.ndarray, sight: PanelSight, to_display, name: str) -> None:
+    """The panel's name above it (and, when refused, the reason)."""
     points = [p for p in (sight.contour_px, sight.outline_px, sight.polygon_px) if p is not None and len(p)]
     if isinstance(sight.outcome, Fix) and sight.outcome.corners_px is not None:
         points.append(sight.outcome.corners_px)
@@ -279,7 +296,7 @@ def _label_panel(image: np.ndarray, sight: PanelSight, to_display) -> None:
     top = to_display(np.vstack(points)) >> SHIFT
     x, y = int(top[:, 0].min()), int(top[:, 1].min()) - 22
     outcome = sight.outcome
-    text = f"beacon {sight.beacon_id}" + ("" if isinstance(outcome, Fix) else f": {outcome.reason}")
+    text = name + ("" if isinstance(outcome, Fix) else f": {outcome.reason}")
     colour = CORNER if isinstance(outcome, Fix) else REFUSED
     cv2.putText(image, _ascii(text), (max(2, x), max(14, y)), FONT, FONT_SCALE, colour, 1, cv2.LINE_AA)
 

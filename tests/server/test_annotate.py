@@ -118,3 +118,18 @@ def test_locate_annotate_writes_the_picture_and_says_when_it_cannot(tmp_path, ca
     assert main(["locate", str(FIXTURE), "--annotate", str(nowhere), "--json"]) == 2
     error = json.loads(capsys.readouterr().out)
     assert error["field"] == "annotate" and str(nowhere) in error["message"]
+
+
+def test_panels_are_named_by_the_result_in_a_device_session_and_by_their_own_beacon_elsewhere():
+    from server.annotate import _panel_name
+    from server.diagnostics import PanelSight
+    from server.outcomes import Fix, Refusal
+    from shared_schemas import FailureReason, LocateResult, TrackState
+
+    fixed = PanelSight(17, Fix(np.zeros(3), np.eye(3), 17, None, 0.1, False, center_px=np.array([100.0, 50.0])))
+    other = PanelSight(17, Refusal(FailureReason.pose_uncertain, "unsure"))
+    track = TrackState(filtered_position_m=[0, 0, 0], velocity_mps=[0, 0, 0], outlier=False)
+    session = LocateResult(ok=True, beacon_id=42, center_px=[100.2, 50.0], track=track)  # measured on a template
+    assert (_panel_name(fixed, session), _panel_name(other, session)) == ("beacon 42", "panel")
+    single = LocateResult(ok=True, beacon_id=17, center_px=[300.0, 50.0])
+    assert (_panel_name(fixed, single), _panel_name(other, single)) == ("beacon 17", "beacon 17")
