@@ -145,8 +145,9 @@ export class LiveView {
     const beacon = last.ok ? `${last.beacon_id ?? "—"}` : "—";
     return el("tr", { "data-testid": "device-row", "data-device": device.device, class: "clickable",
       onclick: () => this.openFrame(device.device) },
-      el("td", {}, el("span", { class: "swatch", style: `background:${colourOf(device.device)}` }), device.device,
-        el("div", { class: "cell-note", text: `${device.map} · ${device.fixes}/${device.frames} fixes` })),
+      el("td", { class: "device-name" }, el("span", { class: "swatch", style: `background:${colourOf(device.device)}` }),
+        device.device, el("div", { class: "cell-note", text: `${device.fixes}/${device.frames} fixes` +
+          (sigma === null ? "" : ` · σ ${(sigma * 1000).toFixed(1)} mm`) })),
       el("td", { "data-field": "beacon" }, beacon,
         last.ok && last.beacon_id_source ? el("div", { class: "cell-note", text: humanize(last.beacon_id_source) })
           : null),
@@ -155,7 +156,6 @@ export class LiveView {
         el("span", { class: "chip", "data-reason": reason, text: `${humanize(reason)} ${(share * 100).toFixed(0)}%` }))
         : el("span", { class: "muted", text: "none" })),
       el("td", { class: "num", "data-field": "latency" }, fmt(device.last_latency_ms, 0, "ms")),
-      el("td", { class: "num", "data-field": "sigma" }, sigma === null ? "—" : fmt(sigma * 1000, 1, "mm")),
       el("td", { class: "num", "data-field": "seen" }, fmtAgo(nowS - device.last_seen_s)),
     );
   }

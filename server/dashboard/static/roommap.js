@@ -19,7 +19,7 @@ function bounds(beacons, points) {
   const ys = [];
   for (const beacon of beacons) {
     const { w, h } = beaconExtent(beacon);
-    const reach = Math.hypot(w, h) / 2;
+    const reach = Math.hypot(w, h) / 2 || 0; // an unreadable size (a preview) reaches nowhere
     xs.push(beacon.center_m[0] - reach, beacon.center_m[0] + reach);
     ys.push(beacon.center_m[1] - reach, beacon.center_m[1] + reach);
   }
@@ -84,7 +84,9 @@ function gridLayer(proj) {
 export function panelNode(beacon, proj) {
   const { w, h, r } = beaconExtent(beacon);
   const [cx, cy] = [proj.px(beacon.center_m[0]), proj.py(beacon.center_m[1])];
-  const size = { w: w * proj.scale, h: h * proj.scale, r: r * proj.scale };
+  // a size the service would refuse (an upload's preview) is drawn as nothing rather than as an error
+  const scaled = (metres) => (Number.isFinite(metres) && metres > 0 ? metres * proj.scale : 0);
+  const size = { w: scaled(w), h: scaled(h), r: Math.min(scaled(r), scaled(w) / 2, scaled(h) / 2) };
   const idSize = Math.max(11, Math.min(22, size.h * 0.45));
   return svgEl("g", { "data-testid": "panel", "data-beacon-id": beacon.id, class: "panel" },
     svgEl("title", { text: `beacon ${beacon.id}: ${(w * 1000).toFixed(0)} × ${(h * 1000).toFixed(0)} mm, ` +
