@@ -15,6 +15,7 @@ Drawn with OpenCV (sub-pixel lines through `shift`); Hershey fonts are ASCII onl
 from __future__ import annotations
 
 import textwrap
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -48,36 +49,91 @@ LINE_PX = 20
 WRAP_CHARS = 100
 
 
+@dataclass(frozen=True, eq=False)  # identity: holds numpy arrays
+class FrameSeen:
+    """What a picture needs of one frame, a small copy kept apart from the frame: the part around the
+    panels measured (every `step`-th pixel when it is larger than the picture), the pixels around
+    each corner of the result, a small copy of the whole frame, and the pipeline's sights."""
+
+    size: tuple[int, int]  # the frame's width, height
+    part: tuple[int, int, int, int]  # x0, y0, x1, y1 of the frame, enlarged in the picture
+    part_pixels: np.ndarray  # pixels of `part`, every `step`-th row and column
+    step: int
+    close_ups: tuple[tuple[tuple[int, int, int, int], np.ndarray], ...]  # per corner: its box and its pixels
+    thumbnail: np.ndarray | None  # the whole frame, every few pixels; None when `part` is the whole frame
+    sights: tuple[PanelSight, ...]
+
+    @property
+    def nbytes(self) -> int:
+        arrays = [self.part_pixels, *(pixels for _, pixels in self.close_ups)]
+        if self.thumbnail is not None:
+            arrays.append(self.thumbnail)
+        return sum(a.nbytes for a in arrays) + 2048 * (1 + len(self.sights))  # the sights' points, roughly
+
+
 def annotate(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult) -> bytes:
     """A PNG of `frame` with what the pipeline saw of each panel it measured (`diagnostics`, given
     to `server.locator.locate` in the pipeline's options) and `result` in a caption below."""
+    return picture(seen_in(frame, diagnostics, result), result)
+
+
+def seen_in(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult) -> FrameSeen:
+    """What a picture of `frame` needs, copied out of it (at most ~1 MB; strided copies: no resampling
+    here, so that keeping it costs the locate path little)."""
     pixels, sights = frame.pixels, diagnostics.in_frame(frame.meta.full_offset)
     height, width = pixels.shape
     part = enlarged_part(sights, result, (width, height))
-    scale = display_scale(part[2] - part[0], part[3] - part[1])
-    image = _view(pixels, part, scale, sights, result, labels=True)
+    x0, y0, x1, y1 = part
+    step = max(1, int(1 / display_scale(x1 - x0, y1 - y0)))
+    close_ups: tuple[tuple[tuple[int, int, int, int], np.ndarray], ...] = ()
     if result.corners_px is not None:
-        image = _stacked(image, _corner_close_ups(pixels, sights, result))
-    thumbnail = None if part == (0, 0, width, height) else _thumbnail(pixels, part)
-    picture = _with_caption(image, _caption(result, sights, part, scale), thumbnail)
-    ok, png = cv2.imencode(".png", picture)
+        boxes = [_close_up_box(x, y, width, height) for x, y in result.corners_px]
+        close_ups = tuple((box, pixels[box[1] : box[3], box[0] : box[2]].copy()) for box in boxes)
+    thumbnail = None
+    if part != (0, 0, width, height):
+        thumb_step = max(1, max(width, height) // THUMBNAIL_PX)
+        thumbnail = pixels[::thumb_step, ::thumb_step].copy()
+    return FrameSeen(
+        size=(width, height),
+        part=part,
+        part_pixels=pixels[y0:y1:step, x0:x1:step].copy(),
+        step=step,
+        close_ups=close_ups,
+        thumbnail=thumbnail,
+        sights=tuple(sights),
+    )
+
+
+def picture(seen: FrameSeen, result: LocateResult) -> bytes:
+    """The PNG of what `seen` kept, with `result` in a caption below."""
+    sights = list(seen.sights)
+    x0, y0, x1, y1 = seen.part
+    scale = display_scale(x1 - x0, y1 - y0)
+    image = _view(seen.part_pixels, seen.part, scale, sights, result, labels=True)
+    if seen.close_ups:
+        image = _stacked(image, _corner_close_ups(seen.close_ups, sights, result))
+    thumbnail = None if seen.thumbnail is None else _thumbnail(seen.thumbnail, seen.size, seen.part)
+    image = _with_caption(image, _caption(result, sights, seen.part, scale), thumbnail)
+    ok, png = cv2.imencode(".png", image)
     if not ok:  # pragma: no cover - OpenCV encodes any 8-bit BGR image
         raise RuntimeError("OpenCV could not encode the picture as PNG")
     return png.tobytes()
 
 
 def _view(
-    pixels: np.ndarray,
+    part_pixels: np.ndarray,
     part: tuple[int, int, int, int],
     scale: float,
     sights: list[PanelSight],
     result: LocateResult,
     labels: bool,
 ) -> np.ndarray:
-    """`part` (x0, y0, x1, y1) of the frame at `scale` display pixels per frame pixel, with the sights drawn."""
+    """`part` (x0, y0, x1, y1) of the frame (its pixels, or every few of them) at `scale` display pixels
+    per frame pixel, with the sights drawn."""
     x0, y0, x1, y1 = part
     size = (max(1, round((x1 - x0) * scale)), max(1, round((y1 - y0) * scale)))
-    enlarged = cv2.resize(pixels[y0:y1, x0:x1], size, interpolation=cv2.INTER_NEAREST if scale >= 1 else cv2.INTER_AREA)
+    upscaled = size[0] >= part_pixels.shape[1]
+    enlarged = cv2.resize(part_pixels, size, interpolation=cv2.INTER_NEAREST if upscaled else cv2.INTER_AREA)
     image = cv2.cvtColor(enlarged, cv2.COLOR_GRAY2BGR)
 
     def to_display(points: np.ndarray) -> np.ndarray:
@@ -91,20 +147,24 @@ def _view(
     return image
 
 
-def _corner_close_ups(pixels: np.ndarray, sights: list[PanelSight], result: LocateResult) -> np.ndarray:
+def _close_up_box(x: float, y: float, width: int, height: int) -> tuple[int, int, int, int]:
+    """The frame pixels shown in the close-up of a corner at (x, y)."""
+    cx, cy = int(round(x)), int(round(y))
+    x0, y0 = min(max(0, cx - CLOSE_UP_HALF_PX), width - 1), min(max(0, cy - CLOSE_UP_HALF_PX), height - 1)
+    return (
+        x0,
+        y0,
+        min(width, max(cx + CLOSE_UP_HALF_PX + 1, x0 + 1)),
+        min(height, max(cy + CLOSE_UP_HALF_PX + 1, y0 + 1)),
+    )
+
+
+def _corner_close_ups(
+    close_ups: tuple[tuple[tuple[int, int, int, int], np.ndarray], ...], sights: list[PanelSight], result: LocateResult
+) -> np.ndarray:
     """The result's four corners side by side, `CLOSE_UP_BLOCK` display pixels per frame pixel."""
-    assert result.corners_px is not None
-    height, width = pixels.shape
     views = []
-    for number, (x, y) in enumerate(result.corners_px):
-        cx, cy = int(round(x)), int(round(y))
-        x0, y0 = min(max(0, cx - CLOSE_UP_HALF_PX), width - 1), min(max(0, cy - CLOSE_UP_HALF_PX), height - 1)
-        box = (
-            x0,
-            y0,
-            min(width, max(cx + CLOSE_UP_HALF_PX + 1, x0 + 1)),
-            min(height, max(cy + CLOSE_UP_HALF_PX + 1, y0 + 1)),
-        )
+    for number, (box, pixels) in enumerate(close_ups):
         view = _view(pixels, box, CLOSE_UP_BLOCK, sights, result, labels=False)
         cv2.putText(view, f"corner {number}", (6, 18), FONT, FONT_SCALE, CORNER, 1, cv2.LINE_AA)
         views.append(cv2.copyMakeBorder(view, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=BAND))
@@ -294,14 +354,15 @@ def _text_width(text: str) -> int:
     return cv2.getTextSize(_ascii(text), FONT, FONT_SCALE, 1)[0][0]
 
 
-def _thumbnail(pixels: np.ndarray, part: tuple[int, int, int, int]) -> np.ndarray:
-    """The whole frame, small, with the enlarged part outlined."""
-    height, width = pixels.shape
+def _thumbnail(small: np.ndarray, size: tuple[int, int], part: tuple[int, int, int, int]) -> np.ndarray:
+    """The whole frame (`small`: every few of its pixels; `size`: its width, height), small, with the
+    enlarged part outlined."""
+    width, height = size
     scale = THUMBNAIL_PX / max(width, height)
-    small = cv2.resize(
-        pixels, (max(1, round(width * scale)), max(1, round(height * scale))), interpolation=cv2.INTER_AREA
+    shown = cv2.resize(
+        small, (max(1, round(width * scale)), max(1, round(height * scale))), interpolation=cv2.INTER_AREA
     )
-    thumbnail = cv2.cvtColor(small, cv2.COLOR_GRAY2BGR)
+    thumbnail = cv2.cvtColor(shown, cv2.COLOR_GRAY2BGR)
     x0, y0, x1, y1 = (round(v * scale) for v in part)
     cv2.rectangle(thumbnail, (x0, y0), (max(x1 - 1, x0 + 1), max(y1 - 1, y0 + 1)), REGION, 1)
     return thumbnail

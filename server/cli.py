@@ -85,6 +85,11 @@ def _add_serve(commands) -> None:
         "--session-idle-s", type=float, help="a device silent for longer loses its session (default 600)"
     )
     parser.add_argument("--max-devices", type=int, help="device sessions kept per worker (default 1000)")
+    parser.add_argument(
+        "--live-frames",
+        type=int,
+        help="pictures kept of each device's last pose frames, for the web page's frame view (default 3; 0: none)",
+    )
     parser.add_argument("--max-body-kb", type=float, help="body limit of the JSON routes (default 1024)")
     parser.add_argument("--max-header-kb", type=float, help="limit on a request's line and headers (default 64)")
     parser.add_argument(
@@ -138,6 +143,7 @@ def _run_serve(args) -> int:
         workers=settings.workers,
         log_level=settings.log_level,
         timeout_keep_alive=30,
+        timeout_graceful_shutdown=5,  # the web page's event streams would otherwise hold a shutdown for minutes
         http=GuardedHttpToolsProtocol,
     )
     return EXIT_FIX

@@ -103,6 +103,67 @@ class Evaluation(BaseModel):
     rows: list[EvaluationRow]
 
 
+class DeviceLive(BaseModel):
+    """One device as the operator's page shows it live (`GET /v1/live/devices`, the `devices` event)."""
+
+    device: str
+    map: str = Field(description="the map its last frame was located in")
+    last_seen_s: float = Field(description="unix time of its last frame")
+    frames: int = Field(description="pose frames since the service started (or since it was dropped as idle)")
+    id_frames: int = Field(description="ID frames kept for its pose frames")
+    fixes: int
+    fix_rate_hz: float = Field(description="fixes per second over the last `window_s`")
+    refused: dict[str, float] = Field(
+        description="reason -> share of the pose frames of the last `window_s` refused for it (0-1)"
+    )
+    last_latency_ms: float | None = Field(description="its last pose frame: from the request's start to its answer")
+    last: LocateResult | None = Field(description="the result of its last pose frame")
+    track: list[tuple[float, float, float, float]] = Field(
+        description="t (unix s), x, y, z (m) of its recent fixes, filtered when tracked; oldest first"
+    )
+    frames_kept: list[int] = Field(description="seq of the pictures kept of its last pose frames, newest last")
+
+
+class LiveDevices(BaseModel):
+    time_s: float = Field(description="the server's unix time")
+    window_s: float = Field(description="the window of fix_rate_hz and refused")
+    devices: list[DeviceLive] = Field(description="most recently seen first")
+
+
+class KeptFrameInfo(BaseModel):
+    """A device's pose frame whose picture the service keeps (`GET /v1/live/devices/{device}/frames`)."""
+
+    seq: int
+    time_s: float
+    map: str
+    result: LocateResult
+    window_px: tuple[int, int, int, int] = Field(description="x0, y0, x1, y1: the frame pixels the picture enlarges")
+
+
+class RouteStatus(BaseModel):
+    route: str = Field(description="the route's path template, e.g. /v1/locate")
+    requests: int = Field(description="since the service started")
+    errors: int = Field(description="answers 5xx since the service started")
+    rate_hz: float = Field(description="requests per second over the status window")
+    p50_ms: float | None = Field(description="latency quantiles over the status window (from histogram buckets)")
+    p90_ms: float | None
+    p99_ms: float | None
+
+
+class Status(BaseModel):
+    """The service at a glance (`GET /v1/status`, the page's Health view), from the metrics it keeps."""
+
+    version: str
+    started_s: float = Field(description="unix time the worker started")
+    uptime_s: float
+    active_map: str
+    devices: int = Field(description="devices on the live board")
+    fixes: int = Field(description="frames located since the start")
+    refused: dict[str, int] = Field(description="frames without a fix since the start, by reason")
+    window_s: float = Field(description="the window of the rates and quantiles: the last minute, or since the start")
+    routes: list[RouteStatus]
+
+
 # The label of a sample stored to be surveyed from (the app's survey: `survey:<map name>:<n>`): a photo of
 # several panels from anywhere, with no truth of its own, which the evaluation leaves out
 SURVEY_LABEL_PREFIX: Final = "survey:"

@@ -9,6 +9,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from server.live import LiveRules
 from server.options import LocateOptions
 from server.tracking.devices import DeviceRules
 from shared_schemas import find_map_file, load_map
@@ -46,6 +47,9 @@ class Settings(BaseSettings):
     cors_origins: list[str] = Field(default_factory=lambda: ["*"])
     session_idle_s: float = Field(default=600.0, gt=0, description="a device silent for longer loses its session")
     max_devices: int = Field(default=1000, ge=1, description="device sessions kept per worker")
+    live_frames: int = Field(
+        default=3, ge=0, le=20, description="pictures kept of each device's last pose frames for the web page; 0: none"
+    )
     log_level: Literal["critical", "error", "warning", "info", "debug"] = "info"
 
     @model_validator(mode="after")
@@ -70,6 +74,9 @@ class Settings(BaseSettings):
 
     def device_rules(self) -> DeviceRules:
         return DeviceRules(idle_s=self.session_idle_s, max_devices=self.max_devices)
+
+    def live_rules(self) -> LiveRules:
+        return LiveRules(frames_kept=self.live_frames, max_devices=self.max_devices)
 
     @property
     def max_upload_bytes(self) -> int:

@@ -13,7 +13,8 @@ from starlette.responses import Response
 
 from server.api.config import Settings
 from server.api.errors import ApiError
-from server.api.metrics import Metrics
+from server.api.metrics import Metrics, StatusWindow
+from server.live import LiveBoard
 from server.options import LocateOptions
 from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
@@ -50,6 +51,9 @@ class Services:
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
     survey_limiter: anyio.CapacityLimiter  # surveys (seconds to a minute each): one at a time
     frame_slots: FrameSlots  # frame uploads held at once (server.api.guard)
+    live: LiveBoard  # devices as the operator's page shows them (per worker, as `devices`)
+    status_window: StatusWindow  # request rates and latencies of the last minute, for the page
+    started_s: float  # unix time this worker started
 
 
 def _services(request: Request) -> Services:

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, replace
 
 from starlette.concurrency import run_in_threadpool
 
-from server.annotate import annotate
+from server.annotate import FrameSeen, picture, seen_in
 from server.api.deps import Services
 from server.api.params import LocateQuery
 from server.api.upload import FrameUpload
@@ -14,7 +15,7 @@ from server.camera import ProfileTable
 from server.diagnostics import Diagnostics
 from server.ingest import decode_frame
 from server.locator import locate
-from shared_schemas import BeaconMap, LocateResult, ProfileRef
+from shared_schemas import BeaconMap, FailureReason, LocateResult, ProfileRef
 
 
 @dataclass(frozen=True)
@@ -32,15 +33,21 @@ def _locate_now(
     query: LocateQuery,
     device: str | None,
     annotated: bool,
-) -> tuple[LocateResult, bytes | None]:
+) -> tuple[LocateResult, FrameSeen | None, bytes | None]:
+    """The result; what a picture of the frame needs, when one is asked for or kept for the web page;
+    the picture, when asked for."""
     frame = decode_frame(upload.data, upload.meta, profiles)
     if upload.camera_used is not None:  # a photo: its intrinsics' source, not "the frame's"
         frame = replace(frame, camera_used=upload.camera_used)
-    options, diagnostics = query.options, Diagnostics() if annotated else None
+    watched = annotated or (device is not None and services.live.keeps_frames)
+    options, diagnostics = query.options, Diagnostics() if watched else None
     if diagnostics is not None:
         options = replace(options, pipeline=replace(options.pipeline, diagnostics=diagnostics))
     result = locate(frame, beacon_map, options, beacon_id=query.beacon_id, device_id=device, devices=services.devices)
-    return result, None if diagnostics is None else annotate(frame, diagnostics, result)
+    if diagnostics is None or (result.reason is FailureReason.id_frame and not annotated):
+        return result, None, None  # an ID frame's stripes are not kept for the page: nothing to see
+    seen = seen_in(frame, diagnostics, result)
+    return result, seen, picture(seen, result) if annotated else None
 
 
 async def locate_upload(
@@ -50,10 +57,12 @@ async def locate_upload(
     query: LocateQuery,
     device: str | None = None,
     annotated: bool = False,
+    started: float | None = None,
 ) -> Located:
     """The result for `upload` in map `map_name` (default: the active map); with a `device`, in its
-    session (tracking, ID frames combined) when the map has several beacons; `annotated`: with a
-    picture of what the pipeline saw."""
+    session (tracking, ID frames combined) when the map has several beacons, and on the live board
+    (`started`: the request's `time.perf_counter()`, for its latency); `annotated`: with a picture
+    of what the pipeline saw."""
     name = map_name if map_name else await run_in_threadpool(services.maps.active_name)
     beacon_map = await run_in_threadpool(services.maps.get, name)  # reads the data folder: off the event loop
     camera = upload.meta.camera
@@ -63,8 +72,11 @@ async def locate_upload(
     if isinstance(camera, ProfileRef):
         profiles = await run_in_threadpool(services.profiles.table, camera.profile)
     async with services.pipeline_limiter:
-        result, picture = await run_in_threadpool(
+        result, seen, drawn = await run_in_threadpool(
             _locate_now, services, upload, beacon_map, profiles, query, device, annotated
         )
     services.metrics.record_result(result)
-    return Located(result=result, map_name=name, picture=picture)
+    if device is not None:
+        latency_ms = None if started is None else 1000 * (time.perf_counter() - started)
+        services.live.record(device, name, result, latency_ms, seen)
+    return Located(result=result, map_name=name, picture=drawn)

@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import time
+
 import anyio
 from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
+from fastapi.responses import FileResponse, RedirectResponse
+from fastapi.staticfiles import StaticFiles
 
 from server.api import VERSION, protocol
 from server.api.config import Settings
 from server.api.deps import FrameSlots, Services
 from server.api.errors import BugCatcher, install_error_handlers
-from server.api.metrics import Metrics, MetricsMiddleware
-from server.api.routes import calibrations, health, locate, maps, profiles, samples, surveys
+from server.api.metrics import Metrics, MetricsMiddleware, StatusWindow
+from server.api.routes import calibrations, health, live, locate, maps, profiles, samples, surveys
+from server.dashboard import STATIC_DIR
+from server.live import LiveBoard
 from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
 from shared_schemas.api import RESULT_HEADER
@@ -37,6 +43,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
         survey_limiter=anyio.CapacityLimiter(1),
         frame_slots=FrameSlots(settings.max_frames_in_flight),
+        live=LiveBoard(settings.live_rules()),
+        status_window=StatusWindow(metrics),
+        started_s=time.time(),
     )
     install_error_handlers(app)
     for router in (
@@ -47,8 +56,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         samples.router,
         surveys.router,
         calibrations.router,
+        live.router,
     ):
         app.include_router(router)
+    _serve_dashboard(app)
     # outermost last: metrics see every answer, bugs become counted 500s, CORS answers preflights
     app.add_middleware(
         CORSMiddleware,
@@ -61,6 +72,24 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(MetricsMiddleware, metrics=metrics)
     protocol.configure(settings.read_timeout_s, settings.max_header_bytes)
     return app
+
+
+def _serve_dashboard(app: FastAPI) -> None:
+    """The operator's page at /dashboard/ (and / leads there); its files are the package's, read-only."""
+
+    @app.get("/", include_in_schema=False)
+    async def root() -> RedirectResponse:
+        return RedirectResponse("/dashboard/", status_code=307)
+
+    @app.get("/dashboard", include_in_schema=False)
+    async def dashboard_without_slash() -> RedirectResponse:
+        return RedirectResponse("/dashboard/", status_code=307)
+
+    @app.get("/dashboard/", include_in_schema=False)
+    async def dashboard() -> FileResponse:
+        return FileResponse(STATIC_DIR / "index.html", headers={"Cache-Control": "no-cache"})
+
+    app.mount("/dashboard/static", StaticFiles(directory=STATIC_DIR), name="dashboard-static")
 
 
 def app_from_environment() -> FastAPI:

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Response
+from fastapi import APIRouter, Query, Request, Response
 
 from server.api.deps import ServicesDep
 from server.api.errors import ERROR_RESPONSES
 from server.api.guard import GuardedRoute
 from server.api.locating import locate_upload
+from server.api.metrics import REQUEST_START
 from server.api.params import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
 from server.api.routes import DAMAGED_RESPONSES
 from shared_schemas import LocateResult
@@ -37,6 +38,7 @@ PICTURE_RESPONSE: dict[int | str, dict[str, Any]] = {
     responses={**DAMAGED_RESPONSES, **PICTURE_RESPONSE},
 )
 async def locate_frame(
+    request: Request,
     services: ServicesDep,
     upload: UploadDep,
     query: QueryDep,
@@ -52,7 +54,8 @@ async def locate_frame(
     With `annotate=1` the answer is a PNG of what the pipeline saw (panel, contour, sides, corners,
     centre, the result or the refusal) and the result travels in the `X-Lumipose-Result` header.
     """
-    located = await locate_upload(services, upload, map, query, device, annotated=annotate)
+    started = getattr(request.state, REQUEST_START, None)
+    located = await locate_upload(services, upload, map, query, device, annotated=annotate, started=started)
     if located.picture is not None:
         return Response(located.picture, media_type="image/png", headers={RESULT_HEADER: result_header(located.result)})
     return located.result

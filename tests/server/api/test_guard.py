@@ -14,10 +14,11 @@ from server.api.main import create_app
 def api_routes():
     """The app's API routes (newer FastAPI keeps an included router whole, its routes in `original_router`)."""
     app = create_app(Settings())
-    return [route for route in app.router.routes if isinstance(route, APIRoute)] or [
+    included = [
         route for router in (r for r in app.router.routes if hasattr(r, "original_router"))
         for route in router.original_router.routes if isinstance(route, APIRoute)
     ]
+    return [route for route in app.router.routes if isinstance(route, APIRoute)] + included
 
 
 # POST routes that only compute an answer and store nothing: as open as a GET. A survey stores its
