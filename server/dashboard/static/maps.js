@@ -109,7 +109,7 @@ export class MapsView {
   draw(beaconMap, note) {
     document.getElementById("map-title").textContent =
       `${beaconMap.name}: ${beaconMap.beacons.length} panel${beaconMap.beacons.length === 1 ? "" : "s"}${note}`;
-    drawRoom(byTestId("map-view"), beaconMap);
+    drawRoom(byTestId("map-view"), beaconMap, [], "map-panel");
   }
 
   async activate() {
