@@ -65,8 +65,9 @@ export class BenchView {
     this.cellInput = byTestId("bench-cell-m");
     this.iInput = byTestId("bench-i-range");
     this.jInput = byTestId("bench-j-range");
+    this.mapChoice = document.getElementById("bench-map-choice");
     this.evaluation = null;
-    this.cellInput.addEventListener("change", () => this.load());
+    for (const input of [this.cellInput, this.mapChoice]) input.addEventListener("change", () => this.load());
     for (const input of [this.iInput, this.jInput]) input.addEventListener("input", () => this.render());
     byTestId("bench-download").addEventListener("click", () => this.download());
   }
@@ -74,13 +75,24 @@ export class BenchView {
   async load() {
     const cellM = Number(this.cellInput.value);
     if (!(cellM > 0)) return this.showError(`Cell: a size in metres above 0 (got “${this.cellInput.value}”)`);
+    const map = this.mapChoice.value ? `&map=${encodeURIComponent(this.mapChoice.value)}` : "";
+    this.listMaps();
     try {
-      this.evaluation = await getJson(`/v1/samples/evaluation?cell_m=${encodeURIComponent(cellM)}`);
+      this.evaluation = await getJson(`/v1/samples/evaluation?cell_m=${encodeURIComponent(cellM)}${map}`);
       this.cellM = cellM;
       this.render();
     } catch (error) {
       this.showError(`Could not evaluate the samples: ${error.message}`);
     }
+  }
+
+  /** The samples are located again in the chosen map (the active one by default): a bench has its own map. */
+  async listMaps() {
+    const maps = await getJson("/v1/maps").catch(() => []);
+    const chosen = this.mapChoice.value;
+    this.mapChoice.replaceChildren(el("option", { value: "", text: "active map" }),
+      ...maps.map((m) => el("option", { value: m.name, text: m.name })));
+    this.mapChoice.value = maps.some((m) => m.name === chosen) ? chosen : "";
   }
 
   showError(message) {
@@ -139,7 +151,7 @@ export class BenchView {
     const size = Math.max(8, Math.min(40, Math.floor(520 / Math.max(ni, nj))));
     const [left, top] = [44, 16];
     const [gridW, gridH] = [ni * size, nj * size];
-    const width = left + gridW + 96;
+    const width = left + gridW + 130;
     const height = top + gridH + 44;
     const means = [...cells.values()].filter((c) => c.errors.length).map((c) => mean(c.errors));
     const maxMm = means.length ? Math.max(...means) : 1;
@@ -181,28 +193,21 @@ export class BenchView {
   renderScatter(rows) {
     const svg = byTestId("bench-scatter");
     const points = rows.filter((r) => r.truth_m && r.position_m && r.error_2d_mm != null);
+    const refused = rows.filter((r) => r.truth_m && r.error_2d_mm == null);
     if (!points.length) {
       svg.setAttribute("viewBox", "0 0 400 60");
       svg.replaceChildren(svgEl("text", { x: 10, y: 34, style: FONT, text: "No fix with a known truth yet." }));
       return;
     }
-    const xs = points.map((r) => r.truth_m[0]);
-    const ys = points.map((r) => r.truth_m[1]);
-    const spanM = Math.max(Math.max(...xs) - Math.min(...xs), Math.max(...ys) - Math.min(...ys), this.cellM * 2);
-    const marginM = spanM * 0.12 + this.cellM;
-    const [x0, y1] = [Math.min(...xs) - marginM, Math.max(...ys) + marginM];
-    const scale = 520 / (spanM + 2 * marginM);
-    const px = (x) => 50 + (x - x0) * scale;
-    const py = (y) => 20 + (y1 - y) * scale;
+    const proj = scatterProjection([...points, ...refused].map((r) => r.truth_m), this.cellM);
+    const { px, py } = proj;
     const maxErrorM = Math.max(...points.map((r) => r.error_2d_mm)) / 1000;
-    // magnify so the largest error is drawn about one cell long
-    const magnify = niceNumber(Math.max(this.cellM / Math.max(maxErrorM, 1e-9), 1));
+    // magnify so the largest error is drawn about 40 px long
+    const magnify = niceNumber(Math.max(40 / proj.scale / Math.max(maxErrorM, 1e-9), 1));
     const nodes = [svgEl("defs", {}, svgEl("marker", { id: "arrow", viewBox: "0 0 10 10", refX: 9, refY: 5,
       markerWidth: 6, markerHeight: 6, orient: "auto-start-reverse" },
     svgEl("path", { d: "M0,0 L10,5 L0,10 z", fill: "#e0632f" })))];
-    const size = 560 + 40;
-    nodes.push(svgEl("rect", { x: 0, y: 0, width: size, height: size + 30, fill: "#fff" }));
-    nodes.push(svgEl("rect", { x: 50, y: 20, width: 520, height: 520, fill: "none", stroke: "#d5d9e0" }));
+    nodes.push(svgEl("rect", { x: 0, y: 0, width: 600, height: 630, fill: "#fff" }), ...scatterAxes(proj));
     for (const row of points) {
       const [tx, ty] = row.truth_m;
       const [ex, ey] = [tx + (row.position_m[0] - tx) * magnify, ty + (row.position_m[1] - ty) * magnify];
@@ -212,8 +217,13 @@ export class BenchView {
         svgEl("line", { x1: px(tx), y1: py(ty), x2: px(ex), y2: py(ey), stroke: "#e0632f", "stroke-width": 1.6,
           "marker-end": "url(#arrow)" })));
     }
-    nodes.push(...scatterKey(magnify, scale, maxErrorM));
-    svg.setAttribute("viewBox", `0 0 ${size} ${size + 30}`);
+    for (const row of refused) {
+      const [x, y] = [px(row.truth_m[0]), py(row.truth_m[1])];
+      nodes.push(svgEl("path", { d: `M${x - 4},${y - 4}L${x + 4},${y + 4}M${x - 4},${y + 4}L${x + 4},${y - 4}`,
+        stroke: NO_FIX, "stroke-width": 2 }, svgEl("title", { text: `${row.label || row.id}: no fix` })));
+    }
+    nodes.push(...scatterKey(magnify, proj.scale, maxErrorM, refused.length > 0));
+    svg.setAttribute("viewBox", "0 0 600 630");
     svg.replaceChildren(...nodes);
   }
 
@@ -271,16 +281,47 @@ function colourBar(x, top, height, maxMm) {
   return nodes;
 }
 
+/** A square 520 px frame around the truths (metres), at least two cells across. */
+function scatterProjection(truths, cellM) {
+  const xs = truths.map((t) => t[0]);
+  const ys = truths.map((t) => t[1]);
+  const spanM = Math.max(Math.max(...xs) - Math.min(...xs), Math.max(...ys) - Math.min(...ys), cellM * 2);
+  const marginM = spanM * 0.08 + cellM;
+  const x0 = (Math.min(...xs) + Math.max(...xs)) / 2 - spanM / 2 - marginM;
+  const y1 = (Math.min(...ys) + Math.max(...ys)) / 2 + spanM / 2 + marginM;
+  const sideM = spanM + 2 * marginM;
+  const scale = 520 / sideM;
+  return { x0, x1: x0 + sideM, y0: y1 - sideM, y1, scale, px: (x) => 60 + (x - x0) * scale,
+    py: (y) => 20 + (y1 - y) * scale };
+}
+
+/** The frame, light grid lines with their metres, and the axes' names. */
+function scatterAxes(proj) {
+  const step = niceNumber((proj.x1 - proj.x0) / 8);
+  const nodes = [svgEl("rect", { x: 60, y: 20, width: 520, height: 520, fill: "none", stroke: "#d5d9e0" })];
+  const label = (v) => String(+v.toFixed(3));
+  for (let v = Math.ceil(proj.x0 / step) * step; v <= proj.x1; v += step) {
+    nodes.push(svgEl("line", { x1: proj.px(v), x2: proj.px(v), y1: 20, y2: 540, stroke: "#eef0f4" }),
+      svgEl("text", { x: proj.px(v), y: 556, "text-anchor": "middle", style: FONT, text: label(v) }));
+  }
+  for (let v = Math.ceil(proj.y0 / step) * step; v <= proj.y1; v += step) {
+    nodes.push(svgEl("line", { x1: 60, x2: 580, y1: proj.py(v), y2: proj.py(v), stroke: "#eef0f4" }),
+      svgEl("text", { x: 54, y: proj.py(v) + 4, "text-anchor": "end", style: FONT, text: label(v) }));
+  }
+  nodes.push(svgEl("text", { x: 320, y: 574, "text-anchor": "middle", style: FONT, text: "X (m)" }));
+  return nodes;
+}
+
 /** The magnification's label and a reference arrow of a round error length. */
-function scatterKey(magnify, scale, maxErrorM) {
+function scatterKey(magnify, scale, maxErrorM, withRefused) {
   const refMm = niceNumber(Math.max(maxErrorM * 1000 * 0.6, 1e-3));
   const length = (refMm / 1000) * magnify * scale;
-  const y = 572;
+  const y = 606;
   return [
-    svgEl("line", { "data-testid": "bench-reference-arrow", x1: 60, y1: y, x2: 60 + length, y2: y, stroke: "#e0632f",
+    svgEl("line", { "data-testid": "bench-reference-arrow", x1: 64, y1: y, x2: 64 + length, y2: y, stroke: "#e0632f",
       "stroke-width": 1.6, "marker-end": "url(#arrow)" }),
-    svgEl("text", { x: 68 + length, y: y + 4, style: FONT, text: `${refMm} mm error` }),
-    svgEl("text", { "data-testid": "bench-magnification", x: 570, y: y + 4, "text-anchor": "end", style: FONT,
-      text: `errors magnified ×${magnify}; dots: truth` }),
+    svgEl("text", { x: 72 + length, y: y + 4, style: FONT, text: `${refMm} mm error` }),
+    svgEl("text", { "data-testid": "bench-magnification", x: 580, y: y + 4, "text-anchor": "end", style: FONT,
+      text: `errors magnified ×${magnify} · dots: truth${withRefused ? " · ✕ no fix" : ""}` }),
   ];
 }

@@ -27,6 +27,7 @@ export class FrameView {
       this.select.replaceChildren(...all.map((name) => el("option", { value: name, text: name })));
     }
     if (this.device) this.select.value = this.device;
+    this.select.disabled = all.length === 0;
     document.getElementById("frame-empty").hidden = all.length > 0;
   }
 
@@ -133,7 +134,10 @@ export class FrameView {
 function poseText(pos, ypr, sigma) {
   const xyz = pos.map((v) => v.toFixed(4)).join(", ");
   const lines = [el("div", { text: `(${xyz}) m` })];
-  if (sigma) lines.push(el("div", { class: "cell-note", text: `σ ${sigma.map((v) => (v * 1000).toFixed(1)).join(" / ")} mm` }));
+  if (sigma) {
+    const mm = sigma.map((v) => (v * 1000).toFixed(1)).join(" / ");
+    lines.push(el("div", { class: "cell-note", text: `σ ${mm} mm (x / y / z)` }));
+  }
   if (ypr) {
     const [yaw, pitch, roll] = ypr.map((v) => v.toFixed(2));
     lines.push(el("div", { text: `yaw ${yaw}°, pitch ${pitch}°, roll ${roll}°` }));

@@ -6,6 +6,7 @@ import { drawRoom } from "./roommap.js";
 const PALETTE = ["#2f7fe0", "#e0632f", "#1f9d6b", "#a34fd6", "#d6a21f", "#d63f7a", "#3fb6c9", "#7a8a2f"];
 const FADE_SEGMENTS = 24;
 const STALE_S = 30;
+const MAX_TRACK = 200; // points of a track kept, as the service keeps
 
 /** Two-sigma ellipse of a 2x2 covariance [[a, b], [b, c]] (m^2): radii (m) and the major axis' angle (deg). */
 export function ellipse2Sigma(cov) {
@@ -17,10 +18,11 @@ export function ellipse2Sigma(cov) {
     angleDeg: (angle * 180) / Math.PI };
 }
 
+const colours = new Map(); // device -> colour, in the order devices are first seen: neighbours differ
+
 function colourOf(name) {
-  let hash = 0;
-  for (const char of name) hash = (hash * 31 + char.charCodeAt(0)) >>> 0;
-  return PALETTE[hash % PALETTE.length];
+  if (!colours.has(name)) colours.set(name, PALETTE[colours.size % PALETTE.length]);
+  return colours.get(name);
 }
 
 /** Where a device is: its last filtered position (the track's newest point), else its last raw fix. */
@@ -51,8 +53,19 @@ export class LiveView {
   update(liveDevices, replace = false) {
     this.clockOffsetS = liveDevices.time_s - Date.now() / 1000;
     if (replace) this.devices.clear();
-    for (const device of liveDevices.devices) this.devices.set(device.device, device);
+    for (const device of liveDevices.devices) this.devices.set(device.device, this.merged(device));
+    if (liveDevices.window_s) {
+      document.getElementById("refused-head").textContent = `Refused (${Math.round(liveDevices.window_s)} s)`;
+    }
     this.render();
+  }
+
+  /** An event's device carries only its track's new points: append them to those already drawn. */
+  merged(device) {
+    const known = this.devices.get(device.device)?.track || [];
+    const newestS = known.length ? known.at(-1)[0] : -Infinity;
+    const track = known.concat((device.track || []).filter((point) => point[0] > newestS)).slice(-MAX_TRACK);
+    return { ...device, track };
   }
 
   deviceNames() {
@@ -145,8 +158,10 @@ export class LiveView {
     const beacon = last.ok ? `${last.beacon_id ?? "—"}` : "—";
     return el("tr", { "data-testid": "device-row", "data-device": device.device, class: "clickable",
       onclick: () => this.openFrame(device.device) },
-      el("td", {}, el("span", { class: "swatch", style: `background:${colourOf(device.device)}` }), device.device,
-        el("div", { class: "cell-note", text: `${device.map} · ${device.fixes}/${device.frames} fixes` })),
+      el("td", { class: "device-name" },
+        el("span", { class: "swatch", style: `background:${colourOf(device.device)}` }),
+        device.device, el("div", { class: "cell-note", text: `${device.fixes}/${device.frames} fixes` +
+          (sigma === null ? "" : ` · σ ${(sigma * 1000).toFixed(1)} mm`) })),
       el("td", { "data-field": "beacon" }, beacon,
         last.ok && last.beacon_id_source ? el("div", { class: "cell-note", text: humanize(last.beacon_id_source) })
           : null),
@@ -155,7 +170,6 @@ export class LiveView {
         el("span", { class: "chip", "data-reason": reason, text: `${humanize(reason)} ${(share * 100).toFixed(0)}%` }))
         : el("span", { class: "muted", text: "none" })),
       el("td", { class: "num", "data-field": "latency" }, fmt(device.last_latency_ms, 0, "ms")),
-      el("td", { class: "num", "data-field": "sigma" }, sigma === null ? "—" : fmt(sigma * 1000, 1, "mm")),
       el("td", { class: "num", "data-field": "seen" }, fmtAgo(nowS - device.last_seen_s)),
     );
   }

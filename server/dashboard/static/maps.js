@@ -39,6 +39,12 @@ export function lineForField(lines, field) {
   return best;
 }
 
+/** An ErrorBody in one line, naming the field once. */
+function describe(body) {
+  const field = body.field && !body.message.includes(body.field) ? ` at ${body.field}` : "";
+  return `${body.error}${field}: ${body.message}`;
+}
+
 function keyMessage() {
   return apiKey.get()
     ? "The API key was refused: writing needs the API key the server was started with."
@@ -103,7 +109,7 @@ export class MapsView {
   draw(beaconMap, note) {
     document.getElementById("map-title").textContent =
       `${beaconMap.name}: ${beaconMap.beacons.length} panel${beaconMap.beacons.length === 1 ? "" : "s"}${note}`;
-    drawRoom(byTestId("map-view"), beaconMap);
+    drawRoom(byTestId("map-view"), beaconMap, [], "map-panel");
   }
 
   async activate() {
@@ -163,20 +169,23 @@ export class MapsView {
     const marked = parsed === undefined ? lines[0] : lineForField(lines, body.field);
     const field = body.field || "body";
     this.errors.replaceChildren(
-      el("p", { class: "error-text", text: `${body.error}${body.field ? ` at ${body.field}` : ""}: ${body.message}` }),
+      el("p", { class: "error-text", text: describe(body) }),
       el("pre", { class: "json" }, lines.map((line) => line === marked
         ? el("div", { class: "line error", "data-testid": "map-error-field", "data-field": field },
           el("code", { text: line.text }), el("span", { class: "error-note", text: `← ${body.message}` }))
         : el("div", { class: "line" }, el("code", { text: line.text })))),
     );
     this.errors.hidden = false;
-    this.errors.querySelector(".error")?.scrollIntoView({ block: "nearest" });
+    // bring the marked line to the middle of the listing (not the page: it stays where the user is)
+    const pre = this.errors.querySelector("pre");
+    const line = pre.querySelector(".error");
+    pre.scrollTop = line.offsetTop - pre.clientHeight / 2;
   }
 
   sayError(error) {
     if (error instanceof ApiError && error.status === 401) return this.say(keyMessage(), "bad");
     const body = error instanceof ApiError ? error.body : { error: "network", message: error.message };
-    this.say(`Refused (${body.error}${body.field ? `, ${body.field}` : ""}): ${body.message}`, "bad");
+    this.say(`Refused: ${describe(body)}`, "bad");
   }
 
   say(text, tone) {

@@ -19,7 +19,7 @@ function bounds(beacons, points) {
   const ys = [];
   for (const beacon of beacons) {
     const { w, h } = beaconExtent(beacon);
-    const reach = Math.hypot(w, h) / 2;
+    const reach = Math.hypot(w, h) / 2 || 0; // an unreadable size (a preview) reaches nowhere
     xs.push(beacon.center_m[0] - reach, beacon.center_m[0] + reach);
     ys.push(beacon.center_m[1] - reach, beacon.center_m[1] + reach);
   }
@@ -81,12 +81,14 @@ function gridLayer(proj) {
 }
 
 /** One panel: its outline to scale, turned by its yaw, and its ID. */
-export function panelNode(beacon, proj) {
+export function panelNode(beacon, proj, testId) {
   const { w, h, r } = beaconExtent(beacon);
   const [cx, cy] = [proj.px(beacon.center_m[0]), proj.py(beacon.center_m[1])];
-  const size = { w: w * proj.scale, h: h * proj.scale, r: r * proj.scale };
+  // a size the service would refuse (an upload's preview) is drawn as nothing rather than as an error
+  const scaled = (metres) => (Number.isFinite(metres) && metres > 0 ? metres * proj.scale : 0);
+  const size = { w: scaled(w), h: scaled(h), r: Math.min(scaled(r), scaled(w) / 2, scaled(h) / 2) };
   const idSize = Math.max(11, Math.min(22, size.h * 0.45));
-  return svgEl("g", { "data-testid": "panel", "data-beacon-id": beacon.id, class: "panel" },
+  return svgEl("g", { "data-testid": testId, "data-beacon-id": beacon.id, class: "panel" },
     svgEl("title", { text: `beacon ${beacon.id}: ${(w * 1000).toFixed(0)} × ${(h * 1000).toFixed(0)} mm, ` +
       `yaw ${beacon.yaw_deg ?? 0}°, z ${beacon.center_m[2]} m` }),
     svgEl("rect", {
@@ -112,12 +114,13 @@ function scaleBar(proj) {
   );
 }
 
-/** Draws `beaconMap` into `svg` (cleared) and returns the projection; later layers go on top. */
-export function drawRoom(svg, beaconMap, points = []) {
+/** Draws `beaconMap` into `svg` (cleared) and returns the projection; later layers go on top.
+ * `panelTestId` tells the live room's panels ("panel") from another drawing's ("map-panel"). */
+export function drawRoom(svg, beaconMap, points = [], panelTestId = "panel") {
   const proj = projectionFor(beaconMap.beacons, points);
   svg.replaceChildren();
   svg.setAttribute("viewBox", `0 0 ${proj.width} ${proj.height.toFixed(1)}`);
-  svg.append(gridLayer(proj), svgEl("g", { class: "panels" }, beaconMap.beacons.map((b) => panelNode(b, proj))),
-    scaleBar(proj));
+  const panels = beaconMap.beacons.map((beacon) => panelNode(beacon, proj, panelTestId));
+  svg.append(gridLayer(proj), svgEl("g", { class: "panels" }, panels), scaleBar(proj));
   return proj;
 }
