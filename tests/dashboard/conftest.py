@@ -41,7 +41,7 @@ def live(walk, tmp_path_factory) -> Iterator[Live]:
     with start_server(tmp_path_factory.mktemp("live-data"), walk) as server:
         feeder = Feeder(server.url, walk).start()
         try:
-            feeder.wait_for_fixes(3)
+            feeder.wait_for_fixes(2)
             yield Live(server.url, walk, feeder)
         finally:
             feeder.stop()
@@ -75,9 +75,10 @@ def browser():
 
 @dataclass
 class PageRecord:
-    """What a page did: every request's URL, console errors, uncaught script errors."""
+    """What a page did: every request's URL, answers 4xx/5xx, console errors, uncaught script errors."""
 
     requests: list[str] = field(default_factory=list)
+    failed: list[str] = field(default_factory=list)
     console_errors: list[str] = field(default_factory=list)
     page_errors: list[str] = field(default_factory=list)
 
@@ -103,6 +104,8 @@ def page(browser, page_record, request):
     context = browser.new_context(viewport={"width": 1280, "height": 860}, accept_downloads=True)
     opened = context.new_page()
     opened.on("request", lambda sent: page_record.requests.append(sent.url))
+    opened.on("response", lambda answer: answer.status >= 400 and page_record.failed.append(
+        f"{answer.status} {answer.request.method} {answer.url}"))
     opened.on("console", lambda message: message.type == "error" and page_record.console_errors.append(message.text))
     opened.on("pageerror", lambda error: page_record.page_errors.append(str(error)))
     try:

@@ -30,9 +30,9 @@ CAPTURES = 8  # one lap: 6 m at 0.5 m/s, a capture every 1.5 s (the 9th would be
 # the four panels' centres, in a loop: the walk passes right under each one
 LAP_M = [[-0.6, -0.9], [0.6, -0.9], [0.6, 0.9], [-0.6, 0.9], [-0.6, -0.9]]
 DEVICES = ("walker-a", "walker-b")  # walker-b walks the same lap half a lap behind
-# wall time between one device's captures as fed (the walk's own clock: 1.5 s); a pose frame in the room costs
-# the service 0.1-0.9 s of CPU (VLC decoding, outline fits): two devices at this pace keep about one core busy
-CAPTURE_PERIOD_S = 1.0
+# wall time between one device's captures as fed (as the walk's own clock: 1.5 s); a pose frame in the room costs
+# the service 0.1-0.9 s of CPU (VLC decoding, outline fits): two devices at this pace keep two thirds of a core busy
+CAPTURE_PERIOD_S = 1.5
 SCREENSHOTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "screenshots"
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
