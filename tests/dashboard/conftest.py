@@ -17,11 +17,7 @@ from urllib.parse import urlsplit
 
 import pytest
 
-from lumipose_cli.main import main as lumipose
-from tests.dashboard.live_room import API_KEY, SCREENSHOTS, Feeder, Walk, chromium, render_walk, start_server
-from simulator.local_server import LocalServer
-
-BENCH_SCALE = 0.2  # of the Mi 8 front camera: the bench frames, as the walk's
+from tests.dashboard.live_room import SCREENSHOTS, Feeder, Walk, chromium, render_bench, render_walk, start_server
 
 
 @dataclass(frozen=True)
@@ -38,7 +34,7 @@ def walk(tmp_path_factory) -> Walk:
 
 @pytest.fixture(scope="session")
 def live(walk, tmp_path_factory) -> Iterator[Live]:
-    with start_server(tmp_path_factory.mktemp("live-data"), walk) as server:
+    with start_server(tmp_path_factory.mktemp("live-data"), walk.map_path) as server:
         feeder = Feeder(server.url, walk).start()
         try:
             feeder.wait_for_fixes(2)
@@ -59,11 +55,9 @@ class Bench:
 def bench(tmp_path_factory) -> Iterator[Bench]:
     """The paper's bench: a row of eight grid cells rendered once, a service holding the bench's map."""
     out = tmp_path_factory.mktemp("bench")
-    command = ["simulate", "paper-bench", str(out), "--limit", "8", "--scale", str(BENCH_SCALE), "--workers", "1"]
-    assert lumipose(command) == 0
-    with LocalServer("--api-key", API_KEY, "--map", str(out / "map.json"), "--log-level", "warning",
-                     data_dir=tmp_path_factory.mktemp("bench-data")) as server:
-        yield Bench(server.url, sorted(out.glob("paper-bench_*.json")))
+    frames = render_bench(out)
+    with start_server(tmp_path_factory.mktemp("bench-data"), out / "map.json") as server:
+        yield Bench(server.url, frames)
         assert "Traceback" not in server.log(), server.log()
 
 

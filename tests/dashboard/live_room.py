@@ -3,8 +3,8 @@ to it by real HTTP, and headless Debian Chromium (Playwright) to look at the pag
 
 Used by tests/dashboard/conftest.py and by `python -m tests.dashboard.screenshots` (docs/dashboard.md).
 The walk is the office scene (simulator/scenes/office.json: four coded panels, 17, 42, 99, 200) without
-its window, walked round the four panels' centres at 0.5 m/s, one capture (a pose frame and its ID frames)
-every 1.5 s, rendered once at a fifth of the Mi 8 front camera's resolution (ID frames at a tenth).
+its window, walked round the four panels' centres at 0.25 m/s, one capture (a pose frame and its ID frames)
+every 3 s, rendered once at a fifth of the Mi 8 front camera's resolution (ID frames at a tenth).
 """
 
 from __future__ import annotations
@@ -26,14 +26,18 @@ from simulator.scene import find_scene
 
 API_KEY = "dashboard-key"
 SCALE = 0.2  # of the Mi 8 front camera's 3880 x 5184: the pipeline stays cheap on 2 cores
-CAPTURES = 8  # one lap: 6 m at 0.5 m/s, a capture every 1.5 s (the 9th would be the start again)
+CAPTURES = 8  # one lap: 6 m at 0.25 m/s, a capture every 3 s (the 9th would be the start again)
 # the four panels' centres, in a loop: the walk passes right under each one
 LAP_M = [[-0.6, -0.9], [0.6, -0.9], [0.6, 0.9], [-0.6, 0.9], [-0.6, -0.9]]
 DEVICES = ("walker-a", "walker-b")  # walker-b walks the same lap half a lap behind
-# wall time between one device's captures as fed (as the walk's own clock: 1.5 s); a pose frame in the room costs
-# the service 0.1-0.9 s of CPU (VLC decoding, outline fits): two devices at this pace keep two thirds of a core busy
+# wall time between one device's captures as fed (the walk's own clock: 3 s); a capture in the room costs the
+# service 0.2-0.9 s of CPU (VLC decoding, outline fits): two devices at this pace keep about half a core busy
 CAPTURE_PERIOD_S = 1.5
+BENCH_CELL_M = 0.05  # the paper's grid
+BENCH_STORED = (0, 2, 3, 5, 7)  # of the bench's row of eight frames, stored as samples
+BENCH_DARK = 1  # stored dark: a cell without a fix (frames 4 and 6: not sampled)
 SCREENSHOTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "screenshots"
+TIMEOUT_MS = 15_000  # the longest a browser test waits for the page to show something
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -65,10 +69,10 @@ class Walk:
 
 def walk_scene_json() -> str:
     """The office scene without its window (light pollution costs most of the render time), walking the lap
-    slowly (motion blur costs the rest)."""
+    slowly (motion blur costs most of the rest: each frame is drawn at many instants of its exposure)."""
     scene = find_scene("office")
     path = scene.series.path.model_copy(update={"kind": "waypoints", "points_m": LAP_M, "area_m": None,
-                                                "speed_mps": 0.5, "frame_interval_s": 1.5})
+                                                "speed_mps": 0.25, "frame_interval_s": 3.0})
     series = scene.series.model_copy(update={"path": path})
     return scene.model_copy(update={"light_sources": [], "series": series}).to_json()
 
@@ -181,10 +185,43 @@ class Feeder:
                 self.posted.append(Posted(device, capture, result))
 
 
-def start_server(data_dir: Path, walk: Walk) -> LocalServer:
-    """`lumipose serve` with the walk's map active and an API key (the caller enters and leaves it)."""
-    return LocalServer("--api-key", API_KEY, "--map", str(walk.map_path), "--log-level", "warning",
-                       data_dir=data_dir)
+def start_server(data_dir: Path, map_path: Path) -> LocalServer:
+    """`lumipose serve` with the map of `map_path` active and an API key (the caller enters and leaves it)."""
+    return LocalServer("--api-key", API_KEY, "--map", str(map_path), "--log-level", "warning", data_dir=data_dir)
+
+
+def render_bench(folder: Path) -> list[Path]:
+    """The paper's bench (one panel 1 m up): a row of eight grid cells' frames rendered into `folder`, with
+    its map.json; the frames' fixtures in the row's order."""
+    command = ["simulate", "paper-bench", str(folder), "--limit", "8", "--scale", str(SCALE), "--workers", "1"]
+    if lumipose(command) != 0:
+        raise RuntimeError(f"lumipose {' '.join(command)} failed")
+    return sorted(folder.glob("paper-bench_*.json"))
+
+
+def cell_label(meta: FrameMeta) -> str:
+    """The 'i,j' grid cell of a frame's true position."""
+    assert meta.ground_truth is not None
+    x_m, y_m = meta.ground_truth.position_m[:2]
+    return f"{round(x_m / BENCH_CELL_M)},{round(y_m / BENCH_CELL_M)}"
+
+
+def store_bench_samples(url: str, frames: list[Path]) -> list[str]:
+    """Store the `BENCH_STORED` frames, each labelled with its cell, and frame `BENCH_DARK` dark (its pixels
+    zeroed: no fix); the others' cells stay not sampled. Returns every frame's cell label, in order."""
+    read = [read_fixture_files(path) for path in frames]
+    with Client(url, api_key=API_KEY) as client:
+        for k in BENCH_STORED:
+            client.store_sample(read[k][1], read[k][0], label=cell_label(read[k][0]))
+        dark_meta, data = read[BENCH_DARK]
+        client.store_sample(bytes(len(data)), dark_meta, label=cell_label(dark_meta))
+    return [cell_label(meta) for meta, _ in read]
+
+
+def open_view(page, url: str, view: str) -> None:
+    """Open the page of the service at `url` on `view` ('live', 'frame/walker-a', ...) and wait for the view."""
+    page.goto(f"{url}/dashboard/#{view}")
+    page.get_by_test_id(f"view-{view.split('/')[0]}").wait_for(state="visible", timeout=TIMEOUT_MS)
 
 
 @contextlib.contextmanager

@@ -17,21 +17,24 @@ import httpx
 import numpy as np
 import pytest
 
-from lumipose_client import Client, read_fixture_files
 from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, world_to_camera
 from shared_schemas import FailureReason
 from simulator.bench_office import true_beacon
 from simulator.render import CameraPose
-from tests.dashboard.live_room import API_KEY, DEVICES, Walk
+from tests.dashboard.live_room import (
+    API_KEY,
+    BENCH_CELL_M,
+    BENCH_DARK,
+    BENCH_STORED,
+    DEVICES,
+    TIMEOUT_MS,
+    Walk,
+    open_view,
+    store_bench_samples,
+)
 
-FOLLOW_M = 0.05  # a marker to the walk's truth: raw fixes at a fifth resolution are 10-40 mm off
-TIMEOUT_MS = 15_000
+FOLLOW_M = 0.03  # a marker to the walk's truth: its fixes at a fifth resolution are 3-16 mm off
 REASONS = {reason.value for reason in FailureReason}
-
-
-def open_view(page, url: str, view: str) -> None:
-    page.goto(f"{url}/dashboard/#{view}")
-    page.get_by_test_id(f"view-{view.split('/')[0]}").wait_for(state="visible", timeout=TIMEOUT_MS)
 
 
 def marker_positions(page) -> dict[str, tuple[float, float]]:
@@ -41,6 +44,53 @@ def marker_positions(page) -> dict[str, tuple[float, float]]:
 
 def nearest_truth_m(walk: Walk, x_m: float, y_m: float) -> float:
     return min(math.dist((x_m, y_m), capture.truth_m[:2]) for capture in walk.captures)
+
+
+# first: the bench's service starts before the walk's feeder keeps two thirds of a core busy
+def test_bench_shows_table_2_of_the_stored_samples(page, bench):
+    labels = store_bench_samples(bench.url, bench.frames)
+    evaluation = httpx.get(f"{bench.url}/v1/samples/evaluation", params={"cell_m": BENCH_CELL_M}).json()
+    assert evaluation["samples"] == len(BENCH_STORED) + 1 and evaluation["fixes"] == len(BENCH_STORED)
+
+    open_view(page, bench.url, "bench")
+    table = page.get_by_test_id("bench-table")
+    table.locator('[data-field="samples"]').wait_for(timeout=TIMEOUT_MS)
+    shown = {field: table.locator(f'[data-field="{field}"]').text_content() for field in (
+        "samples", "with_truth", "fixes", "coverage", "mean_mm", "std_mm", "min_mm", "max_mm")}
+    assert shown == {
+        "samples": str(evaluation["samples"]), "with_truth": str(evaluation["with_truth"]),
+        "fixes": str(evaluation["fixes"]), "coverage": f"{evaluation['coverage'] * 100:.1f} %",
+        **{name: f"{evaluation[name]:.2f}" for name in ("mean_mm", "std_mm", "min_mm", "max_mm")},
+    }
+    expected = {label: "not-sampled" for label in labels} | {labels[k]: "sampled" for k in BENCH_STORED} | {
+        labels[BENCH_DARK]: "no-fix"}
+    cells = page.get_by_test_id("bench-cell")
+    assert {cells.nth(k).get_attribute("data-cell"): cells.nth(k).get_attribute("data-state")
+            for k in range(cells.count())} == expected  # the planned grid: the span of the stored cells
+    errors = {row["label"]: row["error_2d_mm"] for row in evaluation["rows"] if row["error_2d_mm"] is not None}
+    for label, error_mm in errors.items():
+        assert float(page.locator(f'[data-testid="bench-cell"][data-cell="{label}"]').get_attribute(
+            "data-error-mm")) == pytest.approx(error_mm, abs=1e-3)
+    assert page.get_by_test_id("bench-scatter").get_by_test_id("bench-arrow").count() == len(errors)
+    assert "magnified ×" in page.get_by_test_id("bench-magnification").text_content()
+
+    i_low = int(labels[0].split(",")[0]) - 1
+    page.get_by_test_id("bench-i-range").fill(f"{i_low}..{i_low + 9}")  # one more cell each side
+    page.wait_for_function(f"() => document.querySelectorAll('[data-testid=\"bench-cell\"]').length === "
+                           f"{len(labels) + 2}", timeout=TIMEOUT_MS)
+    assert page.locator(f'[data-testid="bench-cell"][data-cell="{i_low},11"]').get_attribute(
+        "data-state") == "not-sampled"
+
+    downloads = []
+    page.on("download", lambda download: downloads.append(download))
+    page.get_by_test_id("bench-download").click()
+    deadline = time.monotonic() + 10
+    while len(downloads) < 2 and time.monotonic() < deadline:
+        page.wait_for_timeout(100)
+    assert sorted(d.suggested_filename.split("-")[2] for d in downloads) == ["heatmap", "scatter"]
+    for download in downloads:
+        text = open(download.path()).read()
+        assert text.startswith("<?xml") and "<svg" in text and 'xmlns="http://www.w3.org/2000/svg"' in text
 
 
 def test_markers_follow_the_walk(page, live):
@@ -213,67 +263,6 @@ def test_map_upload_shows_the_error_at_its_field(page, live, tmp_path):
         httpx.put(f"{live.url}/v1/maps/active", json={"name": "office"}, headers={"X-API-Key": API_KEY})
 
 
-BENCH_CELL_M = 0.05
-STORED = (0, 2, 3, 5, 7)  # of the bench's row of eight frames; frame 1 stored dark (no fix), 4 and 6 not at all
-
-
-def cell_label(meta) -> str:
-    x, y = meta.ground_truth.position_m[:2]
-    return f"{round(x / BENCH_CELL_M)},{round(y / BENCH_CELL_M)}"
-
-
-def test_bench_shows_table_2_of_the_stored_samples(page, bench):
-    with Client(bench.url, api_key=API_KEY) as client:
-        for k in STORED:
-            meta, data = read_fixture_files(bench.frames[k])
-            client.store_sample(data, meta, label=cell_label(meta))
-        dark_meta, dark = read_fixture_files(bench.frames[1])
-        client.store_sample(bytes(len(dark)), dark_meta, label=cell_label(dark_meta))
-    evaluation = httpx.get(f"{bench.url}/v1/samples/evaluation", params={"cell_m": BENCH_CELL_M}).json()
-    assert evaluation["samples"] == len(STORED) + 1 and evaluation["fixes"] == len(STORED)
-
-    open_view(page, bench.url, "bench")
-    table = page.get_by_test_id("bench-table")
-    table.locator('[data-field="samples"]').wait_for(timeout=TIMEOUT_MS)
-    shown = {field: table.locator(f'[data-field="{field}"]').text_content() for field in (
-        "samples", "with_truth", "fixes", "coverage", "mean_mm", "std_mm", "min_mm", "max_mm")}
-    assert shown == {
-        "samples": str(evaluation["samples"]), "with_truth": str(evaluation["with_truth"]),
-        "fixes": str(evaluation["fixes"]), "coverage": f"{evaluation['coverage'] * 100:.1f} %",
-        **{name: f"{evaluation[name]:.2f}" for name in ("mean_mm", "std_mm", "min_mm", "max_mm")},
-    }
-    labels = [cell_label(read_fixture_files(path)[0]) for path in bench.frames]
-    expected = {label: "not-sampled" for label in labels} | {labels[k]: "sampled" for k in STORED} | {
-        labels[1]: "no-fix"}
-    cells = page.get_by_test_id("bench-cell")
-    assert {cells.nth(k).get_attribute("data-cell"): cells.nth(k).get_attribute("data-state")
-            for k in range(cells.count())} == expected  # the planned grid: the span of the stored cells
-    errors = {row["label"]: row["error_2d_mm"] for row in evaluation["rows"] if row["error_2d_mm"] is not None}
-    for label, error_mm in errors.items():
-        assert float(page.locator(f'[data-testid="bench-cell"][data-cell="{label}"]').get_attribute(
-            "data-error-mm")) == pytest.approx(error_mm, abs=1e-3)
-    assert page.get_by_test_id("bench-scatter").get_by_test_id("bench-arrow").count() == len(errors)
-    assert "magnified ×" in page.get_by_test_id("bench-magnification").text_content()
-
-    i_low = int(labels[0].split(",")[0]) - 1
-    page.get_by_test_id("bench-i-range").fill(f"{i_low}..{i_low + 9}")  # one more cell each side
-    page.wait_for_function(f"() => document.querySelectorAll('[data-testid=\"bench-cell\"]').length === "
-                           f"{len(labels) + 2}", timeout=TIMEOUT_MS)
-    assert page.locator(f'[data-testid="bench-cell"][data-cell="{i_low},11"]').get_attribute(
-        "data-state") == "not-sampled"
-
-    downloads = []
-    page.on("download", lambda download: downloads.append(download))
-    page.get_by_test_id("bench-download").click()
-    deadline = time.monotonic() + 10
-    while len(downloads) < 2 and time.monotonic() < deadline:
-        page.wait_for_timeout(100)
-    assert sorted(d.suggested_filename.split("-")[2] for d in downloads) == ["heatmap", "scatter"]
-    for download in downloads:
-        text = open(download.path()).read()
-        assert text.startswith("<?xml") and "<svg" in text and 'xmlns="http://www.w3.org/2000/svg"' in text
-
-
 def test_health_shows_the_version_and_the_locate_rate(page, live):
     open_view(page, live.url, "health")
     version = httpx.get(f"{live.url}/healthz").json()["version"]
@@ -303,4 +292,17 @@ def test_every_view_stays_on_the_server_and_logs_no_error(page, page_record, liv
     assert {"/dashboard/", "/v1/live/events", "/v1/samples/evaluation", "/v1/maps", "/v1/status"} <= paths, paths
     assert any(path.endswith(".png") for path in paths), paths  # a kept frame's picture
     assert page_record.foreign_requests() == []
-    assert page_record.console_errors == [], page_record.failed
+    assert unexpected_console_errors(page_record) == [], page_record.failed
+
+
+def unexpected_console_errors(record) -> list[str]:
+    """The console's errors but the browser's own line for a kept picture dropped between the page's listing
+    and its fetch (404 `unknown_frame`, the spec's answer for a frame no longer kept: a device's newest three
+    frames are kept, a new one every 1.5 s)."""
+    dropped = [line for line in record.failed if re.fullmatch(r"404 GET .*/v1/live/devices/.+/frames/\d+\.png", line)]
+    missing = "Failed to load resource: the server responded with a status of 404 (Not Found)"
+    lines = list(record.console_errors)
+    for _ in dropped:
+        if missing in lines:
+            lines.remove(missing)
+    return lines
