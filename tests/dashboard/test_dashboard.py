@@ -10,6 +10,7 @@ import json
 import math
 import re
 import time
+from pathlib import Path
 from urllib.parse import urlsplit
 
 import cv2
@@ -46,7 +47,7 @@ def nearest_truth_m(walk: Walk, x_m: float, y_m: float) -> float:
     return min(math.dist((x_m, y_m), capture.truth_m[:2]) for capture in walk.captures)
 
 
-# first: the bench's service starts before the walk's feeder keeps two thirds of a core busy
+# first: the bench's service starts before the walk's feeder keeps half a core busy
 def test_bench_shows_table_2_of_the_stored_samples(page, bench):
     labels = store_bench_samples(bench.url, bench.frames)
     evaluation = httpx.get(f"{bench.url}/v1/samples/evaluation", params={"cell_m": BENCH_CELL_M}).json()
@@ -89,7 +90,7 @@ def test_bench_shows_table_2_of_the_stored_samples(page, bench):
         page.wait_for_timeout(100)
     assert sorted(d.suggested_filename.split("-")[2] for d in downloads) == ["heatmap", "scatter"]
     for download in downloads:
-        text = open(download.path()).read()
+        text = Path(download.path()).read_text()
         assert text.startswith("<?xml") and "<svg" in text and 'xmlns="http://www.w3.org/2000/svg"' in text
 
 
@@ -199,7 +200,7 @@ def test_frame_view_outlines_the_panel_under_the_device(page, live):
         assert posted, "the kept frame is one the feeder posted"
         meta = live.walk.captures[posted[-1].capture].pose_meta
         result = newest["result"]
-        assert result["ok"], result  # the feeder's frames of the lap are fixes but for a rare pose_uncertain
+        assert result["ok"], result  # every pose frame of the lap gives a fix
         under = true_beacon(list(live.walk.beacon_map.beacons), meta.camera, pose_of(meta), result["center_px"])
         assert shown["beacon"] == str(under) == str(result["beacon_id"])
         assert shown["green"] > 40, shown  # four green corner discs in the picture
