@@ -32,4 +32,14 @@ done
 "$work/venv/bin/python" -c "import urllib.request; urllib.request.urlopen($healthcheck, timeout=2)"
 "$work/venv/bin/lumipose" client --url "http://127.0.0.1:$port" locate tests/fixtures/bench_1m.json > "$work/result.json"
 grep -q '"ok": true' "$work/result.json"
+# the operator's page ships in the package: the page and every file it names are served
+"$work/venv/bin/python" - "http://127.0.0.1:$port" <<'PY'
+import re, sys, urllib.request
+base = sys.argv[1]
+page = urllib.request.urlopen(f"{base}/dashboard/", timeout=5).read().decode()
+assets = re.findall(r'(?:src|href)="(static/[^"]+)"', page)
+for asset in assets:
+    urllib.request.urlopen(f"{base}/dashboard/{asset}", timeout=5).read()
+print(f"docker_check: the operator's page and its {len(assets)} files are served")
+PY
 echo "docker_check: the image's install steps give a service that passes its healthcheck and locates the fixture"
