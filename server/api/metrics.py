@@ -87,7 +87,8 @@ class MetricsMiddleware:
         try:
             await self.app(scope, receive, send_and_note)
         finally:
-            route = getattr(scope.get("route"), "path", "unmatched")
+            # a route's template; a mount's path (the page's static files: its root_path); else "unmatched"
+            route = getattr(scope.get("route"), "path", None) or scope.get("root_path") or "unmatched"
             self.metrics.requests.labels(route=route, status=str(status)).inc()
             self.metrics.latency.labels(route=route).observe(time.perf_counter() - start)
 

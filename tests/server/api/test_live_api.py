@@ -109,6 +109,8 @@ def test_the_page_is_served_from_the_package(server_url):
     page = httpx.get(f"{server_url}/dashboard/")
     assert page.status_code == 200 and page.headers["content-type"].startswith("text/html") and "<html" in page.text
     assert httpx.get(f"{server_url}/dashboard/static/no-such-file.js").status_code == 404
+    metrics = httpx.get(f"{server_url}/metrics").text  # the static files counted as theirs, not "unmatched"
+    assert 'lumipose_requests_total{route="/dashboard/static",status="404"}' in metrics
 
 
 def test_histogram_quantiles_interpolate_within_their_bucket():
