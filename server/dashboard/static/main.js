@@ -23,6 +23,7 @@ let currentView = null;
 function route() {
   const [name, ...rest] = location.hash.replace(/^#/, "").split("/");
   const view = VIEWS.includes(name) ? name : "live";
+  if (view !== currentView) window.scrollTo(0, 0);
   currentView = view;
   for (const other of VIEWS) {
     byTestId(`view-${other}`).hidden = other !== view;
