@@ -111,7 +111,8 @@ export class LiveView {
     const refused = !device.last?.ok;
     const group = svgEl("g", {
       "data-testid": "device-marker", "data-device": device.device, "data-x": at[0], "data-y": at[1],
-      class: `device${idle ? " idle" : ""}${refused ? " refused" : ""}`, style: `--c:${colour}`, tabindex: 0, role: "link",
+      class: `device${idle ? " idle" : ""}${refused ? " refused" : ""}`, style: `--c:${colour}`,
+      tabindex: 0, role: "link",
       onclick: () => this.openFrame(device.device),
       onkeydown: (event) => event.key === "Enter" && this.openFrame(device.device),
     });
