@@ -55,7 +55,7 @@ function onDevices(liveDevices, replace) {
   live.update(liveDevices, replace);
   frame.setDevices(live.deviceNames());
   if (currentView === "frame" && !frame.device) frame.show(null, live.deviceNames());
-  for (const device of liveDevices.devices) frame.onDevice(device);
+  for (const device of liveDevices.devices) frame.onDevice(device, currentView === "frame");
 }
 
 /** The live stream; EventSource reconnects by itself (the server's `retry: 1000`), resyncing on each open. */
