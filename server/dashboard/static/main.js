@@ -33,6 +33,7 @@ function route() {
   if (view === "frame") frame.show(rest.length ? decodeURIComponent(rest.join("/")) : null, live.deviceNames());
   if (view === "bench" && !loaded.has("bench")) bench.load();
   if (view === "maps") maps.load();
+  if (view === "health") health.checkFiles();
   loaded.add(view);
 }
 
