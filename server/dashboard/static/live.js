@@ -116,11 +116,13 @@ export class LiveView {
       onclick: () => this.openFrame(device.device),
       onkeydown: (event) => event.key === "Enter" && this.openFrame(device.device),
     });
-    group.append(svgEl("title", { text: `${device.device}: (${at[0].toFixed(3)}, ${at[1].toFixed(3)}) m` }));
-    group.append(...this.trackNodes(device.track || []));
+    const title = svgEl("title", { text: `${device.device}: (${at[0].toFixed(3)}, ${at[1].toFixed(3)}) m` });
+    group.append(title, ...this.trackNodes(device.track || []));
     const cov = device.last?.ok ? device.last.position_covariance_m2 : null;
     if (cov) {
       const e = ellipse2Sigma(cov);
+      // drawn to scale: millimetres are a pixel or two on a room's map, so the title says how large
+      title.textContent += `, 2σ ellipse ${(e.major * 1000).toFixed(1)} × ${(e.minor * 1000).toFixed(1)} mm`;
       group.append(svgEl("ellipse", {
         "data-testid": "device-ellipse", class: "ellipse", cx: px(at[0]), cy: py(at[1]),
         rx: Math.max(e.major * scale, 0.5), ry: Math.max(e.minor * scale, 0.5),
