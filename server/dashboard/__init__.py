@@ -1,4 +1,9 @@
-"""The operator's web page (`/dashboard/`): static files in `static/`, no build step, no external requests."""
+"""The operator's web page (issue 16): static files in `static/` (index.html, ES modules, style.css).
+
+No build step and no external requests: the service serves the folder as it is shipped in the package.
+"""
+
+from __future__ import annotations
 
 from pathlib import Path
 
