@@ -32,4 +32,18 @@ done
 "$work/venv/bin/python" -c "import urllib.request; urllib.request.urlopen($healthcheck, timeout=2)"
 "$work/venv/bin/lumipose" client --url "http://127.0.0.1:$port" locate tests/fixtures/bench_1m.json > "$work/result.json"
 grep -q '"ok": true' "$work/result.json"
+# the operator's page ships in the package: every file of the repository's page is installed and served
+"$work/venv/bin/python" -I - "http://127.0.0.1:$port" server/dashboard/static <<'PY'
+import sys, urllib.request
+from pathlib import Path
+from server.dashboard import STATIC_DIR  # the installed package's (-I: not the repository's)
+base, source = sys.argv[1], Path(sys.argv[2])
+files = sorted(p.name for p in source.iterdir())
+missing = sorted(set(files) - {p.name for p in STATIC_DIR.iterdir()})
+assert not missing, f"the package leaves out the page's {missing}"
+assert "<html" in urllib.request.urlopen(f"{base}/dashboard/", timeout=5).read().decode()
+for name in files:
+    urllib.request.urlopen(f"{base}/dashboard/static/{name}", timeout=5).read()
+print(f"docker_check: the operator's page and its {len(files)} files are installed and served")
+PY
 echo "docker_check: the image's install steps give a service that passes its healthcheck and locates the fixture"

@@ -18,7 +18,7 @@ from __future__ import annotations
 import asyncio
 import threading
 import time
-from collections import OrderedDict, deque
+from collections import Counter, OrderedDict, deque
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
@@ -59,6 +59,7 @@ class _DeviceLog:
     id_frames: int = 0
     fixes: int = 0
     recent: deque[tuple[float, FailureReason | None]] = field(default_factory=deque)  # pose frames in the window
+    recent_counts: Counter[FailureReason | None] = field(default_factory=Counter)  # of `recent`, by reason
     last: LocateResult | None = None
     last_latency_ms: float | None = None
     track: deque[tuple[int, tuple[float, float, float, float]]] = field(default_factory=deque)  # (version, t x y z)
@@ -180,8 +181,8 @@ class LiveBoard:
         log.frames += 1
         log.last, log.last_latency_ms = result, latency_ms
         log.recent.append((now, result.reason))
-        while log.recent and log.recent[0][0] < now - self.rules.window_s:
-            log.recent.popleft()
+        log.recent_counts[result.reason] += 1
+        self._forget_old(log, now)
         if result.ok and result.position_m is not None:
             log.fixes += 1
             x, y, z = result.track.filtered_position_m if result.track is not None else result.position_m
@@ -198,11 +199,9 @@ class LiveBoard:
 
     def _device_live(self, name: str, log: _DeviceLog, now: float, since_version: int) -> DeviceLive:
         """(The board's lock is held.)"""
-        recent = [reason for t, reason in log.recent if t >= now - self.rules.window_s]
-        refused: dict[str, float] = {}
-        for reason in recent:
-            if reason is not None:
-                refused[reason.value] = refused.get(reason.value, 0.0) + 1 / len(recent)
+        self._forget_old(log, now)  # kept counts: an event costs the same whatever the frame rate
+        frames = len(log.recent)
+        refused = {reason.value: n / frames for reason, n in log.recent_counts.items() if reason is not None and n}
         return DeviceLive(
             device=name,
             map=log.map,
@@ -210,13 +209,18 @@ class LiveBoard:
             frames=log.frames,
             id_frames=log.id_frames,
             fixes=log.fixes,
-            fix_rate_hz=sum(reason is None for reason in recent) / self.rules.window_s,
+            fix_rate_hz=log.recent_counts[None] / self.rules.window_s,
             refused=refused,
             last_latency_ms=log.last_latency_ms,
             last=log.last,
             track=[point for version, point in log.track if version > since_version],
             frames_kept=[k.seq for k in log.kept],
         )
+
+    def _forget_old(self, log: _DeviceLog, now: float) -> None:
+        """Drop the pose frames older than the window from the counts (the board's lock is held)."""
+        while log.recent and log.recent[0][0] < now - self.rules.window_s:
+            log.recent_counts[log.recent.popleft()[1]] -= 1
 
     def _set_kept_bytes(self, log: _DeviceLog, nbytes: int) -> None:
         self._frame_bytes += nbytes - log.kept_bytes

@@ -159,7 +159,8 @@ class Status(BaseModel):
     active_map: str
     devices: int = Field(description="devices on the live board")
     fixes: int = Field(description="frames located since the start")
-    refused: dict[str, int] = Field(description="frames without a fix since the start, by reason")
+    id_frames: int = Field(description="ID frames kept for their devices' pose frames since the start")
+    refused: dict[str, int] = Field(description="frames without a fix since the start, by reason (ID frames apart)")
     window_s: float = Field(description="the window of the rates and quantiles: the last minute, or since the start")
     routes: list[RouteStatus]
 

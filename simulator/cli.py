@@ -129,6 +129,17 @@ def add_commands(commands) -> None:
     load.add_argument("--url",
                       help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
                            "no server-side figures then (default: our own server)")
+    load.add_argument("--devices", action="store_true",
+                      help="client n sends X-Lumipose-Device: load-<n>, as phones do: the live board records every "
+                           "frame and keeps its picture's source (default: no device header)")
+    load.add_argument("--watchers", type=int, default=0,
+                      help="open operator pages: subscribers that read /v1/live/events through each run")
+    load.add_argument("--picture-every-s", type=float, default=2.0,
+                      help="with --devices and --watchers: one watcher fetches device load-0's newest kept picture "
+                           "this often, as the page's frame view; 0: none")
+    load.add_argument("--live-frames", type=int,
+                      help="the started server's serve --live-frames (pictures kept per device; 0: none) "
+                           "(default: the server's, 3)")
     load.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     load.set_defaults(run=_run_load)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),

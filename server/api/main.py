@@ -70,7 +70,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     )
     app.add_middleware(BugCatcher, on_bug=metrics.server_errors.inc)
     app.add_middleware(MetricsMiddleware, metrics=metrics)
-    protocol.configure(settings.read_timeout_s, settings.max_header_bytes)
+    protocol.configure(settings.read_timeout_s, settings.max_header_bytes, endless_paths=(live.EVENTS_PATH,))
     return app
 
 

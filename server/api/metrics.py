@@ -78,18 +78,23 @@ class MetricsMiddleware:
         start, status = time.perf_counter(), 500
         scope.setdefault("state", {})[REQUEST_START] = start  # a route's latency from the request's start
 
+        stream = False  # an event stream's time is how long a page stayed, not a latency
+
         async def send_and_note(message) -> None:
-            nonlocal status
+            nonlocal status, stream
             if message["type"] == "http.response.start":
                 status = message["status"]
+                stream = any(k == b"content-type" and v.startswith(b"text/event-stream") for k, v in message["headers"])
             await send(message)
 
         try:
             await self.app(scope, receive, send_and_note)
         finally:
-            route = getattr(scope.get("route"), "path", "unmatched")
+            # a route's template; a mount's path (the page's static files: its root_path); else "unmatched"
+            route = getattr(scope.get("route"), "path", None) or scope.get("root_path") or "unmatched"
             self.metrics.requests.labels(route=route, status=str(status)).inc()
-            self.metrics.latency.labels(route=route).observe(time.perf_counter() - start)
+            if not stream:
+                self.metrics.latency.labels(route=route).observe(time.perf_counter() - start)
 
 
 @dataclass(frozen=True)

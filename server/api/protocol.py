@@ -9,7 +9,8 @@ that sends them at a byte a second holds its connection (and a slot of the serve
 - answers 431 and closes when they pass `max_header_bytes`, counted as they arrive (one
   endless header line too), and the request is never run;
 - closes the connection once a response is sent before its request's body has arrived (an
-  early refusal, or a route that reads no body): the rest would otherwise trickle in forever.
+  early refusal, or a route that reads no body): the rest would otherwise trickle in forever;
+- closes an event stream (`endless_paths`) at once when the server shuts down.
 `configure` is called by `create_app` in every worker, before it serves.
 """
 
@@ -21,10 +22,12 @@ import json
 from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 
 _limits = {"read_timeout_s": 30.0, "max_header_bytes": 64 * 1024}
+_endless_paths: set[str] = set()  # responses that never complete by themselves (event streams)
 
 
-def configure(read_timeout_s: float, max_header_bytes: int) -> None:
+def configure(read_timeout_s: float, max_header_bytes: int, endless_paths: tuple[str, ...] = ()) -> None:
     _limits.update(read_timeout_s=read_timeout_s, max_header_bytes=max_header_bytes)
+    _endless_paths.update(endless_paths)
 
 
 class GuardedHttpToolsProtocol(HttpToolsProtocol):
@@ -80,6 +83,15 @@ class GuardedHttpToolsProtocol(HttpToolsProtocol):
         super().on_response_complete()
         if not self._body_done and not self.pipeline and not self.transport.is_closing():
             self.transport.close()
+
+    def shutdown(self) -> None:
+        """A graceful shutdown waits for the answers being sent, but an event stream never ends: close it
+        now (the page reconnects to a server that runs) rather than hold the shutdown for its timeout."""
+        cycle = self.cycle
+        if cycle is not None and not cycle.response_complete and cycle.scope.get("path") in _endless_paths:
+            self.transport.close()
+            return
+        super().shutdown()
 
     def connection_lost(self, exc: Exception | None) -> None:
         self._disarm_head_deadline()

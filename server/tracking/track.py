@@ -40,8 +40,9 @@ class Track:
         return self.state.velocity_mps if self.established and self.state is not None else np.zeros(3)
 
     def predicted_m(self, t_s: float) -> np.ndarray | None:
-        """Where an established, recent track puts the camera at `t_s`; None when it cannot tell."""
-        if not self.established or self.state is None or t_s - self.state.t_s > self.rules.horizon_s:
+        """Where an established, recent track puts the camera at `t_s`; None when it cannot tell (also
+        before the track's time: a device whose clock went back, a replay, starts its track again)."""
+        if not self.established or self.state is None or not 0 <= t_s - self.state.t_s <= self.rules.horizon_s:
             return None
         return predict(self.state, t_s, self.rules.motion).position_m
 

@@ -21,6 +21,7 @@ from server.api import VERSION
 from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
+from shared_schemas import FailureReason
 from shared_schemas.api import KeptFrameInfo, LiveDevices, Status
 
 router = APIRouter(tags=["live"], responses=ERROR_RESPONSES, route_class=GuardedRoute)
@@ -30,6 +31,7 @@ STATUS_EVERY_S = 2.0  # a status event this often (it is the stream's heartbeat 
 STREAM_S = 300.0  # a stream ends after this long and the browser reconnects: no connection held forever
 RETRY_MS = 1000  # how soon the browser reconnects
 
+EVENTS_PATH = "/v1/live/events"
 DeviceName = Annotated[str, Path(min_length=1, max_length=128, description="the X-Lumipose-Device of its frames")]
 
 
@@ -40,7 +42,7 @@ async def live_devices(services: ServicesDep) -> LiveDevices:
 
 
 @router.get(
-    "/v1/live/events",
+    EVENTS_PATH,
     response_class=StreamingResponse,
     responses={200: {"content": {"text/event-stream": {}}, "description": "server-sent events"}},
 )
@@ -91,6 +93,7 @@ async def status(services: ServicesDep) -> Status:
 def service_status(services: Services) -> Status:
     window_s, routes = services.status_window.routes()
     fixes, refused = services.metrics.outcomes()
+    id_frames = refused.pop(FailureReason.id_frame.value, 0)  # kept for a pose frame: not refused
     return Status(
         version=VERSION,
         started_s=services.started_s,
@@ -98,6 +101,7 @@ def service_status(services: Services) -> Status:
         active_map=services.maps.active_name(),
         devices=len(services.live),
         fixes=fixes,
+        id_frames=id_frames,
         refused=refused,
         window_s=window_s,
         routes=routes,

@@ -68,7 +68,12 @@ export class BenchView {
     this.mapChoice = document.getElementById("bench-map-choice");
     this.evaluation = null;
     for (const input of [this.cellInput, this.mapChoice]) input.addEventListener("change", () => this.load());
-    for (const input of [this.iInput, this.jInput]) input.addEventListener("input", () => this.render());
+    for (const input of [this.iInput, this.jInput]) {
+      input.addEventListener("input", () => {
+        input.dataset.typed = input.value.trim() ? "true" : ""; // emptied: back to the stored cells' span
+        this.render();
+      });
+    }
     byTestId("bench-download").addEventListener("click", () => this.download());
   }
 
@@ -133,15 +138,15 @@ export class BenchView {
     );
   }
 
-  /** The planned grid: the typed i and j ranges, each defaulting to the span of the stored cells. */
+  /** The planned grid: the typed i and j ranges, each the span of the stored cells until one is typed. */
   plannedGrid(cells) {
-    const is = [...cells.values()].map((c) => c.i);
-    const js = [...cells.values()].map((c) => c.j);
     const span = (values) => (values.length ? [Math.min(...values), Math.max(...values)] : [0, 0]);
-    const iRange = parseRange(this.iInput.value, "i range") || span(is);
-    const jRange = parseRange(this.jInput.value, "j range") || span(js);
-    this.iInput.placeholder = `${span(is).join("..")}`;
-    this.jInput.placeholder = `${span(js).join("..")}`;
+    const range = (input, values, name) => {
+      if (!input.dataset.typed) input.value = span(values).join("..");
+      return parseRange(input.value, name) || span(values);
+    };
+    const iRange = range(this.iInput, [...cells.values()].map((c) => c.i), "i range");
+    const jRange = range(this.jInput, [...cells.values()].map((c) => c.j), "j range");
     return { iRange, jRange };
   }
 

@@ -3,6 +3,9 @@
 import { ApiError, getJson } from "./api.js";
 import { byTestId, el, fmt, humanize } from "./dom.js";
 
+// each new picture is drawn by the service on request, in turn with the frames it locates: ask at most this often
+const MIN_REFRESH_MS = 2000;
+
 const framesPath = (device) => `/v1/live/devices/${encodeURIComponent(device)}/frames`;
 const pngPath = (device, seq) => `${framesPath(device)}/${seq}.png`;
 
@@ -16,6 +19,7 @@ export class FrameView {
     this.shownSeq = null;
     this.following = true; // show each new frame as it comes, until a thumbnail of an older one is chosen
     this.loading = null;
+    this.refreshTimer = null;
     this.select.addEventListener("change", () => onChooseDevice(this.select.value));
   }
 
@@ -44,11 +48,23 @@ export class FrameView {
     if (this.device) this.load();
   }
 
-  /** A live update of the chosen device: fetch its frames again when a newer one was kept. */
-  onDevice(device) {
-    if (device.device !== this.device || !this.following) return;
+  /** A live update of the chosen device: fetch its frames again when a newer one was kept (not more than
+   * once every 2 s, and not while the view or the page is hidden). */
+  onDevice(device, visible) {
+    if (!visible || document.hidden || device.device !== this.device || !this.following) return;
     const newest = device.frames_kept?.at(-1);
-    if (newest !== undefined && newest !== this.kept[0]?.seq) this.load();
+    if (newest === undefined || newest === this.kept[0]?.seq) return;
+    this.refreshSoon();
+  }
+
+  /** Fetch the frames again, at most once every MIN_REFRESH_MS (the server draws each picture asked for). */
+  refreshSoon() {
+    if (this.refreshTimer) return;
+    const wait = Math.max(0, MIN_REFRESH_MS - (Date.now() - (this.loadedAt || 0)));
+    this.refreshTimer = setTimeout(() => {
+      this.refreshTimer = null;
+      this.load();
+    }, wait);
   }
 
   async load() {
@@ -63,6 +79,7 @@ export class FrameView {
 
   showKept(kept) {
     this.kept = kept;
+    this.loadedAt = Date.now();
     document.getElementById("frame-body").hidden = false;
     const stillKept = kept.some((frame) => frame.seq === this.shownSeq);
     const frame = this.following || !stillKept ? kept[0] : kept.find((f) => f.seq === this.shownSeq);
@@ -88,7 +105,8 @@ export class FrameView {
     this.shownSeq = frame.seq;
     const src = pngPath(this.device, frame.seq);
     if (this.image.getAttribute("src") !== src) {
-      this.image.onerror = () => this.following && this.load(); // dropped meanwhile: ask for what is kept now
+      // dropped meanwhile (a fast device keeps each frame a fraction of a second): ask for what is kept now
+      this.image.onerror = () => this.following && this.refreshSoon();
       this.image.src = src;
     }
     this.image.dataset.seq = frame.seq;

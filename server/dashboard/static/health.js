@@ -1,5 +1,6 @@
 // Health view: version, uptime, active map and the routes' rates and latency quantiles (GET /v1/status).
 
+import { getJson } from "./api.js";
 import { byTestId, el, fmt, fmtDuration, humanize } from "./dom.js";
 
 export class HealthView {
@@ -24,6 +25,20 @@ export class HealthView {
       ? refused.map(([reason, count]) => `${humanize(reason)}: ${count}`).join(" · ") : "None since start.";
     this.renderUptime();
     this.renderRoutes(status.routes || []);
+  }
+
+  /** The stored files' state from /healthz: a damaged map, profile or sample is named there. */
+  async checkFiles() {
+    const node = document.getElementById("health-files");
+    try {
+      const health = await getJson("/healthz");
+      node.textContent = health.damaged.length
+        ? `Degraded: damaged stored files ${health.damaged.join(", ")}` : "Stored maps, profiles and samples: ok";
+      node.classList.toggle("bad", health.damaged.length > 0);
+    } catch (error) {
+      node.textContent = `Health check failed: ${error.message}`;
+      node.classList.add("bad");
+    }
   }
 
   renderUptime() {

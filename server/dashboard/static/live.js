@@ -5,7 +5,7 @@ import { drawRoom } from "./roommap.js";
 
 const PALETTE = ["#2f7fe0", "#e0632f", "#1f9d6b", "#a34fd6", "#d6a21f", "#d63f7a", "#3fb6c9", "#7a8a2f"];
 const FADE_SEGMENTS = 24;
-const STALE_S = 30;
+const IDLE_S = 30; // a device not seen for this long is drawn faded, without its name (its title has it)
 const MAX_TRACK = 200; // points of a track kept, as the service keeps
 
 /** Two-sigma ellipse of a 2x2 covariance [[a, b], [b, c]] (m^2): radii (m) and the major axis' angle (deg). */
@@ -97,7 +97,9 @@ export class LiveView {
       document.getElementById("map-scale").textContent = `${(this.proj.x1 - this.proj.x0).toFixed(2)} m across`;
     }
     const nowS = Date.now() / 1000 + this.clockOffsetS;
-    this.layer.replaceChildren(...[...this.devices.values()].map((d) => this.deviceNode(d, nowS)).filter(Boolean));
+    // idle devices first, so the active ones are drawn over them
+    const devices = [...this.devices.values()].sort((a, b) => a.last_seen_s - b.last_seen_s);
+    this.layer.replaceChildren(...devices.map((d) => this.deviceNode(d, nowS)).filter(Boolean));
   }
 
   deviceNode(device, nowS) {
@@ -105,18 +107,22 @@ export class LiveView {
     if (!at) return null;
     const { px, py, scale } = this.proj;
     const colour = colourOf(device.device);
-    const stale = nowS - device.last_seen_s > STALE_S || !device.last?.ok;
+    const idle = nowS - device.last_seen_s > IDLE_S;
+    const refused = !device.last?.ok;
     const group = svgEl("g", {
       "data-testid": "device-marker", "data-device": device.device, "data-x": at[0], "data-y": at[1],
-      class: `device${stale ? " stale" : ""}`, style: `--c:${colour}`, tabindex: 0, role: "link",
+      class: `device${idle ? " idle" : ""}${refused ? " refused" : ""}`, style: `--c:${colour}`,
+      tabindex: 0, role: "link",
       onclick: () => this.openFrame(device.device),
       onkeydown: (event) => event.key === "Enter" && this.openFrame(device.device),
     });
-    group.append(svgEl("title", { text: `${device.device}: (${at[0].toFixed(3)}, ${at[1].toFixed(3)}) m` }));
-    group.append(...this.trackNodes(device.track || []));
+    const title = svgEl("title", { text: `${device.device}: (${at[0].toFixed(3)}, ${at[1].toFixed(3)}) m` });
+    group.append(title, ...this.trackNodes(device.track || []));
     const cov = device.last?.ok ? device.last.position_covariance_m2 : null;
     if (cov) {
       const e = ellipse2Sigma(cov);
+      // drawn to scale: millimetres are a pixel or two on a room's map, so the title says how large
+      title.textContent += `, 2σ ellipse ${(e.major * 1000).toFixed(1)} × ${(e.minor * 1000).toFixed(1)} mm`;
       group.append(svgEl("ellipse", {
         "data-testid": "device-ellipse", class: "ellipse", cx: px(at[0]), cy: py(at[1]),
         rx: Math.max(e.major * scale, 0.5), ry: Math.max(e.minor * scale, 0.5),
@@ -125,7 +131,9 @@ export class LiveView {
       }));
     }
     group.append(svgEl("circle", { class: "marker", cx: px(at[0]), cy: py(at[1]), r: 7 }));
-    group.append(svgEl("text", { class: "device-label", x: px(at[0]) + 11, y: py(at[1]) - 9, text: device.device }));
+    if (!idle) {
+      group.append(svgEl("text", { class: "device-label", x: px(at[0]) + 11, y: py(at[1]) - 9, text: device.device }));
+    }
     return group;
   }
 

@@ -23,6 +23,7 @@ let currentView = null;
 function route() {
   const [name, ...rest] = location.hash.replace(/^#/, "").split("/");
   const view = VIEWS.includes(name) ? name : "live";
+  if (view !== currentView) window.scrollTo(0, 0);
   currentView = view;
   for (const other of VIEWS) {
     byTestId(`view-${other}`).hidden = other !== view;
@@ -32,6 +33,7 @@ function route() {
   if (view === "frame") frame.show(rest.length ? decodeURIComponent(rest.join("/")) : null, live.deviceNames());
   if (view === "bench" && !loaded.has("bench")) bench.load();
   if (view === "maps") maps.load();
+  if (view === "health") health.checkFiles();
   loaded.add(view);
 }
 
@@ -54,7 +56,7 @@ function onDevices(liveDevices, replace) {
   live.update(liveDevices, replace);
   frame.setDevices(live.deviceNames());
   if (currentView === "frame" && !frame.device) frame.show(null, live.deviceNames());
-  for (const device of liveDevices.devices) frame.onDevice(device);
+  for (const device of liveDevices.devices) frame.onDevice(device, currentView === "frame");
 }
 
 /** The live stream; EventSource reconnects by itself (the server's `retry: 1000`), resyncing on each open. */

@@ -2,6 +2,7 @@
 
 import json
 import threading
+import time
 import uuid
 
 import cv2
@@ -96,7 +97,17 @@ def test_status_gives_rates_and_latency_quantiles_of_the_routes(server_url, clie
     meta, data = fixture_frame
     for _ in range(3):
         client.locate(data, meta)
-    status = httpx.get(f"{server_url}/v1/status").json()
+    with httpx.stream("GET", f"{server_url}/v1/live/events", timeout=10) as response:
+        next(_events(response))
+    for _ in range(50):  # the server counts the stream when it notices its end (at its next event, within 2 s)
+        status = httpx.get(f"{server_url}/v1/status").json()
+        streams = [r for r in status["routes"] if r["route"] == "/v1/live/events"]
+        if streams:
+            break
+        time.sleep(0.1)
+    (events,) = streams
+    assert events["requests"] >= 1 and events["p50_ms"] is None  # a page's stay is not a latency
+    assert "id_frame" not in status["refused"]
     assert status["active_map"] == "test-bench" and status["fixes"] >= 3 and status["window_s"] > 0
     (locate,) = [r for r in status["routes"] if r["route"] == "/v1/locate"]
     assert locate["requests"] >= 3 and locate["rate_hz"] > 0
@@ -109,6 +120,8 @@ def test_the_page_is_served_from_the_package(server_url):
     page = httpx.get(f"{server_url}/dashboard/")
     assert page.status_code == 200 and page.headers["content-type"].startswith("text/html") and "<html" in page.text
     assert httpx.get(f"{server_url}/dashboard/static/no-such-file.js").status_code == 404
+    metrics = httpx.get(f"{server_url}/metrics").text  # the static files counted as theirs, not "unmatched"
+    assert 'lumipose_requests_total{route="/dashboard/static",status="404"}' in metrics
 
 
 def test_histogram_quantiles_interpolate_within_their_bucket():
@@ -118,3 +131,23 @@ def test_histogram_quantiles_interpolate_within_their_bucket():
     assert histogram_quantile(0.99, buckets) == 0.047
     assert histogram_quantile(0.5, ((0.01, 0.0), (float("inf"), 0.0))) is None
     assert histogram_quantile(0.9, ((0.01, 1.0), (float("inf"), 10.0))) == 0.01  # past the last bound: that bound
+
+
+def test_a_server_with_a_page_open_stops_at_once(tmp_path):
+    """An event stream never ends by itself: the server closes it when it stops instead of waiting for it."""
+    from simulator.local_server import LocalServer
+
+    with LocalServer("--log-level", "warning", data_dir=tmp_path) as server:
+        stream = httpx.Client(timeout=10).stream("GET", f"{server.url}/v1/live/events")
+        response = stream.__enter__()
+        events = _events(response)
+        assert next(events)[0] == "devices"
+        start = time.perf_counter()
+        server.process.terminate()
+        server.process.wait(timeout=30)
+        stopped_s = time.perf_counter() - start
+    assert stopped_s < 2.5, f"the server took {stopped_s:.1f} s to stop with a page open"  # was 5-7 s
+    try:  # the stream was closed, not left hanging: reading it to its end returns
+        list(events)
+    except httpx.RemoteProtocolError:  # closed in the middle of its (endless) body
+        pass

@@ -47,3 +47,13 @@ def test_the_fix_covariance_weighs_the_fix():
             track.add(0.05 * k, np.zeros(3), covariance_m2=np.eye(3) * 1e-6)
         track.add(1.0, np.array([0.004, 0.0, 0.0]), covariance_m2=covariance)
     assert unsure.state.position_m[0] < 0.5 * sure.state.position_m[0]
+
+
+def test_a_clock_that_goes_back_predicts_nothing_and_starts_the_track_again():
+    """A device replaying its frames under the same name sent times before the track's: a 500 once."""
+    track = Track(TrackRules(established_fixes=2))
+    for k in range(4):
+        track.add(1.0 + 0.5 * k, np.array([0.4 * k, 0.0, 1.3]))
+    assert track.established and track.predicted_m(0.0) is None and track.coasting(0.0) is None
+    state = track.add(0.0, np.array([5.0, 0.0, 1.3]))
+    assert state.filtered_position_m == [5.0, 0.0, 1.3] and not state.outlier
