@@ -59,12 +59,7 @@ class Walk:
     map_path: Path
     beacon_map: BeaconMap
     captures: tuple[Capture, ...]
-    lap_s: float  # the walk's own clock: one lap
-
-    def path_m(self) -> list[tuple[float, float]]:
-        """The true horizontal path, a closed loop (the last capture leads back to the first)."""
-        points = [capture.truth_m[:2] for capture in self.captures]
-        return [*points, points[0]]
+    lap_s: float  # the walk's own clock: one lap (the last capture leads back to the first)
 
 
 def walk_scene_json() -> str:
