@@ -146,12 +146,10 @@ def test_device_table_shows_rates_latency_and_beacon(page, live):
         page.locator(f'[data-testid="device-row"][data-device="{DEVICES[1]}"]').click()
         page.wait_for_url(f"**/dashboard/#frame/{DEVICES[1]}", timeout=TIMEOUT_MS)
         page.get_by_test_id("view-frame").wait_for(state="visible")
-        page.go_back()
-        # the marker drawn last: another device's track drawn over a marker takes its clicks (a known limit)
-        on_top = page.get_by_test_id("device-marker").last
-        name = on_top.get_attribute("data-device")
-        on_top.locator("circle.marker").click()
-        page.wait_for_url(f"**/dashboard/#frame/{name}", timeout=TIMEOUT_MS)
+        for name in DEVICES:  # every marker takes its clicks (tracks drawn over them do not: pointer-events none)
+            open_view(page, live.url, "live")
+            page.locator(f'[data-testid="device-marker"][data-device="{name}"] circle.marker').click()
+            page.wait_for_url(f"**/dashboard/#frame/{name}", timeout=TIMEOUT_MS)
 
 
 SHOWN_FRAME_JS = """() => {
