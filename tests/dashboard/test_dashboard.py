@@ -93,6 +93,16 @@ def test_bench_shows_table_2_of_the_stored_samples(page, bench):
         text = Path(download.path()).read_text()
         assert text.startswith("<?xml") and "<svg" in text and 'xmlns="http://www.w3.org/2000/svg"' in text
 
+    # errors leave no figure of the previous grid or evaluation under them
+    page.get_by_test_id("bench-i-range").fill("x")
+    page.wait_for_function("() => !document.querySelector('[data-testid=\"bench-cell\"]')", timeout=TIMEOUT_MS)
+    assert "i range" in page.locator("#bench-error").text_content()
+    assert page.get_by_test_id("bench-download").is_disabled() and table.is_visible()
+    page.get_by_test_id("bench-cell-m").fill("20")  # the service takes at most 10 m
+    page.get_by_test_id("bench-cell-m").dispatch_event("change")
+    page.locator("#bench-body").wait_for(state="hidden", timeout=TIMEOUT_MS)
+    assert "Could not evaluate" in page.locator("#bench-error").text_content()
+
 
 def test_markers_follow_the_walk(page, live):
     open_view(page, live.url, "live")
@@ -231,6 +241,12 @@ def test_map_upload_shows_the_error_at_its_field(page, live, tmp_path):
     page.locator('[data-testid="map-row"][data-map="office"][data-active="true"]').wait_for(timeout=TIMEOUT_MS)
     page.get_by_test_id("map-upload").set_input_files(str(bad_file))
     assert page.get_by_test_id("map-name").input_value() == "office-bad"  # from the file's name
+    page.get_by_test_id("map-name").fill("office bad/1")  # the service's names: letters, digits, _ . -
+    assert "letters, digits" in page.get_by_test_id("map-name-error").text_content()
+    page.get_by_test_id("map-submit").click()
+    assert "name" in page.get_by_test_id("map-message").text_content()
+    page.get_by_test_id("map-name").fill("office-bad")
+    assert page.get_by_test_id("map-name-error").text_content() == ""
     page.get_by_test_id("map-submit").click()
     message = page.get_by_test_id("map-message")
     page.wait_for_function("() => document.querySelector('[data-testid=\"map-message\"]').textContent.includes("
