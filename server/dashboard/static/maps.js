@@ -155,7 +155,7 @@ export class MapsView {
     const name = this.nameInput.value.trim();
     if (this.uploadText === null) return this.say("Choose a map file first.", "bad");
     const problem = this.checkName();
-    if (problem) return this.say(`The map's name: ${problem}`, "bad");
+    if (problem) return this.say("Not sent: the map's name needs fixing (see next to the field).", "bad");
     this.errors.hidden = true;
     try {
       const stored = await putJson(mapPath(name), this.uploadText);
