@@ -62,6 +62,7 @@ class FrameSeen:
     close_ups: tuple[tuple[tuple[int, int, int, int], np.ndarray], ...]  # per corner: its box and its pixels
     thumbnail: np.ndarray | None  # the whole frame, every few pixels; None when `part` is the whole frame
     sights: tuple[PanelSight, ...]
+    in_session: bool = False  # a device's session measured it (`server.locator.in_device_session`)
 
     @property
     def nbytes(self) -> int:
@@ -71,13 +72,13 @@ class FrameSeen:
         return sum(a.nbytes for a in arrays) + 2048 * (1 + len(self.sights))  # the sights' points, roughly
 
 
-def annotate(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult) -> bytes:
+def annotate(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult, in_session: bool = False) -> bytes:
     """A PNG of `frame` with what the pipeline saw of each panel it measured (`diagnostics`, given
     to `server.locator.locate` in the pipeline's options) and `result` in a caption below."""
-    return picture(seen_in(frame, diagnostics, result), result)
+    return picture(seen_in(frame, diagnostics, result, in_session), result)
 
 
-def seen_in(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult) -> FrameSeen:
+def seen_in(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult, in_session: bool = False) -> FrameSeen:
     """What a picture of `frame` needs, copied out of it (at most ~1 MB; strided copies: no resampling
     here, so that keeping it costs the locate path little)."""
     pixels, sights = frame.pixels, diagnostics.in_frame(frame.meta.full_offset)
@@ -101,6 +102,7 @@ def seen_in(frame: LumaFrame, diagnostics: Diagnostics, result: LocateResult) ->
         close_ups=close_ups,
         thumbnail=thumbnail,
         sights=tuple(sights),
+        in_session=in_session,
     )
 
 
@@ -109,7 +111,7 @@ def picture(seen: FrameSeen, result: LocateResult) -> bytes:
     sights = list(seen.sights)
     x0, y0, x1, y1 = seen.part
     scale = display_scale(x1 - x0, y1 - y0)
-    image = _view(seen.part_pixels, seen.part, scale, sights, result, labels=True)
+    image = _view(seen.part_pixels, seen.part, scale, sights, result, labels=True, in_session=seen.in_session)
     if seen.close_ups:
         image = _stacked(image, _corner_close_ups(seen.close_ups, sights, result))
     thumbnail = None if seen.thumbnail is None else _thumbnail(seen.thumbnail, seen.size, seen.part)
@@ -127,6 +129,7 @@ def _view(
     sights: list[PanelSight],
     result: LocateResult,
     labels: bool,
+    in_session: bool = False,
 ) -> np.ndarray:
     """`part` (x0, y0, x1, y1) of the frame (its pixels, or every few of them) at `scale` display pixels
     per frame pixel, with the sights drawn."""
@@ -141,7 +144,7 @@ def _view(
         return np.rint(display_px(points, part, scale) * (1 << SHIFT)).astype(np.int32)
 
     for sight in sights:
-        _draw_sight(image, sight, to_display, _panel_name(sight, result) if labels else None)
+        _draw_sight(image, sight, to_display, _panel_name(sight, result, in_session) if labels else None)
     if not any(isinstance(s.outcome, Fix) for s in sights) and result.ok:  # a fix from no sight
         _draw_fix(image, result.corners_px, result.center_px, to_display, labels)
     return image
@@ -224,7 +227,7 @@ def _polyline(image: np.ndarray, points: np.ndarray, colour: tuple[int, int, int
     cv2.polylines(image, [points.reshape(-1, 1, 2)], closed, colour, 1, cv2.LINE_AA, SHIFT)
 
 
-def _panel_name(sight: PanelSight, result: LocateResult) -> str:
+def _panel_name(sight: PanelSight, result: LocateResult, in_session: bool) -> str:
     """What to call a panel: the result's beacon for the panel that gave the fix; in a device's session,
     where every panel is measured against one template beacon (`server.tracking.session`), the other
     panels are unnamed; elsewhere each sight's own beacon."""
@@ -237,7 +240,7 @@ def _panel_name(sight: PanelSight, result: LocateResult) -> str:
     )
     if gave_fix:
         return f"beacon {result.beacon_id}"
-    return "panel" if result.track is not None else f"beacon {sight.beacon_id}"
+    return "panel" if in_session else f"beacon {sight.beacon_id}"
 
 
 def _draw_sight(image: np.ndarray, sight: PanelSight, to_display, name: str | None) -> None:

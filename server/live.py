@@ -66,7 +66,6 @@ class _DeviceLog:
     kept: deque[KeptFrame] = field(default_factory=deque)
     kept_bytes: int = 0
     version: int = 0  # the board's version when it last changed
-    drawn: tuple[int, bytes] | None = None  # the last picture drawn: its seq and PNG
 
 
 class _Listener:
@@ -88,7 +87,8 @@ class LiveBoard:
         self._lock = threading.Lock()
         self._devices: OrderedDict[str, _DeviceLog] = OrderedDict()  # least recently seen first
         self._version = 0
-        self._seq = 0
+        # a kept frame's number names its picture's URL, which browsers cache: unique across restarts and workers
+        self._seq = time.time_ns() // 1000
         self._frame_bytes = 0
         self._listeners: set[_Listener] = set()
 
@@ -139,19 +139,26 @@ class LiveBoard:
             return None if log is None else list(reversed(log.kept))
 
     def picture(self, device: str, seq: int) -> bytes | None:
-        """The PNG of the device's kept frame `seq` (drawn now, or the one drawn last), or None."""
+        """The PNG of the device's kept frame `seq`, drawn now (tens of ms, outside the lock), or None."""
         with self._lock:
             log = self._devices.get(device)
             kept = None if log is None else next((k for k in log.kept if k.seq == seq), None)
-            drawn = None if log is None else log.drawn
-        if log is None or kept is None:
-            return None
-        if drawn is not None and drawn[0] == seq:
-            return drawn[1]
-        png = picture(kept.seen, kept.result)  # tens of ms: outside the lock
+        return None if kept is None else picture(kept.seen, kept.result)
+
+    def expire_windows(self) -> None:
+        """Let the window of the fix rate and refusal shares pass for devices that sent nothing since: those
+        whose counts change are marked changed, so event streams send their figures going down to zero."""
+        now = self._clock()
         with self._lock:
-            log.drawn = (seq, png)
-        return png
+            since = now - self.rules.window_s
+            stale = [log for log in self._devices.values() if log.recent and log.recent[0][0] < since]
+            for log in stale:
+                self._forget_old(log, now)
+                self._version += 1
+                log.version = self._version
+            listeners = list(self._listeners) if stale else []
+        for listener in listeners:
+            listener.wake()
 
     def __len__(self) -> int:
         with self._lock:

@@ -78,7 +78,7 @@ def run_locate(args) -> int:
     from dataclasses import replace
 
     from server.diagnostics import Diagnostics
-    from server.locator import locate
+    from server.locator import in_device_session, locate
     from server.options import LocateOptions
     from server.tracking.devices import Devices
     from shared_schemas import LocateResult
@@ -109,7 +109,8 @@ def run_locate(args) -> int:
             )
             if picture is not None and diagnostics is not None:
                 try:
-                    write_annotation(picture, frames[index], diagnostics, results[index])
+                    in_session = in_device_session(beacon_map, args.beacon_id, args.device)
+                    write_annotation(picture, frames[index], diagnostics, results[index], in_session)
                 except BadInput as problem:
                     return report_bad_input(problem, as_json=args.json)
         for index in sorted(capture):
@@ -166,12 +167,12 @@ def pipeline_options(args):
     )
 
 
-def write_annotation(path: Path, frame, diagnostics, result) -> None:
+def write_annotation(path: Path, frame, diagnostics, result, in_session: bool = False) -> None:
     """The picture of what the pipeline saw (`server.annotate`) as a PNG file at `path`."""
     from server.annotate import annotate
 
     try:
-        path.write_bytes(annotate(frame, diagnostics, result))
+        path.write_bytes(annotate(frame, diagnostics, result, in_session))
     except OSError as error:
         raise BadInput(f"cannot write the picture {path}: {error.strerror or error}", field="annotate") from None
     print(f"picture: {path}", file=sys.stderr)  # stdout stays the result alone (--json)

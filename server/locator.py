@@ -95,6 +95,11 @@ def _where(error: BaseException) -> str:
     return where
 
 
+def in_device_session(beacon_map: BeaconMap, beacon_id: int | None, device_id: str | None) -> bool:
+    """Whether `locate` takes a frame in its device's session: a device, a map of several beacons, none named."""
+    return device_id is not None and beacon_id is None and len(beacon_map.beacons) > 1
+
+
 def _dispatch(
     frame: LumaFrame,
     beacon_map: BeaconMap,
@@ -118,7 +123,8 @@ def _dispatch(
         return _one_panel(frame, beacon, BeaconIdSource.vlc, options)
     if len(beacon_map.beacons) == 1:
         return _one_panel(frame, beacon_map.beacons[0], BeaconIdSource.single_beacon_map, options)
-    if device_id is not None and devices is not None:
+    if devices is not None and in_device_session(beacon_map, beacon_id, device_id):
+        assert device_id is not None
         return devices.locate(device_id, frame, beacon_map, options)
     return locate_in_room(frame, beacon_map, options.pipeline, options.room)
 

@@ -109,7 +109,7 @@ class DeviceLive(BaseModel):
     device: str
     map: str = Field(description="the map its last frame was located in")
     last_seen_s: float = Field(description="unix time of its last frame")
-    frames: int = Field(description="pose frames since the service started (or since it was dropped as idle)")
+    frames: int = Field(description="pose frames since it first came (a device is forgotten only to make room)")
     id_frames: int = Field(description="ID frames kept for its pose frames")
     fixes: int
     fix_rate_hz: float = Field(description="fixes per second over the last `window_s`")
@@ -161,7 +161,10 @@ class Status(BaseModel):
     fixes: int = Field(description="frames located since the start")
     id_frames: int = Field(description="ID frames kept for their devices' pose frames since the start")
     refused: dict[str, int] = Field(description="frames without a fix since the start, by reason (ID frames apart)")
-    window_s: float = Field(description="the window of the rates and quantiles: the last minute, or since the start")
+    window_s: float = Field(
+        description="the window of the rates and quantiles: the last minute, longer after a quiet spell (the counters "
+        "are sampled when the status is asked), or since the start"
+    )
     routes: list[RouteStatus]
 
 

@@ -14,7 +14,7 @@ from server.api.upload import FrameUpload
 from server.camera import ProfileTable
 from server.diagnostics import Diagnostics
 from server.ingest import decode_frame
-from server.locator import locate
+from server.locator import in_device_session, locate
 from shared_schemas import BeaconMap, FailureReason, LocateResult, ProfileRef
 
 
@@ -46,7 +46,7 @@ def _locate_now(
     result = locate(frame, beacon_map, options, beacon_id=query.beacon_id, device_id=device, devices=services.devices)
     if diagnostics is None or (result.reason is FailureReason.id_frame and not annotated):
         return result, None, None  # an ID frame's stripes are not kept for the page: nothing to see
-    seen = seen_in(frame, diagnostics, result)
+    seen = seen_in(frame, diagnostics, result, in_device_session(beacon_map, query.beacon_id, device))
     return result, seen, picture(seen, result) if annotated else None
 
 

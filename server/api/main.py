@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 
 import anyio
-from fastapi import FastAPI
+from fastapi import FastAPI, Response
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
@@ -85,11 +85,21 @@ def _serve_dashboard(app: FastAPI) -> None:
     async def dashboard_without_slash() -> RedirectResponse:
         return RedirectResponse("/dashboard/", status_code=307)
 
-    @app.get("/dashboard/", include_in_schema=False)
+    @app.api_route("/dashboard/", methods=["GET", "HEAD"], include_in_schema=False)
     async def dashboard() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html", headers={"Cache-Control": "no-cache"})
 
-    app.mount("/dashboard/static", StaticFiles(directory=STATIC_DIR), name="dashboard-static")
+    app.mount("/dashboard/static", _RevalidatedFiles(directory=STATIC_DIR), name="dashboard-static")
+
+
+class _RevalidatedFiles(StaticFiles):
+    """The page's files, asked again (cheaply, by ETag) on each load: after an upgrade no browser mixes
+    old and new modules."""
+
+    def file_response(self, *args, **kwargs) -> Response:
+        response = super().file_response(*args, **kwargs)
+        response.headers["Cache-Control"] = "no-cache"
+        return response
 
 
 def app_from_environment() -> FastAPI:

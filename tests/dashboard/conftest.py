@@ -27,12 +27,12 @@ class Live:
     feeder: Feeder
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def walk(tmp_path_factory) -> Walk:
     return render_walk(tmp_path_factory.mktemp("walk"))
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def live(walk, tmp_path_factory) -> Iterator[Live]:
     with start_server(tmp_path_factory.mktemp("live-data"), walk.map_path) as server:
         feeder = Feeder(server.url, walk).start()
@@ -51,7 +51,7 @@ class Bench:
     frames: list[Path]  # the bench's frames (fixtures), a row of grid cells under the panel, as rendered
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def bench(tmp_path_factory) -> Iterator[Bench]:
     """The paper's bench: a row of eight grid cells rendered once, a service holding the bench's map."""
     out = tmp_path_factory.mktemp("bench")
@@ -61,7 +61,9 @@ def bench(tmp_path_factory) -> Iterator[Bench]:
         assert "Traceback" not in server.log(), server.log()
 
 
-@pytest.fixture(scope="session")
+# The module's, not the session's: while a browser is open Playwright's sync API runs an event loop in the
+# main thread, and every later test's asyncio.run() failed under it (5 tests in a whole run).
+@pytest.fixture(scope="module")
 def browser():
     with chromium() as launched:
         yield launched

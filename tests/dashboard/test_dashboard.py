@@ -18,6 +18,7 @@ import httpx
 import numpy as np
 import pytest
 
+from lumipose_client import Client, read_fixture_files
 from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, world_to_camera
 from shared_schemas import FailureReason
 from simulator.bench_office import true_beacon
@@ -92,6 +93,44 @@ def test_bench_shows_table_2_of_the_stored_samples(page, bench):
     for download in downloads:
         text = Path(download.path()).read_text()
         assert text.startswith("<?xml") and "<svg" in text and 'xmlns="http://www.w3.org/2000/svg"' in text
+
+    # errors leave no figure of the previous grid or evaluation under them
+    page.get_by_test_id("bench-i-range").fill("x")
+    page.wait_for_function("() => !document.querySelector('[data-testid=\"bench-cell\"]')", timeout=TIMEOUT_MS)
+    assert "i range" in page.locator("#bench-error").text_content()
+    assert page.get_by_test_id("bench-download").is_disabled() and table.is_visible()
+    page.get_by_test_id("bench-cell-m").fill("20")  # the service takes at most 10 m
+    page.get_by_test_id("bench-cell-m").dispatch_event("change")
+    page.locator("#bench-body").wait_for(state="hidden", timeout=TIMEOUT_MS)
+    assert "Could not evaluate" in page.locator("#bench-error").text_content()
+
+
+def test_device_table_lists_other_maps_caps_rows_and_lets_rates_run_out(page, bench):
+    """On the bench's service (its own live board): 51 devices in the active map and one in a copy of it."""
+    bench_map = json.loads((bench.frames[0].parent / "map.json").read_text())
+    headers = {"X-API-Key": API_KEY, "Content-Type": "application/json"}
+    stored = httpx.put(f"{bench.url}/v1/maps/bench-copy", json={**bench_map, "name": "bench-copy"}, headers=headers)
+    assert stored.status_code == 200, stored.text
+    meta, data = read_fixture_files(bench.frames[0])
+    with Client(bench.url, api_key=API_KEY) as client:
+        for k in range(51):
+            assert client.locate(data, meta, device=f"here-{k:02d}", compress=None).ok
+        assert client.locate(data, meta, map="bench-copy", device="elsewhere", compress=None).ok
+    window_s = httpx.get(f"{bench.url}/v1/live/devices").json()["window_s"]
+
+    open_view(page, bench.url, "live")
+    elsewhere = page.locator('[data-testid="device-row"][data-device="elsewhere"]')
+    elsewhere.wait_for(timeout=TIMEOUT_MS)
+    assert "in map bench-copy" in elsewhere.text_content()
+    assert page.get_by_test_id("device-row").count() == 50  # the most recently seen; the 2 oldest summed up
+    assert page.get_by_test_id("device-more").text_content() == "and 2 more devices"
+    assert page.get_by_test_id("device-marker").count() == 51  # all but the one in another map
+    assert page.locator('[data-testid="device-marker"][data-device="elsewhere"]').count() == 0
+    assert float(elsewhere.locator('[data-field="fix-rate"]').text_content().split()[0]) > 0
+    # no frame comes any more: once the window is past, the page shows no rate without a new event for the device
+    page.wait_for_function("() => [...document.querySelectorAll('[data-testid=\"device-row\"] "
+                           "[data-field=\"fix-rate\"]')].every((cell) => cell.textContent === '0.0 Hz')",
+                           timeout=window_s * 1000 + TIMEOUT_MS)
 
 
 def test_markers_follow_the_walk(page, live):
@@ -231,6 +270,12 @@ def test_map_upload_shows_the_error_at_its_field(page, live, tmp_path):
     page.locator('[data-testid="map-row"][data-map="office"][data-active="true"]').wait_for(timeout=TIMEOUT_MS)
     page.get_by_test_id("map-upload").set_input_files(str(bad_file))
     assert page.get_by_test_id("map-name").input_value() == "office-bad"  # from the file's name
+    page.get_by_test_id("map-name").fill("office bad/1")  # the service's names: letters, digits, _ . -
+    assert "letters, digits" in page.get_by_test_id("map-name-error").text_content()
+    page.get_by_test_id("map-submit").click()
+    assert "name" in page.get_by_test_id("map-message").text_content()
+    page.get_by_test_id("map-name").fill("office-bad")
+    assert page.get_by_test_id("map-name-error").text_content() == ""
     page.get_by_test_id("map-submit").click()
     message = page.get_by_test_id("map-message")
     page.wait_for_function("() => document.querySelector('[data-testid=\"map-message\"]').textContent.includes("

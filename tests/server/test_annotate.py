@@ -130,6 +130,8 @@ def test_panels_are_named_by_the_result_in_a_device_session_and_by_their_own_bea
     other = PanelSight(17, Refusal(FailureReason.pose_uncertain, "unsure"))
     track = TrackState(filtered_position_m=[0, 0, 0], velocity_mps=[0, 0, 0], outlier=False)
     session = LocateResult(ok=True, beacon_id=42, center_px=[100.2, 50.0], track=track)  # measured on a template
-    assert (_panel_name(fixed, session), _panel_name(other, session)) == ("beacon 42", "panel")
+    assert (_panel_name(fixed, session, True), _panel_name(other, session, True)) == ("beacon 42", "panel")
+    refused = LocateResult(ok=False, reason=FailureReason.beacon_cut_off, message="cut")  # a session's, no track
+    assert _panel_name(other, refused, True) == "panel"
     single = LocateResult(ok=True, beacon_id=17, center_px=[300.0, 50.0])
-    assert (_panel_name(fixed, single), _panel_name(other, single)) == ("beacon 17", "beacon 17")
+    assert (_panel_name(fixed, single, False), _panel_name(other, single, False)) == ("beacon 17", "beacon 17")

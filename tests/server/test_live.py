@@ -84,7 +84,8 @@ def test_tracks_and_kept_frames_are_bounded_per_device():
     (device,) = board.devices()[1].devices
     assert [p[1] for p in device.track] == [7.0, 8.0, 9.0, 10.0, 11.0]
     kept = board.kept_frames("phone")
-    assert [k.seq for k in kept] == [12, 11, 10] and device.frames_kept == [10, 11, 12]
+    seqs = [k.seq for k in kept]
+    assert seqs[0] - seqs[2] == 2 and seqs == sorted(seqs, reverse=True) and device.frames_kept == seqs[::-1]
     assert board.frame_bytes == sum(k.seen.nbytes for k in kept)
 
 
@@ -149,3 +150,24 @@ def test_a_listener_on_the_event_loop_is_woken_by_a_record_from_another_thread()
 
     assert asyncio.run(wait_for_a_record())
     assert board.devices()[1].devices[0].device == "phone"
+
+
+def test_frame_numbers_differ_across_restarts_so_cached_pictures_are_never_another_frames():
+    first, restarted = LiveBoard(), LiveBoard()  # a browser caches /frames/<seq>.png by its number
+    first.record("cam", "m", fix(0), seen=seen())
+    restarted.record("cam", "m", fix(0), seen=seen())
+    assert first.kept_frames("cam")[0].seq != restarted.kept_frames("cam")[0].seq
+
+
+def test_a_device_gone_quiet_is_sent_again_with_its_rate_going_to_zero():
+    clock = Clock()
+    board = LiveBoard(LiveRules(window_s=10.0), clock=clock)
+    board.record("quiet", "m", fix(0))
+    version, _ = board.devices()
+    clock.t += 5
+    board.expire_windows()
+    assert board.devices(version)[1].devices == []  # still within its window: nothing to send
+    clock.t += 6
+    board.expire_windows()
+    (device,) = board.devices(version)[1].devices
+    assert device.fix_rate_hz == 0.0 and device.refused == {} and device.track == []

@@ -37,8 +37,9 @@ DeviceName = Annotated[str, Path(min_length=1, max_length=128, description="the 
 
 @router.get("/v1/live/devices", response_model=LiveDevices)
 async def live_devices(services: ServicesDep) -> LiveDevices:
-    """Every device that sent frames with `X-Lumipose-Device` to this worker recently, most recent first."""
-    return services.live.devices()[1]
+    """Every device that sent frames with `X-Lumipose-Device` to this worker (the least recently seen are
+    forgotten past `--max-devices`), most recent first."""
+    return (await run_in_threadpool(services.live.devices))[1]  # many devices: milliseconds, off the event loop
 
 
 @router.get(
@@ -57,7 +58,7 @@ async def live_events(services: ServicesDep) -> StreamingResponse:
     )
 
 
-@router.get("/v1/live/devices/{device}/frames", response_model=list[KeptFrameInfo])
+@router.get("/v1/live/devices/{device:path}/frames", response_model=list[KeptFrameInfo])
 async def kept_frames(device: DeviceName, services: ServicesDep) -> list[KeptFrameInfo]:
     """The device's last pose frames whose pictures are kept (newest first): results and the windows shown."""
     kept = services.live.kept_frames(device)
@@ -67,7 +68,7 @@ async def kept_frames(device: DeviceName, services: ServicesDep) -> list[KeptFra
 
 
 @router.get(
-    "/v1/live/devices/{device}/frames/{seq}.png",
+    "/v1/live/devices/{device:path}/frames/{seq}.png",
     response_class=Response,
     responses={200: {"content": {"image/png": {}}, "description": "what the pipeline saw (the paper's Fig. 8)"}},
 )
@@ -123,13 +124,14 @@ async def _events(services: Services) -> AsyncIterator[str]:
         while anyio.current_time() < end:
             if first or changed.is_set():
                 changed.clear()
-                version, live = board.devices(version)
+                version, live = await run_in_threadpool(board.devices, version)
                 if first or live.devices:
                     event_id += 1
                     yield _event("devices", live, event_id)
                 first = False
                 await anyio.sleep(UPDATE_GAP_S)
             if anyio.current_time() >= next_status:
+                board.expire_windows()  # a device gone quiet: its rate and shares go to zero on the page
                 event_id += 1
                 yield _event("status", await run_in_threadpool(service_status, services), event_id)
                 next_status = anyio.current_time() + STATUS_EVERY_S

@@ -54,6 +54,7 @@ async def locate_frame(
     With `annotate=1` the answer is a PNG of what the pipeline saw (panel, contour, sides, corners,
     centre, the result or the refusal) and the result travels in the `X-Lumipose-Result` header.
     """
+    device = device.strip() if device else None  # a blank header names no device
     started = getattr(request.state, REQUEST_START, None)
     located = await locate_upload(services, upload, map, query, device, annotated=annotate, started=started)
     if located.picture is not None:

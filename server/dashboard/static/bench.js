@@ -79,7 +79,7 @@ export class BenchView {
 
   async load() {
     const cellM = Number(this.cellInput.value);
-    if (!(cellM > 0)) return this.showError(`Cell: a size in metres above 0 (got “${this.cellInput.value}”)`);
+    if (!(cellM > 0)) return this.failed(`Cell: a size in metres above 0 (got “${this.cellInput.value}”)`);
     const map = this.mapChoice.value ? `&map=${encodeURIComponent(this.mapChoice.value)}` : "";
     this.listMaps();
     try {
@@ -87,8 +87,17 @@ export class BenchView {
       this.cellM = cellM;
       this.render();
     } catch (error) {
-      this.showError(`Could not evaluate the samples: ${error.message}`);
+      this.failed(`Could not evaluate the samples: ${error.message}`);
     }
+  }
+
+  /** The evaluation could not be had: its error, and no table or figures of an earlier one under it. */
+  failed(message) {
+    this.evaluation = null;
+    document.getElementById("bench-body").hidden = true;
+    document.getElementById("bench-empty").hidden = true;
+    byTestId("bench-download").disabled = true;
+    this.showError(message);
   }
 
   /** The samples are located again in the chosen map (the active one by default): a bench has its own map. */
@@ -119,9 +128,11 @@ export class BenchView {
     const cells = cellsOf(evaluation.rows, this.cellM);
     try {
       this.showError("");
-      const grid = this.plannedGrid(cells);
-      this.renderHeatmap(cells, grid);
+      this.renderHeatmap(cells, this.plannedGrid(cells));
     } catch (error) {
+      // an unreadable grid: no heat map of the previous one under its error (the table and scatter still hold)
+      byTestId("bench-heatmap").replaceChildren();
+      byTestId("bench-download").disabled = true;
       this.showError(error.message);
     }
     this.renderScatter(evaluation.rows);

@@ -67,14 +67,17 @@ export class FrameView {
     }, wait);
   }
 
+  /** Fetches the chosen device's kept frames; one request at a time per device (another device's does not
+   * hold back the newly chosen one's). */
   async load() {
-    if (this.loading) return this.loading;
     const device = this.device;
-    this.loading = getJson(framesPath(device))
+    if (this.loading?.device === device) return this.loading.done;
+    const done = getJson(framesPath(device))
       .then((kept) => device === this.device && this.showKept(kept))
       .catch((error) => device === this.device && this.showError(error))
-      .finally(() => (this.loading = null));
-    return this.loading;
+      .finally(() => this.loading?.done === done && (this.loading = null));
+    this.loading = { device, done };
+    return done;
   }
 
   showKept(kept) {

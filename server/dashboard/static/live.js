@@ -7,6 +7,7 @@ const PALETTE = ["#2f7fe0", "#e0632f", "#1f9d6b", "#a34fd6", "#d6a21f", "#d63f7a
 const FADE_SEGMENTS = 24;
 const IDLE_S = 30; // a device not seen for this long is drawn faded, without its name (its title has it)
 const MAX_TRACK = 200; // points of a track kept, as the service keeps
+const MAX_ROWS = 50; // devices listed in the table, most recently seen first
 
 /** Two-sigma ellipse of a 2x2 covariance [[a, b], [b, c]] (m^2): radii (m) and the major axis' angle (deg). */
 export function ellipse2Sigma(cov) {
@@ -41,6 +42,24 @@ export class LiveView {
     this.map = null;
     this.proj = null;
     this.clockOffsetS = 0;
+    this.windowS = 10; // the window of fix_rate_hz and refused, from the latest LiveDevices
+    this.rows = new Map(); // device -> {key, row}: a row is built again only when what it shows changed
+  }
+
+  /** The server's clock now, as the latest event or status set it (seconds). */
+  serverNowS() {
+    return Date.now() / 1000 + this.clockOffsetS;
+  }
+
+  /** Located in the drawn map (a device in another map is listed, not drawn on this room). */
+  inDrawnMap(device) {
+    return device.map === this.map?.name;
+  }
+
+  /** A status event (every 2 s): set the clock again and let the rates of quiet devices run out. */
+  onStatus(status) {
+    this.clockOffsetS = status.started_s + status.uptime_s - Date.now() / 1000;
+    this.renderTable();
   }
 
   setMap(beaconMap) {
@@ -55,6 +74,7 @@ export class LiveView {
     if (replace) this.devices.clear();
     for (const device of liveDevices.devices) this.devices.set(device.device, this.merged(device));
     if (liveDevices.window_s) {
+      this.windowS = liveDevices.window_s;
       document.getElementById("refused-head").textContent = `Refused (${Math.round(liveDevices.window_s)} s)`;
     }
     this.render();
@@ -76,14 +96,17 @@ export class LiveView {
     this.renderMap();
     this.renderTable();
     const count = this.devices.size;
+    const elsewhere = [...this.devices.values()].filter((d) => !this.inDrawnMap(d)).length;
     document.getElementById("live-empty").hidden = count > 0;
     document.getElementById("live-summary").textContent = this.map
-      ? `Map “${this.map.name}”: ${this.map.beacons.length} panels · ${count} device${count === 1 ? "" : "s"}`
+      ? `Map “${this.map.name}”: ${this.map.beacons.length} panels · ${count} device${count === 1 ? "" : "s"}` +
+        (elsewhere ? ` (${elsewhere} in other maps, not drawn)` : "")
       : "Loading the active map…";
   }
 
   trackPoints() {
-    return [...this.devices.values()].flatMap((d) => (d.track || []).map((p) => [p[1], p[2]]));
+    return [...this.devices.values()].filter((d) => this.inDrawnMap(d))
+      .flatMap((d) => (d.track || []).map((p) => [p[1], p[2]]));
   }
 
   renderMap() {
@@ -96,9 +119,10 @@ export class LiveView {
       this.svg.append(this.layer);
       document.getElementById("map-scale").textContent = `${(this.proj.x1 - this.proj.x0).toFixed(2)} m across`;
     }
-    const nowS = Date.now() / 1000 + this.clockOffsetS;
+    const nowS = this.serverNowS();
     // idle devices first, so the active ones are drawn over them
-    const devices = [...this.devices.values()].sort((a, b) => a.last_seen_s - b.last_seen_s);
+    const devices = [...this.devices.values()].filter((d) => this.inDrawnMap(d))
+      .sort((a, b) => a.last_seen_s - b.last_seen_s);
     this.layer.replaceChildren(...devices.map((d) => this.deviceNode(d, nowS)).filter(Boolean));
   }
 
@@ -154,31 +178,62 @@ export class LiveView {
   }
 
   renderTable() {
-    const nowS = Date.now() / 1000 + this.clockOffsetS;
-    const rows = this.deviceNames().map((name) => this.deviceRow(this.devices.get(name), nowS));
+    const nowS = this.serverNowS();
+    const names = this.deviceNames();
+    const shown = names.slice(0, MAX_ROWS).map((name) => [name, this.cachedRow(this.devices.get(name), nowS)]);
+    this.rows = new Map(shown);
+    const rows = shown.map(([, cached]) => cached.row);
+    const more = names.length - shown.length;
+    if (more > 0) {
+      rows.push(el("tr", { "data-testid": "device-more", class: "more" },
+        el("td", { colspan: 6, class: "muted", text: `and ${more} more device${more === 1 ? "" : "s"}` })));
+    }
     this.tbody.replaceChildren(...rows);
   }
 
-  deviceRow(device, nowS) {
+  cachedRow(device, nowS) {
+    const values = this.rowValues(device, nowS);
+    const key = JSON.stringify(values);
+    const cached = this.rows.get(device.device);
+    return cached?.key === key ? cached : { key, row: this.deviceRow(values) };
+  }
+
+  /** What a device's row shows, as text. Its rates are of the last window_s: none once it is quiet longer. */
+  rowValues(device, nowS) {
     const last = device.last || {};
-    const refused = Object.entries(device.refused || {}).filter(([, share]) => share > 0);
+    const quiet = nowS - device.last_seen_s > this.windowS;
     const sigma = last.position_sigma_m ? Math.hypot(last.position_sigma_m[0], last.position_sigma_m[1]) : null;
-    const beacon = last.ok ? `${last.beacon_id ?? "—"}` : "—";
-    return el("tr", { "data-testid": "device-row", "data-device": device.device, class: "clickable",
-      onclick: () => this.openFrame(device.device) },
+    return {
+      device: device.device,
+      note: `${device.fixes}/${device.frames} fixes` + (sigma === null ? "" : ` · σ ${(sigma * 1000).toFixed(1)} mm`),
+      otherMap: this.map && !this.inDrawnMap(device) ? device.map : null,
+      beacon: last.ok ? `${last.beacon_id ?? "—"}` : "—",
+      beaconSource: last.ok && last.beacon_id_source ? humanize(last.beacon_id_source) : null,
+      rate: fmt(quiet ? 0 : device.fix_rate_hz, 1, "Hz"),
+      refused: quiet ? [] : Object.entries(device.refused || {}).filter(([, share]) => share > 0)
+        .map(([reason, share]) => [reason, `${humanize(reason)} ${(share * 100).toFixed(0)}%`]),
+      latency: fmt(device.last_latency_ms, 0, "ms"),
+      seen: fmtAgo(nowS - device.last_seen_s),
+    };
+  }
+
+  deviceRow(values) {
+    const name = values.device;
+    return el("tr", { "data-testid": "device-row", "data-device": name, class: "clickable",
+      onclick: () => this.openFrame(name) },
       el("td", { class: "device-name" },
-        el("span", { class: "swatch", style: `background:${colourOf(device.device)}` }),
-        device.device, el("div", { class: "cell-note", text: `${device.fixes}/${device.frames} fixes` +
-          (sigma === null ? "" : ` · σ ${(sigma * 1000).toFixed(1)} mm`) })),
-      el("td", { "data-field": "beacon" }, beacon,
-        last.ok && last.beacon_id_source ? el("div", { class: "cell-note", text: humanize(last.beacon_id_source) })
-          : null),
-      el("td", { class: "num", "data-field": "fix-rate" }, fmt(device.fix_rate_hz, 1, "Hz")),
-      el("td", { "data-field": "refused" }, refused.length ? refused.map(([reason, share]) =>
-        el("span", { class: "chip", "data-reason": reason, text: `${humanize(reason)} ${(share * 100).toFixed(0)}%` }))
+        el("span", { class: "swatch", style: `background:${colourOf(name)}` }), name,
+        el("div", { class: "cell-note", text: values.note }),
+        values.otherMap === null ? null
+          : el("div", { class: "cell-note other-map", "data-field": "map", text: `in map ${values.otherMap}` })),
+      el("td", { "data-field": "beacon" }, values.beacon,
+        values.beaconSource ? el("div", { class: "cell-note", text: values.beaconSource }) : null),
+      el("td", { class: "num", "data-field": "fix-rate" }, values.rate),
+      el("td", { "data-field": "refused" }, values.refused.length
+        ? values.refused.map(([reason, text]) => el("span", { class: "chip", "data-reason": reason, text }))
         : el("span", { class: "muted", text: "none" })),
-      el("td", { class: "num", "data-field": "latency" }, fmt(device.last_latency_ms, 0, "ms")),
-      el("td", { class: "num", "data-field": "seen" }, fmtAgo(nowS - device.last_seen_s)),
+      el("td", { class: "num", "data-field": "latency" }, values.latency),
+      el("td", { class: "num", "data-field": "seen" }, values.seen),
     );
   }
 }

@@ -76,6 +76,7 @@ function connect() {
   events.addEventListener("status", (event) => {
     const status = JSON.parse(event.data);
     health.update(status);
+    live.onStatus(status);
     if (live.map && status.active_map !== live.map.name) loadActiveMap();
   });
 }

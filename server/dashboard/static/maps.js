@@ -5,6 +5,14 @@ import { byTestId, el } from "./dom.js";
 import { drawRoom } from "./roommap.js";
 
 const mapPath = (name) => `/v1/maps/${encodeURIComponent(name)}`;
+const NAME_PATTERN = /^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$/; // the service's (shared_schemas/api.py NAME_PATTERN)
+
+/** Why the service would refuse `name` as a map's name, or "" when it would take it. */
+export function nameProblem(name) {
+  if (!name) return "Name the map first (the file's “name” by default).";
+  if (NAME_PATTERN.test(name)) return "";
+  return "Use 1-64 letters, digits, '_', '.' or '-', starting with a letter or digit.";
+}
 
 /** Pretty JSON as lines, each with the dotted path of the value it holds ("beacons.1.side_m"; "" the whole). */
 export function jsonLines(value, path = "", key = null, depth = 0, comma = "") {
@@ -61,6 +69,9 @@ export class MapsView {
     this.maps = [];
     this.selected = null;
     this.uploadText = null;
+    this.nameError = el("span", { class: "field-error", "data-testid": "map-name-error", role: "alert" });
+    this.nameInput.after(this.nameError);
+    this.nameInput.addEventListener("input", () => this.checkName());
     this.fileInput.addEventListener("change", () => this.readFile());
     document.getElementById("map-form").addEventListener("submit", (event) => {
       event.preventDefault();
@@ -132,6 +143,7 @@ export class MapsView {
     try {
       const parsed = JSON.parse(this.uploadText);
       if (typeof parsed?.name === "string") this.nameInput.value = parsed.name;
+      this.checkName();
       if (Array.isArray(parsed?.beacons) && parsed.beacons.length) this.draw(parsed, " (file, not stored yet)");
     } catch {
       // the service names what is wrong with the file when it is sent
@@ -142,7 +154,8 @@ export class MapsView {
   async upload() {
     const name = this.nameInput.value.trim();
     if (this.uploadText === null) return this.say("Choose a map file first.", "bad");
-    if (!name) return this.say("Name the map first (the file's “name” by default).", "bad");
+    const problem = this.checkName();
+    if (problem) return this.say("Not sent: the map's name needs fixing (see next to the field).", "bad");
     this.errors.hidden = true;
     try {
       const stored = await putJson(mapPath(name), this.uploadText);
@@ -153,6 +166,14 @@ export class MapsView {
       this.sayError(error);
       if (error instanceof ApiError && error.status !== 401) this.showUploadError(error.body);
     }
+  }
+
+  /** Shows next to the name field why the service would refuse it, and returns it ("" when it is fine). */
+  checkName() {
+    const problem = nameProblem(this.nameInput.value.trim());
+    this.nameError.textContent = problem;
+    this.nameInput.toggleAttribute("aria-invalid", Boolean(problem));
+    return problem;
   }
 
   /** The uploaded file with the error's message next to the line of the field it names. */

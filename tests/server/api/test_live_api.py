@@ -10,6 +10,7 @@ import httpx
 import numpy as np
 
 from server.api.metrics import histogram_quantile
+from lumipose_client.client import FRAME_HEADER
 
 CORNER_GREEN = (0, 255, 0)  # BGR, as server/annotate.py draws the corners
 
@@ -54,6 +55,25 @@ def test_a_frame_without_a_device_is_not_on_the_board(server_url, client, fixtur
     before = len(httpx.get(f"{server_url}/v1/live/devices").json()["devices"])
     assert client.locate(data, meta).ok
     assert len(httpx.get(f"{server_url}/v1/live/devices").json()["devices"]) == before
+
+
+def test_device_names_with_slashes_and_spaces_open_and_a_blank_header_names_no_device(
+    server_url, client, fixture_frame
+):
+    meta, data = fixture_frame
+    device = f"{_device()} lab/bench 2"
+    client.locate(data, meta, device=device)
+    quoted = httpx.URL(f"{server_url}/v1/live/devices/").join(device.replace(" ", "%20").replace("/", "%2F"))
+    frames = httpx.get(f"{quoted}/frames")
+    assert frames.status_code == 200 and len(frames.json()) == 1
+    assert httpx.get(f"{quoted}/frames/{frames.json()[0]['seq']}.png").status_code == 200
+    before = {d["device"] for d in httpx.get(f"{server_url}/v1/live/devices").json()["devices"]}
+    blank = httpx.post(f"{server_url}/v1/locate", content=data, timeout=30, headers={
+        "Content-Type": "application/octet-stream", "X-Lumipose-Device": "",
+        FRAME_HEADER: meta.model_dump_json(by_alias=True, exclude_none=True)})
+    assert blank.status_code == 200 and blank.json()["ok"]
+    after = {d["device"] for d in httpx.get(f"{server_url}/v1/live/devices").json()["devices"]}
+    assert after == before
 
 
 def test_unknown_devices_and_frames_are_named_404s(server_url, client, fixture_frame):
