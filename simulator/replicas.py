@@ -170,7 +170,8 @@ class Replicas:
                 serve_args += ("--redis", self.redis.url)
             shared = self.folder / "data"
             shared.mkdir()
-            self.servers = [LocalServer(*serve_args, data_dir=shared) for _ in range(self._count)]
+            # started at once they share the cores: several times one's start-up on a busy machine
+            self.servers = [LocalServer(*serve_args, data_dir=shared, startup_timeout_s=120) for _ in range(self._count)]
             for server in self.servers:
                 self._stack.push(server)  # its exit is safe before it starts
             with ThreadPoolExecutor(self._count) as pool:  # the replicas start in parallel (seconds each)
