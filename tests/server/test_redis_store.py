@@ -9,7 +9,7 @@ import time
 import pytest
 import redis
 
-from server.redis_store import ACTIVE_KEY, MAPS_KEY, RedisMaps
+from server.redis_store import ACTIVE_KEY, MAPS_KEY, RedisMaps, describe
 from server.store import MapStore, StoreError
 from shared_schemas import BeaconMap, load_map
 
@@ -158,3 +158,9 @@ def test_activating_and_deleting_at_once_on_two_replicas_never_leaves_an_active_
     assert not errors, errors
     assert not orphans, f"the active name without its map {len(orphans)} times: {orphans[:5]}"
     assert activating.active_name() in set(names) | {"test-bench"}
+
+
+def test_messages_name_redis_without_its_password():
+    assert describe("redis://:secret@cache:6380/2") == "Redis at cache:6380/2"
+    assert describe("redis://localhost") == "Redis at localhost:6379/0"
+    assert describe("unix:///run/redis.sock?db=1") == "Redis at /run/redis.sock"
