@@ -1,11 +1,12 @@
 """Stored data of the service: beacon maps, device profiles and recorded samples, in one data folder.
 
 Every write is atomic (a temporary file or folder, then `os.replace`), so a crash mid-write
-leaves the old data whole. The folder is the only state the service keeps: replicas that
-share it (a volume) see the same maps, active map, profiles and samples.
+leaves the old data whole. Replicas that share the folder (a volume) see the same maps, active
+map, profiles and samples; with `serve --redis URL` the maps and the active map's name are kept
+in Redis instead (`server.redis_store`, a `MapBackend`), under the same rules (`MapStore`).
 
-    DATA/maps/NAME.json         stored maps (override bundled ones of the same name)
-    DATA/active_map.json        {"name": ...}; absent = the startup map
+    DATA/maps/NAME.json         stored maps (override bundled ones of the same name); not with Redis
+    DATA/active_map.json        {"name": ...}; absent = the startup map; not with Redis
     DATA/profiles/ID.json       stored device profiles (calibrated ones; never a bundled id)
     DATA/samples/ID/meta.json   the frame's metadata
     DATA/samples/ID/frame.bin   the frame bytes, uncompressed, as uploaded
