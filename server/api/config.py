@@ -50,6 +50,11 @@ class Settings(BaseSettings):
     live_frames: int = Field(
         default=3, ge=0, le=20, description="pictures kept of each device's last pose frames for the web page; 0: none"
     )
+    redis: str | None = Field(
+        default=None,
+        description="Redis URL (redis://host:port/db): device sessions, maps and "
+        "the active map shared by replicas; default: this process and the data folder",
+    )
     log_level: Literal["critical", "error", "warning", "info", "debug"] = "info"
 
     @model_validator(mode="after")
@@ -62,6 +67,15 @@ class Settings(BaseSettings):
             except (OSError, ValueError) as error:
                 raise ValueError(f"cannot load {describe_file_error(self.map, error)}") from None
         return self
+
+    @field_validator("redis")
+    @classmethod
+    def _redis_url(cls, value: str | None) -> str | None:
+        if value:
+            from redis.connection import parse_url  # redis-py only when a URL is given
+
+            parse_url(value)  # its ValueError names the schemes a URL may have
+        return value or None
 
     @field_validator("api_key")
     @classmethod

@@ -18,7 +18,7 @@ from starlette.requests import ClientDisconnect
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from server.outcomes import FrameError
-from server.store import StoreError
+from server.store import UNAVAILABLE, StoreError
 from shared_schemas import ErrorBody
 
 log = logging.getLogger("lumipose.api")
@@ -34,7 +34,7 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         413: "upload or body too large",
         415: "unsupported content type or encoding",
         422: "invalid parameter",
-        503: "too many frame uploads held at once (frame routes); try again",
+        503: "too many frame uploads held at once (frame routes), or Redis cannot be reached; try again",
     }.items()
 }
 
@@ -49,6 +49,7 @@ STORE_STATUS = {
     "bundled_profile": 409,
     "active_map": 409,
     "fixed_map": 409,
+    UNAVAILABLE: 503,
 }
 
 

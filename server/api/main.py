@@ -18,7 +18,7 @@ from server.api.metrics import Metrics, MetricsMiddleware, StatusWindow
 from server.api.routes import calibrations, health, live, locate, maps, profiles, samples, surveys
 from server.dashboard import STATIC_DIR
 from server.live import LiveBoard
-from server.store import MapStore, ProfileStore, SampleStore
+from server.store import MapBackend, MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices
 from shared_schemas.api import RESULT_HEADER
 
@@ -34,7 +34,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     metrics = Metrics()
     app.state.services = Services(
         settings=settings,
-        maps=MapStore(settings.data_dir, settings.map),
+        maps=MapStore(settings.data_dir, settings.map, _map_backend(settings)),
         profiles=ProfileStore(settings.data_dir),
         samples=SampleStore(settings.data_dir),
         metrics=metrics,
@@ -72,6 +72,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(MetricsMiddleware, metrics=metrics)
     protocol.configure(settings.read_timeout_s, settings.max_header_bytes, endless_paths=(live.EVENTS_PATH,))
     return app
+
+
+def _map_backend(settings: Settings) -> MapBackend | None:
+    """Redis when a URL is given (maps shared by replicas at once), else the data folder (None)."""
+    if settings.redis is None:
+        return None
+    from server.redis_store import RedisMaps  # redis-py only when asked for
+
+    return RedisMaps.from_url(settings.redis)
 
 
 def _serve_dashboard(app: FastAPI) -> None:
