@@ -8,6 +8,7 @@ import pytest
 
 from lumipose_client import Client, read_fixture_files
 from simulator.local_server import LocalServer
+from tests.redis_server import RedisServer
 
 API_KEY = "test-key"
 UPLOAD_LIMIT_MB = 4  # small, so the 'too large' cases are cheap
@@ -32,3 +33,10 @@ def client(server_url):
 @pytest.fixture(scope="session")
 def fixture_frame():
     return read_fixture_files(FIXTURE)
+
+
+@pytest.fixture(scope="session")
+def redis_url():
+    """A real redis-server for the session (tests/redis_server.py); tests keep apart by their own key prefixes."""
+    with RedisServer() as redis:
+        yield redis.url

@@ -15,17 +15,21 @@ router = APIRouter(tags=["health"])
 
 @router.get("/healthz", response_model=Health)
 async def health(services: ServicesDep) -> Health:
-    """200 while the service runs; 'degraded' names the stored files that cannot be read."""
+    """200 while the service runs; 'degraded' names the stored files that cannot be read, and a shared
+    store (Redis) that does not answer."""
     return await run_in_threadpool(_health, services)
 
 
 def _health(services: Services) -> Health:
     damaged = sorted(services.maps.damaged() + services.profiles.damaged() + services.samples.damaged())
+    sessions_problem = services.devices.unavailable()
+    unavailable = [] if sessions_problem is None else [f"device sessions: {sessions_problem}"]
     return Health(
-        status="degraded" if damaged else "ok",
+        status="degraded" if damaged or unavailable else "ok",
         version=VERSION,
         active_map=services.maps.active_name(),
         damaged=damaged,
+        unavailable=unavailable,
     )
 
 
