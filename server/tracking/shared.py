@@ -3,8 +3,10 @@
 Each device's record (`server.tracking.state`: JSON) is one key, `{prefix}device:{id}`, written with
 an expiry of `idle_s`, so Redis forgets a silent device as `Devices` does. An update is optimistic:
 WATCH the key, GET, locate the frame in the record, then MULTI / SET / EXEC; when another replica or
-thread changed the device meanwhile, EXEC fails and the frame is located again on the newer record,
-at most `MAX_ATTEMPTS` times. No lock is taken, so a replica that dies mid-frame leaves nothing held.
+thread changed the device meanwhile, EXEC fails and the frame is located again on the newer record
+after a short random wait, at most `MAX_ATTEMPTS` times, then answered 'busy'. No lock is taken, so a
+replica that dies mid-frame leaves nothing held. A device's concurrent frames are thus each located
+once per attempt: cheap for the app's few requests per capture, costly for a device that floods.
 
 Memory is Redis's to bound (`maxmemory` with `maxmemory-policy volatile-lru`: every key here expires),
 not a per-process budget as in `Devices`; `max_devices` does not apply either. Redis not answering is
@@ -14,7 +16,9 @@ a `SessionStoreError('store_unavailable')` within the client's socket timeouts, 
 from __future__ import annotations
 
 import logging
+import random
 import threading
+import time
 from typing import cast
 from urllib.parse import urlsplit, urlunsplit
 
@@ -30,8 +34,9 @@ from server.tracking.state import StateError, dump_device, load_device
 from shared_schemas import BeaconMap, LocateResult
 
 LOG = logging.getLogger("lumipose.sessions")
-MAX_ATTEMPTS = 8  # updates of one frame that lost to another writer before it is answered 'busy'
+MAX_ATTEMPTS = 10  # updates of one frame that lost to another writer before it is answered 'busy'
 MAX_RECORD_BYTES = 4 * 2**20  # records are kilobytes (tests/server/tracking/test_state.py); more is a fault
+MAX_RETRY_WAIT_S = 0.5
 CONNECT_TIMEOUT_S = 1.0
 SOCKET_TIMEOUT_S = 2.0
 
@@ -82,12 +87,17 @@ class SharedDevices:
     ) -> LocateResult:
         """The frame located in the device's stored record (`locate_in_record`), the record written back."""
         try:
-            for _ in range(MAX_ATTEMPTS):
+            for attempt in range(MAX_ATTEMPTS):
+                started_s = time.monotonic()
                 result = self._attempt(device_id, frame, beacon_map, options)
                 if result is not None:
                     return result
                 with self._lock:
                     self.conflicts += 1
+                # writers that collided wait apart, randomly and longer each time, on the scale of one attempt:
+                # then one does not lose every round to the others
+                took_s = time.monotonic() - started_s
+                time.sleep(random.uniform(0, min(MAX_RETRY_WAIT_S, took_s * 2**attempt)))
         except RedisError as error:
             raise SessionStoreError("store_unavailable", f"{self._name} did not answer: {error}") from None
         raise SessionStoreError(
