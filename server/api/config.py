@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from pathlib import Path
 from typing import Literal
@@ -82,6 +83,8 @@ class Settings(BaseSettings):
         if value and urlsplit(value).scheme not in REDIS_SCHEMES:
             schemes = ", ".join(f"{scheme}://" for scheme in REDIS_SCHEMES)
             raise ValueError(f"a Redis URL starts with one of {schemes} (got '{urlsplit(value).scheme}:')")
+        if value and importlib.util.find_spec("redis") is None:
+            raise ValueError("a Redis URL needs redis-py: pip install 'lumipose[redis]'")
         return value or None
 
     def locate_options(self) -> LocateOptions:
