@@ -24,7 +24,9 @@ from urllib.parse import urlsplit, urlunsplit
 
 import redis
 from redis.backoff import NoBackoff
+from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import RedisError, WatchError
+from redis.exceptions import TimeoutError as RedisTimeoutError
 from redis.retry import Retry
 
 from server.ingest import LumaFrame
@@ -60,6 +62,12 @@ def redacted(url: str) -> str:
     host = parts.hostname or ""
     netloc = f"{parts.username or ''}:***@{host}" + (f":{parts.port}" if parts.port else "")
     return urlunsplit(parts._replace(netloc=netloc))
+
+
+def _said(error: RedisError) -> str:
+    """Redis's own words: redis-py quotes a failed pipeline's whole command (the record) before them."""
+    text = str(error)
+    return text.split(" of pipeline caused error: ", 1)[-1][:200]
 
 
 class SharedDevices:
@@ -98,8 +106,10 @@ class SharedDevices:
                 # then one does not lose every round to the others
                 took_s = time.monotonic() - started_s
                 time.sleep(random.uniform(0, min(MAX_RETRY_WAIT_S, took_s * 2**attempt)))
-        except RedisError as error:
-            raise SessionStoreError("store_unavailable", f"{self._name} did not answer: {error}") from None
+        except (RedisConnectionError, RedisTimeoutError) as error:
+            raise SessionStoreError("store_unavailable", f"{self._name} did not answer: {_said(error)}") from None
+        except RedisError as error:  # e.g. out of memory under maxmemory-policy noeviction
+            raise SessionStoreError("store_unavailable", f"{self._name} refused the session: {_said(error)}") from None
         raise SessionStoreError(
             "busy", f"device '{device_id}': its session changed under {MAX_ATTEMPTS} updates in a row; try again"
         )

@@ -178,3 +178,14 @@ def test_a_redis_that_never_answers_times_out_rather_than_hangs():
 def test_the_password_is_not_named():
     assert redacted("redis://user:secret@redis.local:6380/1") == "redis://user:***@redis.local:6380/1"
     assert redacted("redis://redis.local:6379/0") == "redis://redis.local:6379/0"
+
+
+def test_a_full_redis_refuses_by_name():
+    """Redis at its maxmemory with nothing it may evict answers OOM: a clear error, not a 500."""
+    with RedisServer() as server:
+        redis.Redis.from_url(server.url).config_set("maxmemory", "1")  # every write is over the limit
+        with pytest.raises(SessionStoreError) as refused:
+            SharedDevices.from_url(server.url).locate("p", dark_frame(FrameKind.id, 0.0), ROOM)
+    assert refused.value.code == "store_unavailable"
+    assert refused.value.message == (f"Redis at {server.url} refused the session: "
+                                     "command not allowed when used memory > 'maxmemory'.")
