@@ -19,7 +19,7 @@ from server.api.routes import calibrations, health, live, locate, maps, profiles
 from server.dashboard import STATIC_DIR
 from server.live import LiveBoard
 from server.store import MapBackend, MapStore, ProfileStore, SampleStore
-from server.tracking.devices import Devices
+from server.tracking.devices import Devices, DeviceSessions
 from shared_schemas.api import RESULT_HEADER
 
 
@@ -39,7 +39,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         samples=SampleStore(settings.data_dir),
         metrics=metrics,
         options=settings.locate_options(),
-        devices=Devices(settings.device_rules()),
+        devices=_device_sessions(settings),
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
         survey_limiter=anyio.CapacityLimiter(1),
         frame_slots=FrameSlots(settings.max_frames_in_flight),
@@ -81,6 +81,15 @@ def _map_backend(settings: Settings) -> MapBackend | None:
     from server.redis_store import RedisMaps  # redis-py only when asked for
 
     return RedisMaps.from_url(settings.redis)
+
+
+def _device_sessions(settings: Settings) -> DeviceSessions:
+    """In this process; in Redis, shared with the other replicas, when given its URL."""
+    if settings.redis is None:
+        return Devices(settings.device_rules())
+    from server.tracking.shared import SharedDevices  # redis-py only when asked for (the `redis` extra)
+
+    return SharedDevices.from_url(settings.redis, settings.device_rules())
 
 
 def _serve_dashboard(app: FastAPI) -> None:

@@ -57,6 +57,19 @@ class DeviceSessions(Protocol):
         self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = ...
     ) -> LocateResult: ...
 
+    def unavailable(self) -> str | None:
+        """Why the store cannot take frames now (its server does not answer), or None."""
+        ...
+
+
+class SessionStoreError(Exception):
+    """The store of device sessions could not take a frame; `code`: 'store_unavailable' (the shared store
+    does not answer), 'busy' (the device's record kept changing under the update), 'session_too_large'."""
+
+    def __init__(self, code: str, message: str):
+        super().__init__(message)
+        self.code, self.message = code, message
+
 
 def locate_in_record(
     record: DeviceRecord, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions, rules: DeviceRules
@@ -127,6 +140,9 @@ class Devices:
                 self._set_waiting(device, device.record.waiting)
                 self._within_budget(device)
             return result
+
+    def unavailable(self) -> str | None:
+        return None  # this process's memory is always there
 
     def stats(self, device_id: str) -> SessionStats | None:
         with self._lock:

@@ -84,5 +84,5 @@ def test_serve_redis_is_a_redis_url_and_a_bad_one_stops_it(monkeypatch, capsys):
     monkeypatch.setenv("LUMIPOSE_REDIS", "redis://cache:6380/2")
     assert Settings().redis == "redis://cache:6380/2"
     assert main(["serve", "--redis", "cache:6379"]) == 2
-    assert capsys.readouterr().err == ("error: redis: Redis URL must specify one of the following schemes "
-                                       "(redis://, rediss://, unix://) (got 'cache:6379')\n")
+    assert capsys.readouterr().err == ("error: redis: a Redis URL starts with one of redis://, rediss://, unix:// "
+                                       "(got 'cache:') (got 'cache:6379')\n")

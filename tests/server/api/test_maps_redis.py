@@ -102,12 +102,14 @@ def test_redis_stopped_is_a_503_naming_redis_never_a_500_or_a_hang(replicas, red
     try:
         for call, args in ((other.maps, ()), (other.active_map, ()), (other.get_map, ("lab",)),
                            (one.put_map, (_room("x", 1.0),)), (one.set_active_map, ("lab",)),
-                           (one.delete_map, ("x",)), (other.health, ()), (other.locate, (frame, meta))):
+                           (one.delete_map, ("x",)), (other.locate, (frame, meta))):
             started = time.monotonic()
             refusal = _refusal(call, *args)
             assert time.monotonic() - started < 3.0, call
             assert (refusal.status, refusal.body.error) == (503, "redis_unavailable"), call
             assert f"Redis at 127.0.0.1:{redis_server.port}/0 cannot be reached" in refusal.body.message
+        health = other.health()  # 200: the process runs (a liveness probe must not restart it), Redis named
+        assert health.status == "degraded" and f"Redis at 127.0.0.1:{redis_server.port}/0" in health.unavailable[0]
     finally:
         redis_server.start()
     assert other.active_map().name == "lab"  # back, on a new connection (this Redis kept nothing: --save "")
