@@ -16,7 +16,7 @@ grep -E '^COPY [^-]' docker/Dockerfile | while read -r _ args; do
 done
 "$PYTHON" -m venv "$work/venv"
 "$work/venv/bin/pip" install --quiet --upgrade pip
-"$work/venv/bin/pip" install --quiet "$work/src"
+"$work/venv/bin/pip" install --quiet "$work/src[redis]"  # the image installs the redis extra
 
 port=$("$PYTHON" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 (cd "$work/data" && LUMIPOSE_HOST=127.0.0.1 LUMIPOSE_PORT=$port LUMIPOSE_DATA_DIR="$work/data" \

@@ -90,6 +90,7 @@ def _add_serve(commands) -> None:
         type=int,
         help="pictures kept of each device's last pose frames, for the web page's frame view (default 3; 0: none)",
     )
+    parser.add_argument("--redis", help="Redis URL shared by replicas (redis://host:port/db); default: none")
     parser.add_argument("--max-body-kb", type=float, help="body limit of the JSON routes (default 1024)")
     parser.add_argument("--max-header-kb", type=float, help="limit on a request's line and headers (default 64)")
     parser.add_argument(

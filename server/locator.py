@@ -34,7 +34,7 @@ from server.outcomes import Refusal, located, refused
 from server.pipeline import locate_beacon
 from server.rooms import locate_in_room
 from server.tone import linearized
-from server.tracking.devices import Devices
+from server.tracking.devices import DeviceSessions
 from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResult
 
 LOG = logging.getLogger("lumipose.pipeline")
@@ -53,12 +53,12 @@ def locate(
     *,
     beacon_id: int | None = None,
     device_id: str | None = None,
-    devices: Devices | None = None,
+    devices: DeviceSessions | None = None,
 ) -> LocateResult:
     """Position and pose of the camera that took `frame`, or the reason there is none.
 
     `beacon_id`: the map beacon in view, when known from elsewhere; `device_id` and `devices`:
-    the sender and the sessions of this process, for maps of several beacons.
+    the sender and the device sessions (this process's, or shared in Redis), for maps of several beacons.
     """
     try:
         result = _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
@@ -106,7 +106,7 @@ def _dispatch(
     options: LocateOptions,
     beacon_id: int | None,
     device_id: str | None,
-    devices: Devices | None,
+    devices: DeviceSessions | None,
 ) -> LocateResult:
     options = options.for_map(beacon_map)
     # Every path below (one panel, rooms, device sessions with their ID frames) reads light: the

@@ -1,11 +1,12 @@
 """Stored data of the service: beacon maps, device profiles and recorded samples, in one data folder.
 
 Every write is atomic (a temporary file or folder, then `os.replace`), so a crash mid-write
-leaves the old data whole. The folder is the only state the service keeps: replicas that
-share it (a volume) see the same maps, active map, profiles and samples.
+leaves the old data whole. Replicas that share the folder (a volume) see the same maps, active
+map, profiles and samples; with `serve --redis URL` the maps and the active map's name are kept
+in Redis instead (`server.redis_store`, a `MapBackend`), under the same rules (`MapStore`).
 
-    DATA/maps/NAME.json         stored maps (override bundled ones of the same name)
-    DATA/active_map.json        {"name": ...}; absent = the startup map
+    DATA/maps/NAME.json         stored maps (override bundled ones of the same name); not with Redis
+    DATA/active_map.json        {"name": ...}; absent = the startup map; not with Redis
     DATA/profiles/ID.json       stored device profiles (calibrated ones; never a bundled id)
     DATA/samples/ID/meta.json   the frame's metadata
     DATA/samples/ID/frame.bin   the frame bytes, uncompressed, as uploaded
@@ -37,7 +38,7 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from functools import cached_property, lru_cache
 from pathlib import Path
-from typing import Generic, TypeVar
+from typing import Generic, Protocol, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
@@ -50,6 +51,7 @@ ACTIVE_MAP_FILE = "active_map.json"
 LOCK_FILE = ".write.lock"
 LOCK_WAIT_S = 5.0  # the start-up clean-up waits this long for writers in other processes
 STALE_AFTER_S = 600.0  # without the lock, only leftovers older than this are surely dead
+UNAVAILABLE = "redis_unavailable"  # StoreError code: a shared store (Redis) cannot be reached; try again
 
 _NAME = re.compile(NAME_PATTERN)
 _SAMPLE_ID = re.compile(r"^[0-9a-f]{32}$")
@@ -178,7 +180,7 @@ def _remove_leftovers(data_dir: Path, places: list[tuple[Path, re.Pattern[str]]]
         )
 
 
-def _why(error: Exception) -> str:
+def why_unreadable(error: Exception) -> str:
     """One line on why a stored file cannot be read."""
     if isinstance(error, ValidationError):
         first = error.errors()[0]
@@ -196,8 +198,8 @@ class Damage:
     whole again or gone; a file damaged for good is not logged on every request.
     """
 
-    def __init__(self, data_dir: Path) -> None:
-        self._data_dir = data_dir
+    def __init__(self, place: str, kind: str = "file") -> None:
+        self._place, self._kind = place, kind  # in the log: "damaged file in the data folder DIR"
         self._lock = threading.Lock()
         self._files: dict[str, str] = {}
 
@@ -210,25 +212,37 @@ class Damage:
                 del self._files[name]
             self._files.update(found)
         for name, why in new.items():
-            log.warning("lumipose: damaged file in the data folder %s: %s (%s)", self._data_dir, name, why)
+            log.warning("lumipose: damaged %s in %s: %s (%s)", self._kind, self._place, name, why)
         for name in gone:
-            log.warning("lumipose: %s in the data folder %s is whole again or gone", name, self._data_dir)
+            log.warning("lumipose: %s in %s is whole again or gone", name, self._place)
 
     def names(self, scope: str = "") -> list[str]:
         with self._lock:
             return sorted(name for name in self._files if _within(name, scope))
 
 
+def _in_folder(data_dir: Path) -> str:
+    return f"the data folder {data_dir}"
+
+
 def _within(name: str, scope: str) -> bool:
     return not scope or name == scope or name.startswith(scope + "/")
 
 
-class _Damaged(Exception):
-    """A stored file that cannot be read: its path relative to the data folder, and why."""
+class Damaged(Exception):
+    """A stored item that cannot be read: its place (a path relative to the data folder, or a Redis
+    key), and why."""
 
     def __init__(self, path: str, why: str):
         super().__init__(f"{path}: {why}")
         self.path, self.why = path, why
+
+
+def damaged_error(kind: str, name: str, damage: Damaged, repair: str, field: str = "name") -> StoreError:
+    """`damaged_<kind>`: the stored item `name` cannot be read; names its place, why, and what mends it."""
+    return StoreError(
+        f"damaged_{kind}", f"the stored {kind} '{name}' is damaged ({damage.path}: {damage.why}); {repair}", field
+    )
 
 
 Model = TypeVar("Model", bound=BaseModel)
@@ -287,18 +301,18 @@ class _JsonFolder(Generic[Model]):
         return {path.stem: path for path in sorted(self.path.glob("*.json")) if _NAME.match(path.stem)}
 
     def read(self, path: Path) -> Model:
-        """The item in `path`; `_Damaged` if it cannot be read or used, FileNotFoundError if gone."""
+        """The item in `path`; `Damaged` if it cannot be read or used, FileNotFoundError if gone."""
         try:
             stat = path.stat()
             item = _parsed(self.model, path, stat.st_mtime_ns, stat.st_size, stat.st_ino)
         except FileNotFoundError:
             raise
         except (OSError, ValueError) as error:
-            raise _Damaged(self.relative(path), _why(error)) from None
+            raise Damaged(self.relative(path), why_unreadable(error)) from None
         assert isinstance(item, self.model)  # _parsed's cache is shared by the models
         why = self.problem(path.stem, item)
         if why is not None:
-            raise _Damaged(self.relative(path), why)
+            raise Damaged(self.relative(path), why)
         return item
 
     def readable(self) -> dict[str, Model | None]:
@@ -310,7 +324,7 @@ class _JsonFolder(Generic[Model]):
                 items[name] = self.read(path)
             except FileNotFoundError:
                 continue
-            except _Damaged as damage:
+            except Damaged as damage:
                 damaged[damage.path] = damage.why
                 items[name] = None
         self.damage.update(self.folder, damaged)
@@ -326,13 +340,9 @@ class _JsonFolder(Generic[Model]):
         except FileNotFoundError:
             self.damage.update(relative, {})
             return None
-        except _Damaged as damage:
+        except Damaged as damage:
             self.damage.update(relative, {relative: damage.why})
-            raise StoreError(
-                f"damaged_{self.kind}",
-                f"the stored {self.kind} '{name}' is damaged ({relative}: {damage.why}); {repair}",
-                field=self.key_field,
-            ) from None
+            raise damaged_error(self.kind, name, damage, repair, self.key_field) from None
         self.damage.update(relative, {})
         return item
 
@@ -360,24 +370,133 @@ class _JsonFolder(Generic[Model]):
         self.readable()
 
 
-@dataclass(frozen=True)
-class MapStore:
-    """Bundled demo map, the startup map, and maps stored in the data folder (in rising precedence).
+class MapView(Protocol):
+    """What an activation or a deletion decides on: read together, within the backend's `change`."""
 
-    Built, it removes the temporary files interrupted writes left and logs damaged map files.
-    """
+    def names(self) -> set[str]:
+        """The names of the stored maps, whole or damaged."""
+        ...
+
+    def read_active(self) -> str | None:
+        """The active map's name as stored; None when none is stored; `Damaged` when it cannot be read."""
+        ...
+
+
+@dataclass(frozen=True)
+class MapChange:
+    """What `MapStore` decided, for the backend to write at once with what it read."""
+
+    active: str | None = None  # make this map the active one
+    delete: str | None = None  # remove this stored map
+
+
+class MapBackend(MapView, Protocol):
+    """Where the stored maps and the active map's name live: the data folder (`FolderMaps`), or Redis
+    (`server.redis_store.RedisMaps`). The rules (what may be activated or deleted, the default map,
+    damage and its messages) are `MapStore`'s; a backend stores and reads."""
+
+    @property
+    def damage(self) -> Damage: ...
+
+    @property
+    def active_place(self) -> str:
+        """The active map's name's place, as `damaged()` names it."""
+        ...
+
+    def readable(self) -> dict[str, BeaconMap | None]:
+        """Every stored map by name, None for a damaged one (noted in `damage`)."""
+        ...
+
+    def get(self, name: str, repair: str) -> BeaconMap | None:
+        """The stored map `name`, None if there is none; `damaged_map` naming its place (and `repair`)."""
+        ...
+
+    def put(self, name: str, beacon_map: BeaconMap) -> None: ...
+
+    def holds(self, name: str, path: Path) -> bool:
+        """Whether the stored map `name` is the file `path` (the startup map may be one of the data folder)."""
+        ...
+
+    def change(self, decide: Callable[[MapView], MapChange]) -> bool:
+        """Run `decide` on what is stored and write its change, as one step against every other change
+        (in any replica the backend is shared with). False when the map to delete was not there."""
+        ...
+
+    def recover(self) -> None:
+        """Clear what interrupted writes left; note every damaged map."""
+        ...
+
+
+@dataclass(frozen=True)
+class FolderMaps:
+    """Stored maps as DATA/maps/NAME.json and the active map's name in DATA/active_map.json."""
 
     data_dir: Path
-    startup_map: Path | None = None
-    _damage: Damage = field(init=False, repr=False, compare=False)
+    damage: Damage = field(init=False, repr=False, compare=False)
+    active_place: str = field(default=ACTIVE_MAP_FILE, init=False)
     _files: _JsonFolder[BeaconMap] = field(init=False, repr=False, compare=False)
     # one activation or deletion at a time in this process: a map is not deleted while it is being activated
     _choosing: threading.Lock = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "_damage", Damage(self.data_dir))
-        object.__setattr__(self, "_files", _JsonFolder(self.data_dir, "maps", "map", BeaconMap, self._damage))
+        object.__setattr__(self, "damage", Damage(_in_folder(self.data_dir)))
+        object.__setattr__(self, "_files", _JsonFolder(self.data_dir, "maps", "map", BeaconMap, self.damage))
         object.__setattr__(self, "_choosing", threading.Lock())
+
+    def names(self) -> set[str]:
+        return set(self._files.files())
+
+    def read_active(self) -> str | None:
+        try:
+            return ActiveMap.model_validate_json((self.data_dir / ACTIVE_MAP_FILE).read_bytes()).name
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError) as error:
+            raise Damaged(ACTIVE_MAP_FILE, why_unreadable(error)) from None
+
+    def readable(self) -> dict[str, BeaconMap | None]:
+        return self._files.readable()
+
+    def get(self, name: str, repair: str) -> BeaconMap | None:
+        return self._files.get(name, repair)
+
+    def put(self, name: str, beacon_map: BeaconMap) -> None:
+        self._files.put(name, beacon_map)
+
+    def holds(self, name: str, path: Path) -> bool:
+        return (self._files.path / f"{name}.json").resolve() == path.resolve()
+
+    def change(self, decide: Callable[[MapView], MapChange]) -> bool:
+        with self._choosing:
+            change = decide(self)
+            if change.active is not None:
+                with _data_lock(self.data_dir, exclusive=False):
+                    payload = ActiveMap(name=change.active).model_dump_json().encode()
+                    write_atomic(self.data_dir / ACTIVE_MAP_FILE, payload)
+            return change.delete is None or self._files.delete(change.delete)
+
+    def recover(self) -> None:
+        if not self.data_dir.is_dir():
+            return
+        _remove_leftovers(self.data_dir, [(self.data_dir, _TEMPORARY_FILE), (self._files.path, _TEMPORARY_FILE)])
+        self._files.readable()
+
+
+@dataclass(frozen=True)
+class MapStore:
+    """Bundled demo map, the startup map, and stored maps (in rising precedence), with the active map.
+
+    Stored maps live in the data folder, or in `backend` when given (Redis: shared by replicas at
+    once). Built, it removes the temporary files interrupted writes left and logs damaged maps.
+    """
+
+    data_dir: Path
+    startup_map: Path | None = None
+    backend: MapBackend | None = None
+    _stored: MapBackend = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_stored", self.backend or FolderMaps(self.data_dir))
         self.recover()
 
     @cached_property
@@ -390,39 +509,42 @@ class MapStore:
             fixed[startup.name] = ("startup", startup)
         return fixed
 
-    def _names(self) -> set[str]:
-        return set(self._fixed) | set(self._files.files())
-
     def default_name(self) -> str:
         """The startup map's name, or else the bundled demo map's (the startup map comes last)."""
         return list(self._fixed)[-1]
 
     def active_name(self) -> str:
-        """The map named in active_map.json; the default map when the file is absent, damaged
+        """The map named as active; the default map when none is, when the name cannot be read
         (reported in `damaged`) or names no map."""
+        return self._active_in(self._stored)
+
+    def _active_in(self, view: MapView) -> str:
+        place = self._stored.active_place
         try:
-            name = ActiveMap.model_validate_json((self.data_dir / ACTIVE_MAP_FILE).read_bytes()).name
-        except FileNotFoundError:
-            self._damage.update(ACTIVE_MAP_FILE, {})
+            name = view.read_active()
+        except Damaged as damage:
+            why = f"{damage.why}; the default map '{self.default_name()}' is active"
+            self._stored.damage.update(place, {place: why})
             return self.default_name()
-        except (OSError, ValueError) as error:
-            why = f"{_why(error)}; the default map '{self.default_name()}' is active"
-            self._damage.update(ACTIVE_MAP_FILE, {ACTIVE_MAP_FILE: why})
+        self._stored.damage.update(place, {})
+        if name is None or name not in set(self._fixed) | view.names():
             return self.default_name()
-        self._damage.update(ACTIVE_MAP_FILE, {})
-        return name if name in self._names() else self.default_name()
+        return name
 
     def set_active(self, name: str) -> None:
-        with self._choosing:
-            self.get(name)
-            with _data_lock(self.data_dir, exclusive=False):
-                write_atomic(self.data_dir / ACTIVE_MAP_FILE, ActiveMap(name=name).model_dump_json().encode())
-        self._damage.update(ACTIVE_MAP_FILE, {})
+        self.get(name)  # not found or damaged: refused by name
+
+        def activate(view: MapView) -> MapChange:
+            if name not in self._fixed and name not in view.names():  # deleted meanwhile
+                raise StoreError("not_found", f"no map named '{name}'", field="name")
+            return MapChange(active=name)
+
+        self._stored.change(activate)
 
     def _readable(self) -> list[tuple[str, str, BeaconMap]]:
         """(name, source, map) of every map that can be read; damaged stored maps are noted, left out."""
         maps = {name: (source, beacon_map) for name, (source, beacon_map) in self._fixed.items()}
-        for name, stored in self._files.readable().items():
+        for name, stored in self._stored.readable().items():
             maps.pop(name, None)  # a stored map hides the fixed one of its name, even damaged
             if stored is not None:
                 maps[name] = ("stored", stored)
@@ -437,14 +559,14 @@ class MapStore:
         ]
 
     def damaged(self) -> list[str]:
-        """The damaged map files and active_map.json, relative to the data folder, checked now."""
+        """The damaged stored maps and active map's name (their places), checked now."""
         self._readable()
         self.active_name()
-        return self._damage.names()
+        return self._stored.damage.names()
 
     def get(self, name: str) -> BeaconMap:
-        """The map `name`: `not_found`, or `damaged_map` (naming the file) if it cannot be read."""
-        stored = self._files.get(_check_name(name), "PUT the map again to replace it")
+        """The map `name`: `not_found`, or `damaged_map` (naming its place) if it cannot be read."""
+        stored = self._stored.get(_check_name(name), "PUT the map again to replace it")
         if stored is not None:
             return stored
         if name in self._fixed:
@@ -456,40 +578,44 @@ class MapStore:
             raise StoreError(
                 "name_mismatch", f"the map's name '{beacon_map.name}' differs from '{name}' in the URL", field="name"
             )
-        self._files.put(name, beacon_map)
+        self._stored.put(name, beacon_map)
         return beacon_map
 
     def delete(self, name: str) -> None:
         """Remove a stored map, also a damaged one. The active map (`active_map`) and the bundled and
         startup maps (`fixed_map`: the startup map even when its file is in the data folder, `serve --map
         NAME`, or the service would not start again) are refused, so no request loses its map."""
-        with self._choosing:
-            if _check_name(name) == self.active_name():
+        _check_name(name)
+        if self.startup_map is not None and self._stored.holds(name, self.startup_map):
+            raise StoreError(
+                "fixed_map", f"'{name}' is the map the service started with (--map): it cannot be deleted", "name"
+            )
+
+        def remove(view: MapView) -> MapChange:
+            if name == self._active_in(view):
                 raise StoreError(
                     "active_map", f"'{name}' is the active map: activate another map before deleting it", field="name"
                 )
-            stored = self._files.path / f"{name}.json"
-            if self.startup_map is not None and stored.resolve() == self.startup_map.resolve():
-                raise StoreError(
-                    "fixed_map", f"'{name}' is the map the service started with (--map): it cannot be deleted", "name"
-                )
-            if self._files.delete(name):
-                return
+            return MapChange(delete=name)
+
+        if self._stored.change(remove):
+            return
         if name in self._fixed:
             source = self._fixed[name][0]
             raise StoreError(
-                "fixed_map",
-                f"'{name}' is the {source} map (not stored in the data folder): it cannot be deleted",
-                field="name",
+                "fixed_map", f"'{name}' is the {source} map (not a stored one): it cannot be deleted", field="name"
             )
         raise StoreError("not_found", f"no stored map named '{name}'", field="name")
 
     def recover(self) -> None:
-        """Remove the temporary files of interrupted writes; log every damaged map file."""
-        if not self.data_dir.is_dir():
-            return
-        _remove_leftovers(self.data_dir, [(self.data_dir, _TEMPORARY_FILE), (self._files.path, _TEMPORARY_FILE)])
-        self.damaged()
+        """Remove the temporary files of interrupted writes; log every damaged map."""
+        try:
+            self._stored.recover()
+            self.active_name()
+        except StoreError as error:
+            if error.code != UNAVAILABLE:
+                raise
+            log.warning("lumipose: %s", error.message)  # the service starts; its map routes answer 503 meanwhile
 
 
 _PROFILE_REPAIR = "PUT the profile again to replace it, or DELETE it"
@@ -542,7 +668,7 @@ class ProfileStore:
             "profiles",
             "profile",
             DeviceProfile,
-            Damage(self.data_dir),
+            Damage(_in_folder(self.data_dir)),
             key_field="profile_id",
             problem=_stored_profile_problem,
         )
@@ -637,7 +763,7 @@ class SampleStore:
     _damage: Damage = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "_damage", Damage(self.data_dir))
+        object.__setattr__(self, "_damage", Damage(_in_folder(self.data_dir)))
         self.recover()
 
     @property
@@ -648,28 +774,28 @@ class SampleStore:
         return path.relative_to(self.data_dir).as_posix()
 
     def _whole(self, folder: Path) -> SampleInfo | None:
-        """The sample in `folder` if it is whole, None if the folder is gone; `_Damaged` otherwise."""
+        """The sample in `folder` if it is whole, None if the folder is gone; `Damaged` otherwise."""
         info_path, frame_path = folder / "sample.json", folder / "frame.bin"
         try:
             info = SampleInfo.model_validate_json(info_path.read_bytes())
         except FileNotFoundError:
             if not folder.is_dir():
                 return None  # deleted meanwhile
-            raise _Damaged(self._relative(info_path), "missing") from None
+            raise Damaged(self._relative(info_path), "missing") from None
         except (OSError, ValueError) as error:
-            raise _Damaged(self._relative(info_path), _why(error)) from None
+            raise Damaged(self._relative(info_path), why_unreadable(error)) from None
         if info.id != folder.name:
-            raise _Damaged(self._relative(info_path), f"it is the record of another sample, '{info.id}'")
+            raise Damaged(self._relative(info_path), f"it is the record of another sample, '{info.id}'")
         try:
             size = frame_path.stat().st_size
         except FileNotFoundError:
             if not folder.is_dir():
                 return None
-            raise _Damaged(self._relative(frame_path), "missing") from None
+            raise Damaged(self._relative(frame_path), "missing") from None
         except OSError as error:
-            raise _Damaged(self._relative(frame_path), _why(error)) from None
+            raise Damaged(self._relative(frame_path), why_unreadable(error)) from None
         if size != info.frame_bytes:
-            raise _Damaged(self._relative(frame_path), f"{size} bytes where sample.json says {info.frame_bytes}")
+            raise Damaged(self._relative(frame_path), f"{size} bytes where sample.json says {info.frame_bytes}")
         return info
 
     def _checked(self, sample_id: str) -> Path:
@@ -679,7 +805,7 @@ class SampleStore:
             raise StoreError("not_found", f"no sample with id '{sample_id}'", field="id")
         try:
             info = self._whole(folder)
-        except _Damaged as damage:
+        except Damaged as damage:
             self._damage.update(self._relative(folder), {damage.path: damage.why})
             raise StoreError(
                 "damaged_sample",
@@ -739,7 +865,7 @@ class SampleStore:
         for folder in folders:
             try:
                 info = self._whole(Path(folder))
-            except _Damaged as damage:
+            except Damaged as damage:
                 damaged[damage.path] = damage.why
                 continue
             if info is not None:

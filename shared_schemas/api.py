@@ -26,7 +26,8 @@ CELL_LABEL = re.compile(r"^\s*(-?\d+)\s*,\s*(-?\d+)\s*$")
 class Health(BaseModel):
     status: str = Field(
         description="'ok' when the service can locate frames and its stored files are whole; "
-        "'degraded' when some are damaged (listed in `damaged`): the service still answers"
+        "'degraded' when some are damaged (listed in `damaged`) or a shared store does not answer "
+        "(named in `unavailable`): the service still answers"
     )
     version: str
     active_map: str
@@ -34,6 +35,12 @@ class Health(BaseModel):
         default_factory=list,
         description="stored files that cannot be read, relative to the data folder (maps/NAME.json, "
         "active_map.json, samples/ID/sample.json, ...): skipped in listings, refused by name (409)",
+    )
+    unavailable: list[str] = Field(
+        default_factory=list,
+        description="shared stores that do not answer, each with the reason (Redis, with `serve --redis`: 'maps: ...', "
+        "'device sessions: ...'); until it is back the routes that read maps answer 503 `redis_unavailable` "
+        "(`active_map` is then the default map's name), and frames in a device's session 503",
     )
 
 

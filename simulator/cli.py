@@ -142,6 +142,20 @@ def add_commands(commands) -> None:
                            "(default: the server's, 3)")
     load.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     load.set_defaults(run=_run_load)
+    replicas = benches.add_parser("replicas", help="bench load through nginx to 1, 2, 3 replicas sharing Redis; "
+                                                   "Redis against memory; bytes per device (minutes)",
+                                  description="Starts redis-server, the replicas (lumipose serve --redis) and nginx "
+                                              "(docker/nginx.conf) on 127.0.0.1 itself; needs Debian's redis-server "
+                                              "and nginx. One run per replica count, frame kind and client count, "
+                                              "then one replica straight with and without Redis.")
+    replicas.add_argument("--replicas", type=int, nargs="+", default=[1, 2, 3], help="replica counts, one set of "
+                                                                                    "runs each")
+    replicas.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],
+                          default=["1080p", "full-window"], help="frame kinds, as bench load's")
+    replicas.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4], help="concurrent clients, one run each")
+    replicas.add_argument("--seconds", type=float, default=10.0, help="per run")
+    replicas.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    replicas.set_defaults(run=_run_replicas)
     for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
                             ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
         grid = benches.add_parser(name, help=help_text)
@@ -302,6 +316,12 @@ def _run_load(args) -> int:
     from simulator.bench_service import run_load_command
 
     return run_load_command(args)
+
+
+def _run_replicas(args) -> int:
+    from simulator.bench_replicas import run_replicas_command
+
+    return run_replicas_command(args)
 
 
 def _run_accuracy(args) -> int:

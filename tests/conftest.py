@@ -5,9 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import redis
 
 from lumipose_client import Client, read_fixture_files
 from simulator.local_server import LocalServer
+from tests.redis_server import RedisServer
 
 API_KEY = "test-key"
 UPLOAD_LIMIT_MB = 4  # small, so the 'too large' cases are cheap
@@ -32,3 +34,20 @@ def client(server_url):
 @pytest.fixture(scope="session")
 def fixture_frame():
     return read_fixture_files(FIXTURE)
+
+
+@pytest.fixture(scope="session")
+def redis_server():
+    with RedisServer() as server:
+        yield server
+
+
+@pytest.fixture
+def redis_url(redis_server):
+    """A running Redis, emptied for each test (one server for the session: it starts in milliseconds,
+    but the tests that use it start services that read it)."""
+    if redis_server.process is None:  # a test stopped it and failed before starting it again
+        redis_server.start()
+    with redis.Redis.from_url(redis_server.url) as client:
+        client.flushall()
+    return redis_server.url

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from pathlib import Path
 from typing import Literal
+from urllib.parse import urlsplit
 
 from pydantic import Field, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -14,6 +16,8 @@ from server.options import LocateOptions
 from server.tracking.devices import DeviceRules
 from shared_schemas import find_map_file, load_map
 from shared_schemas.cli import describe_file_error
+
+REDIS_SCHEMES = ("redis", "rediss", "unix")
 
 
 class Settings(BaseSettings):
@@ -50,6 +54,11 @@ class Settings(BaseSettings):
     live_frames: int = Field(
         default=3, ge=0, le=20, description="pictures kept of each device's last pose frames for the web page; 0: none"
     )
+    redis: str | None = Field(
+        default=None,
+        description="Redis URL (redis://host:port/db): device sessions, maps and "
+        "the active map shared by replicas; default: this process and the data folder",
+    )
     log_level: Literal["critical", "error", "warning", "info", "debug"] = "info"
 
     @model_validator(mode="after")
@@ -66,6 +75,20 @@ class Settings(BaseSettings):
     @field_validator("api_key")
     @classmethod
     def _empty_key_is_none(cls, value: str | None) -> str | None:
+        return value or None
+
+    @field_validator("redis")
+    @classmethod
+    def _redis_url(cls, value: str | None) -> str | None:
+        if value and urlsplit(value).scheme not in REDIS_SCHEMES:
+            schemes = ", ".join(f"{scheme}://" for scheme in REDIS_SCHEMES)
+            raise ValueError(f"a Redis URL starts with one of {schemes} (got '{urlsplit(value).scheme}:')")
+        if value and importlib.util.find_spec("redis") is None:
+            raise ValueError("a Redis URL needs redis-py: pip install 'lumipose[redis]'")
+        if value:
+            from redis.connection import parse_url  # redis-py only when a URL is given
+
+            parse_url(value)  # the rest of the URL (its ValueError says what is wrong)
         return value or None
 
     def locate_options(self) -> LocateOptions:

@@ -17,7 +17,7 @@ from server.api.metrics import Metrics, StatusWindow
 from server.live import LiveBoard
 from server.options import LocateOptions
 from server.store import MapStore, ProfileStore, SampleStore
-from server.tracking.devices import Devices
+from server.tracking.devices import DeviceSessions
 
 
 class FrameSlots:
@@ -47,7 +47,7 @@ class Services:
     samples: SampleStore
     metrics: Metrics
     options: LocateOptions  # from the settings; a request's query refines its pipeline part
-    devices: Devices  # per-process: see docs/deployment.md
+    devices: DeviceSessions  # this process's, or Redis's with --redis: see docs/deployment.md
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
     survey_limiter: anyio.CapacityLimiter  # surveys (seconds to a minute each): one at a time
     frame_slots: FrameSlots  # frame uploads held at once (server.api.guard)

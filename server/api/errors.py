@@ -18,7 +18,8 @@ from starlette.requests import ClientDisconnect
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from server.outcomes import FrameError
-from server.store import StoreError
+from server.store import UNAVAILABLE, StoreError
+from server.tracking.devices import SessionStoreError
 from shared_schemas import ErrorBody
 
 log = logging.getLogger("lumipose.api")
@@ -34,7 +35,8 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         413: "upload or body too large",
         415: "unsupported content type or encoding",
         422: "invalid parameter",
-        503: "too many frame uploads held at once (frame routes); try again",
+        503: "too many frame uploads held at once (frame routes), or Redis (maps, device sessions) cannot be "
+        "reached, or a device's session is busy; try again",
     }.items()
 }
 
@@ -49,6 +51,7 @@ STORE_STATUS = {
     "bundled_profile": 409,
     "active_map": 409,
     "fixed_map": 409,
+    UNAVAILABLE: 503,
 }
 
 
@@ -85,6 +88,11 @@ def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(StoreError)
     async def _store_error(request: Request, error: StoreError) -> JSONResponse:
         return error_response(STORE_STATUS.get(error.code, 400), error.code, error.message, error.field)
+
+    @app.exception_handler(SessionStoreError)
+    async def _session_store_error(request: Request, error: SessionStoreError) -> JSONResponse:
+        # the store, not the request, is at fault: the same frame may succeed later ('busy': at once)
+        return error_response(503, error.code, error.message)
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, error: RequestValidationError) -> JSONResponse:

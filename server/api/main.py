@@ -18,8 +18,8 @@ from server.api.metrics import Metrics, MetricsMiddleware, StatusWindow
 from server.api.routes import calibrations, health, live, locate, maps, profiles, samples, surveys
 from server.dashboard import STATIC_DIR
 from server.live import LiveBoard
-from server.store import MapStore, ProfileStore, SampleStore
-from server.tracking.devices import Devices
+from server.store import MapBackend, MapStore, ProfileStore, SampleStore
+from server.tracking.devices import Devices, DeviceSessions
 from shared_schemas.api import RESULT_HEADER
 
 
@@ -34,12 +34,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     metrics = Metrics()
     app.state.services = Services(
         settings=settings,
-        maps=MapStore(settings.data_dir, settings.map),
+        maps=MapStore(settings.data_dir, settings.map, _map_backend(settings)),
         profiles=ProfileStore(settings.data_dir),
         samples=SampleStore(settings.data_dir),
         metrics=metrics,
         options=settings.locate_options(),
-        devices=Devices(settings.device_rules()),
+        devices=_device_sessions(settings),
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
         survey_limiter=anyio.CapacityLimiter(1),
         frame_slots=FrameSlots(settings.max_frames_in_flight),
@@ -72,6 +72,24 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(MetricsMiddleware, metrics=metrics)
     protocol.configure(settings.read_timeout_s, settings.max_header_bytes, endless_paths=(live.EVENTS_PATH,))
     return app
+
+
+def _map_backend(settings: Settings) -> MapBackend | None:
+    """Redis when a URL is given (maps shared by replicas at once), else the data folder (None)."""
+    if settings.redis is None:
+        return None
+    from server.redis_store import RedisMaps  # redis-py only when asked for
+
+    return RedisMaps.from_url(settings.redis)
+
+
+def _device_sessions(settings: Settings) -> DeviceSessions:
+    """In this process; in Redis, shared with the other replicas, when given its URL."""
+    if settings.redis is None:
+        return Devices(settings.device_rules())
+    from server.tracking.shared import SharedDevices  # redis-py only when asked for (the `redis` extra)
+
+    return SharedDevices.from_url(settings.redis, settings.device_rules())
 
 
 def _serve_dashboard(app: FastAPI) -> None:

@@ -20,11 +20,12 @@ from collections import OrderedDict, deque
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from server.ingest import LumaFrame
 from server.options import LocateOptions
 from server.outcomes import Refusal, refused
-from server.tracking.session import DeviceSession, IdSighting, SessionStats
+from server.tracking.session import DeviceSession, IdSighting, SessionStats, WaitingIdFrame
 from server.vlc.capture import ID_BURST_FRAMES, is_id_frame
 from server.vlc.reader import read_id_frame
 from shared_schemas import BeaconMap, FailureReason, LocateResult
@@ -40,23 +41,81 @@ class DeviceRules:
     max_waiting_bytes: int = 64 * 2**20  # stripes waiting, all devices together; the least recent give way
 
 
-@dataclass(frozen=True)
-class WaitingIdFrame:
-    t_s: float | None
-    sightings: tuple[IdSighting, ...]
+@dataclass
+class DeviceRecord:
+    """One device's state between its requests: its session and the ID stripes waiting for its pose frame."""
 
-    @property
-    def nbytes(self) -> int:
-        """The memory its stripes hold (their arrays, plus a little for the objects around them)."""
-        return sum(s.observation.nbytes + 256 for s in self.sightings) + 128
+    session: DeviceSession | None = None
+    waiting: deque[WaitingIdFrame] = field(default_factory=deque)
+
+
+class DeviceSessions(Protocol):
+    """Where devices' records live: this process (`Devices`) or a store shared by replicas
+    (`server.tracking.shared.SharedDevices`); either takes one device's frames one at a time."""
+
+    def locate(
+        self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = ...
+    ) -> LocateResult: ...
+
+    def unavailable(self) -> str | None:
+        """Why the store cannot take frames now (its server does not answer), or None."""
+        ...
+
+
+class SessionStoreError(Exception):
+    """The store of device sessions could not take a frame; `code`: 'store_unavailable' (the shared store
+    does not answer), 'busy' (the device's record kept changing under the update), 'session_too_large'."""
+
+    def __init__(self, code: str, message: str):
+        super().__init__(message)
+        self.code, self.message = code, message
+
+
+def locate_in_record(
+    record: DeviceRecord, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions, rules: DeviceRules
+) -> LocateResult:
+    """An ID frame's stripes are kept in the record for the device's next pose frame; a pose frame is
+    located in the record's session (a new one for a new map), with the stripes waiting for it."""
+    if is_id_frame(frame):
+        return _keep(record, frame, options, rules)
+    if record.session is None or record.session.beacon_map != beacon_map:
+        record.session = DeviceSession(beacon_map, options.session)
+    sightings = _fresh_sightings(record, frame, rules)
+    return record.session.locate(frame, sightings, options.pipeline, options.room)
+
+
+def _keep(record: DeviceRecord, frame: LumaFrame, options: LocateOptions, rules: DeviceRules) -> LocateResult:
+    reading = read_id_frame(frame, options.room.candidates, options.room.stripes)
+    if reading.problem is not None:
+        return refused(Refusal(FailureReason.id_frame, f"ID frame not kept: {reading.problem}"))
+    t_s = None if frame.meta.timestamp_ns is None else frame.meta.timestamp_ns * 1e-9
+    read = [p for p in reading.panels if p.observation is not None][: rules.max_panels_per_id_frame]
+    sightings = tuple(IdSighting(p.centroid_norm, p.observation) for p in read if p.observation is not None)
+    record.waiting = deque([*record.waiting, WaitingIdFrame(t_s, sightings)][-rules.id_frames_kept :])
+    return refused(
+        Refusal(
+            FailureReason.id_frame,
+            f"ID frame kept for this device's next pose frame ({len(record.waiting)} waiting)",
+        )
+    )
+
+
+def _fresh_sightings(record: DeviceRecord, pose_frame: LumaFrame, rules: DeviceRules) -> list[IdSighting]:
+    waiting, record.waiting = list(record.waiting), deque()
+    stamp = pose_frame.meta.timestamp_ns
+    return [
+        s
+        for w in waiting
+        if stamp is None or w.t_s is None or abs(stamp * 1e-9 - w.t_s) <= rules.max_id_frame_age_s
+        for s in w.sightings
+    ]
 
 
 @dataclass
 class _Device:
     lock: threading.Lock = field(default_factory=threading.Lock)
-    session: DeviceSession | None = None
-    waiting: deque[WaitingIdFrame] = field(default_factory=deque)
-    waiting_bytes: int = 0  # of `waiting`; changed under the store's lock only
+    record: DeviceRecord = field(default_factory=DeviceRecord)
+    waiting_bytes: int = 0  # of `record.waiting`; changed under the store's lock only
     last_seen_s: float = 0.0
     users: int = 0  # requests holding or waiting for `lock`: such a record is never dropped
 
@@ -74,23 +133,24 @@ class Devices:
     def locate(
         self, device_id: str, frame: LumaFrame, beacon_map: BeaconMap, options: LocateOptions = LocateOptions()
     ) -> LocateResult:
-        """An ID frame is kept for the device's next pose frame; a pose frame is located in the device's
-        session (a new one for a new map), with the ID stripes waiting for it."""
+        """The frame located in the device's record (`locate_in_record`), one at a time per device."""
         with self._checked_out(device_id) as device:
-            if is_id_frame(frame):
-                return self._keep(device, frame, options)
-            if device.session is None or device.session.beacon_map != beacon_map:
-                device.session = DeviceSession(beacon_map, options.session)
-            sightings = self._fresh_sightings(device, frame)
-            return device.session.locate(frame, sightings, options.pipeline, options.room)
+            result = locate_in_record(device.record, frame, beacon_map, options, self.rules)
+            with self._lock:  # the stripes it keeps count against the budget of all devices
+                self._set_waiting(device, device.record.waiting)
+                self._within_budget(device)
+            return result
+
+    def unavailable(self) -> str | None:
+        return None  # this process's memory is always there
 
     def stats(self, device_id: str) -> SessionStats | None:
         with self._lock:
             device = self._devices.get(device_id)
-        if device is None or device.session is None:
+        if device is None:
             return None
         with device.lock:
-            return device.session.stats
+            return None if device.record.session is None else device.record.session.stats
 
     def __len__(self) -> int:
         with self._lock:
@@ -140,42 +200,12 @@ class Devices:
         """Replace a device's waiting frames and keep the byte count (the store's lock is held)."""
         nbytes = sum(w.nbytes for w in waiting)
         self._waiting_bytes += nbytes - device.waiting_bytes
-        device.waiting, device.waiting_bytes = waiting, nbytes
+        device.record.waiting, device.waiting_bytes = waiting, nbytes
 
     def _within_budget(self, keeping: _Device) -> None:
         """Drop the waiting frames of the least recently seen devices not in use until the total fits."""
         for device in list(self._devices.values()):
             if self._waiting_bytes <= self.rules.max_waiting_bytes:
                 return
-            if device is not keeping and device.users == 0 and device.waiting:
+            if device is not keeping and device.users == 0 and device.record.waiting:
                 self._set_waiting(device, deque())
-
-    def _keep(self, device: _Device, frame: LumaFrame, options: LocateOptions) -> LocateResult:
-        reading = read_id_frame(frame, options.room.candidates, options.room.stripes)
-        if reading.problem is not None:
-            return refused(Refusal(FailureReason.id_frame, f"ID frame not kept: {reading.problem}"))
-        t_s = None if frame.meta.timestamp_ns is None else frame.meta.timestamp_ns * 1e-9
-        read = [p for p in reading.panels if p.observation is not None][: self.rules.max_panels_per_id_frame]
-        sightings = tuple(IdSighting(p.centroid_norm, p.observation) for p in read if p.observation is not None)
-        waiting = deque([*device.waiting, WaitingIdFrame(t_s, sightings)][-self.rules.id_frames_kept :])
-        with self._lock:
-            self._set_waiting(device, waiting)
-            self._within_budget(device)
-        return refused(
-            Refusal(
-                FailureReason.id_frame,
-                f"ID frame kept for this device's next pose frame ({len(device.waiting)} waiting)",
-            )
-        )
-
-    def _fresh_sightings(self, device: _Device, pose_frame: LumaFrame) -> list[IdSighting]:
-        waiting = list(device.waiting)
-        with self._lock:
-            self._set_waiting(device, deque())
-        stamp = pose_frame.meta.timestamp_ns
-        return [
-            s
-            for w in waiting
-            if stamp is None or w.t_s is None or abs(stamp * 1e-9 - w.t_s) <= self.rules.max_id_frame_age_s
-            for s in w.sightings
-        ]

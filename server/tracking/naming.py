@@ -115,6 +115,14 @@ class PanelNamer:
         )
         return PanelFix(blob, beacon, named, reading)
 
+    def new_evidence(self) -> IdEvidence:
+        """An empty accumulator for a new panel: the map's IDs preferred."""
+        return IdEvidence(
+            preferred=tuple(sorted(b.id for b in self.beacon_map.beacons)),
+            rules=self.rules.stripes,
+            max_frames=self.rules.evidence_frames,
+        )
+
     def count(self, source: BeaconIdSource | None) -> None:
         """Count a fix that was used, by how its beacon was named."""
         if source is BeaconIdSource.vlc:
@@ -145,12 +153,7 @@ class PanelNamer:
             if distance < best_distance:
                 best, best_distance = index, distance
         if best is None:
-            evidence = IdEvidence(
-                preferred=tuple(sorted(b.id for b in self.beacon_map.beacons)),
-                rules=self.rules.stripes,
-                max_frames=self.rules.evidence_frames,
-            )
-            self.panels.append(PanelTrack(relative_m, t_s, evidence))
+            self.panels.append(PanelTrack(relative_m, t_s, self.new_evidence()))
             best = len(self.panels) - 1
         claimed.add(best)
         panel = self.panels[best]

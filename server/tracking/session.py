@@ -59,6 +59,19 @@ class IdSighting:
     observation: StripeObservation
 
 
+@dataclass(frozen=True)
+class WaitingIdFrame:
+    """An ID frame's stripes waiting for the device's next pose frame (`server.tracking.devices`)."""
+
+    t_s: float | None
+    sightings: tuple[IdSighting, ...]
+
+    @property
+    def nbytes(self) -> int:
+        """The memory its stripes hold (their arrays, plus a little for the objects around them)."""
+        return sum(s.observation.nbytes + 256 for s in self.sightings) + 128
+
+
 @dataclass
 class SessionStats:
     captures: int = 0

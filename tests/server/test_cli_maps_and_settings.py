@@ -77,3 +77,12 @@ def test_every_serve_flag_is_a_setting_read_from_lumipose_flag(monkeypatch):
     assert (Settings().max_devices, Settings().log_level) == (7, "debug")
     assert Settings(max_devices=9).max_devices == 9  # a flag given wins
     assert "LUMIPOSE_SOME_FLAG" in serve.format_help()
+
+
+def test_serve_redis_is_a_redis_url_and_a_bad_one_stops_it(monkeypatch, capsys):
+    assert Settings().redis is None  # without it nothing is shared through Redis
+    monkeypatch.setenv("LUMIPOSE_REDIS", "redis://cache:6380/2")
+    assert Settings().redis == "redis://cache:6380/2"
+    assert main(["serve", "--redis", "cache:6379"]) == 2
+    assert capsys.readouterr().err == ("error: redis: a Redis URL starts with one of redis://, rediss://, unix:// "
+                                       "(got 'cache:') (got 'cache:6379')\n")

@@ -8,6 +8,7 @@ from starlette.concurrency import run_in_threadpool
 
 from server.api import VERSION
 from server.api.deps import Services, ServicesDep
+from server.store import UNAVAILABLE, StoreError
 from shared_schemas.api import Health
 
 router = APIRouter(tags=["health"])
@@ -15,17 +16,32 @@ router = APIRouter(tags=["health"])
 
 @router.get("/healthz", response_model=Health)
 async def health(services: ServicesDep) -> Health:
-    """200 while the service runs; 'degraded' names the stored files that cannot be read."""
+    """200 while the service runs; 'degraded' names the stored files that cannot be read, and a shared
+    store (Redis) that does not answer."""
     return await run_in_threadpool(_health, services)
 
 
 def _health(services: Services) -> Health:
-    damaged = sorted(services.maps.damaged() + services.profiles.damaged() + services.samples.damaged())
+    # Redis away is 'degraded' with a 200, not the maps routes' 503: the process still runs (a liveness probe
+    # must not restart it for Redis), and the body says what does not answer
+    unavailable = []
+    try:
+        damaged_maps, active_map = services.maps.damaged(), services.maps.active_name()
+    except StoreError as error:
+        if error.code != UNAVAILABLE:
+            raise
+        damaged_maps, active_map = [], services.maps.default_name()
+        unavailable.append(f"maps: {error.message}")
+    sessions_problem = services.devices.unavailable()
+    if sessions_problem is not None:
+        unavailable.append(f"device sessions: {sessions_problem}")
+    damaged = sorted(damaged_maps + services.profiles.damaged() + services.samples.damaged())
     return Health(
-        status="degraded" if damaged else "ok",
+        status="degraded" if damaged or unavailable else "ok",
         version=VERSION,
-        active_map=services.maps.active_name(),
+        active_map=active_map,
         damaged=damaged,
+        unavailable=unavailable,
     )
 
 
