@@ -22,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from server.redis_store import connect
 from server.tracking import shared
 from server.tracking.devices import Devices
-from server.tracking.shared import SharedDevices, redis_client
+from server.tracking.shared import SharedDevices
 from server.vlc.capture import is_id_frame
 from simulator.bench_office import OfficeConfig, office_scenes, walk_captures
 
@@ -60,7 +61,7 @@ def measure(redis_url: str, captures: int, devices: int) -> dict[str, Any]:
     beacon_map = office_scenes(config)[0].beacon_map()
     frames = [f for c in walk_captures(config) for f in (*c.id_frames, c.pose_frame)]
     memory, stored = Devices(), SharedDevices.from_url(redis_url, prefix=f"bench-{uuid.uuid4().hex[:8]}:")
-    client = redis_client(redis_url)
+    client = connect(redis_url)
     parts = ("memory", "redis", "added", "json", "round_trips")
     times: dict[str, dict[str, list[float]]] = {kind: {p: [] for p in parts} for kind in ("pose", "id")}
     strlen: list[int] = []

@@ -63,7 +63,7 @@ class DeviceSessions(Protocol):
 
 
 class SessionStoreError(Exception):
-    """The store of device sessions could not take a frame; `code`: 'store_unavailable' (the shared store
+    """The store of device sessions could not take a frame; `code`: 'redis_unavailable' (the shared store
     does not answer), 'busy' (the device's record kept changing under the update), 'session_too_large'."""
 
     def __init__(self, code: str, message: str):

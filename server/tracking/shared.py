@@ -10,7 +10,7 @@ once per attempt: cheap for the app's few requests per capture, costly for a dev
 
 Memory is Redis's to bound (`maxmemory` with `maxmemory-policy volatile-lru`: every key here expires),
 not a per-process budget as in `Devices`; `max_devices` does not apply either. Redis not answering is
-a `SessionStoreError('store_unavailable')` within the client's socket timeouts, never a hang.
+a `SessionStoreError('redis_unavailable')` within the client's socket timeouts, never a hang.
 """
 
 from __future__ import annotations
@@ -20,17 +20,16 @@ import random
 import threading
 import time
 from typing import cast
-from urllib.parse import urlsplit, urlunsplit
 
 import redis
-from redis.backoff import NoBackoff
 from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import RedisError, WatchError
 from redis.exceptions import TimeoutError as RedisTimeoutError
-from redis.retry import Retry
 
 from server.ingest import LumaFrame
 from server.options import LocateOptions
+from server.redis_store import connect, describe
+from server.store import UNAVAILABLE
 from server.tracking.devices import DeviceRecord, DeviceRules, SessionStoreError, locate_in_record
 from server.tracking.state import StateError, dump_device, load_device
 from shared_schemas import BeaconMap, LocateResult
@@ -41,27 +40,6 @@ MAX_RECORD_BYTES = 4 * 2**20  # records are kilobytes (tests/server/tracking/tes
 MAX_RETRY_WAIT_S = 0.5
 CONNECT_TIMEOUT_S = 1.0
 SOCKET_TIMEOUT_S = 2.0
-
-
-def redis_client(url: str) -> redis.Redis:
-    """A client whose every call ends within seconds when Redis is away: short socket timeouts, and one
-    immediate retry (a pooled connection that Redis closed) rather than redis-py's backoff of seconds."""
-    return redis.Redis.from_url(
-        url,
-        socket_connect_timeout=CONNECT_TIMEOUT_S,
-        socket_timeout=SOCKET_TIMEOUT_S,
-        retry=Retry(NoBackoff(), 1),
-    )
-
-
-def redacted(url: str) -> str:
-    """The URL without its password, to name the server in errors and logs."""
-    parts = urlsplit(url)
-    if parts.password is None:
-        return url
-    host = parts.hostname or ""
-    netloc = f"{parts.username or ''}:***@{host}" + (f":{parts.port}" if parts.port else "")
-    return urlunsplit(parts._replace(netloc=netloc))
 
 
 def _said(error: RedisError) -> str:
@@ -85,7 +63,7 @@ class SharedDevices:
 
     @classmethod
     def from_url(cls, url: str, rules: DeviceRules = DeviceRules(), prefix: str = "lumipose:") -> SharedDevices:
-        return cls(redis_client(url), rules, prefix, name=f"Redis at {redacted(url)}")
+        return cls(connect(url), rules, prefix, name=describe(url))
 
     def key(self, device_id: str) -> str:
         return f"{self._prefix}device:{device_id}"
@@ -107,9 +85,9 @@ class SharedDevices:
                 took_s = time.monotonic() - started_s
                 time.sleep(random.uniform(0, min(MAX_RETRY_WAIT_S, took_s * 2**attempt)))
         except (RedisConnectionError, RedisTimeoutError) as error:
-            raise SessionStoreError("store_unavailable", f"{self._name} did not answer: {_said(error)}") from None
+            raise SessionStoreError(UNAVAILABLE, f"{self._name} did not answer: {_said(error)}") from None
         except RedisError as error:  # e.g. out of memory under maxmemory-policy noeviction
-            raise SessionStoreError("store_unavailable", f"{self._name} refused the session: {_said(error)}") from None
+            raise SessionStoreError(UNAVAILABLE, f"{self._name} refused the session: {_said(error)}") from None
         raise SessionStoreError(
             "busy", f"device '{device_id}': its session changed under {MAX_ATTEMPTS} updates in a row; try again"
         )

@@ -10,6 +10,7 @@ import pytest
 
 from lumipose_client import Client, LumiposeError
 from simulator.bench_office import OfficeConfig, office_scenes, walk_captures
+from server.redis_store import describe
 from simulator.local_server import LocalServer
 from tests.helpers import ROOM, dark_frame
 from tests.redis_server import RedisServer
@@ -59,13 +60,13 @@ def test_redis_stopped_is_a_503_naming_it_and_a_degraded_health():
             with pytest.raises(LumiposeError) as refused:
                 _upload(client, dark_frame(FrameKind.id, 0.01), "p", ROOM.name)
             # the frame's map is read from Redis first (maps live there too with --redis): the maps' 503 answers;
-            # the sessions' own 503 store_unavailable is tested in tests/server/tracking/test_shared.py
+            # the sessions' own 503 (the same code) is tested in tests/server/tracking/test_shared.py
             assert refused.value.status == 503 and refused.value.body.error == "redis_unavailable"
             assert "Redis at 127.0.0.1:" in refused.value.body.message
             health = client.health()
             assert health.status == "degraded"
             assert [p.split(": ")[0] for p in health.unavailable] == ["maps", "device sessions"]
-            assert f"Redis at {redis_server.url} does not answer" in health.unavailable[1]
+            assert f"{describe(redis_server.url)} does not answer" in health.unavailable[1]
     assert "Traceback" not in server.log(), server.log()
 
 

@@ -15,7 +15,9 @@ import redis
 from server.options import LocateOptions
 from server.tracking import shared
 from server.tracking.devices import DeviceRules, Devices, SessionStoreError
-from server.tracking.shared import SharedDevices, redacted
+from server import redis_store
+from server.redis_store import describe
+from server.tracking.shared import SharedDevices
 from server.tracking.state import load_device
 from shared_schemas import FrameKind
 from simulator.bench_office import OfficeConfig, office_scenes, walk_captures
@@ -156,9 +158,9 @@ def test_redis_stopped_is_a_clear_error_within_seconds():
         with pytest.raises(SessionStoreError) as failed:
             devices.locate("p", dark_frame(FrameKind.id, 0.01), ROOM)
         assert time.monotonic() - started < 3.0
-        assert failed.value.code == "store_unavailable"
-        assert failed.value.message.startswith(f"Redis at {server.url} did not answer: "), failed.value.message
-        assert devices.unavailable().startswith(f"Redis at {server.url} does not answer: ")
+        assert failed.value.code == "redis_unavailable"
+        assert failed.value.message.startswith(f"{describe(server.url)} did not answer: "), failed.value.message
+        assert devices.unavailable().startswith(f"{describe(server.url)} does not answer: ")
 
 
 def test_a_redis_that_never_answers_times_out_rather_than_hangs():
@@ -171,13 +173,13 @@ def test_a_redis_that_never_answers_times_out_rather_than_hangs():
         with pytest.raises(SessionStoreError) as failed:
             devices.locate("p", dark_frame(FrameKind.id, 0.0), ROOM)
         took_s = time.monotonic() - started
-    assert failed.value.code == "store_unavailable" and "Timeout" in failed.value.message, failed.value.message
-    assert took_s < 2 * (shared.CONNECT_TIMEOUT_S + shared.SOCKET_TIMEOUT_S) + 1, took_s
+    assert failed.value.code == "redis_unavailable" and "Timeout" in failed.value.message, failed.value.message
+    assert took_s < 2 * (redis_store.CONNECT_TIMEOUT_S + redis_store.COMMAND_TIMEOUT_S) + 1, took_s
 
 
 def test_the_password_is_not_named():
-    assert redacted("redis://user:secret@redis.local:6380/1") == "redis://user:***@redis.local:6380/1"
-    assert redacted("redis://redis.local:6379/0") == "redis://redis.local:6379/0"
+    assert describe("redis://user:secret@redis.local:6380/1") == "Redis at redis.local:6380/1"
+    assert describe("redis://redis.local:6379/0") == "Redis at redis.local:6379/0"
 
 
 def test_a_full_redis_refuses_by_name():
@@ -186,6 +188,6 @@ def test_a_full_redis_refuses_by_name():
         redis.Redis.from_url(server.url).config_set("maxmemory", "1")  # every write is over the limit
         with pytest.raises(SessionStoreError) as refused:
             SharedDevices.from_url(server.url).locate("p", dark_frame(FrameKind.id, 0.0), ROOM)
-    assert refused.value.code == "store_unavailable"
-    assert refused.value.message == (f"Redis at {server.url} refused the session: "
+    assert refused.value.code == "redis_unavailable"
+    assert refused.value.message == (f"{describe(server.url)} refused the session: "
                                      "command not allowed when used memory > 'maxmemory'.")
