@@ -70,6 +70,14 @@ def describe(url: str) -> str:
     return f"Redis at {parts.hostname or 'localhost'}:{parts.port or 6379}/{database}"
 
 
+def lost_at_exec(error: redis.WatchError) -> bool:
+    """Whether a WatchError means the connection failed while watching (redis-py raises one then, EXEC's
+    reply lost: Redis may have applied the transaction) rather than another writer's change."""
+    return isinstance(error.__context__, (redis.ConnectionError, redis.TimeoutError)) or (
+        "occurred while watching" in str(error)
+    )
+
+
 @contextmanager
 def reaching(place: str) -> Iterator[None]:
     """Redis errors as the store's: down or refusing (read-only, out of memory, a key of another type)."""
@@ -204,7 +212,11 @@ class RedisMaps:
                     if change.delete is not None:
                         pipe.hdel(MAPS_KEY, change.delete)
                     done = pipe.execute()
-                except redis.WatchError:
+                except redis.WatchError as error:
+                    if lost_at_exec(error):  # it may have been applied: say so rather than decide again
+                        raise StoreError(
+                            UNAVAILABLE, f"{self.place} did not confirm the change; look before trying again"
+                        ) from None
                     continue  # another replica changed a map or the active one meanwhile: decide again
                 return change.delete is None or done[-1] == 1
         raise StoreError(UNAVAILABLE, f"{self.place}: the maps kept changing; try again")

@@ -2,8 +2,10 @@
 (simulator/replicas.py starts them all on 127.0.0.1), one replica with and without Redis (what the sessions' round
 trips add), and the bytes Redis holds per device after an office walk. Figures, not a test.
 
-Every client names its device (`X-Lumipose-Device: load-<n>`), so every frame reads and writes its device's
-session: in Redis with `--redis`, in the process without."""
+Every client names its device (`X-Lumipose-Device: load-<n>`), but the frames are the bundled test-bench map's,
+which has one beacon: a frame of a one-beacon map needs no session (`server.locator.in_device_session`), so these
+runs measure the balancing and the maps' reads from Redis, not the sessions' (`simulator/bench_sessions.py` times
+those, in process)."""
 
 from __future__ import annotations
 
@@ -121,7 +123,7 @@ def print_report(report: dict) -> None:
     runs = report["runs"]
     print(f"commit {report['commit']}, {report['machine']['cpus']} CPUs, load average "
           f"{report['machine']['load_average_1min']:.1f} at the start; {report['seconds']:g} s per run\n")
-    print("Through nginx (least_conn), sessions in Redis:\n")
+    print("Through nginx (least_conn), maps in Redis (one-beacon map: no session):\n")
     print("| replicas | frame | clients | requests | errors | req/s | x one replica | p50 ms | p99 ms | load avg |")
     print("| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     balanced = [r for r in runs if r["nginx"]]
@@ -131,7 +133,7 @@ def print_report(report: dict) -> None:
         print(f"| {r['replicas']} | {r['frame']} | {r['clients']} | {r['requests']} | {r['errors']} "
               f"| {r['throughput_rps']:.1f} | {'-' if ratio is None else f'{ratio:.2f}'} | {r['p50_ms']:.1f} "
               f"| {r['p99_ms']:.1f} | {r['load_average_1min']:.1f} |")
-    print("\nOne replica straight (no nginx), sessions in memory against Redis:\n")
+    print("\nOne replica straight (no nginx), without and with Redis (its maps; no session):\n")
     print("| frame | clients | req/s memory | req/s Redis | p50 ms memory | p50 ms Redis | p99 ms memory | p99 ms Redis "
           "| server ms memory | server ms Redis |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")

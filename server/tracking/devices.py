@@ -135,11 +135,12 @@ class Devices:
     ) -> LocateResult:
         """The frame located in the device's record (`locate_in_record`), one at a time per device."""
         with self._checked_out(device_id) as device:
-            result = locate_in_record(device.record, frame, beacon_map, options, self.rules)
-            with self._lock:  # the stripes it keeps count against the budget of all devices
-                self._set_waiting(device, device.record.waiting)
-                self._within_budget(device)
-            return result
+            try:
+                return locate_in_record(device.record, frame, beacon_map, options, self.rules)
+            finally:  # the stripes it keeps (or used up, even when it raised) count against all devices' budget
+                with self._lock:
+                    self._set_waiting(device, device.record.waiting)
+                    self._within_budget(device)
 
     def unavailable(self) -> str | None:
         return None  # this process's memory is always there

@@ -28,7 +28,7 @@ from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from server.ingest import LumaFrame
 from server.options import LocateOptions
-from server.redis_store import connect, describe
+from server.redis_store import connect, describe, lost_at_exec
 from server.store import UNAVAILABLE
 from server.tracking.devices import DeviceRecord, DeviceRules, SessionStoreError, locate_in_record
 from server.tracking.state import StateError, dump_device, load_device
@@ -123,7 +123,12 @@ class SharedDevices:
             pipe.set(key, data, px=max(1, round(self.rules.idle_s * 1000)))
             try:
                 pipe.execute()
-            except WatchError:
+            except WatchError as error:
+                if lost_at_exec(error):  # Redis may have stored it: locating the frame again would count it twice
+                    raise SessionStoreError(
+                        UNAVAILABLE,
+                        f"{self._name} did not confirm device '{device_id}''s session; its frame may be kept",
+                    ) from None
                 return None
         return result
 

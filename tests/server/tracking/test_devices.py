@@ -133,3 +133,20 @@ def test_waiting_stripes_are_bounded_in_bytes_across_devices(monkeypatch):
     assert devices.waiting_bytes == 3 * per_frame  # the two least recently seen devices gave theirs up
     devices.locate("phone-4", dark_frame(FrameKind.pose), ROOM)  # its pose frame takes its stripes
     assert devices.waiting_bytes == 2 * per_frame
+
+
+def test_a_pose_frame_that_fails_still_gives_its_stripes_back_to_the_budget(monkeypatch):
+    """The byte count is settled even when the session raises (the locator turns that into a refusal one level
+    up): it once stayed at the used-up stripes' size until the device's next frame."""
+    from server.tracking.session import DeviceSession
+
+    devices = Devices()
+    devices.locate("p", dark_frame(FrameKind.id), ROOM)
+
+    def fails(*args, **kwargs):
+        raise FloatingPointError("a numerical failure deep in the fit")
+
+    monkeypatch.setattr(DeviceSession, "locate", fails)
+    with pytest.raises(FloatingPointError):
+        devices.locate("p", dark_frame(FrameKind.pose), ROOM)
+    assert devices.waiting_bytes == 0

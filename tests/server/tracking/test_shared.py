@@ -191,3 +191,54 @@ def test_a_full_redis_refuses_by_name():
     assert refused.value.code == "redis_unavailable"
     assert refused.value.message == (f"{describe(server.url)} refused the session: "
                                      "command not allowed when used memory > 'maxmemory'.")
+
+
+def _slow_exec_proxy(redis_port: int, delay_s: float) -> int:
+    """A TCP proxy to Redis that holds back the reply to the first EXEC for `delay_s` (past the client's
+    timeout, while Redis has applied it): the port it listens on."""
+    import asyncio
+
+    armed, ports = {"exec": True, "hold": False}, []
+
+    async def pump(reader, writer, to_server: bool) -> None:
+        while data := await reader.read(65536):
+            if to_server and b"EXEC" in data and armed["exec"]:
+                armed["exec"], armed["hold"] = False, True
+            if not to_server and armed["hold"]:
+                armed["hold"] = False
+                await asyncio.sleep(delay_s)
+            try:
+                writer.write(data)
+                await writer.drain()
+            except OSError:
+                return
+        writer.close()
+
+    async def handle(client_reader, client_writer) -> None:
+        server_reader, server_writer = await asyncio.open_connection("127.0.0.1", redis_port)
+        await asyncio.gather(pump(client_reader, server_writer, True), pump(server_reader, client_writer, False),
+                             return_exceptions=True)
+
+    async def serve() -> None:
+        server = await asyncio.start_server(handle, "127.0.0.1", 0)
+        ports.append(server.sockets[0].getsockname()[1])
+        async with server:
+            await server.serve_forever()
+
+    threading.Thread(target=lambda: asyncio.run(serve()), daemon=True).start()
+    while not ports:
+        time.sleep(0.01)
+    return ports[0]
+
+
+def test_a_lost_exec_reply_is_an_error_not_a_second_locate(redis_url):
+    """redis-py raises WatchError when the connection fails while watching, though Redis may have applied
+    EXEC: retrying located the frame twice (an ID frame's stripes kept twice, a pose frame tracked twice)."""
+    port = _slow_exec_proxy(int(redis_url.rsplit(":", 1)[1].split("/")[0]), redis_store.COMMAND_TIMEOUT_S + 1)
+    devices = SharedDevices.from_url(f"redis://127.0.0.1:{port}/0")
+    with pytest.raises(SessionStoreError) as failed:
+        devices.locate("p", dark_frame(FrameKind.id, 0.0), ROOM)
+    assert failed.value.code == "redis_unavailable" and "did not confirm" in failed.value.message
+    time.sleep(redis_store.COMMAND_TIMEOUT_S)  # the held reply has gone by
+    _, waiting = load_device(redis.Redis.from_url(redis_url).get(devices.key("p")), ROOM, LocateOptions().session)
+    assert len(waiting) == 1 and devices.conflicts == 0  # kept once, and not counted as another writer's change
