@@ -17,6 +17,7 @@ import cv2
 import httpx
 import numpy as np
 import pytest
+from playwright.sync_api import expect
 
 from lumipose_client import Client, read_fixture_files
 from server.geometry import beacon_corners_m, beacon_to_world, camera_matrix, world_to_camera
@@ -269,7 +270,7 @@ def test_map_upload_shows_the_error_at_its_field(page, live, tmp_path):
     open_view(page, live.url, "maps")
     page.locator('[data-testid="map-row"][data-map="office"][data-active="true"]').wait_for(timeout=TIMEOUT_MS)
     page.get_by_test_id("map-upload").set_input_files(str(bad_file))
-    assert page.get_by_test_id("map-name").input_value() == "office-bad"  # from the file's name
+    expect(page.get_by_test_id("map-name")).to_have_value("office-bad", timeout=TIMEOUT_MS)  # the file's name
     page.get_by_test_id("map-name").fill("office bad/1")  # the service's names: letters, digits, _ . -
     assert "letters, digits" in page.get_by_test_id("map-name-error").text_content()
     page.get_by_test_id("map-submit").click()

@@ -72,7 +72,8 @@ export class MapsView {
     this.nameError = el("span", { class: "field-error", "data-testid": "map-name-error", role: "alert" });
     this.nameInput.after(this.nameError);
     this.nameInput.addEventListener("input", () => this.checkName());
-    this.fileInput.addEventListener("change", () => this.readFile());
+    // an upload waits for the file being read: clicked at once, it would send the previous file's text
+    this.fileInput.addEventListener("change", () => (this.reading = this.readFile()));
     document.getElementById("map-form").addEventListener("submit", (event) => {
       event.preventDefault();
       this.upload();
@@ -152,6 +153,7 @@ export class MapsView {
   }
 
   async upload() {
+    await this.reading;
     const name = this.nameInput.value.trim();
     if (this.uploadText === null) return this.say("Choose a map file first.", "bad");
     const problem = this.checkName();
