@@ -124,3 +124,15 @@ def survey_frame(shot, name: str, labels=None):
     return SurveyFrame(
         name, LumaFrame(shot.pixels, meta, shot.meta.camera), list(shot.labels if labels is None else labels)
     )
+
+
+def walk_frames(captures):
+    """A walk's frames as the app sends them: each capture's ID frames, then its pose frame."""
+    for capture in captures:
+        yield from capture.id_frames
+        yield capture.pose_frame
+
+
+def answer_without_timings(result) -> dict:
+    """A result as JSON without its timings: what two ways of locating one frame must agree on."""
+    return result.model_dump(mode="json", exclude={"timing_ms"})

@@ -21,7 +21,7 @@ from server.tracking.shared import SharedDevices
 from server.tracking.state import load_device
 from shared_schemas import FrameKind
 from simulator.bench_office import OfficeConfig, office_scenes, walk_captures
-from tests.helpers import ROOM, dark_frame
+from tests.helpers import answer_without_timings, walk_frames, ROOM, dark_frame
 from tests.redis_server import RedisServer
 
 OPTIONS = LocateOptions()
@@ -40,16 +40,6 @@ def prefix() -> str:
     return f"test-{uuid.uuid4().hex[:8]}:"
 
 
-def _frames(captures):
-    for capture in captures:
-        yield from capture.id_frames  # as the app sends them: the ID frames, then the pose frame
-        yield capture.pose_frame
-
-
-def _answer(result) -> dict:
-    return result.model_dump(mode="json", exclude={"timing_ms"})
-
-
 def _stored(client: redis.Redis, devices: SharedDevices, device: str, beacon_map):
     return load_device(client.get(devices.key(device)), beacon_map, OPTIONS.session)
 
@@ -58,10 +48,10 @@ def test_a_walk_in_redis_answers_as_in_memory(walk, redis_url, prefix):
     beacon_map, captures = walk
     memory, stored = Devices(), SharedDevices.from_url(redis_url, prefix=prefix)
     fixes = 0
-    for frame in _frames(captures):
+    for frame in walk_frames(captures):
         expected = memory.locate("phone", frame, beacon_map)
         got = stored.locate("phone", frame, beacon_map)
-        assert _answer(got) == _answer(expected)
+        assert answer_without_timings(got) == answer_without_timings(expected)
         fixes += got.ok
     assert fixes >= 4
     session, waiting = _stored(redis.Redis.from_url(redis_url), stored, "phone", beacon_map)
@@ -76,10 +66,10 @@ def test_two_replicas_taking_turns_answer_as_one_process(walk, redis_url, prefix
     memory = Devices()
     replicas = [SharedDevices.from_url(redis_url, prefix=prefix) for _ in range(2)]
     vlc_ids = 0
-    for n, frame in enumerate(_frames(captures)):
+    for n, frame in enumerate(walk_frames(captures)):
         expected = memory.locate("phone", frame, beacon_map)
         got = replicas[n % 2].locate("phone", frame, beacon_map)
-        assert _answer(got) == _answer(expected)
+        assert answer_without_timings(got) == answer_without_timings(expected)
         vlc_ids += got.ok and got.beacon_id_source.value == "vlc"
     assert vlc_ids >= 2  # pose frames named by ID frames that went through the other replica
 

@@ -10,7 +10,7 @@ from server.options import LocateOptions
 from server.tracking.devices import DeviceRecord, DeviceRules, locate_in_record
 from server.tracking.state import STATE_FORMAT, StateError, dump_device, load_device, map_digest
 from simulator.bench_office import OfficeConfig, office_scenes, walk_captures
-from tests.helpers import OTHER_ROOM, ROOM
+from tests.helpers import answer_without_timings, walk_frames, OTHER_ROOM, ROOM
 
 OPTIONS, RULES = LocateOptions(), DeviceRules()
 
@@ -22,24 +22,14 @@ def walk():
     return pose_scene.beacon_map(), list(walk_captures(config))
 
 
-def _frames(captures):
-    for capture in captures:
-        yield from capture.id_frames  # as the app sends them: the ID frames, then the pose frame
-        yield capture.pose_frame
-
-
-def _answer(result) -> dict:
-    return result.model_dump(mode="json", exclude={"timing_ms"})
-
-
 def test_a_walk_stored_after_every_frame_answers_as_one_kept_in_memory(walk):
     beacon_map, captures = walk
     kept, stored = DeviceRecord(), DeviceRecord()
     sizes, fixes = [], 0
-    for frame in _frames(captures):
+    for frame in walk_frames(captures):
         expected = locate_in_record(kept, frame, beacon_map, OPTIONS, RULES)
         got = locate_in_record(stored, frame, beacon_map, OPTIONS, RULES)
-        assert _answer(got) == _answer(expected)
+        assert answer_without_timings(got) == answer_without_timings(expected)
         fixes += got.ok
         data = dump_device(stored.session, stored.waiting)
         sizes.append(len(data))
