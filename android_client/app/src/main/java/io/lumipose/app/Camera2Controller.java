@@ -12,6 +12,7 @@ import android.hardware.camera2.CameraDevice;
 import android.hardware.camera2.CameraManager;
 import android.hardware.camera2.CameraMetadata;
 import android.hardware.camera2.CaptureRequest;
+import android.hardware.camera2.CaptureResult;
 import android.hardware.camera2.TotalCaptureResult;
 import android.hardware.camera2.params.TonemapCurve;
 import android.media.Image;
@@ -55,13 +56,34 @@ final class Camera2Controller {
         /** The camera is configured; returns where frames go (the Activity builds it from facts and plan). */
         FrameSink onStarted(CameraFacts facts, CapturePlan plan, String summary);
 
+        /** The camera cannot be used on this phone or by this app (no retry helps). */
         void onUnsupported(String reason);
 
-        void onError(String message);
+        /**
+         * The camera was lost or failed (disconnected, taken by another app, an error, a refused
+         * stream, an exception on the camera thread): everything is closed and the controller opens
+         * it again by itself in {@code retryInMs}.
+         */
+        void onCameraLost(String message, long retryInMs);
+
+        /** Capturing again after {@link #onCameraLost}, into the same sink. */
+        void onCameraBack(String summary);
+
+        /** A frame could not be handled (the sink threw): the frame is dropped, capturing goes on. */
+        void onFrameError(String message);
     }
 
     /** Images in flight: the sink copies during the call, so a few suffice for a five-frame burst. */
     private static final int MAX_IMAGES = 4;
+    /** Reopening after a loss: the first wait, doubled each time up to the last. */
+    static final long FIRST_RETRY_MS = 1000;
+    static final long LAST_RETRY_MS = 30_000;
+    /**
+     * White balance runs until it has converged (or this many frames have passed, for a camera that
+     * never says so), then is locked: gains that move from frame to frame would move the Y levels the
+     * server's clipped-edge model reads, and gains locked before they settle could be far off.
+     */
+    static final int AWB_SETTLE_MAX_FRAMES = 30;
 
     private final Context context;
     private final String requestedCameraId;
@@ -80,6 +102,17 @@ final class Camera2Controller {
     private CameraCaptureSession session;
     private ImageReader reader;
     private FrameSink sink;
+    /** The facts and plan of the camera being used (kept across reopenings). */
+    private CameraFacts facts;
+    private CapturePlan plan;
+    private String summary;
+    private boolean awbLocked;
+    private int framesSinceConfigured;
+    /** The wait before the next reopening; 0 until a loss. */
+    private long retryMs;
+    private boolean lost;
+    /** Only the first of a run of failing frames is told: a broken sink would say so every frame. */
+    private boolean frameErrorTold;
 
     Camera2Controller(Context context, String cameraId, CaptureOptions options, Listener listener) {
         this.context = context.getApplicationContext();
@@ -125,7 +158,12 @@ final class Camera2Controller {
         thread = new HandlerThread("lumipose-camera");
         thread.start();
         handler = new Handler(thread.getLooper());
-        handler.post(this::open);
+        handler.post(new Runnable() {
+            @Override
+            public void run() {
+                open();
+            }
+        });
     }
 
     /** Closes the camera; the thread ends after the camera says it is closed. Safe to call twice. */
@@ -134,15 +172,17 @@ final class Camera2Controller {
             return;
         }
         stopRequested = true;
-        handler.post(this::close);
+        handler.post(new Runnable() {
+            @Override
+            public void run() {
+                close();
+            }
+        });
     }
 
     private void close() {
         sink = null;
-        if (session != null) {
-            session.close();
-            session = null;
-        }
+        closeSession();
         // With openCamera in flight this waits: onOpened closes the device, whose onClosed quits.
         act(lifecycle.stop(), camera);
         // A device closed after an error may never report onClosed: the thread goes after a while anyway.
@@ -152,6 +192,19 @@ final class Camera2Controller {
                 act(lifecycle.onCloseTimeout(), null);
             }
         }, CLOSE_TIMEOUT_MS);
+    }
+
+    /** Closing a session the camera already dropped may throw: it is gone either way. */
+    private void closeSession() {
+        CameraCaptureSession s = session;
+        session = null;
+        if (s != null) {
+            try {
+                s.close();
+            } catch (RuntimeException alreadyGone) {
+                // closed underneath us (the device failed or was closed first)
+            }
+        }
     }
 
     private void act(CameraLifecycle.Action action, CameraDevice device) {
@@ -197,41 +250,99 @@ final class Camera2Controller {
         }
         CameraManager manager = (CameraManager) context.getSystemService(Context.CAMERA_SERVICE);
         try {
-            String id = chooseCameraId(manager);
-            if (id == null) {
-                listener.onUnsupported("This phone has no camera.");
-                return;
+            if (facts == null) {
+                String id = chooseCameraId(manager);
+                if (id == null) {
+                    listener.onUnsupported("This phone has no camera.");
+                    return;
+                }
+                CameraCharacteristics cc = manager.getCameraCharacteristics(id);
+                CameraFacts read = CameraFactsReader.read(id, cc);
+                CapturePlan p = CapturePlan.plan(read, options);
+                if (!CameraFactsReader.reportsRollingShutterSkew(cc)) {
+                    p = p.withoutIdFrames("no rolling-shutter skew: beacon IDs off");
+                }
+                plan = listener.plan(read, p);
+                facts = read;
+                summary = summary(facts, plan);
             }
-            CameraCharacteristics cc = manager.getCameraCharacteristics(id);
-            CameraFacts facts = CameraFactsReader.read(id, cc);
-            CapturePlan plan = CapturePlan.plan(facts, options);
-            if (!CameraFactsReader.reportsRollingShutterSkew(cc)) {
-                plan = plan.withoutIdFrames("no rolling-shutter skew: beacon IDs off");
+            if (reader == null) {
+                reader = ImageReader.newInstance(plan.output.width, plan.output.height, ImageFormat.YUV_420_888,
+                        MAX_IMAGES);
+                reader.setOnImageAvailableListener(new ImageReader.OnImageAvailableListener() {
+                    @Override
+                    public void onImageAvailable(ImageReader r) {
+                        deliver(r);
+                    }
+                }, handler);
             }
-            plan = listener.plan(facts, plan);
-            reader = ImageReader.newInstance(plan.output.width, plan.output.height, ImageFormat.YUV_420_888,
-                    MAX_IMAGES);
-            reader.setOnImageAvailableListener(this::deliver, handler);
-            manager.openCamera(id, stateCallback(facts, plan), handler);
+            manager.openCamera(facts.cameraId, stateCallback(), handler);
             lifecycle.opening(); // callbacks come on this thread, after this method returns
         } catch (UnsupportedCameraException e) {
             listener.onUnsupported(e.getMessage());
         } catch (IllegalArgumentException e) {
             listener.onUnsupported("Camera facts unusable: " + e.getMessage());
-        } catch (CameraAccessException e) {
-            listener.onError("Camera access failed: " + e.getMessage());
         } catch (SecurityException e) {
             listener.onUnsupported("Camera permission refused: " + e.getMessage());
+        } catch (CameraAccessException e) {
+            if (e.getReason() == CameraAccessException.CAMERA_DISABLED) {
+                listener.onUnsupported("The camera is disabled on this phone (device policy).");
+            } else {
+                lose("Camera not available (" + accessReason(e) + ")");
+            }
+        } catch (RuntimeException e) {
+            lose("Camera failed to open: " + e);
         }
     }
 
-    private CameraDevice.StateCallback stateCallback(final CameraFacts facts, final CapturePlan plan) {
+    private static String accessReason(CameraAccessException e) {
+        switch (e.getReason()) {
+            case CameraAccessException.CAMERA_IN_USE:
+                return "in use by another app";
+            case CameraAccessException.MAX_CAMERAS_IN_USE:
+                return "too many cameras open";
+            case CameraAccessException.CAMERA_DISCONNECTED:
+                return "disconnected";
+            default:
+                return e.getMessage();
+        }
+    }
+
+    /**
+     * The camera was lost: close what is open (the sink stays for the next try) and open again
+     * after a wait that doubles each time, until stopped. A user who walks away from the phone and
+     * back finds it capturing again without leaving the screen.
+     */
+    private void lose(String message) {
+        closeSession();
+        awbLocked = false;
+        CameraDevice device = camera;
+        if (device != null) {
+            camera = null;
+            device.close();
+            act(lifecycle.onFailed(), device);
+        }
+        if (lifecycle.isClosing()) {
+            return;
+        }
+        lost = true;
+        retryMs = retryMs == 0 ? FIRST_RETRY_MS : Math.min(LAST_RETRY_MS, 2 * retryMs);
+        listener.onCameraLost(message, retryMs);
+        handler.postDelayed(new Runnable() {
+            @Override
+            public void run() {
+                open();
+            }
+        }, retryMs);
+    }
+
+    private CameraDevice.StateCallback stateCallback() {
         return new CameraDevice.StateCallback() {
             @Override
             public void onOpened(CameraDevice device) {
                 if (lifecycle.onOpened() == CameraLifecycle.Action.USE_DEVICE) {
                     camera = device;
-                    startSession(facts, plan);
+                    startSession();
                 } else {
                     device.close(); // stop() came while opening
                 }
@@ -244,27 +355,50 @@ final class Camera2Controller {
 
             @Override
             public void onDisconnected(CameraDevice device) {
-                failed(device, "Camera disconnected.");
+                failed(device, "Camera disconnected (another app may have taken it)");
             }
 
             @Override
             public void onError(CameraDevice device, int error) {
-                failed(device, "Camera error " + error + ".");
+                if (error == CameraDevice.StateCallback.ERROR_CAMERA_DISABLED) {
+                    failed(device, null);
+                    listener.onUnsupported("The camera is disabled on this phone (device policy).");
+                } else {
+                    failed(device, "Camera error " + error + " (" + errorName(error) + ")");
+                }
             }
         };
     }
 
-    private void failed(CameraDevice device, String message) {
-        camera = null;
-        device.close();
-        boolean stopping = lifecycle.isClosing();
-        act(lifecycle.onFailed(), device);
-        if (!stopping) {
-            listener.onError(message);
+    private static String errorName(int error) {
+        switch (error) {
+            case CameraDevice.StateCallback.ERROR_CAMERA_IN_USE:
+                return "in use";
+            case CameraDevice.StateCallback.ERROR_MAX_CAMERAS_IN_USE:
+                return "too many cameras open";
+            case CameraDevice.StateCallback.ERROR_CAMERA_DEVICE:
+                return "device failed";
+            case CameraDevice.StateCallback.ERROR_CAMERA_SERVICE:
+                return "camera service failed";
+            default:
+                return "unknown";
         }
     }
 
-    private void startSession(final CameraFacts facts, final CapturePlan plan) {
+    /** A device that failed: closed; reopened later unless stopping or {@code message} is null. */
+    private void failed(CameraDevice device, String message) {
+        closeSession();
+        if (camera == device) {
+            camera = null;
+        }
+        device.close();
+        act(lifecycle.onFailed(), device);
+        if (message != null) {
+            lose(message);
+        }
+    }
+
+    private void startSession() {
         try {
             camera.createCaptureSession(Collections.singletonList(reader.getSurface()),
                     new CameraCaptureSession.StateCallback() {
@@ -275,40 +409,58 @@ final class Camera2Controller {
                             }
                             session = s;
                             try {
-                                List<CaptureRequest> burst = new ArrayList<CaptureRequest>();
-                                for (RequestSpec spec : plan.burst()) {
-                                    burst.add(request(facts, spec));
-                                }
-                                sink = listener.onStarted(facts, plan, summary(facts, plan));
-                                s.setRepeatingBurst(burst, captureCallback, handler);
-                            } catch (CameraAccessException | IllegalArgumentException e) {
-                                listener.onError("Could not start capturing: " + e.getMessage());
+                                framesSinceConfigured = 0;
+                                awbLocked = false;
+                                repeat(s);
+                                started();
+                            } catch (CameraAccessException | RuntimeException e) {
+                                lose("Could not start capturing: " + e.getMessage());
                             }
                         }
 
                         @Override
                         public void onConfigureFailed(CameraCaptureSession s) {
                             if (!lifecycle.isClosing()) {
-                                listener.onError("The camera refused the YUV_420_888 stream.");
+                                lose("The camera refused the YUV_420_888 stream");
                             }
                         }
                     }, handler);
-        } catch (CameraAccessException e) {
-            listener.onError("Could not configure the camera: " + e.getMessage());
+        } catch (CameraAccessException | RuntimeException e) {
+            lose("Could not configure the camera: " + e.getMessage());
         }
     }
 
+    /** The sink is made once, on the first configuration; a reopening only says the camera is back. */
+    private void started() {
+        if (sink == null && !lost) {
+            sink = listener.onStarted(facts, plan, summary);
+        } else if (lost) {
+            lost = false;
+            retryMs = 0;
+            listener.onCameraBack(summary);
+        }
+    }
+
+    /** (Re)starts the repeating burst, with white balance locked once it has settled. */
+    private void repeat(CameraCaptureSession s) throws CameraAccessException {
+        List<CaptureRequest> burst = new ArrayList<CaptureRequest>();
+        for (RequestSpec spec : plan.burst()) {
+            burst.add(request(spec, awbLocked));
+        }
+        s.setRepeatingBurst(burst, captureCallback, handler);
+    }
+
     /** One RequestSpec as a CaptureRequest: every value comes from the spec; "null" leaves a key alone. */
-    private CaptureRequest request(CameraFacts facts, RequestSpec spec) throws CameraAccessException {
+    private CaptureRequest request(RequestSpec spec, boolean lockWhiteBalance) throws CameraAccessException {
         CaptureRequest.Builder b = camera.createCaptureRequest(CameraDevice.TEMPLATE_MANUAL);
         b.addTarget(reader.getSurface());
         b.setTag(spec.kind);
         b.set(CaptureRequest.CONTROL_MODE, CameraMetadata.CONTROL_MODE_AUTO);
         b.set(CaptureRequest.CONTROL_AE_MODE, CameraMetadata.CONTROL_AE_MODE_OFF);
         b.set(CaptureRequest.CONTROL_AF_MODE, CameraMetadata.CONTROL_AF_MODE_OFF);
-        // White-balance gains that move from frame to frame would move the Y levels the server's clipped-edge
-        // model reads: whatever mode the template leaves, the gains stay where they are.
-        b.set(CaptureRequest.CONTROL_AWB_LOCK, Boolean.TRUE);
+        // Auto white balance until it settles, then the gains stay where they are (AWB_SETTLE_MAX_FRAMES).
+        b.set(CaptureRequest.CONTROL_AWB_MODE, CameraMetadata.CONTROL_AWB_MODE_AUTO);
+        b.set(CaptureRequest.CONTROL_AWB_LOCK, lockWhiteBalance);
         // Digital stabilisation crops and shifts the stream: the intrinsics assume neither.
         b.set(CaptureRequest.CONTROL_VIDEO_STABILIZATION_MODE, CameraMetadata.CONTROL_VIDEO_STABILIZATION_MODE_OFF);
         b.set(CaptureRequest.SENSOR_EXPOSURE_TIME, spec.exposureNs);
@@ -370,24 +522,72 @@ final class Camera2Controller {
     private final CameraCaptureSession.CaptureCallback captureCallback = new CameraCaptureSession.CaptureCallback() {
         @Override
         public void onCaptureCompleted(CameraCaptureSession s, CaptureRequest request, TotalCaptureResult result) {
-            FrameResult frame = FrameResultReader.read(result);
-            if (frame != null && sink != null) {
-                sink.onResult(frame);
+            if (s != session) {
+                return; // a late result of a session closed since
+            }
+            settleWhiteBalance(s, result);
+            FrameSink to = sink;
+            if (to == null) {
+                return;
+            }
+            try {
+                FrameResult frame = FrameResultReader.read(result);
+                if (frame != null) {
+                    to.onResult(frame);
+                }
+                frameErrorTold = false;
+            } catch (RuntimeException e) {
+                frameFailed("capture result", e);
             }
         }
     };
 
+    /** Locks white balance once it has converged, or after AWB_SETTLE_MAX_FRAMES frames. */
+    private void settleWhiteBalance(CameraCaptureSession s, TotalCaptureResult result) {
+        if (awbLocked) {
+            return;
+        }
+        Integer state = result.get(CaptureResult.CONTROL_AWB_STATE);
+        framesSinceConfigured++;
+        if ((state != null && state == CameraMetadata.CONTROL_AWB_STATE_CONVERGED)
+                || framesSinceConfigured >= AWB_SETTLE_MAX_FRAMES) {
+            awbLocked = true;
+            try {
+                repeat(s);
+            } catch (CameraAccessException | RuntimeException e) {
+                lose("Could not lock white balance: " + e.getMessage());
+            }
+        }
+    }
+
+    private void frameFailed(String what, RuntimeException e) {
+        if (!frameErrorTold) {
+            frameErrorTold = true;
+            listener.onFrameError("A frame's " + what + " could not be handled (" + e + "): frame dropped.");
+        }
+    }
+
     private void deliver(ImageReader r) {
-        Image image = r.acquireNextImage();
+        Image image;
+        try {
+            image = r.acquireNextImage();
+        } catch (RuntimeException e) {
+            // IllegalStateException: more images held than maxImages, or the reader closed meanwhile
+            frameFailed("image", e);
+            return;
+        }
         if (image == null) {
             return;
         }
         try {
-            if (sink != null) {
+            FrameSink to = sink;
+            if (to != null) {
                 Image.Plane y = image.getPlanes()[0];
-                sink.onImage(image.getTimestamp(), y.getBuffer(), image.getWidth(), image.getHeight(),
+                to.onImage(image.getTimestamp(), y.getBuffer(), image.getWidth(), image.getHeight(),
                         y.getRowStride(), y.getPixelStride());
             }
+        } catch (RuntimeException e) {
+            frameFailed("image", e);
         } finally {
             image.close();
         }

@@ -221,7 +221,17 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     }
 
     @Override
-    public void onError(String message) {
+    public void onCameraLost(String message, long retryInMs) {
+        showStatus(message + ": trying again in " + (retryInMs + 500) / 1000 + " s.");
+    }
+
+    @Override
+    public void onCameraBack(String summary) {
+        showStatus("Capturing again: " + summary);
+    }
+
+    @Override
+    public void onFrameError(String message) {
         showStatus(message);
     }
 }
