@@ -22,6 +22,9 @@ import java.lang.reflect.Constructor;
 import java.util.ArrayList;
 import java.util.List;
 
+import org.json.JSONArray;
+import org.json.JSONException;
+import org.json.JSONObject;
 import org.robolectric.shadows.ShadowCameraCharacteristics;
 import org.robolectric.shadows.ShadowCaptureResult;
 import org.robolectric.shadows.ShadowTotalCaptureResult;
@@ -90,10 +93,26 @@ public final class FakeCamera {
      * until the camera thread has handled both.
      */
     public long capture(ShadowBurstSession s, int index, byte[] luma, int width, int height, boolean imageFirst) {
-        final long timestamp = nextTimestampNs;
+        long timestamp = nextTimestampNs;
         nextTimestampNs += 33_000_000L;
-        final CaptureRequest request = s.burst().get(index);
-        final TotalCaptureResult result = result(request, timestamp);
+        CaptureRequest request = s.burst().get(index);
+        deliver(s, request, result(request, timestamp), luma, width, height, imageFirst);
+        return timestamp;
+    }
+
+    /**
+     * Captures a recorded frame for the burst's request {@code index}: its pixels and the result
+     * the recording says the camera reported ({@code FrameResult} JSON, the simulator's phone).
+     */
+    public void capture(ShadowBurstSession s, int index, byte[] luma, int width, int height, JSONObject recorded)
+            throws JSONException {
+        CaptureRequest request = s.burst().get(index);
+        deliver(s, request, recordedResult(request, recorded), luma, width, height, false);
+    }
+
+    private void deliver(ShadowBurstSession s, final CaptureRequest request, final TotalCaptureResult result,
+                         byte[] luma, int width, int height, boolean imageFirst) {
+        long timestamp = result.get(CaptureResult.SENSOR_TIMESTAMP);
         YuvImage image = new YuvImage(width, height, width + ROW_PADDING, timestamp, luma);
         ShadowYuvImageReader reader = ShadowYuvImageReader.latest();
         final ShadowBurstSession session = s;
@@ -111,7 +130,6 @@ public final class FakeCamera {
             reader.deliver(image);
         }
         idle(s);
-        return timestamp;
     }
 
     /** Runs what is queued on the camera thread, from the test thread. */
@@ -144,6 +162,41 @@ public final class FakeCamera {
         // Robolectric's results carry no request; a camera's always do (the app reads its tag).
         ReflectionHelpers.setField(android.hardware.camera2.CaptureResult.class, r, "mRequest", request);
         return r;
+    }
+
+    /** A result of {@code request} saying what a recorded FrameResult JSON says. */
+    public static TotalCaptureResult recordedResult(CaptureRequest request, JSONObject f) throws JSONException {
+        TotalCaptureResult r = ShadowTotalCaptureResult.newTotalCaptureResult();
+        ShadowCaptureResult shadow = (ShadowCaptureResult) org.robolectric.shadow.api.Shadow.extract(r);
+        shadow.set(CaptureResult.SENSOR_TIMESTAMP, f.getLong("sensor_timestamp_ns"));
+        shadow.set(CaptureResult.SENSOR_EXPOSURE_TIME, f.getLong("sensor_exposure_time_ns"));
+        shadow.set(CaptureResult.SENSOR_SENSITIVITY, f.getInt("sensor_sensitivity"));
+        shadow.set(CaptureResult.SENSOR_FRAME_DURATION, f.getLong("sensor_frame_duration_ns"));
+        if (f.has("sensor_rolling_shutter_skew_ns")) {
+            shadow.set(CaptureResult.SENSOR_ROLLING_SHUTTER_SKEW, f.getLong("sensor_rolling_shutter_skew_ns"));
+        }
+        shadow.set(CaptureResult.LENS_FOCAL_LENGTH, (float) f.getDouble("lens_focal_length_mm"));
+        shadow.set(CaptureResult.LENS_INTRINSIC_CALIBRATION, floats(f.getJSONArray("lens_intrinsic_calibration")));
+        shadow.set(CaptureResult.LENS_DISTORTION, floats(f.getJSONArray("lens_distortion")));
+        JSONArray crop = f.getJSONArray("scaler_crop_region");
+        shadow.set(CaptureResult.SCALER_CROP_REGION, new Rect(crop.getInt(0), crop.getInt(1),
+                crop.getInt(0) + crop.getInt(2), crop.getInt(1) + crop.getInt(3)));
+        shadow.set(CaptureResult.LENS_OPTICAL_STABILIZATION_MODE,
+                code(Camera2Names::oisMode, f.getString("lens_optical_stabilization_mode")));
+        shadow.set(CaptureResult.TONEMAP_MODE, code(Camera2Names::tonemapMode, f.getString("tonemap_mode")));
+        shadow.set(CaptureResult.LENS_FOCUS_DISTANCE, (float) f.getDouble("lens_focus_distance_diopters"));
+        shadow.set(CaptureResult.DISTORTION_CORRECTION_MODE,
+                code(Camera2Names::distortionCorrectionMode, f.getString("distortion_correction_mode")));
+        ReflectionHelpers.setField(android.hardware.camera2.CaptureResult.class, r, "mRequest", request);
+        return r;
+    }
+
+    private static float[] floats(JSONArray a) throws JSONException {
+        float[] out = new float[a.length()];
+        for (int i = 0; i < out.length; i++) {
+            out[i] = (float) a.getDouble(i);
+        }
+        return out;
     }
 
     /** CameraCharacteristics saying what {@code facts} says, in Camera2's own types and codes. */
