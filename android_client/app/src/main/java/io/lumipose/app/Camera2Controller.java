@@ -125,7 +125,12 @@ final class Camera2Controller {
         thread = new HandlerThread("lumipose-camera");
         thread.start();
         handler = new Handler(thread.getLooper());
-        handler.post(this::open);
+        handler.post(new Runnable() {
+            @Override
+            public void run() {
+                open();
+            }
+        });
     }
 
     /** Closes the camera; the thread ends after the camera says it is closed. Safe to call twice. */
@@ -134,7 +139,12 @@ final class Camera2Controller {
             return;
         }
         stopRequested = true;
-        handler.post(this::close);
+        handler.post(new Runnable() {
+            @Override
+            public void run() {
+                close();
+            }
+        });
     }
 
     private void close() {
@@ -211,7 +221,12 @@ final class Camera2Controller {
             plan = listener.plan(facts, plan);
             reader = ImageReader.newInstance(plan.output.width, plan.output.height, ImageFormat.YUV_420_888,
                     MAX_IMAGES);
-            reader.setOnImageAvailableListener(this::deliver, handler);
+            reader.setOnImageAvailableListener(new ImageReader.OnImageAvailableListener() {
+                @Override
+                public void onImageAvailable(ImageReader r) {
+                    deliver(r);
+                }
+            }, handler);
             manager.openCamera(id, stateCallback(facts, plan), handler);
             lifecycle.opening(); // callbacks come on this thread, after this method returns
         } catch (UnsupportedCameraException e) {
