@@ -1,15 +1,14 @@
 #!/usr/bin/env bash
 # Optional: build a signed debug APK of the Android client offline, from Maven Central and Debian's
 # packages only (no Android SDK, no Gradle): Maven compiles the modules, dx (dalvik-dx from Maven
-# Central) dexes them, Debian's aapt packages the manifest against Android 10's framework-res.apk,
-# zipalign aligns, apksigner signs with a throw-away debug key, and both tools check the result.
+# Central, scripts/android_dex.sh) dexes them, Debian's aapt packages the manifest against Android 10's
+# framework-res.apk, zipalign aligns, apksigner signs with a throw-away debug key, and both tools check the result.
 #   Debian packages needed: aapt zipalign apksigner android-framework-res
 #   Output: android_client/app/target/apk/lumipose-debug.apk
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT="$PWD"
 FRAMEWORK_RES=/usr/share/android-framework-res/framework-res.apk
-DX_VERSION=11.0.0_r3
 
 missing=()
 for tool in aapt zipalign apksigner; do
@@ -25,8 +24,6 @@ OUT=android_client/app/target/apk
 mkdir -p "$OUT"
 MVN=(mvn -B -ntp -q -f android_client/pom.xml)
 "${MVN[@]}" package -DskipTests
-"${MVN[@]}" org.apache.maven.plugins:maven-dependency-plugin:3.8.1:copy -N \
-    -Dartifact=com.jakewharton.android.repackaged:dalvik-dx:$DX_VERSION -DoutputDirectory="$PWD/$OUT/tools"
 rm -f "$OUT"/*.apk "$OUT"/classes.dex
 
 # Resources: the manifest and strings only (the screens are built in code, so no R class is needed).
@@ -37,10 +34,9 @@ grep -q 'package="io.lumipose.app"' "$OUT/AndroidManifest.xml"
 aapt package -f -M "$OUT/AndroidManifest.xml" -S android_client/app/src/main/res -I "$FRAMEWORK_RES" \
     --min-sdk-version 28 --target-sdk-version 29 --version-code 1 --version-name 0.1.0 -F "$OUT/unsigned.apk"
 
-# Dex the app and the core; org.json and android.* come from the phone's framework.
-java -cp "$OUT/tools/dalvik-dx-$DX_VERSION.jar" com.android.dx.command.Main --dex --min-sdk-version=28 \
-    --output="$OUT/classes.dex" android_client/core/target/lumipose-client-core-*.jar \
-    android_client/app/target/lumipose-android-app-*.jar
+# Dex the app and the core (dx, minSdk 28; the same step as the dex check's); org.json and android.* come from
+# the phone's framework.
+bash scripts/android_dex.sh "$OUT/classes.dex"
 (cd "$OUT" && aapt add unsigned.apk classes.dex >/dev/null)
 # The core's Java resource (the capture protocol, as core/pom.xml bundles it) at the APK's root, where
 # Android's class loader serves it to CaptureProtocol.

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Android client: build both Maven modules (core on the JVM, app against the Android framework
-# classes from Maven Central) and run the core's JUnit 5 tests, including the end-to-end test
-# against a real `lumipose serve` on 127.0.0.1. Needs OpenJDK 17 and Maven 3.8; Maven downloads
-# everything from Maven Central on first use. Nothing is installed by hand.
+# Android client: build the Maven modules (core on the JVM, app against the Android framework
+# classes from Maven Central; both checked against Android API 28's public surface by animal-sniffer)
+# and run the core's JUnit 5 tests, including the end-to-end test against a real `lumipose serve` on
+# 127.0.0.1; then the dex check (scripts/android_dex_check.sh). Needs OpenJDK 17 and Maven 3.8; Maven
+# downloads everything from Maven Central on first use. Nothing is installed by hand.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT="$PWD"
@@ -11,7 +12,17 @@ ROOT="$PWD"
 [ -x .venv/bin/lumipose ] || bash scripts/setup.sh
 
 MVN=(mvn -B -ntp -f android_client/pom.xml)
+# verify also runs the minSdk API check (animal-sniffer against Android API 28, docs/android.md).
 "${MVN[@]}" verify -Dlumipose.exe="$ROOT/.venv/bin/lumipose" -Dlumipose.e2e.required=true "$@"
+
+# The -D properties given to this script (e.g. -Dmaven.repo.local) go to the other Maven calls too.
+PROPERTIES=()
+for arg in "$@"; do
+    if [[ "$arg" == -D* ]]; then PROPERTIES+=("$arg"); fi
+done
+
+# No invokedynamic in the dex the APK would carry (dx does not desugar; a lambda throws on the phone).
+bash scripts/android_dex_check.sh ${PROPERTIES[@]+"${PROPERTIES[@]}"}
 
 # The core also runs on Android, whose org.json differs from Maven Central's (checked JSONException,
 # fewer methods): compile the core's main sources against the framework classes alone to prove it.
@@ -20,10 +31,6 @@ trap 'rm -rf "$OUT"' EXIT
 # The android-all jar is in Maven's local repository, wherever Maven puts it (settings.xml,
 # user.home, a -Dmaven.repo.local given to this script): ask Maven (written to a file, since
 # its stdout carries colour codes). M2_REPO still overrides.
-PROPERTIES=()
-for arg in "$@"; do
-    if [[ "$arg" == -D* ]]; then PROPERTIES+=("$arg"); fi
-done
 if [ -n "${M2_REPO:-}" ]; then
     M2="$M2_REPO"
 else

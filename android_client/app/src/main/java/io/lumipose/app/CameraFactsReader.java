@@ -25,7 +25,7 @@ final class CameraFactsReader {
         b.lensFacing(facing == null ? null : Camera2Names.lensFacing(facing));
         b.sensorOrientationDeg(orZero(cc.get(CameraCharacteristics.SENSOR_ORIENTATION)));
         b.capabilities(Camera2Names.names(cc.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES),
-                Camera2Names::capability));
+                Camera2Names.CAPABILITY));
         Integer sync = cc.get(CameraCharacteristics.SYNC_MAX_LATENCY);
         b.syncMaxLatency(sync == null ? CameraFacts.SYNC_UNKNOWN : Camera2Names.syncMaxLatency(sync));
         Integer source = cc.get(CameraCharacteristics.SENSOR_INFO_TIMESTAMP_SOURCE);
@@ -48,21 +48,21 @@ final class CameraFactsReader {
         b.focusDistanceCalibration(focusCalibration == null ? null
                 : Camera2Names.focusDistanceCalibration(focusCalibration));
         b.oisModes(Camera2Names.names(cc.get(CameraCharacteristics.LENS_INFO_AVAILABLE_OPTICAL_STABILIZATION),
-                Camera2Names::oisMode));
+                Camera2Names.OIS_MODE));
         b.tonemapModes(Camera2Names.names(cc.get(CameraCharacteristics.TONEMAP_AVAILABLE_TONE_MAP_MODES),
-                Camera2Names::tonemapMode));
+                Camera2Names.TONEMAP_MODE));
         b.tonemapMaxCurvePoints(cc.get(CameraCharacteristics.TONEMAP_MAX_CURVE_POINTS));
         b.edgeModes(Camera2Names.names(cc.get(CameraCharacteristics.EDGE_AVAILABLE_EDGE_MODES),
-                Camera2Names::edgeMode));
+                Camera2Names.EDGE_MODE));
         b.noiseReductionModes(Camera2Names.names(
                 cc.get(CameraCharacteristics.NOISE_REDUCTION_AVAILABLE_NOISE_REDUCTION_MODES),
-                Camera2Names::noiseReductionMode));
+                Camera2Names.NOISE_REDUCTION_MODE));
         b.distortionCorrectionModes(Camera2Names.names(
                 cc.get(CameraCharacteristics.DISTORTION_CORRECTION_AVAILABLE_MODES),
-                Camera2Names::distortionCorrectionMode));
+                Camera2Names.DISTORTION_CORRECTION_MODE));
         if (Camera2Keys.available()) {
             b.rotateAndCropModes(Camera2Names.names(cc.get(Camera2Keys.ROTATE_AND_CROP_MODES),
-                    Camera2Names::rotateAndCrop));
+                    Camera2Names.ROTATE_AND_CROP_MODE));
             b.zoomRatioRange(doubles(cc.get(Camera2Keys.ZOOM_RATIO_RANGE)));
         }
         Range<Long> exposure = cc.get(CameraCharacteristics.SENSOR_INFO_EXPOSURE_TIME_RANGE);

@@ -24,6 +24,19 @@ public final class Camera2Names {
     private static final String[] DISTORTION_CORRECTION = {"off", "fast", "high_quality"};
     private static final String[] ROTATE_AND_CROP = {"none", "90", "180", "270", "auto"};
 
+    /*
+     * The int-array keys' tables as Namers for names(int[], Namer). Plain objects rather than method
+     * references: the app is dexed by dx, which does not desugar, and Android has no usable
+     * LambdaMetafactory (docs/android.md, "Dex and API level checks"). Declared after the tables they read.
+     */
+    public static final Namer CAPABILITY = new Table(CAPABILITIES);
+    public static final Namer OIS_MODE = new Table(OIS);
+    public static final Namer TONEMAP_MODE = new Table(TONEMAP);
+    public static final Namer EDGE_MODE = new Table(EDGE);
+    public static final Namer NOISE_REDUCTION_MODE = new Table(NOISE_REDUCTION);
+    public static final Namer DISTORTION_CORRECTION_MODE = new Table(DISTORTION_CORRECTION);
+    public static final Namer ROTATE_AND_CROP_MODE = new Table(ROTATE_AND_CROP);
+
     private Camera2Names() {
     }
 
@@ -89,9 +102,22 @@ public final class Camera2Names {
         return out;
     }
 
-    /** One of the enum tables above, e.g. {@code Camera2Names::capability}. */
+    /** One of the enum tables above, e.g. {@link #CAPABILITY}. */
     public interface Namer {
         String name(int value);
+    }
+
+    private static final class Table implements Namer {
+        private final String[] table;
+
+        Table(String[] table) {
+            this.table = table;
+        }
+
+        @Override
+        public String name(int value) {
+            return Camera2Names.name(table, value);
+        }
     }
 
     private static String name(String[] table, int v) {

@@ -30,7 +30,21 @@ class Camera2NamesTest {
     @Test
     void unknownValuesKeepTheirNumber() {
         assertEquals("42", Camera2Names.capability(42));
-        assertEquals(Arrays.asList("off", "17"), Camera2Names.names(new int[] {0, 17}, Camera2Names::edgeMode));
-        assertNull(Camera2Names.names(null, Camera2Names::edgeMode));
+        assertEquals(Arrays.asList("off", "17"), Camera2Names.names(new int[] {0, 17}, Camera2Names.EDGE_MODE));
+        assertNull(Camera2Names.names(null, Camera2Names.EDGE_MODE));
+    }
+
+    /** The Namer constants the app passes (no method references on Android) name as the methods do. */
+    @Test
+    void namersMatchTheirMethods() {
+        for (int v = -1; v < 20; v++) {
+            assertEquals(Camera2Names.capability(v), Camera2Names.CAPABILITY.name(v));
+            assertEquals(Camera2Names.oisMode(v), Camera2Names.OIS_MODE.name(v));
+            assertEquals(Camera2Names.tonemapMode(v), Camera2Names.TONEMAP_MODE.name(v));
+            assertEquals(Camera2Names.edgeMode(v), Camera2Names.EDGE_MODE.name(v));
+            assertEquals(Camera2Names.noiseReductionMode(v), Camera2Names.NOISE_REDUCTION_MODE.name(v));
+            assertEquals(Camera2Names.distortionCorrectionMode(v), Camera2Names.DISTORTION_CORRECTION_MODE.name(v));
+            assertEquals(Camera2Names.rotateAndCrop(v), Camera2Names.ROTATE_AND_CROP_MODE.name(v));
+        }
     }
 }
