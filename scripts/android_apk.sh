@@ -26,13 +26,10 @@ MVN=(mvn -B -ntp -q -f android_client/pom.xml)
 "${MVN[@]}" package -DskipTests
 rm -f "$OUT"/*.apk "$OUT"/classes.dex
 
-# Resources: the manifest and strings only (the screens are built in code, so no R class is needed).
-# The source manifest is Gradle-style (no package, no uses-sdk); aapt gets them here, as Gradle would.
-sed 's|<manifest xmlns:android="http://schemas.android.com/apk/res/android">|<manifest xmlns:android="http://schemas.android.com/apk/res/android" package="io.lumipose.app">|' \
-    android_client/app/src/main/AndroidManifest.xml > "$OUT/AndroidManifest.xml"
-grep -q 'package="io.lumipose.app"' "$OUT/AndroidManifest.xml"
-aapt package -f -M "$OUT/AndroidManifest.xml" -S android_client/app/src/main/res -I "$FRAMEWORK_RES" \
-    --min-sdk-version 28 --target-sdk-version 29 --version-code 1 --version-name 0.1.0 -F "$OUT/unsigned.apk"
+# Resources: the manifest and strings only (the screens are built in code, so no R class is needed), compiled
+# as the Robolectric tests read them.
+bash scripts/android_resources.sh "$OUT"
+mv "$OUT/resources.apk" "$OUT/unsigned.apk"
 
 # Dex the app and the core (dx, minSdk 28; the same step as the dex check's); org.json and android.* come from
 # the phone's framework.

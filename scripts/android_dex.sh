@@ -15,5 +15,9 @@ DX="$TOOLS/dalvik-dx-$DX_VERSION.jar"
     -Dartifact=com.jakewharton.android.repackaged:dalvik-dx:$DX_VERSION -DoutputDirectory="$PWD/$TOOLS" "$@"
 mkdir -p "$(dirname "$OUTPUT")"
 rm -f "$OUTPUT"
-java -cp "$DX" com.android.dx.command.Main --dex --min-sdk-version=28 --output="$OUTPUT" \
-    android_client/core/target/lumipose-client-core-*.jar android_client/app/target/lumipose-android-app-*.jar
+# The main jars only: the core's test-jar (for the app's Robolectric tests) sits beside them.
+JARS=()
+for jar in android_client/core/target/lumipose-client-core-*.jar android_client/app/target/lumipose-android-app-*.jar; do
+    [[ "$jar" == *-tests.jar ]] || JARS+=("$jar")
+done
+java -cp "$DX" com.android.dx.command.Main --dex --min-sdk-version=28 --output="$OUTPUT" "${JARS[@]}"
