@@ -11,6 +11,7 @@ import android.app.Application;
 import android.os.Looper;
 import android.widget.TextView;
 
+import java.nio.charset.StandardCharsets;
 import java.nio.file.Files;
 import java.nio.file.Path;
 import java.util.ArrayList;
@@ -19,6 +20,7 @@ import java.util.Locale;
 import java.util.regex.Matcher;
 import java.util.regex.Pattern;
 
+import org.json.JSONObject;
 import org.junit.AfterClass;
 import org.junit.Assume;
 import org.junit.BeforeClass;
@@ -38,7 +40,9 @@ import io.lumipose.app.camera.ShadowYuvImageReader;
 import io.lumipose.client.replay.RecordedFrame;
 import io.lumipose.client.replay.Recording;
 import io.lumipose.client.replay.SimulatedPhone;
+import io.lumipose.client.protocol.CaptureProtocol;
 import io.lumipose.client.testutil.Lumipose;
+import io.lumipose.client.testutil.Repo;
 
 /**
  * The live screen end to end, the app's own code on Android's framework classes: LiveActivity
@@ -69,10 +73,26 @@ public class LiveActivityEndToEndTest {
             Assume.assumeTrue(reason, false);
         }
         Path dir = Files.createTempDirectory("lumipose-live-e2e");
-        Lumipose.simulate("walk-one-panel", dir, "--scale", "0.25", "--limit", "3");
-        walk = Recording.open(dir.toFile());
+        Path frames = dir.resolve("walk");
+        Lumipose.simulate(walkAsTheAppCaptures(dir).toString(), frames, "--scale", "0.25", "--limit", "3");
+        walk = Recording.open(frames.toFile());
         serve = Lumipose.Serve.start();
         serve.putMap(walk.map());
+    }
+
+    /**
+     * The walk under one panel at the app's pose exposure (the protocol's 10 ms; the scene's 1 ms
+     * would be refused as "settings in transition"), at a tenth of the scene's ISO for the same
+     * exposure of the panel: the phone's lowest ISO, which the app's plan picks.
+     */
+    private static Path walkAsTheAppCaptures(Path dir) throws Exception {
+        JSONObject scene = new JSONObject(Repo.text("simulator/scenes/walk-one-panel.json"));
+        JSONObject sensor = scene.getJSONObject("sensor");
+        sensor.put("exposure_s", CaptureProtocol.POSE_EXPOSURE_NS / 1e9);
+        sensor.put("iso", 40);
+        Path file = dir.resolve("walk-app.json");
+        Files.write(file, scene.toString(2).getBytes(StandardCharsets.UTF_8));
+        return file;
     }
 
     @AfterClass
@@ -94,7 +114,12 @@ public class LiveActivityEndToEndTest {
 
         ActivityController<LiveActivity> screen = Robolectric.buildActivity(LiveActivity.class).setup();
         LiveActivity live = screen.get();
-        ShadowBurstSession session = camera.awaitBurst(TIMEOUT_MS);
+        ShadowBurstSession session;
+        try {
+            session = camera.awaitBurst(TIMEOUT_MS);
+        } catch (AssertionError e) {
+            throw new AssertionError(e.getMessage() + "; status: " + live.status.getText(), e);
+        }
         assertNotNull("the map came from the server", live.map);
         assertEquals(mapName, live.map.name);
         assertEquals("one panel: pose frames only", 1, session.burst().size());
@@ -106,7 +131,13 @@ public class LiveActivityEndToEndTest {
             }
             String before = pose.getText().toString();
             camera.capture(session, 0, f.luma(), f.width, f.height, phone.result(f, live.plan.pose));
-            String after = awaitChange(pose, before);
+            String after;
+            try {
+                after = awaitChange(pose, before);
+            } catch (AssertionError e) {
+                throw new AssertionError(e.getMessage() + "; status: " + live.status.getText() + "; not sent: "
+                        + live.dropCounts() + "; warnings: " + live.warnings() + "\nserver: " + serve.logTail(), e);
+            }
             shown.add(after);
             Matcher m = POSITION.matcher(after);
             assertTrue(f.name + ": no position shown: " + after + "\nserver: " + serve.logTail(), m.find());
