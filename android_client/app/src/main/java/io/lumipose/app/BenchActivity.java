@@ -114,7 +114,13 @@ public final class BenchActivity extends CameraActivity implements FramePipeline
                 prefs.calibratedProfile(facts.cameraId));
         final FramePipeline p = FramePipeline.forCamera(describer, facts, plan, gravity.history(), gravity.rates(),
                 storeSample, network, this);
-        pipeline = p;
+        synchronized (sinkLock) {
+            if (!current(network)) {
+                p.close(); // the screen paused while it was built: onPause could not close it
+                return null;
+            }
+            pipeline = p;
+        }
         // Frames reach the pipeline only while a sample is wanted, until it has taken one.
         return new FrameSink() {
             @Override
@@ -145,16 +151,18 @@ public final class BenchActivity extends CameraActivity implements FramePipeline
     }
 
     @Override
-    protected void onPause() {
-        FramePipeline p = pipeline;
+    protected void closeSinks() {
+        FramePipeline p;
+        synchronized (sinkLock) {
+            p = pipeline;
+            pipeline = null;
+        }
         if (p != null) {
             p.close();
-            pipeline = null;
         }
         if (wanted.getAndSet(false)) {
             take.setEnabled(true);
         }
-        super.onPause();
     }
 
     @Override

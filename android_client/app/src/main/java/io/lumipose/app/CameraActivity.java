@@ -28,6 +28,7 @@ import io.lumipose.client.protocol.CaptureProtocol;
  */
 abstract class CameraActivity extends Activity implements Camera2Controller.Listener {
     private static final int PERMISSION_REQUEST = 1;
+    private static final String PERMISSION_ASKED = "lumipose.permission_asked";
 
     protected Prefs prefs;
     /** Map fetches and stored samples: patient (retries, long timeout). */
@@ -35,10 +36,18 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     protected GravityListener gravity;
     protected TextView status;
     protected volatile RoomMap map;
-    // written on the UI thread, read on the camera thread (onStarted): volatile
+    // written on the UI thread (under sinkLock), read on the camera thread (onStarted): volatile
     private volatile ExecutorService network;
+    /**
+     * Held by a screen while it keeps the sink it built on the camera thread and while onPause takes
+     * the executor away: a sink built for an executor that is gone is closed at once, never kept.
+     */
+    protected final Object sinkLock = new Object();
+    /** The screen is kept on and the sensors run: only while the camera may run (resumed, allowed). */
+    private boolean cameraMayRun;
     private Camera2Controller controller;
-    // The permission dialog pauses and resumes the screen: ask once, and start the camera once.
+    // The permission dialog pauses and resumes the screen: ask once, and start the camera once. Kept
+    // across recreation: the dialog outlives the screen and answers the recreated one.
     private boolean permissionAsked;
     private boolean cameraAllowed;
 
@@ -59,7 +68,7 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
     @Override
     protected void onCreate(Bundle savedInstanceState) {
         super.onCreate(savedInstanceState);
-        getWindow().addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON);
+        permissionAsked = savedInstanceState != null && savedInstanceState.getBoolean(PERMISSION_ASKED);
         prefs = new Prefs(this);
         status = new TextView(this);
         status.setPadding(16, 16, 16, 16);
@@ -78,10 +87,12 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         if (client == null) {
             return;
         }
-        network = Executors.newSingleThreadExecutor();
-        gravity.start();
+        synchronized (sinkLock) {
+            network = Executors.newSingleThreadExecutor();
+        }
         if (checkSelfPermission(Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED) {
             cameraAllowed = true;
+            cameraMayRun();
         } else if (!permissionAsked) {
             permissionAsked = true;
             requestPermissions(new String[] {Manifest.permission.CAMERA}, PERMISSION_REQUEST);
@@ -96,10 +107,28 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
         if (requestCode == PERMISSION_REQUEST && results.length > 0
                 && results[0] == PackageManager.PERMISSION_GRANTED) {
             cameraAllowed = true;
+            if (network != null) { // resumed (the answer may also come just before onResume)
+                cameraMayRun();
+            }
             startCameraWhenReady();
         } else {
             showStatus("Lumipose needs the camera to see the ceiling panel.");
         }
+    }
+
+    /** UI thread, resumed with the permission: the screen stays on and the sensors run (once). */
+    private void cameraMayRun() {
+        if (!cameraMayRun) {
+            cameraMayRun = true;
+            getWindow().addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON);
+            gravity.start();
+        }
+    }
+
+    @Override
+    protected void onSaveInstanceState(Bundle outState) {
+        super.onSaveInstanceState(outState);
+        outState.putBoolean(PERMISSION_ASKED, permissionAsked);
     }
 
     /** UI thread: starts the camera once both the permission and the map are there. */
@@ -122,18 +151,41 @@ abstract class CameraActivity extends Activity implements Camera2Controller.List
 
     @Override
     protected void onPause() {
+        ExecutorService gone;
+        synchronized (sinkLock) {
+            gone = network;
+            network = null; // from now on a sink built on the camera thread is closed at once
+        }
+        closeSinks();
         if (controller != null) {
             controller.stop();
             controller = null;
         }
-        if (gravity != null) {
+        if (cameraMayRun) {
+            cameraMayRun = false;
+            getWindow().clearFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON);
             gravity.stop();
         }
-        if (network != null) {
-            network.shutdownNow();
-            network = null;
+        if (gone != null) {
+            gone.shutdownNow();
         }
         super.onPause();
+    }
+
+    /**
+     * UI thread, in onPause once the executor is taken away (before the camera stops): closes the
+     * screen's sinks (taken out under {@link #sinkLock}) and puts its buttons back.
+     */
+    protected void closeSinks() {
+    }
+
+    /**
+     * Whether a sink the camera thread built for executor {@code e} may be kept: the screen has not
+     * paused since (nor resumed again with another executor). Call holding {@link #sinkLock}, and keep
+     * the sink (or close it) in the same block.
+     */
+    protected final boolean current(ExecutorService e) {
+        return e != null && e == network;
     }
 
     /**

@@ -4,12 +4,17 @@ import android.graphics.Canvas;
 import android.graphics.Color;
 import android.graphics.Paint;
 import android.os.Build;
+import android.os.Bundle;
+import android.view.View;
 import android.widget.Button;
 import android.widget.EditText;
 import android.widget.LinearLayout;
 import android.widget.TextView;
 
+import java.io.IOException;
 import java.util.Locale;
+
+import org.json.JSONObject;
 
 import io.lumipose.client.calibration.BoardCoverage;
 import io.lumipose.client.calibration.BoardSpec;
@@ -22,6 +27,7 @@ import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.capture.UnsupportedCameraException;
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.frame.GreyPreview;
+import io.lumipose.client.json.Json;
 
 /**
  * "Calibrate camera": photographs the printed ChArUco board with the positioning frames' geometry
@@ -32,6 +38,10 @@ import io.lumipose.client.frame.GreyPreview;
  * its intrinsics (docs/android.md, "Calibrate camera"). The core's CalibrationSession does the work.
  */
 public final class CameraCalibrationActivity extends StillActivity {
+    /** The session's file in the app's private storage (docs/android.md, "Sessions across recreation"). */
+    static final String SESSION_FILE = "calibration-session.json";
+    private static final String SCHEMA = "lumipose.app.calibration-screen/1";
+    private static final int ID_BOARD = 1;
     private final Paint empty = new Paint();
     private final Paint covered = new Paint();
     private final Paint grid = new Paint();
@@ -39,7 +49,9 @@ public final class CameraCalibrationActivity extends StillActivity {
     private TextView counts;
     private TextView report;
     private Button calibrate;
+    /** Written on the UI thread under the store's lock (made, restored, finished, started over). */
     private volatile CalibrationSession session;
+    private SessionFile store;
     private volatile FrameMeta firstPhoto;
     private volatile BoardCoverage coverage;
 
@@ -56,6 +68,7 @@ public final class CameraCalibrationActivity extends StillActivity {
         intro.setText("Photograph the printed board at the distance of the ceiling, tilted, filling every cell of "
                 + "the grid (red: too few corners yet). Board spec (the board.json printed with it):");
         boardField = new EditText(this);
+        boardField.setId(ID_BOARD);
         boardField.setText(prefs.boardSpecJson());
         counts = new TextView(this);
         report = new TextView(this);
@@ -72,10 +85,107 @@ public final class CameraCalibrationActivity extends StillActivity {
                 calibrate();
             }
         });
+        Button startOver = new Button(this);
+        startOver.setText("Start over");
+        startOver.setOnClickListener(new View.OnClickListener() {
+            @Override
+            public void onClick(View v) {
+                startOver();
+            }
+        });
+        root.addView(startOver);
         root.addView(counts);
         root.addView(report);
         root.addView(status);
         setContentView(root);
+    }
+
+    @Override
+    protected void onCreate(Bundle savedInstanceState) {
+        super.onCreate(savedInstanceState);
+        store = new SessionFile(this, SESSION_FILE);
+        restore();
+    }
+
+    /**
+     * The session saved before the screen was recreated or the process died (its views, coverage and
+     * first photo's description); a file that cannot be read is said, dropped, and a new one starts.
+     */
+    private void restore() {
+        CalibrationSession s;
+        FrameMeta first = null;
+        try {
+            String text = store.read();
+            if (text == null) {
+                return;
+            }
+            JSONObject o = Json.parseObject(text, "calibration screen");
+            if (!SCHEMA.equals(Json.optString(o, "schema", "schema"))) {
+                throw new IllegalArgumentException("schema: must be '" + SCHEMA + "'");
+            }
+            s = CalibrationSession.fromJson(client, Json.requireObject(o, "session", "session").toString());
+            JSONObject meta = Json.optObject(o, "first_photo", "first_photo");
+            if (meta != null) {
+                first = FrameMeta.fromJson(meta.toString());
+            }
+            if ((first == null) != s.views().isEmpty()) {
+                throw new IllegalArgumentException("first_photo: " + (first == null ? "missing" : "without a view"));
+            }
+        } catch (IOException | IllegalArgumentException e) {
+            store.drop();
+            report.setText("The calibration saved on the phone could not be restored (" + e.getMessage()
+                    + "): a new one starts.");
+            return;
+        }
+        session = s;
+        firstPhoto = first;
+        coverage = s.coverage();
+        boardField.setText(s.board().toJson().toString());
+        boardField.setEnabled(false);
+        calibrate.setEnabled(first != null);
+        counts.setText(photoCounts());
+        report.setText("Calibration restored: " + s.views().size() + " board views kept. Go on shooting, or tap "
+                + "Calibrate.");
+    }
+
+    /** Any thread: writes the session to its file, unless the screen has left it (started over, finished). */
+    private void save(CalibrationSession s) {
+        synchronized (store.lock()) {
+            if (s != session) {
+                return;
+            }
+            JSONObject o = new JSONObject();
+            Json.put(o, "schema", SCHEMA);
+            Json.put(o, "session", s.toJson());
+            FrameMeta first = firstPhoto;
+            if (first != null) {
+                Json.put(o, "first_photo", first.toJson());
+            }
+            try {
+                store.write(o.toString());
+            } catch (IOException e) {
+                showStatus("The calibration could not be saved on the phone: " + e.getMessage());
+            }
+        }
+    }
+
+    /** UI thread: forgets the session and its file. */
+    private void dropSession() {
+        synchronized (store.lock()) {
+            session = null;
+            firstPhoto = null;
+            coverage = null;
+            store.drop();
+        }
+        boardField.setEnabled(true);
+        calibrate.setEnabled(false);
+        counts.setText(photoCounts());
+        preview.invalidate();
+    }
+
+    private void startOver() {
+        dropSession();
+        report.setText("Started over: a new calibration.");
     }
 
     /** The board's exposure on the positioning plan's geometry, so the photos share its intrinsics. */
@@ -95,8 +205,12 @@ public final class CameraCalibrationActivity extends StillActivity {
         if (session == null) {
             try {
                 BoardSpec board = prefs.saveBoardSpec(boardField.getText().toString());
-                session = new CalibrationSession(client, board);
+                CalibrationSession s = new CalibrationSession(client, board);
+                synchronized (store.lock()) {
+                    session = s;
+                }
                 boardField.setEnabled(false);
+                save(s);
             } catch (IllegalArgumentException e) {
                 report.setText("Board spec: " + e.getMessage());
                 return;
@@ -124,21 +238,32 @@ public final class CameraCalibrationActivity extends StillActivity {
 
     @Override
     public void onPhoto(byte[] luma, FrameMeta meta) {
-        CalibrationSession s = session;
+        final CalibrationSession s = session;
+        if (s == null) {
+            shutterBack(null);
+            return;
+        }
         String outcome;
         try {
             CalibrationSession.Photo photo = s.addPhoto(luma, meta);
             if (photo.found()) {
-                if (firstPhoto == null) {
-                    firstPhoto = meta;
+                synchronized (store.lock()) {
+                    if (s == session) {
+                        if (firstPhoto == null) {
+                            firstPhoto = meta;
+                        }
+                        coverage = s.coverage();
+                    }
                 }
-                coverage = s.coverage();
                 outcome = photo.name + ": " + photo.view.corners() + " corners";
             } else {
                 outcome = photo.name + " not used: " + photo.refusal; // the server's reason (no board, ...)
             }
+            save(s); // the photo count moved either way
         } catch (InterruptedException e) {
+            // the screen was left during the upload (its executor shut down): the shutter works on return
             Thread.currentThread().interrupt();
+            shutterBack("Photo not sent: the screen was left during the upload. Take it again.");
             return;
         } catch (Exception e) {
             outcome = "Photo not sent: " + e.getMessage();
@@ -147,9 +272,12 @@ public final class CameraCalibrationActivity extends StillActivity {
         runOnUiThread(new Runnable() {
             @Override
             public void run() {
+                shutter.setEnabled(true);
+                if (s != session) {
+                    return; // started over meanwhile
+                }
                 report.setText(shown);
                 counts.setText(photoCounts());
-                shutter.setEnabled(true);
                 calibrate.setEnabled(firstPhoto != null);
                 preview.invalidate();
             }
@@ -169,6 +297,7 @@ public final class CameraCalibrationActivity extends StillActivity {
             @Override
             public void run() {
                 String text;
+                boolean kept = false;
                 try {
                     DeviceProfile phone = DeviceProfile.ofPhone(prefs.phoneProfileId(f.cameraId),
                             Build.MANUFACTURER + " " + Build.MODEL + " camera " + f.cameraId,
@@ -176,21 +305,29 @@ public final class CameraCalibrationActivity extends StillActivity {
                     CalibrationSession.Outcome o = s.calibrate(phone, null);
                     if (o.report.ok) {
                         prefs.setCalibratedProfile(f.cameraId, o.report.profile);
+                        kept = true;
+                    } else {
+                        coverage = s.coverage(); // the report's grid from now on
+                        save(s);
                     }
-                    coverage = s.coverage();
                     text = describe(o);
                 } catch (InterruptedException e) {
                     Thread.currentThread().interrupt();
-                    return;
+                    text = "Calibration interrupted: the screen was left. Tap Calibrate again.";
                 } catch (Exception e) {
                     text = "Calibration failed: " + e.getMessage();
                 }
                 final String shown = text;
+                final boolean done = kept;
                 runOnUiThread(new Runnable() {
                     @Override
                     public void run() {
+                        if (done && s == session) {
+                            dropSession(); // the profile is kept: the next calibration starts afresh
+                        } else {
+                            calibrate.setEnabled(firstPhoto != null);
+                        }
                         report.setText(shown);
-                        calibrate.setEnabled(true);
                         preview.invalidate();
                     }
                 });

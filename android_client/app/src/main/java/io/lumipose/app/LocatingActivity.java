@@ -36,18 +36,26 @@ abstract class LocatingActivity extends CameraActivity implements FramePipeline.
                 prefs.calibratedProfile(facts.cameraId));
         FramePipeline p = FramePipeline.forCamera(describer, facts, plan, gravity.history(), gravity.rates(), live,
                 network, this);
-        pipeline = p;
+        synchronized (sinkLock) {
+            if (!current(network)) {
+                p.close(); // the screen paused while it was built: onPause could not close it
+                return null;
+            }
+            pipeline = p;
+        }
         return p;
     }
 
     @Override
-    protected void onPause() {
-        FramePipeline p = pipeline;
-        if (p != null) {
-            p.close();
+    protected void closeSinks() {
+        FramePipeline p;
+        synchronized (sinkLock) {
+            p = pipeline;
             pipeline = null;
         }
-        super.onPause();
+        if (p != null) {
+            p.close();
+        }
     }
 
     /** Frames not sent so far, by reason (empty before the camera starts). */

@@ -22,6 +22,16 @@ import io.lumipose.client.net.LumiposeClient;
 public final class SettingsActivity extends Activity {
     private static final int TEXT = InputType.TYPE_CLASS_TEXT;
     private static final int DECIMAL = InputType.TYPE_CLASS_NUMBER | InputType.TYPE_NUMBER_FLAG_DECIMAL;
+    // Fixed view ids: what the user typed (or ticked, or chose) survives the screen's recreation.
+    private static final int ID_URL = 1;
+    private static final int ID_KEY = 2;
+    private static final int ID_MAP = 3;
+    private static final int ID_HAND = 4;
+    private static final int ID_MEGAPIXELS = 5;
+    private static final int ID_ID_EXPOSURE = 6;
+    private static final int ID_BEARING = 7;
+    private static final int ID_READ_IDS = 8;
+    private static final int ID_CAMERA = 9;
     private Prefs prefs;
     private EditText url;
     private EditText key;
@@ -42,21 +52,22 @@ public final class SettingsActivity extends Activity {
         LinearLayout form = new LinearLayout(this);
         form.setOrientation(LinearLayout.VERTICAL);
         form.setPadding(24, 24, 24, 24);
-        url = field(form, "Server URL (http://host:port)", prefs.serverUrl(), TEXT | InputType.TYPE_TEXT_VARIATION_URI);
-        key = field(form, "API key (empty if the server has none)", prefs.apiKey(),
+        url = field(form, ID_URL, "Server URL (http://host:port)", prefs.serverUrl(), TEXT | InputType.TYPE_TEXT_VARIATION_URI);
+        key = field(form, ID_KEY, "API key (empty if the server has none)", prefs.apiKey(),
                 TEXT | InputType.TYPE_TEXT_VARIATION_PASSWORD);
-        mapName = field(form, "Map name", prefs.mapName(), TEXT);
-        handHeight = field(form, "Phone's height above the floor, m (focus: the map's ceiling minus this)",
+        mapName = field(form, ID_MAP, "Map name", prefs.mapName(), TEXT);
+        handHeight = field(form, ID_HAND, "Phone's height above the floor, m (focus: the map's ceiling minus this)",
                 String.valueOf(prefs.handHeightM()), DECIMAL);
-        megapixels = field(form, "Largest frame, megapixels", String.valueOf(prefs.maxMegapixels()), DECIMAL);
-        idExposure = field(form, "Beacon-ID exposure, microseconds", String.valueOf(prefs.idExposureNs() / 1000),
+        megapixels = field(form, ID_MEGAPIXELS, "Largest frame, megapixels", String.valueOf(prefs.maxMegapixels()), DECIMAL);
+        idExposure = field(form, ID_ID_EXPOSURE, "Beacon-ID exposure, microseconds", String.valueOf(prefs.idExposureNs() / 1000),
                 InputType.TYPE_CLASS_NUMBER);
 
         Double b = prefs.mapXBearingDeg();
-        bearing = field(form, "Compass bearing of the map's +X axis, deg, for maps without a surveyed bearing "
+        bearing = field(form, ID_BEARING, "Compass bearing of the map's +X axis, deg, for maps without a surveyed bearing "
                 + "(empty: no heading then)",
                 b == null ? "" : String.valueOf(b), DECIMAL | InputType.TYPE_NUMBER_FLAG_SIGNED);
         readIds = new CheckBox(this);
+        readIds.setId(ID_READ_IDS);
         readIds.setText("Read beacon IDs in live mode (short-exposure frames after each pose frame, on maps "
                 + "of several panels)");
         readIds.setChecked(prefs.readIds());
@@ -66,6 +77,7 @@ public final class SettingsActivity extends Activity {
         cameraLabel.setText("Camera");
         form.addView(cameraLabel);
         camera = new Spinner(this);
+        camera.setId(ID_CAMERA);
         List<String> labels = new ArrayList<String>();
         cameraIds.add("");
         labels.add("Automatic (first back camera with manual exposure)");
@@ -97,8 +109,8 @@ public final class SettingsActivity extends Activity {
         setContentView(scroll);
     }
 
-    private EditText field(LinearLayout form, String label, String value, int inputType) {
-        return Forms.field(this, form, label, value, inputType);
+    private EditText field(LinearLayout form, int id, String label, String value, int inputType) {
+        return Forms.field(this, form, id, label, value, inputType);
     }
 
     private void save() {

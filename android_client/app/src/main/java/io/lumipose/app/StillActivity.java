@@ -74,7 +74,13 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
         this.facts = facts;
         StillCapture c = new StillCapture(describer(facts, plan), gravity.history(), gravity.rates(),
                 facts.timestampsAreRealtime(), network, this, PREVIEW_EVERY_NS);
-        capture = c;
+        synchronized (sinkLock) {
+            if (!current(network)) {
+                c.close(); // the screen paused while it was built: onPause could not close it
+                return null;
+            }
+            capture = c;
+        }
         return c;
     }
 
@@ -91,14 +97,35 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
         }
     }
 
+    /**
+     * Closes the shutter's capture: an armed shot goes with the camera, so the shutter works again on
+     * return (a photo already taken is being uploaded on the executor, which is shut down now: its
+     * screen re-enables the shutter when the upload ends or is interrupted).
+     */
     @Override
-    protected void onPause() {
-        StillCapture c = capture;
-        if (c != null) {
-            c.close();
+    protected void closeSinks() {
+        StillCapture c;
+        synchronized (sinkLock) {
+            c = capture;
             capture = null;
         }
-        super.onPause();
+        if (c != null) {
+            c.close();
+        }
+        shutter.setEnabled(true);
+    }
+
+    /** Any thread: the shutter on again after a photo the screen could not handle (the screen was left). */
+    protected void shutterBack(final String why) {
+        runOnUiThread(new Runnable() {
+            @Override
+            public void run() {
+                shutter.setEnabled(true);
+                if (why != null) {
+                    showStatus(why);
+                }
+            }
+        });
     }
 
     @Override

@@ -3,7 +3,9 @@ package io.lumipose.app;
 import android.graphics.Canvas;
 import android.graphics.Color;
 import android.graphics.Paint;
+import android.os.Bundle;
 import android.text.InputType;
+import android.view.View;
 import android.widget.Button;
 import android.widget.EditText;
 import android.widget.LinearLayout;
@@ -32,6 +34,11 @@ import io.lumipose.client.survey.SurveySession;
  * becomes the server's active map and the app's (docs/android.md, "Survey room").
  */
 public final class SurveyActivity extends StillActivity implements PreviewView.TapListener {
+    /** The session's file in the app's private storage (docs/android.md, "Sessions across recreation"). */
+    static final String SESSION_FILE = "survey-session.json";
+    private static final int ID_NAME = 1;
+    private static final int ID_ANCHOR = 2;
+    private static final int ID_PANEL = 3;
     private final Paint labelPaint = new Paint(Paint.ANTI_ALIAS_FLAG);
     private EditText nameField;
     private EditText anchorField;
@@ -39,7 +46,9 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     private TextView photosView;
     private TextView reportView;
     private Button surveyButton;
+    /** Written on the UI thread under the store's lock (made, restored, finished, started over). */
     private volatile SurveySession session;
+    private SessionFile store;
     /** The photo on screen for labelling (its index in the session), or -1 while the camera is shown. */
     private volatile int held = -1;
 
@@ -50,11 +59,11 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         LinearLayout root = new LinearLayout(this);
         root.setOrientation(LinearLayout.VERTICAL);
         root.setPadding(16, 16, 16, 16);
-        nameField = Forms.field(this, root, "Surveyed map's name", prefs.mapName() + "-surveyed",
+        nameField = Forms.field(this, root, ID_NAME, "Surveyed map's name", prefs.mapName() + "-surveyed",
                 InputType.TYPE_CLASS_TEXT);
-        anchorField = Forms.field(this, root, "Anchor panel ID (its place in the map '" + prefs.mapName()
+        anchorField = Forms.field(this, root, ID_ANCHOR, "Anchor panel ID (its place in the map '" + prefs.mapName()
                 + "' is kept)", "", InputType.TYPE_CLASS_NUMBER);
-        panelField = Forms.field(this, root, "Panel ID: tap a panel on the photo to name it", "",
+        panelField = Forms.field(this, root, ID_PANEL, "Panel ID: tap a panel on the photo to name it", "",
                 InputType.TYPE_CLASS_NUMBER);
         surveyButton = addCameraViews(root, new PreviewView.Overlay() {
             @Override
@@ -68,12 +77,89 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             }
         });
         preview.setTapListener(this);
+        Button startOver = new Button(this);
+        startOver.setText("Start over");
+        startOver.setOnClickListener(new View.OnClickListener() {
+            @Override
+            public void onClick(View v) {
+                startOver();
+            }
+        });
+        root.addView(startOver);
         photosView = new TextView(this);
         reportView = new TextView(this);
         root.addView(photosView);
         root.addView(reportView);
         root.addView(status);
         setContentView(root);
+    }
+
+    @Override
+    protected void onCreate(Bundle savedInstanceState) {
+        super.onCreate(savedInstanceState);
+        store = new SessionFile(this, SESSION_FILE);
+        restore();
+    }
+
+    /**
+     * The session saved before the screen was recreated or the process died: its photos and labels,
+     * back at the camera (the held photo's preview is not kept: labels go on the next photos). A file
+     * that cannot be read is said, dropped, and a new survey starts.
+     */
+    private void restore() {
+        SurveySession s;
+        try {
+            String text = store.read();
+            if (text == null) {
+                return;
+            }
+            s = SurveySession.fromJson(client, text);
+        } catch (IOException | IllegalArgumentException e) {
+            store.drop();
+            reportView.setText("The survey saved on the phone could not be restored (" + e.getMessage()
+                    + "): a new survey starts.");
+            return;
+        }
+        session = s;
+        nameField.setText(s.name());
+        nameField.setEnabled(false);
+        int n = s.shots().size();
+        surveyButton.setEnabled(n > 0);
+        reportView.setText("Survey '" + s.name() + "' restored: " + n + (n == 1 ? " photo" : " photos")
+                + " stored on the server, listed below. Take the next photo, or tap Survey.");
+        showPhotos();
+    }
+
+    /** Any thread: writes the session to its file, unless the screen has left it (started over, finished). */
+    private void save(SurveySession s) {
+        synchronized (store.lock()) {
+            if (s != session) {
+                return;
+            }
+            try {
+                store.write(s.toJson().toString());
+            } catch (IOException e) {
+                showStatus("The survey could not be saved on the phone: " + e.getMessage());
+            }
+        }
+    }
+
+    /** UI thread: forgets the session and its file (the photos stay on the server as samples). */
+    private void dropSession() {
+        synchronized (store.lock()) {
+            session = null;
+            store.drop();
+        }
+        held = -1;
+        shutter.setText("Take photo");
+        nameField.setEnabled(true);
+        surveyButton.setEnabled(false);
+        photosView.setText("");
+    }
+
+    private void startOver() {
+        dropSession();
+        reportView.setText("Started over: a new survey.");
     }
 
     /** Survey photos see the panels as positioning frames do, but with no ID frames: one photo, whole. */
@@ -96,13 +182,18 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             return;
         }
         if (session == null) {
+            SurveySession s;
             try {
-                session = new SurveySession(client, nameField.getText().toString().trim());
+                s = new SurveySession(client, nameField.getText().toString().trim());
                 nameField.setEnabled(false);
             } catch (IllegalArgumentException e) {
                 reportView.setText("Map name: " + e.getMessage());
                 return;
             }
+            synchronized (store.lock()) {
+                session = s;
+            }
+            save(s);
         }
         takePhoto();
     }
@@ -118,15 +209,23 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     public void onPhoto(byte[] luma, FrameMeta meta) {
         final GreyPreview still = GreyPreview.of(ByteBuffer.wrap(luma), meta.width, meta.height, meta.width, 1,
                 StillCapture.PREVIEW_SIDE);
+        final SurveySession s = session;
+        if (s == null) {
+            shutterBack(null);
+            return;
+        }
         String outcome;
         int index = -1;
         try {
-            SurveySession.Shot shot = session.addPhoto(luma, meta);
-            index = session.shots().size() - 1;
+            SurveySession.Shot shot = s.addPhoto(luma, meta);
+            index = s.shots().size() - 1;
+            save(s);
             outcome = "Photo " + (index + 1) + " stored as " + shot.sampleId + ": tap each panel with its ID."
                     + (meta.compassBearingDeg == null ? " (no compass reading)" : "");
         } catch (InterruptedException e) {
+            // the screen was left during the upload (its executor shut down): the shutter works on return
             Thread.currentThread().interrupt();
+            shutterBack("Photo not stored: the screen was left during the upload. Take it again.");
             return;
         } catch (Exception e) {
             outcome = "Photo not stored: " + e.getMessage();
@@ -137,6 +236,9 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             @Override
             public void run() {
                 shutter.setEnabled(true);
+                if (s != session) {
+                    return; // started over meanwhile: the photo belongs to the abandoned survey
+                }
                 reportView.setText(shown);
                 if (stored >= 0) {
                     held = stored;
@@ -165,6 +267,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             reportView.setText(e.getMessage());
             return;
         }
+        save(s);
         preview.invalidate();
         showPhotos();
     }
@@ -220,6 +323,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             @Override
             public void run() {
                 String text;
+                boolean finished = false;
                 try {
                     SurveyReport r = s.survey(sketch, anchor);
                     text = describe(r);
@@ -227,10 +331,13 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
                         s.activate(r);
                         prefs.setMapName(r.map.name);
                         text += "\nMap '" + r.map.name + "' is now the active map.";
+                        finished = true;
                     }
                 } catch (InterruptedException e) {
+                    // the screen was left while the survey ran: sent once, so the map may be stored
                     Thread.currentThread().interrupt();
-                    return;
+                    text = "The survey was interrupted (the screen was left). If map '" + s.name() + "' is on "
+                            + "the server, make it active there rather than surveying again.";
                 } catch (IOException e) {
                     // sent once: the server may still have stored the map
                     text = "No answer to the survey: " + e.getMessage() + "\nIf map '" + s.name() + "' is on the "
@@ -239,11 +346,16 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
                     text = "Survey refused: " + e.getMessage();
                 }
                 final String shown = text;
+                final boolean done = finished;
                 runOnUiThread(new Runnable() {
                     @Override
                     public void run() {
+                        if (done && s == session) {
+                            dropSession(); // stored and active: the next survey starts afresh
+                        } else {
+                            surveyButton.setEnabled(true);
+                        }
                         reportView.setText(shown);
-                        surveyButton.setEnabled(true);
                     }
                 });
             }

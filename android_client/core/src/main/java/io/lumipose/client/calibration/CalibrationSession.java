@@ -34,6 +34,8 @@ public final class CalibrationSession {
     public static final String CALIBRATIONS_PATH = "/v1/calibrations";
     public static final String PROFILES_PATH = "/v1/profiles/";
     public static final String BOARD_HEADER = "X-Lumipose-Board";
+    /** The schema of {@link #toJson}: the screen's saved session (the app's private storage, not the contract). */
+    public static final String SCHEMA = "lumipose.calibration-session/1";
     /**
      * A printed board in room light, hand-held: 20 ms at ISO 800 (about what a phone's auto exposure
      * picks under 300-500 lux; the positioning frames' 10 ms at the lowest ISO would leave paper
@@ -114,6 +116,77 @@ public final class CalibrationSession {
 
     public BoardSpec board() {
         return board;
+    }
+
+    /**
+     * The session as plain JSON, for the screen to keep across its recreation and the process's
+     * death: the board, the photo count, the photos' size, the views kept (their corners: a few kB
+     * each, never the photos) and the report's coverage grid once there is one.
+     */
+    public synchronized JSONObject toJson() {
+        JSONObject o = new JSONObject();
+        Json.put(o, "schema", SCHEMA);
+        Json.put(o, "board", board.toJson());
+        Json.put(o, "photos", photos);
+        Json.put(o, "width", width);
+        Json.put(o, "height", height);
+        Json.put(o, "grid_rows", gridRows);
+        Json.put(o, "grid_columns", gridColumns);
+        Json.put(o, "views", BoardView.toJson(views));
+        return o;
+    }
+
+    /**
+     * The session {@link #toJson} wrote, going on with {@code client}: more photos, the calibration.
+     *
+     * @throws ContractException naming the field when the text is not such a session (damaged,
+     *         another schema, a view of another size than the session's, more views than photos)
+     */
+    public static CalibrationSession fromJson(LumiposeClient client, String text) {
+        JSONObject o = Json.parseObject(text, "calibration session");
+        if (!SCHEMA.equals(Json.optString(o, "schema", "schema"))) {
+            throw new ContractException("schema", "must be '" + SCHEMA + "'");
+        }
+        BoardSpec board;
+        try {
+            board = BoardSpec.fromJson(Json.requireObject(o, "board", "board").toString());
+        } catch (ContractException e) {
+            throw e.within("board.");
+        } catch (IllegalArgumentException e) {
+            throw new ContractException("board", e.getMessage());
+        }
+        CalibrationSession s = new CalibrationSession(client, board);
+        s.photos = Json.requireInt(o, "photos", "photos");
+        s.width = Json.requireInt(o, "width", "width");
+        s.height = Json.requireInt(o, "height", "height");
+        s.gridRows = Json.requireInt(o, "grid_rows", "grid_rows");
+        s.gridColumns = Json.requireInt(o, "grid_columns", "grid_columns");
+        if (s.width < 0 || s.height < 0 || (s.width == 0) != (s.height == 0)) {
+            throw new ContractException("width", "the photos' size must be positive (or 0 x 0 before the first), got "
+                    + s.width + "x" + s.height);
+        }
+        if (s.gridRows < 0 || s.gridColumns < 0 || (s.gridRows == 0) != (s.gridColumns == 0)) {
+            throw new ContractException("grid_rows", "the coverage grid must be positive (or 0 x 0 before a report), "
+                    + "got " + s.gridRows + "x" + s.gridColumns);
+        }
+        List<JSONObject> views = Json.optObjects(o, "views", "views");
+        for (int i = 0; i < views.size(); i++) {
+            BoardView v;
+            try {
+                v = BoardView.fromJson(views.get(i).toString());
+            } catch (ContractException e) {
+                throw e.within("views[" + i + "].");
+            }
+            if (v.width != s.width || v.height != s.height) {
+                throw new ContractException("views[" + i + "].width", "a " + v.width + "x" + v.height
+                        + " view in a session of " + s.width + "x" + s.height + " photos");
+            }
+            s.views.add(v);
+        }
+        if (s.photos < s.views.size()) {
+            throw new ContractException("photos", s.photos + " photos counted but " + s.views.size() + " views kept");
+        }
+        return s;
     }
 
     /**

@@ -44,6 +44,8 @@ public final class LocateResult {
     private final VlcReading vlc;
     private final Integer beaconsInView;
     private final Track track;
+    /** The object this result was read from, as text: what {@link #toJson} gives back. */
+    private final String source;
 
     /** A device's motion-filtered track at this frame (the contract's {@code TrackState}); the fix is positionM. */
     public static final class Track {
@@ -98,6 +100,7 @@ public final class LocateResult {
     }
 
     private LocateResult(JSONObject o, boolean ok, double[] positionM, String reason) {
+        this.source = o.toString();
         this.ok = ok;
         this.positionM = positionM;
         this.reason = reason;
@@ -214,6 +217,11 @@ public final class LocateResult {
             out[i] = rows[i].clone();
         }
         return out;
+    }
+
+    /** The result as the server sent it (a copy: every field, known or not); {@link #fromJson} reads it back. */
+    public JSONObject toJson() {
+        return Json.parseObject(source, "result");
     }
 
     public static LocateResult fromJson(String text) {

@@ -10,6 +10,7 @@ import org.json.JSONObject;
 
 import io.lumipose.client.contract.ContractRanges;
 import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.json.ContractException;
 import io.lumipose.client.json.Json;
 import io.lumipose.client.net.LocateResult;
 import io.lumipose.client.net.LumiposeClient;
@@ -29,6 +30,8 @@ import io.lumipose.client.net.StoredSample;
  */
 public final class SurveySession {
     public static final String SURVEYS_PATH = "/v1/surveys";
+    /** The schema of {@link #toJson}: the screen's saved session (the app's private storage, not the contract). */
+    public static final String SCHEMA = "lumipose.survey-session/1";
 
     /** A panel named on a photo: the contract's {@code PanelLabel}. */
     public static final class Label {
@@ -97,6 +100,98 @@ public final class SurveySession {
 
     public String name() {
         return name;
+    }
+
+    /**
+     * The session as plain JSON, for the screen to keep across its recreation and the process's
+     * death: the name, the photo count (the next sample's label number), every stored photo's
+     * sample id, size, stored result and labels. Not the photos themselves: they are on the server.
+     */
+    public synchronized JSONObject toJson() {
+        JSONObject o = new JSONObject();
+        Json.put(o, "schema", SCHEMA);
+        Json.put(o, "name", name);
+        Json.put(o, "photos", photos);
+        JSONArray a = new JSONArray();
+        for (Shot shot : shots) {
+            JSONObject j = new JSONObject();
+            Json.put(j, "sample_id", shot.sampleId);
+            Json.put(j, "width", shot.width);
+            Json.put(j, "height", shot.height);
+            Json.put(j, "stored", shot.stored.toJson());
+            JSONArray labels = new JSONArray();
+            for (Label l : shot.labels) {
+                labels.put(l.toJson());
+            }
+            Json.put(j, "labels", labels);
+            a.put(j);
+        }
+        Json.put(o, "shots", a);
+        return o;
+    }
+
+    /**
+     * The session {@link #toJson} wrote, going on with {@code client}: more photos, labels, the survey.
+     *
+     * @throws ContractException naming the field when the text is not such a session (damaged,
+     *         another schema, a label outside its photo, fewer photos counted than stored)
+     */
+    public static SurveySession fromJson(LumiposeClient client, String text) {
+        JSONObject o = Json.parseObject(text, "survey session");
+        if (!SCHEMA.equals(Json.optString(o, "schema", "schema"))) {
+            throw new ContractException("schema", "must be '" + SCHEMA + "'");
+        }
+        String name = Json.optString(o, "name", "name");
+        if (name == null) {
+            throw new ContractException("name", "missing");
+        }
+        SurveySession s;
+        try {
+            s = new SurveySession(client, name);
+        } catch (IllegalArgumentException e) {
+            throw new ContractException("name", e.getMessage());
+        }
+        List<JSONObject> shots = Json.optObjects(o, "shots", "shots");
+        int photos = Json.requireInt(o, "photos", "photos");
+        if (photos < shots.size()) {
+            throw new ContractException("photos", photos + " photos counted but " + shots.size() + " stored");
+        }
+        s.photos = photos;
+        for (int i = 0; i < shots.size(); i++) {
+            String path = "shots[" + i + "]";
+            JSONObject j = shots.get(i);
+            String sampleId = Json.optString(j, "sample_id", path + ".sample_id");
+            if (sampleId == null || sampleId.isEmpty()) {
+                throw new ContractException(path + ".sample_id", "missing");
+            }
+            int width = Json.requireInt(j, "width", path + ".width");
+            int height = Json.requireInt(j, "height", path + ".height");
+            if (width <= 0 || height <= 0) {
+                throw new ContractException(path + ".width", "the photo's size must be positive, got " + width
+                        + "x" + height);
+            }
+            LocateResult stored;
+            try {
+                stored = LocateResult.fromJson(Json.requireObject(j, "stored", path + ".stored"));
+            } catch (ContractException e) {
+                throw e.field.startsWith(path) ? e : e.within(path + ".stored.");
+            }
+            s.shots.add(new Shot(sampleId, width, height, stored, Collections.<Label>emptyList()));
+            List<JSONObject> labels = Json.optObjects(j, "labels", path + ".labels");
+            for (int k = 0; k < labels.size(); k++) {
+                String lp = path + ".labels[" + k + "]";
+                JSONObject l = labels.get(k);
+                try {
+                    s.label(i, Json.requireInt(l, "beacon_id", lp + ".beacon_id"),
+                            Json.requireDouble(l, "x_px", lp + ".x_px"), Json.requireDouble(l, "y_px", lp + ".y_px"));
+                } catch (ContractException e) {
+                    throw e;
+                } catch (IllegalArgumentException e) {
+                    throw new ContractException(lp, e.getMessage());
+                }
+            }
+        }
+        return s;
     }
 
     /**

@@ -16,6 +16,7 @@ import org.junit.jupiter.api.Test;
 import io.lumipose.client.camera.DeviceProfile;
 import io.lumipose.client.camera.Intrinsics;
 import io.lumipose.client.frame.FrameMeta;
+import io.lumipose.client.json.ContractException;
 import io.lumipose.client.net.ClientConfig;
 import io.lumipose.client.net.FakeTransport;
 import io.lumipose.client.net.HttpCall;
@@ -193,5 +194,87 @@ class CalibrationSessionTest {
         assertEquals("too dark: more light on the board", CalibrationSession.exposureHint(12));
         assertNull(CalibrationSession.exposureHint(120));
         assertTrue(CalibrationSession.exposureHint(250).startsWith("too bright"));
+    }
+
+    /** What the screen keeps of a session (its file in the app's storage): read back equal, and usable. */
+    @Test
+    void aSessionSurvivesItsJsonAndGoesOn() throws Exception {
+        transport.reply(200, view("photo-1", new double[] {5, 5}, new double[] {60, 40}))
+                .reply(422, error("no_board", "no ChArUco corners found on the photo"))
+                .reply(200, okReport(calibrated())).reply(200, calibrated().toJson().toString());
+        session.addPhoto(new byte[W * H], photo());
+        session.addPhoto(new byte[W * H], photo());
+        DeviceProfile phone = DeviceProfile.ofPhone("phone", "phone", LensFacing.BACK, CAMERA, W, H);
+        session.calibrate(phone, null); // the report's 2 x 3 grid is the session's from now on
+        JSONObject saved = session.toJson();
+        assertEquals(CalibrationSession.SCHEMA, saved.getString("schema"));
+
+        FakeTransport later = new FakeTransport();
+        CalibrationSession back = CalibrationSession.fromJson(new LumiposeClient(new ClientConfig(
+                "http://server:8000", "key", "phone-1", false, new RetryPolicy(1, 0, 1.0, 0)), later, ms -> { }),
+                saved.toString());
+        assertTrue(saved.similar(back.toJson()), back.toJson().toString());
+        assertEquals(BOARD.toJson().toString(), back.board().toJson().toString());
+        assertEquals(2, back.photos());
+        assertEquals(1, back.views().size());
+        assertEquals(session.views().get(0).toJson().toString(), back.views().get(0).toJson().toString());
+        assertEquals(2, back.coverage().rows, "the report's grid kept");
+        assertEquals(3, back.coverage().columns);
+        assertEquals(session.coverage().count(0, 0), back.coverage().count(0, 0));
+
+        later.reply(200, view("photo-3", new double[] {33, 5})).reply(200, okReport(calibrated()))
+                .reply(200, calibrated().toJson().toString());
+        back.addPhoto(new byte[W * H], photo());
+        assertEquals("http://server:8000/v1/calibrations/views?name=photo-3", later.calls.get(0).url);
+        assertTrue(back.calibrate(phone, null).report.ok);
+        assertEquals(2, body(later.calls.get(1)).getJSONArray("views").length(), "the restored view and the new one");
+        assertThrows(IllegalArgumentException.class, () -> back.addPhoto(new byte[32 * 24],
+                FrameMeta.builder(32, 24).camera(CAMERA).frameKind("pose").build()), "the session's size is kept");
+    }
+
+    @Test
+    void anEmptySessionSurvivesItsJson() {
+        CalibrationSession back = CalibrationSession.fromJson(null, session.toJson().toString());
+        assertEquals(0, back.photos());
+        assertNull(back.coverage());
+        assertTrue(session.toJson().similar(back.toJson()));
+    }
+
+    /** A damaged or foreign file is refused naming what is wrong, never half read. */
+    @Test
+    void aDamagedSessionIsRefusedNamingWhatIsWrong() throws Exception {
+        transport.reply(200, view("photo-1", new double[] {5, 5}, new double[] {60, 40}));
+        session.addPhoto(new byte[W * H], photo());
+        String good = session.toJson().toString();
+
+        ContractException cut = assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, good.substring(0, good.length() - 3)));
+        assertEquals("calibration session", cut.field);
+        assertTrue(cut.getMessage().contains("not a JSON object"), cut.getMessage());
+        assertEquals("schema", assertThrows(ContractException.class, () -> CalibrationSession.fromJson(null,
+                new JSONObject(good).put("schema", "lumipose.survey-session/1").toString())).field);
+        JSONObject board = new JSONObject(good);
+        board.getJSONObject("board").put("squares_x", 1);
+        ContractException b = assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, board.toString()));
+        assertTrue(b.field.startsWith("board"), b.field);
+        JSONObject corners = new JSONObject(good);
+        corners.getJSONArray("views").getJSONObject(0).getJSONArray("corner_ids").put(0, 3000000);
+        assertEquals("views[0].corner_ids[0]", assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, corners.toString())).field);
+        assertEquals("views[0].width", assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, new JSONObject(good).put("width", W * 2).toString())).field);
+        assertEquals("photos", assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, new JSONObject(good).put("photos", 0).toString())).field);
+        assertEquals("grid_rows", assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, new JSONObject(good).put("grid_rows", 2).toString())).field);
+        assertEquals("height", assertThrows(ContractException.class,
+                () -> CalibrationSession.fromJson(null, withoutHeight(good))).field);
+    }
+
+    private static String withoutHeight(String json) {
+        JSONObject o = new JSONObject(json);
+        o.remove("height");
+        return o.toString();
     }
 }

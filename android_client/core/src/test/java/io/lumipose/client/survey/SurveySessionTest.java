@@ -172,4 +172,95 @@ class SurveySessionTest {
         assertThrows(IllegalStateException.class, () -> session.activate(notStored));
         assertEquals(2, transport.calls.size(), "no PUT for a map that was not stored");
     }
+
+    /** What the screen keeps of a session (its file in the app's storage): read back equal, and usable. */
+    @Test
+    void aSessionSurvivesItsJsonAndGoesOn() throws Exception {
+        transport.reply(201, sample("s1")).reply(201, sample("s2"));
+        session.addPhoto(new byte[W * H], photo());
+        session.addPhoto(new byte[W * H], photo());
+        session.label(0, 17, 10.5, 20);
+        session.label(0, 42, 70, 20);
+        session.label(1, 42, 40.25, 30);
+        JSONObject saved = session.toJson();
+        assertEquals(SurveySession.SCHEMA, saved.getString("schema"));
+
+        FakeTransport later = new FakeTransport();
+        SurveySession back = SurveySession.fromJson(new LumiposeClient(new ClientConfig("http://server:8000", "key",
+                "phone-1", false, new RetryPolicy(1, 0, 1.0, 0)), later, ms -> { }), saved.toString());
+        assertTrue(saved.similar(back.toJson()), back.toJson().toString());
+        assertEquals("office-surveyed", back.name());
+        assertEquals(2, back.shots().size());
+        SurveySession.Shot first = back.shots().get(0);
+        assertEquals("s1", first.sampleId);
+        assertEquals(W, first.width);
+        assertEquals(H, first.height);
+        assertFalse(first.stored.ok);
+        assertEquals("beacon_id_unknown", first.stored.reason);
+        assertEquals(2, first.labels.size());
+        assertEquals(42, first.labels.get(1).beaconId);
+        assertEquals(40.25, back.shots().get(1).labels.get(0).xPx, 0.0);
+
+        // more photos (numbered on), labels on old and new ones, the survey of them all
+        later.reply(201, sample("s3")).reply(200, report(true));
+        back.addPhoto(new byte[W * H], photo());
+        assertEquals("http://server:8000/v1/samples?label=survey%3Aoffice-surveyed%3A3", later.calls.get(0).url);
+        back.label(2, 17, 5, 5);
+        back.label(1, 17, 6, 6);
+        back.survey("office", 17);
+        JSONArray samples = body(later.calls.get(1)).getJSONArray("samples");
+        assertEquals(3, samples.length());
+        assertEquals("s2", samples.getJSONObject(1).getString("sample_id"));
+        assertEquals(2, samples.getJSONObject(1).getJSONArray("labels").length());
+        assertEquals(1, samples.getJSONObject(2).getJSONArray("labels").length());
+    }
+
+    @Test
+    void anEmptySessionSurvivesItsJson() {
+        SurveySession back = SurveySession.fromJson(null, session.toJson().toString());
+        assertEquals(0, back.shots().size());
+        assertTrue(session.toJson().similar(back.toJson()));
+    }
+
+    /** A damaged or foreign file is refused naming what is wrong, never half read. */
+    @Test
+    void aDamagedSessionIsRefusedNamingWhatIsWrong() throws Exception {
+        transport.reply(201, sample("s1"));
+        session.addPhoto(new byte[W * H], photo());
+        session.label(0, 17, 10.5, 20);
+        String good = session.toJson().toString();
+
+        ContractException cut = assertThrows(ContractException.class,
+                () -> SurveySession.fromJson(null, good.substring(0, good.length() / 2)));
+        assertEquals("survey session", cut.field);
+        assertTrue(cut.getMessage().contains("not a JSON object"), cut.getMessage());
+        assertThrows(ContractException.class, () -> SurveySession.fromJson(null, ""));
+        assertEquals("schema", assertThrows(ContractException.class, () -> SurveySession.fromJson(null,
+                new JSONObject(good).put("schema", "lumipose.calibration-session/1").toString())).field);
+        assertEquals("schema", assertThrows(ContractException.class, () -> SurveySession.fromJson(null,
+                "{\"name\": \"x\", \"photos\": 0}")).field);
+        assertEquals("name", assertThrows(ContractException.class, () -> SurveySession.fromJson(null,
+                new JSONObject(good).put("name", "no spaces allowed?").toString())).field);
+
+        JSONObject lostSample = new JSONObject(good);
+        lostSample.getJSONArray("shots").getJSONObject(0).remove("sample_id");
+        assertEquals("shots[0].sample_id", assertThrows(ContractException.class,
+                () -> SurveySession.fromJson(null, lostSample.toString())).field);
+        JSONObject badResult = new JSONObject(good);
+        badResult.getJSONArray("shots").getJSONObject(0).getJSONObject("stored").remove("ok");
+        assertEquals("shots[0].stored.ok", assertThrows(ContractException.class,
+                () -> SurveySession.fromJson(null, badResult.toString())).field);
+        JSONObject outside = new JSONObject(good);
+        outside.getJSONArray("shots").getJSONObject(0).getJSONArray("labels").getJSONObject(0).put("x_px", W + 5);
+        ContractException e = assertThrows(ContractException.class,
+                () -> SurveySession.fromJson(null, outside.toString()));
+        assertEquals("shots[0].labels[0]", e.field);
+        assertTrue(e.getMessage().contains("outside"), e.getMessage());
+        JSONObject badId = new JSONObject(good);
+        badId.getJSONArray("shots").getJSONObject(0).getJSONArray("labels").getJSONObject(0).put("beacon_id", "17");
+        assertEquals("shots[0].labels[0].beacon_id", assertThrows(ContractException.class,
+                () -> SurveySession.fromJson(null, badId.toString())).field);
+        assertEquals("photos", assertThrows(ContractException.class,
+                () -> SurveySession.fromJson(null, new JSONObject(good).put("photos", 0).toString())).field);
+    }
 }
