@@ -19,8 +19,8 @@ import io.lumipose.client.protocol.CaptureProtocol;
  * whole cycle (pose frame plus n ID frames) is a whole number of messages plus the golden step
  * 0.382, so successive bursts see the message at evenly spread phases. The burst repeats at most
  * {@link CaptureOptions#burstsPerSecond} (or {@link CaptureOptions#idBurstsPerSecond} with ID
- * frames) times a second: its last frame takes up the slack
- * ({@link BurstTiming}), the pose and ID frames keep their shortest durations.
+ * frames) times a second: its last frame takes up the slack ({@link BurstTiming}), the pose and
+ * ID frames keep their shortest durations.
  */
 public final class CapturePlan {
     /** The output stream's size (YUV_420_888). */
@@ -49,8 +49,8 @@ public final class CapturePlan {
     private final double withIdFramesPerSecond;
 
     /**
-     * @param pose and {@code id}: the requests at their own shortest durations; the timing sets the
-     *             pose frame's and adds the last ID request
+     * {@code pose} and {@code id} come at their own shortest frame durations: the timing sets the
+     * pose frame's and makes the burst's last ID request.
      */
     private CapturePlan(PixelSize output, RequestSpec pose, RequestSpec id, int idFramesPerBurst,
                         List<String> settingsNotes, Long maxFrameDurationNs, double poseAlonePerSecond,
