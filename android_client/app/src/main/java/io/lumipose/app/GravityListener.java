@@ -5,6 +5,8 @@ import android.hardware.Sensor;
 import android.hardware.SensorEvent;
 import android.hardware.SensorEventListener;
 import android.hardware.SensorManager;
+import android.os.Handler;
+import android.os.HandlerThread;
 
 import io.lumipose.client.sensor.GravityHistory;
 import io.lumipose.client.sensor.GyroHistory;
@@ -15,6 +17,12 @@ import io.lumipose.client.sensor.LowPassGravity;
  * attitude (device to East-North-Up), each stamped with its event's timestamp, so every frame gets
  * the reading at its own SENSOR_TIMESTAMP. Phones without TYPE_GRAVITY get a low-passed accelerometer.
  * The gyroscope feeds a GyroHistory the same way: each frame gets the mean rate over its readout.
+ *
+ * <p>Events come on a thread of the listener's own (about 300 a second: gravity and rotation at
+ * 50 Hz, the gyroscope at 200 Hz), started by {@link #start()} and ended by {@link #stop()}: on the
+ * main thread they queued behind drawing and the screen's work, and delayed both. An event
+ * allocates nothing: the rotation matrix and the low-passed gravity go through buffers of this
+ * thread's, which the histories copy (they are read on the camera thread).
  */
 final class GravityListener implements SensorEventListener {
     /**
@@ -32,6 +40,11 @@ final class GravityListener implements SensorEventListener {
     private final LowPassGravity lowPass;
     private final GravityHistory history = new GravityHistory();
     private final GyroHistory rates = new GyroHistory();
+    /** The sensor thread's buffers: the histories copy what they keep. */
+    private final float[] rotationMatrix = new float[9];
+    private final float[] filteredGravity = new float[3];
+    /** Between start() and stop(); both on the main thread. */
+    private HandlerThread thread;
 
     GravityListener(Context context) {
         sensors = (SensorManager) context.getSystemService(Context.SENSOR_SERVICE);
@@ -67,30 +80,42 @@ final class GravityListener implements SensorEventListener {
     }
 
     void start() {
+        if (sensors == null || thread != null) {
+            return;
+        }
+        thread = new HandlerThread("lumipose-sensors");
+        thread.start();
+        Handler handler = new Handler(thread.getLooper());
         if (gravity != null) {
-            sensors.registerListener(this, gravity, SensorManager.SENSOR_DELAY_GAME);
+            sensors.registerListener(this, gravity, SensorManager.SENSOR_DELAY_GAME, handler);
         }
         if (rotation != null) {
-            sensors.registerListener(this, rotation, SensorManager.SENSOR_DELAY_GAME);
+            sensors.registerListener(this, rotation, SensorManager.SENSOR_DELAY_GAME, handler);
         }
         if (gyroscope != null) {
-            sensors.registerListener(this, gyroscope, GYROSCOPE_PERIOD_US);
+            sensors.registerListener(this, gyroscope, GYROSCOPE_PERIOD_US, handler);
         }
     }
 
     void stop() {
-        if (sensors != null) {
-            sensors.unregisterListener(this);
+        if (sensors == null || thread == null) {
+            return;
         }
+        sensors.unregisterListener(this);
+        thread.quitSafely(); // events already queued still reach the histories
+        thread = null;
     }
 
+    /**
+     * On the sensor thread. Synchronized only because a screen resumed at once may start the next
+     * thread while the last one handles its last event: they share the buffers (uncontended otherwise).
+     */
     @Override
-    public void onSensorChanged(SensorEvent event) {
+    public synchronized void onSensorChanged(SensorEvent event) {
         switch (event.sensor.getType()) {
             case Sensor.TYPE_ROTATION_VECTOR:
-                float[] m = new float[9];
-                SensorManager.getRotationMatrixFromVector(m, event.values);
-                history.addRotation(event.timestamp, m);
+                SensorManager.getRotationMatrixFromVector(rotationMatrix, event.values);
+                history.addRotation(event.timestamp, rotationMatrix);
                 break;
             case Sensor.TYPE_GRAVITY:
                 history.addGravity(event.timestamp, event.values);
@@ -100,7 +125,8 @@ final class GravityListener implements SensorEventListener {
                 break;
             case Sensor.TYPE_ACCELEROMETER:
                 if (lowPass != null) {
-                    history.addGravity(event.timestamp, lowPass.update(event.timestamp, event.values));
+                    history.addGravity(event.timestamp,
+                            lowPass.update(event.timestamp, event.values, filteredGravity));
                 }
                 break;
             default:

@@ -21,8 +21,12 @@ import io.lumipose.client.frame.GreyPreview;
  * reach {@link #onPhoto} on the screen's executor, one at a time.
  */
 abstract class StillActivity extends CameraActivity implements StillCapture.Listener {
-    /** A preview about five times a second: enough to aim, little work on the camera thread. */
-    private static final long PREVIEW_EVERY_NS = 200_000_000L;
+    /**
+     * A preview about five times a second: enough to aim, little work on the camera thread. Below
+     * the still plan's 200 ms frame period (CaptureOptions.STILL_BURSTS_PER_S), so that timestamp
+     * jitter does not skip every other frame.
+     */
+    private static final long PREVIEW_EVERY_NS = 150_000_000L;
     protected PreviewView preview;
     protected Button shutter;
     protected volatile CameraFacts facts;

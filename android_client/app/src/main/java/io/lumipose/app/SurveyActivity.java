@@ -17,6 +17,7 @@ import java.util.List;
 import java.util.Locale;
 
 import io.lumipose.client.camera.CameraFacts;
+import io.lumipose.client.capture.CaptureOptions;
 import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.capture.UnsupportedCameraException;
@@ -162,10 +163,14 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         reportView.setText("Started over: a new survey.");
     }
 
-    /** Survey photos see the panels as positioning frames do, but with no ID frames: one photo, whole. */
+    /**
+     * Survey photos see the panels as positioning frames do, but with no ID frames: one photo, whole;
+     * at a still screen's rate (its preview is all that runs between photos).
+     */
     @Override
     public CapturePlan plan(CameraFacts facts, CapturePlan positioning) throws UnsupportedCameraException {
-        return positioning.withoutIdFrames("survey: panels named by labels, no ID frames");
+        return positioning.withoutIdFrames("survey: panels named by labels, no ID frames")
+                .atBurstsPerSecond(CaptureOptions.STILL_BURSTS_PER_S);
     }
 
     /** The sketch's positions are rough: its bearing (if any) is no better, but the compass bearing goes anyway. */

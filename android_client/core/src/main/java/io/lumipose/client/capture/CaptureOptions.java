@@ -4,6 +4,28 @@ import io.lumipose.client.protocol.CaptureProtocol;
 
 /** What the user and the map ask of the capture; the camera's facts then decide what is possible. */
 public final class CaptureOptions {
+    /*
+     * The uploader keeps one burst in flight and one waiting; a frame beyond what it takes is read
+     * out, processed and dropped all the same (battery and heat, issue 26). So the camera repeats
+     * its burst about as often as the uploader sends one (docs/android.md, "Benchmark", 50 Mbit/s).
+     */
+    /**
+     * Live screens, pose frames alone (a one-beacon map): a pose window's round trip is 25-45 ms,
+     * and a fix every 100 ms is all a walker needs (14 cm at 1.4 m/s); 60 a second was 6 times that.
+     */
+    public static final double LIVE_BURSTS_PER_S = 10.0;
+    /**
+     * Live screens, bursts with ID frames: four ID windows and a pose window take 0.25 s at 3 m,
+     * 0.4 s at 2 m, 1 s at 1 m, so 5 a second is what the uploader takes at best; a burst that
+     * waits is then at most 0.2 s old. (The protocol's captures are 0.5 s apart, docs/vlc.md.)
+     */
+    public static final double LIVE_ID_BURSTS_PER_S = 5.0;
+    /**
+     * The still screens (calibration, survey): their preview is drawn five times a second and the
+     * shutter takes the next frame, so a fifth of a second is all the wait there is.
+     */
+    public static final double STILL_BURSTS_PER_S = 5.0;
+
     /** Exposure of the pose frames, ns. */
     public final long poseExposureNs;
     /** Exposure of the beacon-ID frames, ns; 0 = no ID frames. */
@@ -14,9 +36,20 @@ public final class CaptureOptions {
     public final double ceilingDistanceM;
     /** Upper bound on output width x height (upload size and server time grow with it). */
     public final long maxPixels;
+    /** The most bursts a second when a burst is a pose frame alone; the plan's last frame blanks the rest. */
+    public final double burstsPerSecond;
+    /** The same when a burst is a pose frame and its ID frames. */
+    public final double idBurstsPerSecond;
 
+    /** A live screen's options: {@link #LIVE_BURSTS_PER_S} and {@link #LIVE_ID_BURSTS_PER_S}. */
     public CaptureOptions(long poseExposureNs, long idExposureNs, int beaconsInMap, double ceilingDistanceM,
                           long maxPixels) {
+        this(poseExposureNs, idExposureNs, beaconsInMap, ceilingDistanceM, maxPixels, LIVE_BURSTS_PER_S,
+                LIVE_ID_BURSTS_PER_S);
+    }
+
+    private CaptureOptions(long poseExposureNs, long idExposureNs, int beaconsInMap, double ceilingDistanceM,
+                           long maxPixels, double burstsPerSecond, double idBurstsPerSecond) {
         if (poseExposureNs <= 0) {
             throw new IllegalArgumentException("pose exposure must be > 0 ns, got " + poseExposureNs);
         }
@@ -32,11 +65,28 @@ public final class CaptureOptions {
         if (maxPixels <= 0) {
             throw new IllegalArgumentException("max pixels must be > 0, got " + maxPixels);
         }
+        requireRate(burstsPerSecond);
+        requireRate(idBurstsPerSecond);
         this.poseExposureNs = poseExposureNs;
         this.idExposureNs = idExposureNs;
         this.beaconsInMap = beaconsInMap;
         this.ceilingDistanceM = ceilingDistanceM;
         this.maxPixels = maxPixels;
+        this.burstsPerSecond = burstsPerSecond;
+        this.idBurstsPerSecond = idBurstsPerSecond;
+    }
+
+    /** The same options at other rates: pose frames alone, and bursts with ID frames, a second at most. */
+    public CaptureOptions withBurstsPerSecond(double poseAlone, double withIdFrames) {
+        return new CaptureOptions(poseExposureNs, idExposureNs, beaconsInMap, ceilingDistanceM, maxPixels, poseAlone,
+                withIdFrames);
+    }
+
+    static double requireRate(double burstsPerSecond) {
+        if (!(burstsPerSecond > 0) || Double.isInfinite(burstsPerSecond)) {
+            throw new IllegalArgumentException("bursts per second must be > 0, got " + burstsPerSecond);
+        }
+        return burstsPerSecond;
     }
 
     /**

@@ -17,33 +17,63 @@ import io.lumipose.client.protocol.CaptureProtocol;
  *
  * <p>Timing (docs/vlc.md): the ID frames of a burst start {@code 1/n} of a message apart, and the
  * whole cycle (pose frame plus n ID frames) is a whole number of messages plus the golden step
- * 0.382, so successive bursts see the message at evenly spread phases. The pose frame's duration
- * takes up the slack.
+ * 0.382, so successive bursts see the message at evenly spread phases. The burst repeats at most
+ * {@link CaptureOptions#burstsPerSecond} (or {@link CaptureOptions#idBurstsPerSecond} with ID
+ * frames) times a second: its last frame takes up the slack ({@link BurstTiming}), the pose and
+ * ID frames keep their shortest durations.
  */
 public final class CapturePlan {
     /** The output stream's size (YUV_420_888). */
     public final PixelSize output;
     public final RequestSpec pose;
-    /** Null when no ID frames are taken. */
+    /** Null when no ID frames are taken. Every ID frame's request but the burst's last, which lasts longer. */
     public final RequestSpec id;
     /** ID frames after each pose frame; 0 without ID frames. */
     public final int idFramesPerBurst;
     /** From one pose frame's start to the next, ns. */
     public final long burstIntervalNs;
+    /** The most bursts a second asked for this burst; {@link #burstIntervalNs} is what the camera allows. */
+    public final double burstsPerSecond;
     /** What the user should know about this camera's capture, shown on screen. */
     public final List<String> notes;
-    /** The pose frame's own minimum duration, before it was stretched to step the bursts. */
+    /** The burst's last ID request: {@link #id} with the blanking that holds the burst to its rate; null without. */
+    private final RequestSpec lastId;
+    /** The notes but the timing's, for a plan retimed or changed. */
+    private final List<String> settingsNotes;
+    /** The pose frame's own minimum duration, before any blanking. */
     private final long poseMinimumFrameNs;
+    /** SENSOR_INFO_MAX_FRAME_DURATION, null when not advertised. */
+    private final Long maxFrameDurationNs;
+    /** The rates asked for pose frames alone and for bursts with ID frames (kept for a plan without them). */
+    private final double poseAlonePerSecond;
+    private final double withIdFramesPerSecond;
 
+    /**
+     * {@code pose} and {@code id} come at their own shortest frame durations: the timing sets the
+     * pose frame's and makes the burst's last ID request.
+     */
     private CapturePlan(PixelSize output, RequestSpec pose, RequestSpec id, int idFramesPerBurst,
-                        long burstIntervalNs, List<String> notes, long poseMinimumFrameNs) {
+                        List<String> settingsNotes, Long maxFrameDurationNs, double poseAlonePerSecond,
+                        double withIdFramesPerSecond) {
+        double burstsPerSecond = id == null ? poseAlonePerSecond : withIdFramesPerSecond;
+        BurstTiming timing = BurstTiming.of(pose.frameDurationNs, id == null ? 0 : id.frameDurationNs,
+                idFramesPerBurst, maxFrameDurationNs, burstsPerSecond);
         this.output = output;
-        this.pose = pose;
+        this.pose = pose.withExposure(RequestSpec.POSE, pose.exposureNs, pose.sensitivityIso, timing.poseFrameNs);
         this.id = id;
+        this.lastId = id == null ? null
+                : id.withExposure(RequestSpec.ID, id.exposureNs, id.sensitivityIso, timing.lastFrameNs);
         this.idFramesPerBurst = idFramesPerBurst;
-        this.burstIntervalNs = burstIntervalNs;
-        this.notes = Collections.unmodifiableList(new ArrayList<String>(notes));
-        this.poseMinimumFrameNs = poseMinimumFrameNs;
+        this.burstIntervalNs = timing.periodNs;
+        this.burstsPerSecond = burstsPerSecond;
+        this.settingsNotes = Collections.unmodifiableList(new ArrayList<String>(settingsNotes));
+        List<String> all = new ArrayList<String>(settingsNotes);
+        all.addAll(timing.notes);
+        this.notes = Collections.unmodifiableList(all);
+        this.poseMinimumFrameNs = pose.frameDurationNs;
+        this.maxFrameDurationNs = maxFrameDurationNs;
+        this.poseAlonePerSecond = poseAlonePerSecond;
+        this.withIdFramesPerSecond = withIdFramesPerSecond;
     }
 
     /**
@@ -99,7 +129,8 @@ public final class CapturePlan {
             notes.add("one beacon in the map: no ID frames");
         }
         if (!options.wantsIdFrames()) {
-            return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
+            return new CapturePlan(output, pose, null, 0, notes, facts.maxFrameDurationNs, options.burstsPerSecond,
+                    options.idBurstsPerSecond);
         }
         CaptureSettings idSettings;
         try {
@@ -108,24 +139,14 @@ public final class CapturePlan {
         } catch (UnsupportedCameraException e) {
             // The pose frames are still good: position without beacon IDs.
             notes.add(e.getMessage());
-            return new CapturePlan(output, pose, null, 0, pose.frameDurationNs, notes, pose.frameDurationNs);
+            return new CapturePlan(output, pose, null, 0, notes, facts.maxFrameDurationNs, options.burstsPerSecond,
+                    options.idBurstsPerSecond);
         }
         notes.addAll(idSettings.notes);
-        int n = CaptureProtocol.ID_BURST_FRAMES;
-        long idFramesNs = n * idSettings.frameDurationNs;
-        long minimumCycleNs = poseSettings.frameDurationNs + idFramesNs;
-        long cycleNs = IdCapturePlan.steppedIntervalNs(minimumCycleNs, minimumCycleNs, CaptureProtocol.GOLDEN_STEP);
-        long poseFrameNs = cycleNs - idFramesNs;
-        if (facts.maxFrameDurationNs != null && poseFrameNs > facts.maxFrameDurationNs) {
-            notes.add("pose frame duration " + poseFrameNs + " ns exceeds SENSOR_INFO_MAX_FRAME_DURATION: "
-                    + "bursts are not golden-stepped");
-            poseFrameNs = facts.maxFrameDurationNs;
-            cycleNs = poseFrameNs + idFramesNs;
-        }
-        pose = pose.withExposure(RequestSpec.POSE, pose.exposureNs, pose.sensitivityIso, poseFrameNs);
         RequestSpec id = pose.withExposure(RequestSpec.ID, idSettings.exposureNs, idSettings.sensitivityIso,
                 idSettings.frameDurationNs);
-        return new CapturePlan(output, pose, id, n, cycleNs, notes, poseSettings.frameDurationNs);
+        return new CapturePlan(output, pose, id, CaptureProtocol.ID_BURST_FRAMES, notes, facts.maxFrameDurationNs,
+                options.burstsPerSecond, options.idBurstsPerSecond);
     }
 
     /** The same plan without ID frames (for example when the results show no rolling-shutter skew). */
@@ -133,23 +154,34 @@ public final class CapturePlan {
         if (id == null) {
             return this;
         }
-        List<String> more = new ArrayList<String>(notes);
+        List<String> more = new ArrayList<String>(settingsNotes);
         more.add(reason);
-        RequestSpec alone = pose.withExposure(RequestSpec.POSE, pose.exposureNs, pose.sensitivityIso,
-                poseMinimumFrameNs);
-        return new CapturePlan(output, alone, null, 0, alone.frameDurationNs, more, poseMinimumFrameNs);
+        return new CapturePlan(output, shortestPose(), null, 0, more, maxFrameDurationNs, poseAlonePerSecond,
+                withIdFramesPerSecond);
+    }
+
+    /** The same plan repeating at most {@code perSecond} bursts a second (within the camera's frame durations). */
+    public CapturePlan atBurstsPerSecond(double perSecond) {
+        CaptureOptions.requireRate(perSecond);
+        return new CapturePlan(output, shortestPose(), id, idFramesPerBurst, settingsNotes, maxFrameDurationNs,
+                perSecond, perSecond);
+    }
+
+    private RequestSpec shortestPose() {
+        return pose.withExposure(RequestSpec.POSE, pose.exposureNs, pose.sensitivityIso, poseMinimumFrameNs);
     }
 
     /**
      * The plan for still photos of a scene lit by the room (a printed calibration board): this plan's
      * output size, crop region, focus, tone curve and processing, so that the photos have the
      * positioning frames' intrinsics, but {@code exposureNs} and {@code iso} (both clamped to what
-     * the camera offers) for the scene, and no ID frames. Its frames are "pose" frames.
+     * the camera offers) for the scene, and no ID frames, at {@link CaptureOptions#STILL_BURSTS_PER_S}
+     * (a preview to aim by; the shutter takes the next frame). Its frames are "pose" frames.
      */
     public CapturePlan forStills(CameraFacts facts, long exposureNs, int iso) throws UnsupportedCameraException {
         CameraRanges ranges = ranges(facts, output);
         CaptureSettings s = CaptureSettingsChooser.choose(ranges, exposureNs);
-        List<String> more = new ArrayList<String>(notes);
+        List<String> more = new ArrayList<String>(settingsNotes);
         more.addAll(s.notes);
         Integer clampedIso = null;
         if (ranges.sensitivityMinIso != null) {
@@ -160,15 +192,19 @@ public final class CapturePlan {
             }
         }
         RequestSpec still = pose.withExposure(RequestSpec.POSE, s.exposureNs, clampedIso, s.frameDurationNs);
-        return new CapturePlan(output, still, null, 0, still.frameDurationNs, more, s.frameDurationNs);
+        return new CapturePlan(output, still, null, 0, more, maxFrameDurationNs, CaptureOptions.STILL_BURSTS_PER_S,
+                CaptureOptions.STILL_BURSTS_PER_S);
     }
 
-    /** The repeating burst in capture order: the pose request, then the ID requests. */
+    /**
+     * The repeating burst in capture order: the pose request, then the ID requests, the last of
+     * which lasts long enough to hold the burst to its rate.
+     */
     public List<RequestSpec> burst() {
         List<RequestSpec> out = new ArrayList<RequestSpec>();
         out.add(pose);
         for (int i = 0; i < idFramesPerBurst; i++) {
-            out.add(id);
+            out.add(i == idFramesPerBurst - 1 ? lastId : id);
         }
         return Collections.unmodifiableList(out);
     }

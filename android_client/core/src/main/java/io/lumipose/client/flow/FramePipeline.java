@@ -17,9 +17,7 @@ import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CapturePlan;
 import io.lumipose.client.capture.RequestSpec;
 import io.lumipose.client.frame.BeaconWindow;
-import io.lumipose.client.frame.FrameLevels;
 import io.lumipose.client.frame.FrameMeta;
-import io.lumipose.client.frame.LumaPlane;
 import io.lumipose.client.frame.Window;
 import io.lumipose.client.net.BurstUploader;
 import io.lumipose.client.net.FrameUpload;
@@ -40,8 +38,9 @@ import io.lumipose.client.sensor.GyroHistory;
  * the stripes on the panel's rows). Each window goes with its whole plane's grey levels
  * ({@code crop.levels_dn}), so the server reads it as the whole frame.
  *
- * <p>Whether a burst goes is decided at its pose frame: when the uploader already holds a burst
- * waiting, the whole burst is dropped before anything of it is copied. Camera calls come on the
+ * <p>Whether a burst goes is decided at its pose frame's first half (result or image): when the
+ * uploader already holds a burst waiting, or one is in flight and the burst being gathered will
+ * wait, the whole burst is dropped before any of it is searched or copied. Camera calls come on the
  * camera's one thread, results on the uploader's; the matching and burst state is guarded by this
  * object's lock only so that {@link #close()} may come from any thread.
  */
@@ -83,6 +82,7 @@ public final class FramePipeline implements FrameSink {
     static final int MAX_WARNINGS = 20;
 
     private final FrameDescriber describer;
+    private final PlaneWork work;
     private final GravityHistory attitude;
     private final GyroHistory rates;
     private final boolean timestampsRealtime;
@@ -121,10 +121,19 @@ public final class FramePipeline implements FrameSink {
     public FramePipeline(FrameDescriber describer, GravityHistory attitude, GyroHistory rates,
                          boolean timestampsRealtime, int idFramesPerBurst, FrameUploader uploader,
                          Executor uploadExecutor, Listener listener) {
+        this(describer, attitude, rates, timestampsRealtime, idFramesPerBurst, uploader, uploadExecutor, listener,
+                PlaneWork.PIXELS);
+    }
+
+    /** The same with the pixel work given (a test counts it). */
+    FramePipeline(FrameDescriber describer, GravityHistory attitude, GyroHistory rates, boolean timestampsRealtime,
+                  int idFramesPerBurst, FrameUploader uploader, Executor uploadExecutor, Listener listener,
+                  PlaneWork work) {
         if (idFramesPerBurst < 0) {
             throw new IllegalArgumentException("idFramesPerBurst must be >= 0, got " + idFramesPerBurst);
         }
         this.describer = describer;
+        this.work = work;
         this.attitude = attitude;
         this.rates = rates;
         this.timestampsRealtime = timestampsRealtime;
@@ -190,7 +199,7 @@ public final class FramePipeline implements FrameSink {
         long number = imageCount++;
         FrameResult result = results.remove(timestampNs);
         if (result != null) {
-            handle(result, new LivePlane(number, yPlane, width, height, rowStride, pixelStride));
+            handle(result, new LivePlane(work, number, yPlane, width, height, rowStride, pixelStride));
             return;
         }
         images.put(timestampNs, copyEarly(number, yPlane, width, height, rowStride, pixelStride));
@@ -303,7 +312,7 @@ public final class FramePipeline implements FrameSink {
 
     private void handlePose(FrameMeta meta, Pixels pixels) {
         submitBurst();
-        if (!uploader.hasRoom()) {
+        if (pixels.skippedBusy() || !roomForNextBurst()) {
             burst = Burst.dropped(idFramesPerBurst);
             lastIdWindow = null;
             drop(DROP_UPLOADER_BUSY, 1);
@@ -382,33 +391,42 @@ public final class FramePipeline implements FrameSink {
     }
 
     /**
-     * The whole plane's [background, plateau] by the contract's coarse rule, sent with its window
-     * ({@code crop.levels_dn}) so the server reads the window as the whole frame.
+     * Whether a burst whose pose frame comes now would find the uploader's waiting place free when
+     * it is complete: not when a burst is in flight and the one being gathered will take that place.
+     * (Should the burst in flight end first, this burst is lost though it had room: one burst, not a
+     * search and a copy of every burst the uploader cannot take.)
      */
-    static double[] levelsOf(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
-        return FrameLevels.measure(plane, width, height, rowStride, pixelStride);
+    private boolean roomForNextBurst() {
+        boolean gatheredWillWait = burst != null && burst.kept && uploader.busy();
+        return !gatheredWillWait && uploader.hasRoom();
     }
 
     /**
      * An image whose result has not come: its kind is guessed from the burst's order
-     * ({@link #guessId}), and only what that kind needs is copied; the result checks it.
+     * ({@link #guessId}), and only what that kind needs is copied; the result checks it. A guessed
+     * pose frame the uploader has no room for is neither searched nor copied (its burst is dropped
+     * at its result), and neither are its ID frames.
      */
     private EarlyImage copyEarly(long number, ByteBuffer plane, int width, int height, int rowStride,
                                  int pixelStride) {
         if (guessId(number)) {
             Window w = lastIdWindow;
-            return new EarlyImage(number, false, null, w,
-                    w == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w),
-                    w == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
+            return new EarlyImage(work, number, false, null, w,
+                    w == null ? null : work.copyWindow(plane, width, height, rowStride, pixelStride, w),
+                    w == null ? null : work.levels(plane, width, height, rowStride, pixelStride));
         }
         guessedPose = number;
-        Window panel = BeaconWindow.find(plane, width, height, rowStride, pixelStride);
+        if (!roomForNextBurst()) {
+            lastIdWindow = null;
+            return EarlyImage.skipped(work, number);
+        }
+        Window panel = work.findPanel(plane, width, height, rowStride, pixelStride);
         lastIdWindow = idWindow(panel, width, height);
         // no panel: the whole plane goes (the server says why), but only when there is room for it
         Window region = panel != null ? panel : uploader.hasRoom() ? new Window(0, 0, width, height) : null;
-        return new EarlyImage(number, true, panel, region,
-                region == null ? null : LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, region),
-                panel == null ? null : levelsOf(plane, width, height, rowStride, pixelStride));
+        return new EarlyImage(work, number, true, panel, region,
+                region == null ? null : work.copyWindow(plane, width, height, rowStride, pixelStride, region),
+                panel == null ? null : work.levels(plane, width, height, rowStride, pixelStride));
     }
 
     private <V> void evictOldest(LinkedHashMap<Long, V> waiting, String reason) {
@@ -486,18 +504,25 @@ public final class FramePipeline implements FrameSink {
         /** Whether {@link #panel()} was looked for. */
         boolean panelSearched();
 
+        /** Whether nothing was kept because the uploader had no room when the image came. */
+        boolean skippedBusy();
+
         /** The frame's beacon window, or null when no panel stands out. */
         Window panel();
 
         /** The packed pixels of a window, or null when they were not kept. */
         byte[] copy(Window w);
 
-        /** The whole plane's grey levels ({@link #levelsOf}). */
+        /**
+         * The whole plane's [background, plateau] by the contract's coarse rule, sent with its window
+         * ({@code crop.levels_dn}) so the server reads the window as the whole frame.
+         */
         double[] levels();
     }
 
     /** The camera's plane, during the onImage call. */
     private static final class LivePlane implements Pixels {
+        private final PlaneWork work;
         private final long number;
         private final ByteBuffer plane;
         private final int width;
@@ -505,7 +530,9 @@ public final class FramePipeline implements FrameSink {
         private final int rowStride;
         private final int pixelStride;
 
-        LivePlane(long number, ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
+        LivePlane(PlaneWork work, long number, ByteBuffer plane, int width, int height, int rowStride,
+                  int pixelStride) {
+            this.work = work;
             this.number = number;
             this.plane = plane;
             this.width = width;
@@ -525,32 +552,47 @@ public final class FramePipeline implements FrameSink {
         }
 
         @Override
+        public boolean skippedBusy() {
+            return false;
+        }
+
+        @Override
         public Window panel() {
-            return BeaconWindow.find(plane, width, height, rowStride, pixelStride);
+            return work.findPanel(plane, width, height, rowStride, pixelStride);
         }
 
         @Override
         public byte[] copy(Window w) {
-            return LumaPlane.copyWindow(plane, width, height, rowStride, pixelStride, w);
+            return work.copyWindow(plane, width, height, rowStride, pixelStride, w);
         }
 
         @Override
         public double[] levels() {
-            return levelsOf(plane, width, height, rowStride, pixelStride);
+            return work.levels(plane, width, height, rowStride, pixelStride);
         }
     }
 
     /** What was kept of an image that came before its result. */
     private static final class EarlyImage implements Pixels {
+        private final PlaneWork work;
         private final long number;
+        private final boolean skippedBusy;
         private final boolean panelSearched;
         private final Window panel;
         private final Window region;
         private final byte[] pixels;
         private final double[] levels;
 
-        EarlyImage(long number, boolean panelSearched, Window panel, Window region, byte[] pixels, double[] levels) {
+        EarlyImage(PlaneWork work, long number, boolean panelSearched, Window panel, Window region, byte[] pixels,
+                   double[] levels) {
+            this(work, number, false, panelSearched, panel, region, pixels, levels);
+        }
+
+        private EarlyImage(PlaneWork work, long number, boolean skippedBusy, boolean panelSearched, Window panel,
+                           Window region, byte[] pixels, double[] levels) {
+            this.work = work;
             this.number = number;
+            this.skippedBusy = skippedBusy;
             this.panelSearched = panelSearched;
             this.panel = panel;
             this.region = region;
@@ -568,9 +610,19 @@ public final class FramePipeline implements FrameSink {
             return number;
         }
 
+        /** A guessed pose frame the uploader had no room for: nothing looked at, nothing kept. */
+        static EarlyImage skipped(PlaneWork work, long number) {
+            return new EarlyImage(work, number, true, false, null, null, null, null);
+        }
+
         @Override
         public boolean panelSearched() {
             return panelSearched;
+        }
+
+        @Override
+        public boolean skippedBusy() {
+            return skippedBusy;
         }
 
         @Override
@@ -586,7 +638,7 @@ public final class FramePipeline implements FrameSink {
             if (region.equals(w)) {
                 return pixels;
             }
-            return LumaPlane.copyWindow(ByteBuffer.wrap(pixels), region.width(), region.height(), region.width(), 1,
+            return work.copyWindow(ByteBuffer.wrap(pixels), region.width(), region.height(), region.width(), 1,
                     new Window(w.x0 - region.x0, w.y0 - region.y0, w.x1 - region.x0, w.y1 - region.y0));
         }
     }

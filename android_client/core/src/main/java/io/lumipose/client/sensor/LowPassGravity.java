@@ -13,7 +13,9 @@ public final class LowPassGravity {
     private static final long RESTART_GAP_NS = 1_000_000_000L;
 
     private final long timeConstantNs;
-    private float[] state;
+    private final float[] state = new float[3];
+    /** False before the first reading, which starts the filter. */
+    private boolean started;
     private long lastNs;
 
     public LowPassGravity() {
@@ -29,12 +31,24 @@ public final class LowPassGravity {
 
     /** Feeds one accelerometer event [x, y, z] m/s^2 and returns the filtered gravity (a new array). */
     public float[] update(long timestampNs, float[] acceleration) {
+        return update(timestampNs, acceleration, new float[3]);
+    }
+
+    /**
+     * The same into {@code out} (3 values), which it returns: the sensor thread's one buffer, so
+     * that an event allocates nothing.
+     */
+    public float[] update(long timestampNs, float[] acceleration, float[] out) {
+        if (out == null || out.length < 3) {
+            throw new IllegalArgumentException("out needs 3 values");
+        }
         if (acceleration == null || acceleration.length < 3) {
             throw new IllegalArgumentException("acceleration needs 3 values [x, y, z]");
         }
         long dt = timestampNs - lastNs;
-        if (state == null || dt < 0 || dt > RESTART_GAP_NS) {
-            state = new float[] {acceleration[0], acceleration[1], acceleration[2]};
+        if (!started || dt < 0 || dt > RESTART_GAP_NS) {
+            System.arraycopy(acceleration, 0, state, 0, 3);
+            started = true;
         } else {
             double weight = (double) dt / (timeConstantNs + dt);
             for (int i = 0; i < 3; i++) {
@@ -42,6 +56,7 @@ public final class LowPassGravity {
             }
         }
         lastNs = timestampNs;
-        return state.clone();
+        System.arraycopy(state, 0, out, 0, 3);
+        return out;
     }
 }

@@ -3,6 +3,10 @@ package io.lumipose.client.sensor;
 /**
  * Timestamped sensor readings in arrival order, overwriting the oldest; the storage the
  * histories share. Not thread-safe itself: its owner synchronizes.
+ *
+ * <p>A reading is copied into the row it overwrites (a new row only while the ring fills, or for
+ * a reading of another length): at ~300 events a second nothing is allocated per event, and the
+ * caller may reuse its array, as Android does SensorEvent.values.
  */
 final class SampleRing {
     private final long[] times;
@@ -20,7 +24,12 @@ final class SampleRing {
 
     void add(long timestampNs, float[] v) {
         times[next] = timestampNs;
-        values[next] = v.clone();
+        float[] row = values[next];
+        if (row == null || row.length != v.length) {
+            row = new float[v.length];
+            values[next] = row;
+        }
+        System.arraycopy(v, 0, row, 0, v.length);
         next = (next + 1) % times.length;
         size = Math.min(size + 1, times.length);
     }

@@ -39,21 +39,27 @@ class CapturePlanTest {
     /**
      * Issue 12 item 2: ID frames start a quarter message apart, and the whole cycle (pose + 4 ID
      * frames) is a whole number of messages plus the golden step 0.382, so successive bursts see the
-     * message at evenly spread phases. Logical camera at 2000x1500, stream minimum 16.67 ms:
-     * ID frame = 2.25 messages = 18.9 ms; cycle >= 16.67 + 4 * 18.9 = 92.27 ms -> 11.382 messages
-     * = 95.61 ms; the pose frame takes the rest, 20.01 ms.
+     * message at evenly spread phases. Logical camera at 2000x1500, stream minimum 16.67 ms, at no
+     * rate limit to speak of: ID frame = 2.25 messages = 18.9 ms; cycle >= 16.67 + 4 * 18.9 =
+     * 92.27 ms -> 11.382 messages = 95.61 ms; the last ID frame takes the rest, 22.24 ms (the pose
+     * frame took it before issue 26). At the live rate: CapturePlanRateTest.
      */
     @Test
     void theBurstStepsTheMessagePhase() throws Exception {
-        CapturePlan plan = CapturePlan.plan(Devices.load(Devices.LOGICAL), options(4));
+        CapturePlan plan = CapturePlan.plan(Devices.load(Devices.LOGICAL), options(4)).atBurstsPerSecond(1000);
         assertEquals(4, plan.idFramesPerBurst);
         assertEquals(5, plan.burst().size());
         assertEquals(18_900_000L, plan.id.frameDurationNs);
         assertEquals(0.25, fraction(plan.id.frameDurationNs), 1e-6);
         assertEquals(CaptureProtocol.GOLDEN_STEP, fraction(plan.burstIntervalNs), 1e-6);
         assertEquals(11.0 + CaptureProtocol.GOLDEN_STEP, plan.burstIntervalNs / PERIOD_NS, 1e-6);
-        assertEquals(plan.burstIntervalNs, plan.pose.frameDurationNs + 4 * plan.id.frameDurationNs);
-        assertTrue(plan.pose.frameDurationNs >= 16_666_666L);
+        long sum = 0;
+        for (RequestSpec spec : plan.burst()) {
+            sum += spec.frameDurationNs;
+        }
+        assertEquals(plan.burstIntervalNs, sum);
+        assertEquals(16_666_666L, plan.pose.frameDurationNs);
+        assertEquals(plan.burstIntervalNs - 16_666_666L - 3 * 18_900_000L, plan.burst().get(4).frameDurationNs);
         // The ID frames keep the pose frames' geometry; only exposure, ISO and timing differ.
         assertEquals(plan.pose.cropRegion, plan.id.cropRegion);
         assertEquals(125_000L, plan.id.exposureNs);
@@ -128,7 +134,7 @@ class CapturePlanTest {
         CapturePlan poseOnly = plan.withoutIdFrames("no rolling-shutter skew: beacon IDs off");
         assertNull(poseOnly.id);
         assertEquals(1, poseOnly.burst().size());
-        assertEquals(16_666_666L, poseOnly.pose.frameDurationNs, "no longer stretched for the burst");
+        assertEquals(100_000_000L, poseOnly.pose.frameDurationNs, "pose frames alone, at the live rate");
         assertTrue(poseOnly.notes.contains("no rolling-shutter skew: beacon IDs off"));
         assertEquals(poseOnly, poseOnly.withoutIdFrames("again"));
     }

@@ -28,6 +28,7 @@ import io.lumipose.client.camera.Devices;
 import io.lumipose.client.camera.FrameResult;
 import io.lumipose.client.capture.CaptureOptions;
 import io.lumipose.client.capture.CapturePlan;
+import io.lumipose.client.capture.FrameDescriber;
 import io.lumipose.client.frame.BeaconWindow;
 import io.lumipose.client.frame.FrameMeta;
 import io.lumipose.client.frame.LumaPlane;
@@ -333,6 +334,98 @@ class FramePipelineTest {
             assertEquals(frames.get(n).t(), r.sent.get(2 * n - 1).timestampNs.longValue(), "burst 2's pose frame");
         } finally {
             network.shutdownNow();
+        }
+    }
+
+    /** The pixel work done for the frames from {@code fromNs} on, counted; the rest is done uncounted. */
+    private static final class CountingWork implements PlaneWork {
+        final long fromNs;
+        volatile boolean counting;
+        int searches;
+        int copies;
+        int levels;
+
+        CountingWork(long fromNs) {
+            this.fromNs = fromNs;
+        }
+
+        /** The sink whose calls for frames from {@code fromNs} on are counted (a call's work is its frame's). */
+        FrameSink counted(FrameSink sink) {
+            return new FrameSink() {
+                @Override
+                public void onResult(FrameResult result) {
+                    counting = result.timestampNs >= fromNs;
+                    sink.onResult(result);
+                }
+
+                @Override
+                public void onImage(long timestampNs, ByteBuffer yPlane, int width, int height, int rowStride,
+                                    int pixelStride) {
+                    counting = timestampNs >= fromNs;
+                    sink.onImage(timestampNs, yPlane, width, height, rowStride, pixelStride);
+                }
+            };
+        }
+
+        @Override
+        public Window findPanel(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
+            searches += counting ? 1 : 0;
+            return PlaneWork.PIXELS.findPanel(plane, width, height, rowStride, pixelStride);
+        }
+
+        @Override
+        public byte[] copyWindow(ByteBuffer plane, int width, int height, int rowStride, int pixelStride, Window w) {
+            copies += counting ? 1 : 0;
+            return PlaneWork.PIXELS.copyWindow(plane, width, height, rowStride, pixelStride, w);
+        }
+
+        @Override
+        public double[] levels(ByteBuffer plane, int width, int height, int rowStride, int pixelStride) {
+            levels += counting ? 1 : 0;
+            return PlaneWork.PIXELS.levels(plane, width, height, rowStride, pixelStride);
+        }
+    }
+
+    /**
+     * Battery and heat (issue 26): a burst the uploader cannot take (one burst in flight, the one
+     * before it waiting) is decided at its pose frame's first half, before any search or copy, in
+     * either arrival order: at an image that comes before its result too, even while the burst
+     * before it is still being gathered (it will take the waiting place).
+     */
+    @Test
+    void aBurstTheUploaderCannotTakeIsNeitherSearchedNorCopiedWhicheverHalfComesFirst() throws Exception {
+        CapturePlan plan = plan(4);
+        CameraFacts facts = Devices.load(Devices.LOGICAL);
+        int n = plan.idFramesPerBurst + 1;
+        for (int lag : new int[] {0, 1, 3, -1, -2, -3}) {
+            List<Frame> frames = bursts(plan, 3);
+            Recorder r = new Recorder(new Semaphore(0));
+            CountingWork work = new CountingWork(frames.get(2 * n).t());
+            ExecutorService network = Executors.newSingleThreadExecutor();
+            try {
+                FramePipeline p = new FramePipeline(new FrameDescriber(facts, plan, null), new GravityHistory(),
+                        new GyroHistory(), true, plan.idFramesPerBurst, r, network, r, work);
+                feed(p, frames.subList(0, n), 0);
+                long deadline = System.nanoTime() + TimeUnit.SECONDS.toNanos(10);
+                while (r.sent.isEmpty() && System.nanoTime() < deadline) {
+                    Thread.sleep(1); // until the uploader has taken burst 1 (and is held there)
+                }
+                feed(work.counted(p), frames.subList(n, 3 * n), lag); // burst 2 waits, burst 3 has no room
+                String where = "lag " + lag + ": " + r.heard;
+                assertEquals(0, work.searches, "panel searches for the dropped burst, " + where);
+                assertEquals(0, work.copies, "copies for the dropped burst, " + where);
+                assertEquals(0, work.levels, "grey levels for the dropped burst, " + where);
+                assertEquals(Collections.singletonMap(FramePipeline.DROP_UPLOADER_BUSY, (long) n), p.dropCounts(),
+                        where);
+                r.gate.release(100);
+                deadline = System.nanoTime() + TimeUnit.SECONDS.toNanos(10);
+                while ((p.uploading() || r.sent.size() < 2 * n) && System.nanoTime() < deadline) {
+                    Thread.sleep(2);
+                }
+                assertBurstsWentWhole(plan, frames.subList(0, 2 * n), r);
+            } finally {
+                network.shutdownNow();
+            }
         }
     }
 

@@ -2,6 +2,7 @@ package io.lumipose.client.sensor;
 
 import static org.junit.jupiter.api.Assertions.assertArrayEquals;
 import static org.junit.jupiter.api.Assertions.assertEquals;
+import static org.junit.jupiter.api.Assertions.assertSame;
 
 import org.junit.jupiter.api.Test;
 
@@ -41,5 +42,19 @@ class LowPassGravityTest {
         LowPassGravity f = new LowPassGravity(200 * MS);
         f.update(0, new float[] {0, 0, 9.81f});
         assertArrayEquals(new float[] {9.81f, 0, 0}, f.update(5_000 * MS, new float[] {9.81f, 0, 0}), 0f);
+    }
+
+    /** The sensor thread's form: the same filter into one buffer, which the caller then hands on. */
+    @Test
+    void intoABufferTheSameValues() {
+        LowPassGravity fresh = new LowPassGravity();
+        LowPassGravity buffered = new LowPassGravity();
+        float[] out = new float[3];
+        for (int i = 0; i < 50; i++) {
+            float[] a = {(float) Math.sin(i), 0.5f, 9.81f};
+            float[] expected = fresh.update(i * 5 * MS, a);
+            assertSame(out, buffered.update(i * 5 * MS, a, out));
+            assertArrayEquals(expected, out, 0f);
+        }
     }
 }
