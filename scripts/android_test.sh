@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Android client: build the Maven modules (core on the JVM, app against the Android framework
 # classes from Maven Central; both checked against Android API 28's public surface by animal-sniffer)
-# and run the core's JUnit 5 tests, including the end-to-end test against a real `lumipose serve` on
+# and run the core's JUnit 5 tests and the app's Robolectric tests (its Activities and camera code on Android's
+# framework classes), including the end-to-end tests against a real `lumipose serve` on
 # 127.0.0.1; then the dex check (scripts/android_dex_check.sh). Needs OpenJDK 17 and Maven 3.8; Maven
 # downloads everything from Maven Central on first use. Nothing is installed by hand.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT="$PWD"
 
-# The end-to-end test starts the server from the checkout's venv.
+# The end-to-end tests start the server from the checkout's venv; the app's resources need Debian's aapt.
 [ -x .venv/bin/lumipose ] || bash scripts/setup.sh
+bash scripts/system_packages.sh android
 
 MVN=(mvn -B -ntp -f android_client/pom.xml)
 # verify also runs the minSdk API check (animal-sniffer against Android API 28, docs/android.md).

@@ -25,7 +25,6 @@ import org.junit.Test;
 import org.junit.runner.RunWith;
 import org.robolectric.RobolectricTestRunner;
 import org.robolectric.RuntimeEnvironment;
-import org.robolectric.annotation.Config;
 import org.robolectric.annotation.Implementation;
 import org.robolectric.annotation.Implements;
 import org.robolectric.shadows.SensorEventBuilder;
@@ -38,7 +37,7 @@ import org.robolectric.shadows.ShadowSensorManager;
  * histories, each kept as its own copy (the listener reuses its buffers).
  */
 @RunWith(RobolectricTestRunner.class)
-@Config(shadows = GravityListenerTest.HandlerRecordingSensorManager.class)
+// The shadow is declared for every test in robolectric.properties.
 public class GravityListenerTest {
     /**
      * Robolectric's SensorManager calls listeners on the caller's thread whatever Handler they gave;
