@@ -39,7 +39,12 @@ final class PreviewView extends View {
     /** UI thread. */
     void show(GreyPreview p) {
         preview = p;
-        bitmap = Bitmap.createBitmap(p.argb(), p.width, p.height, Bitmap.Config.ARGB_8888);
+        // One bitmap while the picture keeps its size: a new one five times a second is garbage the
+        // UI thread's collector must clear while the camera runs.
+        if (bitmap == null || bitmap.getWidth() != p.width || bitmap.getHeight() != p.height) {
+            bitmap = Bitmap.createBitmap(p.width, p.height, Bitmap.Config.ARGB_8888);
+        }
+        bitmap.setPixels(p.argb(), 0, p.width, 0, 0, p.width, p.height);
         invalidate();
     }
 

@@ -49,10 +49,11 @@ import io.lumipose.client.protocol.CaptureProtocol;
 /**
  * Camera2Controller against Robolectric's Camera2 framework classes (and the two small shadows in
  * {@code camera/}): the requests it builds are the capture protocol's, frames reach the sink as a
- * phone delivers them, and nothing that goes wrong on the camera thread ends the app.
+ * phone delivers them, and nothing that goes wrong on the camera thread ends the app. On the
+ * minSdk's framework (28) and the compileSdk's (29).
  */
 @RunWith(RobolectricTestRunner.class)
-@Config(shadows = {ShadowBurstSession.class, ShadowYuvImageReader.class, ShadowResultKeysCharacteristics.class})
+@Config(sdk = {28, 29}, shadows = {ShadowBurstSession.class, ShadowYuvImageReader.class, ShadowResultKeysCharacteristics.class})
 public class Camera2ControllerTest {
     private static final long TIMEOUT_MS = 5000;
     private Application app;

@@ -31,6 +31,7 @@ import org.robolectric.RobolectricTestRunner;
 import org.robolectric.RuntimeEnvironment;
 import org.robolectric.android.controller.ActivityController;
 import org.robolectric.annotation.Config;
+import org.robolectric.annotation.GraphicsMode;
 import org.robolectric.util.ReflectionHelpers;
 
 import io.lumipose.app.camera.FakeCamera;
@@ -53,7 +54,8 @@ import io.lumipose.client.testutil.Repo;
  * with the reason.
  */
 @RunWith(RobolectricTestRunner.class)
-@Config(shadows = {ShadowBurstSession.class, ShadowYuvImageReader.class, ShadowResultKeysCharacteristics.class})
+@GraphicsMode(GraphicsMode.Mode.NATIVE)
+@Config(qualifiers = "w360dp-h740dp-xhdpi", shadows = {ShadowBurstSession.class, ShadowYuvImageReader.class, ShadowResultKeysCharacteristics.class})
 public class LiveActivityEndToEndTest {
     /** The walk's single frames are within ~36 mm of the truth (core's ReplayEndToEndTest says why). */
     private static final double TOLERANCE_MM = 50.0;
@@ -151,6 +153,7 @@ public class LiveActivityEndToEndTest {
         }
         assertTrue(shown.toString(), shown.size() >= 2);
         assertTrue("the answer names the beacon: " + shown, shown.get(0).contains("beacon "));
+        Screenshots.save(live, "android-live");
         screen.pause().stop().destroy();
     }
 

@@ -278,26 +278,28 @@ public final class FakeCamera {
                         o.minFrameDurationNs));
             }
         }
-        StreamConfiguration[] none = new StreamConfiguration[0];
-        StreamConfigurationDuration[] noDurations = new StreamConfigurationDuration[0];
-        try {
-            // The SDK's constructor: configurations, min durations, stall durations, then the depth, dynamic
-            // depth and HEIC triples, high-speed video, reprocessing, listHighResolution (hidden API).
-            Constructor<StreamConfigurationMap> c = StreamConfigurationMap.class.getConstructor(
-                    StreamConfiguration[].class, StreamConfigurationDuration[].class,
-                    StreamConfigurationDuration[].class, StreamConfiguration[].class,
-                    StreamConfigurationDuration[].class, StreamConfigurationDuration[].class,
-                    StreamConfiguration[].class, StreamConfigurationDuration[].class,
-                    StreamConfigurationDuration[].class, StreamConfiguration[].class,
-                    StreamConfigurationDuration[].class, StreamConfigurationDuration[].class,
-                    android.hardware.camera2.params.HighSpeedVideoConfiguration[].class,
-                    android.hardware.camera2.params.ReprocessFormatsMap.class, boolean.class);
-            return c.newInstance(sizes.toArray(none), durations.toArray(noDurations), noDurations, none,
-                    noDurations, noDurations, none, noDurations, noDurations, none, noDurations, noDurations,
-                    null, null, false);
-        } catch (ReflectiveOperationException e) {
-            throw new IllegalStateException("this SDK's StreamConfigurationMap constructor is not the one expected", e);
+        // Hidden API whose arguments vary by SDK: the configurations and their minimum durations first, then
+        // stall durations, other formats' (depth, dynamic depth, HEIC) and high-speed video (all empty here),
+        // reprocessing (null) and flags (false).
+        for (Constructor<?> c : StreamConfigurationMap.class.getConstructors()) {
+            Class<?>[] types = c.getParameterTypes();
+            if (types.length < 3 || types[0] != StreamConfiguration[].class) {
+                continue;
+            }
+            Object[] args = new Object[types.length];
+            args[0] = sizes.toArray(new StreamConfiguration[0]);
+            args[1] = durations.toArray(new StreamConfigurationDuration[0]);
+            for (int i = 2; i < types.length; i++) {
+                args[i] = types[i].isArray() ? java.lang.reflect.Array.newInstance(types[i].getComponentType(), 0)
+                        : types[i] == boolean.class ? Boolean.FALSE : null;
+            }
+            try {
+                return (StreamConfigurationMap) c.newInstance(args);
+            } catch (ReflectiveOperationException e) {
+                throw new IllegalStateException("StreamConfigurationMap" + java.util.Arrays.toString(types), e);
+            }
         }
+        throw new IllegalStateException("no StreamConfigurationMap constructor of the expected shape in this SDK");
     }
 
     interface Namer {

@@ -84,6 +84,10 @@ public class ShadowYuvImageReader extends ShadowImageReader {
         });
     }
 
+    public ImageReader reader() {
+        return reader;
+    }
+
     public synchronized int acquired() {
         return acquired;
     }
