@@ -486,6 +486,9 @@ class FailureReason(StrEnum):
     pose_failed = "pose_failed"
     pose_ambiguous = "pose_ambiguous"
     pose_uncertain = "pose_uncertain"  # the frame fixes the position only to worse than the map's required_sigma_m
+    # the fitted panel does not explain what the frame shows, beyond the noise the fit measured (a wrong
+    # map, a blob that is not a panel of the map): docs/reliability.md, "A fix answers to its own evidence"
+    shape_mismatch = "shape_mismatch"
     unknown_beacon = "unknown_beacon"
     id_frame = "id_frame"  # an ID frame kept for the device's next capture: no fix of its own (docs/vlc.md)
     numerical_failure = "numerical_failure"  # the arithmetic failed on the frame's or map's numbers (logged)
