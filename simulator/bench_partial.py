@@ -33,7 +33,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, device_profiles
-from simulator.benchmarks import PROFILE_ID, AccuracyConfig, _noisy_gravity, bench_beacon
+from simulator.benchmarks import PROFILE_ID, AccuracyConfig, noisy_gravity, bench_beacon
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, exact_polygon_area_px, render_frame
 from simulator.sampling import parallel_map
@@ -196,7 +196,7 @@ def _partial_sample(args: tuple[PartialConfig, float, float, int]) -> dict:
         psf_sigma_px=rng.uniform(*config.psf_sigma_px), plateau_dn=255.0 * rng.uniform(*config.overexposure)
     )
     pixels = render_frame(beacon, camera, drawn.pose, width, height, sensor, rng)
-    gravity = _noisy_gravity(drawn.pose.rotation_wc, config.gravity_sigma_deg, rng)
+    gravity = noisy_gravity(drawn.pose.rotation_wc, config.gravity_sigma_deg, rng)
     meta = fixture_meta(camera, width, height, drawn.pose, gravity_camera=gravity)
     options = PipelineOptions(gravity_mode=GravityMode.auto, gravity_sigma_deg=config.gravity_sigma_deg)
     result = locate(

@@ -60,7 +60,7 @@ from server.pipeline import PipelineOptions
 from server.pose.outline import OutlineFitRules
 from shared_schemas import Beacon, BeaconMap, PanelShape, device_profiles
 from shared_schemas.cli import BadInput, plural, report_bad_input
-from simulator.benchmarks import summarize
+from simulator.benchmarks import noisy_gravity, summarize
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
 
@@ -117,12 +117,6 @@ class ShapesConfig:
     shapes: tuple[str, ...] = field(default=SHAPES)
 
 
-def _noisy_gravity(rotation_wc: np.ndarray, sigma_deg: float, rng: np.random.Generator) -> list[float]:
-    """Gravity (down) in the camera frame, tilted by a random error of `sigma_deg` per axis."""
-    error = rotation_from_ypr(0.0, *rng.normal(0.0, sigma_deg, 2))
-    return (rotation_wc.T @ error @ np.array([0.0, 0.0, -1.0])).tolist()
-
-
 def draw_shape_pose(
     config: ShapesConfig, case: ShapeCase, camera, width: int, height: int, rng: np.random.Generator
 ) -> tuple[CameraPose, int]:
@@ -165,7 +159,7 @@ def shape_sample(args: tuple[ShapesConfig, str, int]) -> dict:
         plateau_dn=255.0 * rng.uniform(*config.overexposure),
     )
     pixels = render_frame(case.beacon, camera, pose, width, height, sensor, rng)
-    gravity = _noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng)
+    gravity = noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng)
     true_yaw = math.degrees(math.atan2(pose.rotation_wc[1, 0], pose.rotation_wc[0, 0]))
     heading = None
     if case.heading:

@@ -79,7 +79,7 @@ def bench_beacon(distance_m: float) -> Beacon:
     return Beacon(id=0, center_m=[0.0, 0.0, distance_m], yaw_deg=0.0, side_m=0.174, corner_radius_m=0.02)
 
 
-def _noisy_gravity(rotation_wc: np.ndarray, sigma_deg: float, rng: np.random.Generator) -> list[float]:
+def noisy_gravity(rotation_wc: np.ndarray, sigma_deg: float, rng: np.random.Generator) -> list[float]:
     """Gravity (down) in the camera frame, tilted by a random error of `sigma_deg` per axis."""
     error = rotation_from_ypr(0.0, *rng.normal(0.0, sigma_deg, 2))
     return (rotation_wc.T @ error @ np.array([0.0, 0.0, -1.0])).tolist()
@@ -135,7 +135,7 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
     else:
         raise ValueError(f"renderer must be one of {RENDERERS}, got {config.renderer!r}")
     meta = fixture_meta(camera, width, height, pose,
-                        gravity_camera=_noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng),
+                        gravity_camera=noisy_gravity(pose.rotation_wc, config.gravity_sigma_deg, rng),
                         tone_curve=config.chain.reported_tone_curve() if config.chain is not None else None,
                         **({} if motion is None else gyroscope_meta(motion, pose, config, index)))
     return LumaFrame(pixels=pixels, meta=meta, camera=camera), BeaconMap(name="bench", beacons=[beacon]), pose
@@ -273,9 +273,12 @@ def summarize(errors_m: list[float]) -> dict:
     }
 
 
-def _progress(done: int, total: int, label: str) -> None:
-    if sys.stderr.isatty() or done == total or done % max(1, total // 10) == 0:
+def progress(done: int, total: int, label: str) -> None:
+    """`label: done/total` on stderr: in place on a terminal, every tenth on a line of its own in a log."""
+    if sys.stderr.isatty():
         print(f"\r{label}: {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
+    elif done == total or done % max(1, total // 10) == 0:
+        print(f"{label}: {done}/{total}", file=sys.stderr, flush=True)
 
 
 def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
@@ -286,7 +289,7 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
     with ProcessPoolExecutor(max_workers=workers) as pool:
         for sample in pool.map(_accuracy_sample, [(config, i) for i in range(config.frames)], chunksize=2):
             samples.append(sample)
-            _progress(len(samples), config.frames, label)
+            progress(len(samples), config.frames, label)
     summary = {}
     for mode in MODES:
         summary[mode] = summarize([s["errors"][mode][0] for s in samples])
