@@ -108,6 +108,8 @@ final class Camera2Controller {
     private String summary;
     private boolean awbLocked;
     private int framesSinceConfigured;
+    /** openCamera calls so far: each one's callbacks know whether they are still the current device's. */
+    private int openings;
     /** The wait before the next reopening; 0 until a loss. */
     private long retryMs;
     private boolean lost;
@@ -328,18 +330,31 @@ final class Camera2Controller {
         lost = true;
         retryMs = retryMs == 0 ? FIRST_RETRY_MS : Math.min(LAST_RETRY_MS, 2 * retryMs);
         listener.onCameraLost(message, retryMs);
-        handler.postDelayed(new Runnable() {
-            @Override
-            public void run() {
-                open();
-            }
-        }, retryMs);
+        handler.removeCallbacks(reopen); // two losses in a row (an error, then its device's disconnect): one retry
+        handler.postDelayed(reopen, retryMs);
     }
 
+    private final Runnable reopen = new Runnable() {
+        @Override
+        public void run() {
+            open();
+        }
+    };
+
     private CameraDevice.StateCallback stateCallback() {
+        final int generation = ++openings;
         return new CameraDevice.StateCallback() {
+            /** A device of an earlier opening (failed, then reopened): closed, but the lifecycle is the new one's. */
+            private boolean stale() {
+                return generation != openings;
+            }
+
             @Override
             public void onOpened(CameraDevice device) {
+                if (stale()) {
+                    device.close();
+                    return;
+                }
                 if (lifecycle.onOpened() == CameraLifecycle.Action.USE_DEVICE) {
                     camera = device;
                     startSession();
@@ -350,17 +365,25 @@ final class Camera2Controller {
 
             @Override
             public void onClosed(CameraDevice device) {
-                act(lifecycle.onClosed(), device);
+                if (!stale()) {
+                    act(lifecycle.onClosed(), device);
+                }
             }
 
             @Override
             public void onDisconnected(CameraDevice device) {
+                if (stale()) {
+                    device.close();
+                    return;
+                }
                 failed(device, "Camera disconnected (another app may have taken it)");
             }
 
             @Override
             public void onError(CameraDevice device, int error) {
-                if (error == CameraDevice.StateCallback.ERROR_CAMERA_DISABLED) {
+                if (stale()) {
+                    device.close();
+                } else if (error == CameraDevice.StateCallback.ERROR_CAMERA_DISABLED) {
                     failed(device, null);
                     listener.onUnsupported("The camera is disabled on this phone (device policy).");
                 } else {
@@ -430,13 +453,17 @@ final class Camera2Controller {
         }
     }
 
-    /** The sink is made once, on the first configuration; a reopening only says the camera is back. */
+    /**
+     * The sink is made once, on the first configuration that succeeds (also when earlier attempts
+     * failed: the camera was busy when the screen opened); a later reopening only says it is back.
+     */
     private void started() {
-        if (sink == null && !lost) {
+        boolean wasLost = lost;
+        lost = false;
+        retryMs = 0;
+        if (sink == null) {
             sink = listener.onStarted(facts, plan, summary);
-        } else if (lost) {
-            lost = false;
-            retryMs = 0;
+        } else if (wasLost) {
             listener.onCameraBack(summary);
         }
     }

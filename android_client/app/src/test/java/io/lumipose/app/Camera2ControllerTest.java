@@ -25,6 +25,7 @@ import java.util.concurrent.CopyOnWriteArrayList;
 
 import org.json.JSONArray;
 import org.json.JSONObject;
+import org.junit.After;
 import org.junit.Before;
 import org.junit.Test;
 import org.junit.runner.RunWith;
@@ -32,6 +33,7 @@ import org.robolectric.RobolectricTestRunner;
 import org.robolectric.RuntimeEnvironment;
 import org.robolectric.annotation.Config;
 import org.robolectric.shadows.ShadowLooper;
+import org.robolectric.util.ReflectionHelpers;
 
 import io.lumipose.app.camera.FakeCamera;
 import io.lumipose.app.camera.ShadowBurstSession;
@@ -59,6 +61,15 @@ public class Camera2ControllerTest {
     private Application app;
     private FakeCamera camera;
     private final Recorder listener = new Recorder();
+    private final List<Camera2Controller> controllers = new ArrayList<Camera2Controller>();
+
+    /** Each test's camera closed and its thread ended, as a screen's onPause does. */
+    @After
+    public void stopCameras() {
+        for (Camera2Controller c : controllers) {
+            c.stop();
+        }
+    }
 
     /** What the controller told its listener, and the sink it was given. */
     static final class Recorder implements Camera2Controller.Listener {
@@ -69,10 +80,16 @@ public class Camera2ControllerTest {
         volatile CapturePlan plan;
         volatile CameraFacts facts;
         volatile RuntimeException failWith;
+        /** Planning fails this many times first (a camera busy when the screen opens fails the same way). */
+        volatile int planFailures;
         int sinksMade;
 
         @Override
         public CapturePlan plan(CameraFacts f, CapturePlan positioning) {
+            if (planFailures > 0) {
+                planFailures--;
+                throw new IllegalStateException("camera busy");
+            }
             return positioning;
         }
 
@@ -141,6 +158,7 @@ public class Camera2ControllerTest {
         CaptureOptions options = new CaptureOptions(CaptureProtocol.POSE_EXPOSURE_NS, CaptureProtocol.ID_EXPOSURE_NS,
                 beacons, 2.5, 2_000_000L);
         Camera2Controller c = new Camera2Controller(app, "", options, listener);
+        controllers.add(c);
         c.start();
         return c;
     }
@@ -312,6 +330,26 @@ public class Camera2ControllerTest {
         byte[] frame = pattern(w, h, 5);
         camera.capture(second, 0, frame, w, h, false);
         assertArrayEquals(frame, listener.images.get(listener.images.size() - 1));
+    }
+
+    @Test
+    public void aCameraLostBeforeItsFirstFramesStillGetsItsSink() throws Exception {
+        listener.planFailures = 1;
+        start(1);
+        for (int i = 0; i < 200 && listener.events.isEmpty(); i++) {
+            Thread.sleep(10);
+        }
+        assertTrue(listener.events.toString(), listener.events.get(0).startsWith("lost: Camera failed to open"));
+        // the retry, a second later on the camera thread's clock
+        Looper cameraLooper = ReflectionHelpers.<android.os.Handler>getField(controllers.get(0), "handler").getLooper();
+        shadowOf(cameraLooper).idleFor(java.time.Duration.ofMillis(Camera2Controller.FIRST_RETRY_MS));
+        ShadowBurstSession s = camera.awaitBurst(TIMEOUT_MS);
+        assertEquals(listener.events.toString(), "started", listener.events.get(listener.events.size() - 1));
+        int w = listener.plan.output.width;
+        int h = listener.plan.output.height;
+        byte[] frame = pattern(w, h, 7);
+        camera.capture(s, 0, frame, w, h, false);
+        assertArrayEquals("frames reach the screen", frame, listener.images.get(0));
     }
 
     @Test
