@@ -162,7 +162,18 @@ def vlc_reading(evidence: IdEvidence) -> VlcReading:
         confident=decision.confident,
         frames=decision.frames,
         chips_seen=decision.chips_seen,
-        candidates=len(evidence.candidates),
+        candidates=evidence.hypotheses,
+    )
+
+
+def foreign_note(vlc: VlcReading | None, beacon_map: BeaconMap, where: str) -> str | None:
+    """What the stripes of a panel read when it is none of the map's IDs (`where`: which panel), else None."""
+    if vlc is None or vlc.beacon_id is None or beacon_map.beacon(vlc.beacon_id) is not None:
+        return None
+    return (
+        f"the stripes of the panel {where} read as ID {vlc.beacon_id}, not in map '{beacon_map.name}' "
+        f"(posterior {vlc.confidence:.2f} that they are of none of its {len(beacon_map.beacons)} beacons, "
+        f"{vlc.frames} frame(s)): not used to name it"
     )
 
 
@@ -243,14 +254,14 @@ def read_room(
     reading = read_id_frame(frame, candidates, rules.stripes, found)
     if reading.problem is not None:
         return RoomReading((), len(found.blobs), reading.problem)
-    ids = tuple(sorted(b.id for b in beacon_map.beacons))  # preferred, never the only candidates
+    ids = tuple(sorted(b.id for b in beacon_map.beacons))  # the hypotheses, with "none of them"
     named: list[tuple[BeaconBlob, VlcReading | None, Beacon | None, str | None]] = []
     for panel in reading.panels:
         blob = panel.blob
         vlc: VlcReading | None = None
         note: str | None = None
         if panel.observation is not None:
-            evidence = IdEvidence(preferred=ids, rules=rules.stripes)
+            evidence = IdEvidence(map_ids=ids, rules=rules.stripes)
             evidence.add(panel.observation)
             vlc = vlc_reading(evidence)
         if blob.cut_off:
@@ -258,9 +269,8 @@ def read_room(
             note = _cut_panel_note(blob, chips, vlc, frame, rules)
         beacon = None
         if note is None and vlc is not None and vlc.confident and vlc.beacon_id is not None:
-            beacon = beacon_map.beacon(vlc.beacon_id)
-            if beacon is None:
-                note = f"the panel {_where(blob)} reads ID {vlc.beacon_id}, which is not in map '{beacon_map.name}'"
+            beacon = beacon_map.beacon(vlc.beacon_id)  # a confident ID is a map ID
+        note = "; ".join(n for n in (note, foreign_note(vlc, beacon_map, _where(blob))) if n) or None
         named.append((blob, vlc, beacon, note))
     plain, flat_notes = flattened(frame, found, [(blob, beacon) for blob, _, beacon, _ in named], candidates, rules)
     blobs = [blob for blob, *_ in named]

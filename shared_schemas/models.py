@@ -509,12 +509,25 @@ class BeaconIdSource(StrEnum):
 class VlcReading(Strict):
     """The beacon ID read from rolling-shutter stripes (docs/vlc.md)."""
 
-    beacon_id: int | None = Field(default=None, ge=0, le=255, description="best ID; null when no stripes were read")
-    confidence: float = Field(ge=0, le=1, description="posterior probability of beacon_id among the candidate IDs")
-    confident: bool = Field(description="confidence reached the decoder's threshold; only then is the ID used")
+    beacon_id: int | None = Field(
+        default=None,
+        ge=0,
+        le=255,
+        description="the best hypothesis's ID: a map ID, or, when 'none of the map's' wins, the code the stripes "
+        "read as (not in the map: never confident, never names a panel); null when no stripes were read",
+    )
+    confidence: float = Field(
+        ge=0,
+        le=1,
+        description="posterior probability of beacon_id's hypothesis among the map's IDs and 'none of them' "
+        "(for an ID not in the map: of 'none'); without a map, among all 256 IDs",
+    )
+    confident: bool = Field(description="a map ID's confidence reached the decoder's threshold; only then is it used")
     frames: int = Field(ge=0, description="ID frames combined")
     chips_seen: float = Field(ge=0, description="message chips covered by those frames (a message is 21)")
-    candidates: int = Field(ge=1, description="number of IDs considered (the map's, or all 256)")
+    candidates: int = Field(
+        ge=1, description="hypotheses weighed: the map's IDs plus 'none of them' (256 IDs without a map)"
+    )
 
 
 class CameraSource(StrEnum):

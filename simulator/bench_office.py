@@ -174,6 +174,8 @@ def run_walk(config: OfficeConfig, beacon_map: BeaconMap | None = None) -> dict:
                                                 result.position_m[1] - pose.position_m[1]),
                 "vlc_confidence": None if result.vlc is None else result.vlc.confidence,
             })
+        if result.vlc is not None:  # what the stripes read, used or not
+            record.update({"vlc_id": result.vlc.beacon_id, "vlc_confident": result.vlc.confident})
         if result.track is not None:
             record["filtered_m"] = result.track.filtered_position_m
             record["outlier"] = result.track.outlier
@@ -217,6 +219,9 @@ def summarize_walk(records: list[dict]) -> dict:
         "id_errors": sum(r["beacon_id"] != r["true_beacon"] for r in ok),
         "ids_by_vlc": sum(r["source"] == "vlc" for r in ok),
         "ids_carried": sum(r["source"] == "track" for r in ok),
+        # the result's VLC reading, confident, against the panel the fix was measured on
+        "vlc_confident_right": sum(bool(r.get("vlc_confident")) and r["vlc_id"] == r["true_beacon"] for r in ok),
+        "vlc_confident_wrong": sum(bool(r.get("vlc_confident")) and r["vlc_id"] != r["true_beacon"] for r in ok),
         "outliers": sum(bool(r.get("outlier")) for r in ok),
         "transition_captures": len(transition),
         "transition_coverage_pct": 100.0 * sum(r["ok"] for r in transition) / max(1, len(transition)),

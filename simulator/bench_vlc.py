@@ -14,6 +14,13 @@ code path (`server.vlc.reader` + `IdEvidence`) among all 256 IDs:
 - single frame: the decision after the first frame;
 - combined: frames added one by one until the decision is confident, at most `max_frames`.
 Success = a confident, correct ID; a confident wrong ID is counted apart (it must be 0).
+
+With `map_ids` = K > 0 the decoder is given a map of K IDs, as a room's or a session's is
+(`IdEvidence.for_map`): in a share `foreign_share` of the trials the panel is not of the map
+and the map holds an ID one bit from the panel's (the hardest foreign panel: its code differs
+from a map code in 2 to 4 chips), otherwise the panel's ID and K - 1 random others. Then
+"read" = a confident, correct ID among the map panels' trials, "named wrong" = a confident map
+ID that is not the panel's (any trial), "foreign confident" = a confident ID outside the map.
 """
 
 from __future__ import annotations
@@ -64,6 +71,8 @@ class VlcConfig:
     read_noise_dn: float = 2.0
     low_level: float = 0.3
     seed: int = 1
+    map_ids: int = 0  # 0: no map, all 256 IDs as candidates; K: a map of K IDs
+    foreign_share: float = 0.5  # with a map: trials whose panel is not of the map
 
 
 def bench_beacon(config: VlcConfig, beacon_id: int) -> Beacon:
@@ -105,6 +114,22 @@ def _jitter(pose: CameraPose, rng) -> CameraPose:
     return CameraPose(pose.position_m + rng.normal(0.0, 0.002, 3) * [1, 1, 0], pose.rotation_wc @ turn)
 
 
+def trial_map(config: VlcConfig, index: int, beacon_id: int) -> tuple[tuple[int, ...], bool]:
+    """The map IDs of trial `index` (empty: no map) and whether the panel is foreign to it (its own stream of
+    random numbers: the panel, pose and noise are the same with a map as without)."""
+    if config.map_ids <= 0:
+        return (), False
+    rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 7])
+    foreign = bool(rng.random() < config.foreign_share)
+    others = [i for i in range(256) if i != beacon_id]
+    if foreign:
+        near = beacon_id ^ (1 << int(rng.integers(0, 8)))
+        rest = rng.choice([i for i in others if i != near], config.map_ids - 1, replace=False)
+        return tuple(sorted([near, *map(int, rest)])), True
+    rest = rng.choice(others, config.map_ids - 1, replace=False)
+    return tuple(sorted([beacon_id, *map(int, rest)])), False
+
+
 def _trial(args: tuple[VlcConfig, int]) -> dict:
     config, index = args
     rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000)])
@@ -118,7 +143,8 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
                                   clock_error_ppm=rng.uniform(-1, 1) * config.clock_error_ppm)
     pose = _draw_pose(config, beacon, camera, width, height, rng)
     row_time = config.skew_s / (height - 1)
-    evidence = IdEvidence()
+    map_ids, foreign = trial_map(config, index, beacon_id)
+    evidence = IdEvidence(map_ids=map_ids)
     single = None
     start_s = float(rng.uniform(0, 10))
     for k in range(config.max_frames):
@@ -140,6 +166,8 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
         pose = _jitter(pose, rng)
     return {
         "id": beacon_id,
+        "map": list(map_ids),
+        "foreign": foreign,
         "single": [single.beacon_id, single.confident, single.chips_seen],
         "combined": [decision.beacon_id, decision.confident, k + 1, decision.chips_seen],
     }
@@ -153,6 +181,17 @@ def _rates(rows: list[list], truth: list[int]) -> dict:
             "no_decision": int(len(rows) - np.sum(confident))}
 
 
+def _map_rates(trials: list[dict], key: str) -> dict:
+    """Read rate among the map panels' trials, wrong namings and confident foreign IDs among all."""
+    own = [t for t in trials if not t["foreign"]]
+    read = [t[key][1] and t[key][0] == t["id"] for t in own]
+    named_wrong = [t[key][1] and t[key][0] in t["map"] and t[key][0] != t["id"] for t in trials]
+    foreign = [t[key][1] and t[key][0] not in t["map"] for t in trials]
+    return {"map_trials": len(own), "foreign_trials": len(trials) - len(own),
+            "read_pct": 100.0 * float(np.mean(read)) if read else math.nan,
+            "named_wrong": int(np.sum(named_wrong)), "foreign_confident": int(np.sum(foreign))}
+
+
 def run_vlc(config: VlcConfig, workers: int | None = None) -> dict:
     workers = workers or os.cpu_count() or 1
     with ProcessPoolExecutor(max_workers=workers) as pool:
@@ -164,11 +203,14 @@ def run_vlc(config: VlcConfig, workers: int | None = None) -> dict:
     frames = [t["combined"][2] for t in trials if t["combined"][1]]
     combined["mean_frames"] = float(np.mean(frames)) if frames else math.nan
     combined["max_frames_used"] = int(max(frames)) if frames else 0
+    if config.map_ids > 0:
+        single["map"], combined["map"] = _map_rates(trials, "single"), _map_rates(trials, "combined")
     print(f"vlc, {config.shape} {config.side_m} m, at {config.distance_m:.2f} m, exposure {config.exposure_s:.2g} s: "
           f"single {single['success_pct']:.0f} %, combined {combined['success_pct']:.0f} %", file=sys.stderr)
     extent = bench_beacon(config, 0).extent_m
     return {"distance_m": config.distance_m, "exposure_s": config.exposure_s, "side_m": config.side_m,
             "shape": config.shape, "extent_m": list(extent), "trials": config.trials, "max_frames": config.max_frames,
+            "map_ids": config.map_ids, "foreign_share": config.foreign_share if config.map_ids else None,
             "single": single, "combined": combined}
 
 

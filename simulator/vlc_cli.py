@@ -23,6 +23,10 @@ def add_vlc_benches(benches) -> None:
     vlc.add_argument("--max-frames", type=int, default=12, help="ID frames combined at most")
     vlc.add_argument("--exposures", type=float, nargs="+", default=None,
                      help="exposure sweep (s) at the first distance instead of the distance sweep")
+    vlc.add_argument("--map-ids", type=int, default=0,
+                     help="give the decoder a map of this many IDs (default 0: no map, all 256 candidates); "
+                          "--foreign-share of the panels are then not of the map, one bit from a map ID")
+    vlc.add_argument("--foreign-share", type=float, default=0.5, help="--map-ids: share of foreign panels")
     vlc.add_argument("--cut", nargs="+", choices=["bottom", "side"], default=None,
                      help="instead: one ID frame of a 0.6 m panel cut by the bottom border or a side, read by the "
                           "room path (named, located), per --shares; at the first of --distances (default 1.2 m)")
@@ -54,7 +58,7 @@ def _run_vlc(args) -> int:
 
     reports = []
     base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed, shape=args.shape,
-                     aspect=args.aspect)
+                     aspect=args.aspect, map_ids=args.map_ids, foreign_share=args.foreign_share)
     if args.exposures:
         for side in args.sides:
             for exposure in args.exposures:
@@ -80,6 +84,11 @@ def _run_vlc(args) -> int:
         print(f"{r['shape']:>6} {r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} "
               f"{s['chips_per_frame']:8.1f} {s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} "
               f"{c['max_frames_used']:4d} {s['confident_wrong'] + c['confident_wrong']:5d}")
+        if "map" in c:
+            m = c["map"]
+            print(f"{'':>6} map of {r['map_ids']} IDs, combined: read {m['read_pct']:.1f}% of {m['map_trials']}, "
+                  f"named wrong {m['named_wrong']}, foreign confident {m['foreign_confident']} "
+                  f"of {m['foreign_trials']} foreign")
     print_figures(figures, args.json)
     return 0
 

@@ -4,9 +4,12 @@ A panel located relative to a template beacon (every map beacon looks alike) giv
 position relative to that panel. From capture to capture that relative position changes only by
 the walked distance, while neighbouring panels are a beacon spacing apart, so it follows one
 physical panel and lets its ID frames keep adding evidence to one `IdEvidence`. A panel is
-named by a confident VLC decision; without one, an established track carries the ID of the map
+named by a confident VLC decision among the map's IDs (the decoder's hypotheses: those and "none
+of them", `IdEvidence.map_ids`); without one, an established track carries the ID of the map
 beacon where it predicts the camera to be, when that is unambiguous; when the two disagree the
-track wins and the panel's evidence is dropped (it may mix two panels).
+track wins and the panel's evidence is dropped (it may mix two panels). Stripes that read as a
+code outside the map never name a panel; the capture's result says what they read (`notes`),
+and when they are surely of none of the map's beacons the evidence is dropped too.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ import numpy as np
 
 from server.geometry import rotation_z
 from server.outcomes import Fix
-from server.rooms import PanelFix, vlc_reading
+from server.rooms import PanelFix, foreign_note, vlc_reading
 from server.tracking.track import Track
 from server.vision.beacons import BeaconBlob
 from server.vlc.decoder import IdEvidence, StripeObservation, StripeRules
@@ -51,7 +54,7 @@ class NamingStats:
     vlc_ids: int = 0
     carried_ids: int = 0
     conflicts: int = 0  # VLC said one beacon, the track another
-    foreign_ids: int = 0  # confident codes of beacons not in the map
+    foreign_ids: int = 0  # readings of a code not in the map ("none of the map's" won): not used
 
 
 @dataclass
@@ -62,10 +65,13 @@ class PanelNamer:
     rules: NamingRules = NamingRules()
     panels: list[PanelTrack] = field(default_factory=list)
     stats: NamingStats = field(default_factory=NamingStats)
+    notes: list[str] = field(default_factory=list)  # this capture's: what stripes outside the map read
 
     def new_capture(self, t_s: float) -> set[int]:
-        """Forget panels unseen for too long; the (empty) set of panels claimed in this capture."""
+        """Forget panels unseen for too long and the last capture's notes; the (empty) set of panels
+        claimed in this capture."""
         self.panels = [p for p in self.panels if t_s - p.t_s <= self.rules.panel_timeout_s]
+        self.notes = []
         return set()
 
     def name(
@@ -85,9 +91,15 @@ class PanelNamer:
         reading = panel.reading
         if panel.beacon_id is None and panel.evidence.observations:  # decoding stops once the ID is known
             reading = panel.reading = vlc_reading(panel.evidence)
-        in_map = reading is not None and reading.beacon_id is not None and self.beacon_map.beacon(reading.beacon_id)
-        if reading is not None and reading.confident and not in_map:
-            self.stats.foreign_ids += 1  # a confidently read code that is not in this map: not used
+        where = f"at ({blob.centroid_px[0]:.0f}, {blob.centroid_px[1]:.0f}) px"
+        note = foreign_note(reading, self.beacon_map, where)
+        if reading is not None and note is not None:
+            self.stats.foreign_ids += 1
+            self.notes.append(note)
+            if reading.confidence >= self.rules.stripes.confident_posterior:
+                # surely none of the map's: a foreign panel reads so again, mixed evidence starts afresh
+                panel.evidence.observations.clear()
+                panel.reading = None
         elif reading is not None and reading.confident:
             if panel.beacon_id is not None and panel.beacon_id != reading.beacon_id:
                 self.stats.conflicts += 1
@@ -116,9 +128,9 @@ class PanelNamer:
         return PanelFix(blob, beacon, named, reading)
 
     def new_evidence(self) -> IdEvidence:
-        """An empty accumulator for a new panel: the map's IDs preferred."""
+        """An empty accumulator for a new panel: the map's IDs (and "none of them") its hypotheses."""
         return IdEvidence(
-            preferred=tuple(sorted(b.id for b in self.beacon_map.beacons)),
+            map_ids=tuple(sorted(b.id for b in self.beacon_map.beacons)),
             rules=self.rules.stripes,
             max_frames=self.rules.evidence_frames,
         )

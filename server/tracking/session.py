@@ -80,7 +80,7 @@ class SessionStats:
     carried_ids: int = 0
     outliers: int = 0
     conflicts: int = 0  # VLC said one beacon, the track another
-    foreign_ids: int = 0  # confident codes of beacons not in the map
+    foreign_ids: int = 0  # readings of a code not in the map ("none of the map's" won): not used
 
 
 # Panels whose yaws differ by this little still share the template: a surveyed map's yaws differ by
@@ -197,10 +197,13 @@ class DeviceSession:
                 refusals.insert(0, together)
             else:
                 best = together
+        notes = tuple(dict.fromkeys(self.namer.notes))  # stripes that read as no map beacon: said, never used
         if best is not None:
             self.last_rotation_wc = np.asarray(best.fix.rotation_wc)
-            return self._tracked(best, len(blobs), t_s)
-        return refused(self._why_no_fix(blobs, refusals), beacons_in_view=len(blobs), track=self.track.coasting(t_s))
+            return self._tracked(replace(best, fix=best.fix.warned(*notes)), len(blobs), t_s)
+        why = self._why_no_fix(blobs, refusals)
+        why = replace(why, warnings=why.warnings + notes)
+        return refused(why, beacons_in_view=len(blobs), track=self.track.coasting(t_s))
 
     def _cut_panels_together(
         self, frame: LumaFrame, cut: list[BeaconBlob], candidates, options: PipelineOptions, t_s: float

@@ -17,8 +17,13 @@ in time: a short exposure shows the chips as horizontal stripes (docs/vlc.md).
    relative phase is known from their timestamps), and the posterior of each ID sums over
    phase and clock error. A frame holding less than one message leaves several IDs
    plausible; the frames that follow, at other phases, settle it.
-3. The decision is confident only when the best ID's posterior reaches
-   `confident_posterior`; otherwise the best guess is reported as not confident.
+3. Hypotheses: with a map, its IDs and "none of them" (the stripes are of a panel from
+   elsewhere, or of two panels' stripes read as one); without, each of the 256 IDs. Every code
+   is fitted either way: "none" is as likely as the best-fitting code outside the map (its ID is
+   whatever it is, not one of 252 equally likely: a neighbouring room's panel may differ from a
+   map ID in a single bit, so the worst case is the honest one). The decision is confident only
+   when a map ID's posterior reaches `confident_posterior`; "none" winning is reported with the
+   code it read, never confident.
 """
 
 from __future__ import annotations
@@ -78,14 +83,20 @@ class StripeObservation:
         return len(self.values_dn)
 
 
+ALL_IDS = tuple(range(MAX_ID + 1))
+
+
 @dataclass(frozen=True)
 class IdDecision:
-    beacon_id: int | None  # the best ID, confident or not; None with no usable stripes
-    confidence: float  # its posterior probability among the candidates
-    confident: bool
+    # the best hypothesis's ID, confident or not: a map ID, or (`in_map` False) when "none of the map's"
+    # wins, the best-fitting code outside the map; None with no usable stripes
+    beacon_id: int | None
+    confidence: float  # the posterior of its hypothesis (for an ID outside the map: of "none")
+    confident: bool  # never for an ID outside the map
     frames: int
     chips_seen: float  # over all frames combined (with overlaps)
     message: str
+    in_map: bool = True  # False: the stripes read as `beacon_id`, which is none of the map's
 
 
 def row_time_s(skew_s: float, height: int) -> float:
@@ -213,18 +224,24 @@ def _normalised(log_weights: np.ndarray) -> np.ndarray:
 
 @dataclass
 class IdEvidence:
-    """ID evidence of one panel over consecutive frames of one device (mutable accumulator)."""
+    """ID evidence of one panel over consecutive frames of one device (mutable accumulator).
 
-    candidates: tuple[int, ...] = tuple(range(MAX_ID + 1))
+    Hypotheses: with `map_ids`, each of them (sharing 1 - `none_prior` of the prior) and "none of
+    them" (`none_prior`, as likely as the best-fitting code outside the map); without, the 256
+    IDs alike. Every ID's code is fitted (`ALL_IDS`) either way.
+    """
+
+    map_ids: tuple[int, ...] = ()
     rules: StripeRules = StripeRules()
-    # The map's IDs are more likely than others, but never the only ones: a panel from elsewhere
-    # (or a code read wrongly) must be able to win, or the decoder names the nearest map ID with
-    # full confidence. `preferred_share` of the prior goes to `preferred`, the rest to the others.
-    preferred: tuple[int, ...] = ()
-    preferred_share: float = 0.9
+    none_prior: float = 0.1  # a panel in view not of the map: another room's, or stripes mixed up
     observations: list[StripeObservation] = field(default_factory=list)
     max_frames: int = 16
     _cache: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def hypotheses(self) -> int:
+        """The map's IDs plus "none", or the 256 IDs without a map."""
+        return len(set(self.map_ids)) + 1 if self.map_ids else len(ALL_IDS)
 
     max_span_s: float = 2.0  # older frames are dropped: the clock-error search grows with the span
 
@@ -244,37 +261,6 @@ class IdEvidence:
         count = int(np.floor(self.rules.max_clock_error_ppm / step_ppm))
         return np.arange(-count, count + 1) * step_ppm
 
-    def unseen_chips(self, observations: list[StripeObservation] | None = None) -> float:
-        """The longest part of the message's cycle that no frame saw, in chips (frames' relative phase is known)."""
-        observations = self.observations if observations is None else observations
-        if not observations:
-            return float(MESSAGE_CHIPS)
-        period = MESSAGE_CHIPS / self.rules.chip_rate_hz
-        cells = MESSAGE_CHIPS * 16
-        seen = np.zeros(cells, bool)
-        reference = observations[0].timestamp_s
-        for obs in observations:
-            start = obs.timestamp_s - reference + float(obs.row_offsets_s.min())
-            end = obs.timestamp_s - reference + float(obs.row_offsets_s.max()) + obs.exposure_s
-            first = int(np.ceil(start / period * cells))
-            last = int(np.floor(end / period * cells))
-            if last - first + 1 >= cells:
-                return 0.0
-            seen[np.arange(first, last + 1) % cells] = True
-        if seen.all():
-            return 0.0
-        # longest circular run of unseen cells
-        rolled = np.roll(~seen, -int(np.argmax(seen)))  # start on a seen cell
-        runs = np.diff(np.flatnonzero(np.diff(np.concatenate([[0], rolled.astype(int), [0]]))))[::2]
-        return float(runs.max()) / 16 if len(runs) else 0.0
-
-    def _log_prior(self) -> np.ndarray:
-        chosen = np.isin(self.candidates, self.preferred)
-        if not chosen.any() or chosen.all():
-            return np.zeros(len(self.candidates))
-        share = np.where(chosen, self.preferred_share / chosen.sum(), (1 - self.preferred_share) / (~chosen).sum())
-        return np.log(share)
-
     def decide(self) -> IdDecision:
         usable = [o for o in self.observations if o.samples >= self.rules.min_samples]
         if not usable:
@@ -287,27 +273,32 @@ class IdEvidence:
         for obs in usable:
             cached = self._cache.get(id(obs))
             if cached is None or cached[0] is not obs or cached[1] != setting:
-                cached = (obs, setting, _frame_log_likelihood(obs, reference, self.candidates, errors, self.rules))
+                cached = (obs, setting, _frame_log_likelihood(obs, reference, ALL_IDS, errors, self.rules))
             cache[id(obs)] = cached
             total = total + cached[2]
         self._cache = cache  # only the frames still in the window
-        flat = total.reshape(len(self.candidates), -1)
+        flat = total.reshape(len(ALL_IDS), -1)
         peak = flat.max()
-        evidence = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))
-        posterior = _normalised(evidence + self._log_prior())
-        order = np.argsort(posterior)[::-1]
-        best = order[0]
-        confidence = float(posterior[best])
-        # The map prior may only settle what noise leaves open, never what no frame has seen: with
-        # part of the message unseen, a foreign panel (ID 200) is indistinguishable from a map ID
-        # differing only there (201). So: either the data alone decides, or no more than one chip
-        # in a row went unseen (BMC's transition at every bit start then tells the missing chip).
-        plain = float(_normalised(evidence)[best])
-        threshold = self.rules.confident_posterior
-        confident = confidence >= threshold and (plain >= threshold or self.unseen_chips(usable) <= 1.0)
+        evidence = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))  # each ID's, over phase and clock
         chips = float(sum(o.chips_seen for o in usable))
-        message = (
-            f"ID {self.candidates[best]} at posterior {confidence:.3f} from {len(usable)} frame(s), "
-            f"{chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message"
-        )
-        return IdDecision(int(self.candidates[best]), confidence, confident, len(usable), chips, message)
+        seen = f"from {len(usable)} frame(s), {chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message"
+        if not self.map_ids:
+            posterior = _normalised(evidence)
+            best = int(np.argmax(posterior))
+            confidence = float(posterior[best])
+            confident = confidence >= self.rules.confident_posterior
+            message = f"ID {best} at posterior {confidence:.3f} {seen}"
+            return IdDecision(best, confidence, confident, len(usable), chips, message)
+        ids = np.array(sorted(set(self.map_ids)))
+        outside = np.setdiff1d(np.arange(len(ALL_IDS)), ids)
+        foreign = int(outside[np.argmax(evidence[outside])])
+        log_prior = np.log(np.append(np.full(len(ids), (1 - self.none_prior) / len(ids)), self.none_prior))
+        posterior = _normalised(np.append(evidence[ids], evidence[foreign]) + log_prior)
+        best = int(np.argmax(posterior))
+        confidence = float(posterior[best])
+        if best == len(ids):
+            message = f"stripes read as ID {foreign}, none of the map's, at posterior {confidence:.3f} {seen}"
+            return IdDecision(foreign, confidence, False, len(usable), chips, message, in_map=False)
+        confident = confidence >= self.rules.confident_posterior
+        message = f"ID {ids[best]} at posterior {confidence:.3f} against the map's others and none {seen}"
+        return IdDecision(int(ids[best]), confidence, confident, len(usable), chips, message)

@@ -36,3 +36,22 @@ def test_locate_prints_an_outline_fix_which_has_no_ambiguity_ratio(tmp_path, cap
     assert main(["locate", f"{stem}.json"]) == 0
     out = capsys.readouterr().out
     assert "ambiguity ratio n/a" in out and "pose from the visible outline" in out
+
+
+def test_the_quickstart_walk_does_not_name_a_panel_after_stripes_outside_the_map(tmp_path, capsys):
+    # docs/quickstart.md's walk: the fifth capture's ID frames read as 74 (the map holds 17, 42, 99, 200);
+    # they were called confident, the track's 42 taken and nothing said
+    args = ["simulate", "office", str(tmp_path), "--bursts", "--limit", "5", "--scale", "0.25", "--workers", "2"]
+    assert main(args) == 0
+    capsys.readouterr()
+    frames = sorted(str(p) for p in tmp_path.glob("office_*.json"))
+    assert main(["locate", *frames, "--map", str(tmp_path / "map.json"), "--device", "phone", "--json"]) == 0
+    results = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    fifth = [r for r, name in zip(results, frames, strict=True) if name.endswith("_pose.json")][4]
+    assert fifth["vlc"]["beacon_id"] == 74 and not fifth["vlc"]["confident"]
+    assert fifth["vlc"]["candidates"] == 5  # the map's 4 IDs and "none of them"
+    assert fifth["beacon_id"] == 42 and fifth["beacon_id_source"] == "track"
+    assert any("read as ID 74, not in map 'office'" in w for w in fifth["warnings"])
+    # every confident reading is a map ID
+    readings = [r["vlc"] for r in results if r.get("vlc")]
+    assert all(v["beacon_id"] in (17, 42, 99, 200) for v in readings if v["confident"])

@@ -48,3 +48,15 @@ def test_walk_summary_counts_coverage_id_errors_and_transitions():
     assert summary["transition_captures"] == 2  # the captures on either side of the change of beacon
     assert summary["refusals"] == {"beacon_cut_off": 1}
     assert summary["fixes"]["max_mm"] == 1200.0
+
+
+def test_a_trial_s_map_holds_the_panel_or_its_one_bit_neighbour():
+    from simulator.bench_vlc import trial_map
+
+    assert trial_map(VlcConfig(), 0, 42) == ((), False)  # no map: all 256 alike
+    config = VlcConfig(map_ids=4, foreign_share=0.5)
+    maps = [trial_map(config, index, 42) for index in range(20)]
+    assert {foreign for _, foreign in maps} == {True, False}
+    for ids, foreign in maps:
+        assert len(set(ids)) == 4 and (42 in ids) is not foreign
+        assert not foreign or any(bin(i ^ 42).count("1") == 1 for i in ids)

@@ -6,7 +6,9 @@ from server.outcomes import Fix
 from server.tracking.naming import NamingRules, PanelNamer
 from server.tracking.track import Track
 from server.vision.beacons import BeaconBlob
+from server.vlc.reader import read_id_frame
 from shared_schemas import Beacon, BeaconIdSource, BeaconMap
+from tests.server.vlc.conftest import id_frames
 
 ROOM = BeaconMap(
     name="room",
@@ -86,3 +88,17 @@ def test_two_sightings_in_one_capture_never_continue_the_same_panel():
     namer.name(BLOB, relative(0.1, 0.0), [], 0.0, track, claimed)
     namer.name(BLOB, relative(0.12, 0.0), [], 0.0, track, claimed)
     assert len(namer.panels) == 2
+
+
+def test_the_decoder_s_hypotheses_are_the_map_s_ids_and_stripes_outside_it_name_no_panel():
+    namer, track = PanelNamer(ROOM), Track()
+    assert namer.new_evidence().map_ids == (17, 42) and namer.new_evidence().hypotheses == 3
+    # a panel coded 43, one bit from the map's 42, 1.4 m away: 8 ID frames of it in one capture
+    stripes = [read_id_frame(f).panels[0].observation for f in id_frames(43, 1.4, 1 / 8000, 8, seed=5)]
+    assert namer.name(BLOB, relative(0.1, 0.0), stripes, 5.3, track, namer.new_capture(5.3)) is None
+    assert namer.stats.foreign_ids == 1 and namer.stats.vlc_ids == 0
+    assert len(namer.notes) == 1 and "read as ID 43, not in map 'room'" in namer.notes[0]
+    # surely none of the map's: the evidence starts afresh, and the next capture's notes are its own
+    assert namer.panels[0].beacon_id is None and not namer.panels[0].evidence.observations
+    namer.new_capture(5.8)
+    assert namer.notes == []

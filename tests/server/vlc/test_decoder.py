@@ -47,16 +47,30 @@ def test_long_exposure_stripes_forced_through_the_decoder_stay_unconfident(make_
     assert not evidence.decide().confident
 
 
-def test_map_ids_are_preferred_but_a_foreign_panel_is_not_named_after_one(make_id_frames):
+def test_a_code_outside_the_map_is_never_confident_and_is_said(make_id_frames):
+    # ID 200 through a map with 201 (one bit away), then with 200 itself
     frames = make_id_frames(200, 1.4, 1 / 8000, 8, seed=5)
-    decisions = decide(frames, preferred=(17, 42, 99, 201))
-    assert not any(d.confident and d.beacon_id != 200 for d in decisions)
-    decisions = decide(frames, preferred=(17, 42, 99, 200))
-    assert decisions[-1].confident and decisions[-1].beacon_id == 200
-    # the map prior makes it faster than among 256 equal IDs
-    first = next(i for i, d in enumerate(decisions) if d.confident)
+    foreign = decide(frames, map_ids=(17, 42, 99, 201))
+    assert not any(d.confident for d in foreign)
+    assert not foreign[-1].in_map and foreign[-1].beacon_id == 200  # what the stripes read
+    assert foreign[-1].confidence > 0.99  # of "none of the map's"
+    assert "none of the map's" in foreign[-1].message
+    own = decide(frames, map_ids=(17, 42, 99, 200))
+    assert own[-1].confident and own[-1].in_map and own[-1].beacon_id == 200
+    # the map's 4 IDs and "none" decide no later than the 256 IDs alike
+    first = next(i for i, d in enumerate(own) if d.confident)
     plain = decide(frames)
     assert first <= next((i for i, d in enumerate(plain) if d.confident), len(plain))
+
+
+def test_none_is_as_likely_as_the_best_code_outside_the_map(make_id_frames):
+    # one frame sees 13 chips: codes that differ only in the unseen ones fit alike, so a map ID can never
+    # be surer than its prior against "none" (0.225 / (0.225 + 0.1)), whatever the frame shows
+    frames = make_id_frames(17, 1.0, 1 / 8000, 1, seed=6)
+    first = decide(frames, map_ids=(17, 42, 99, 200))[0]
+    assert first.beacon_id == 17 and not first.confident
+    assert first.confidence <= 0.225 / 0.325 + 1e-9
+    assert IdEvidence(map_ids=(17, 42, 99, 200)).hypotheses == 5 and IdEvidence().hypotheses == 256
 
 
 def test_stripes_skip_the_panel_edges_and_bin_rows():
@@ -83,16 +97,6 @@ def _observation(t_s, rows, row_time=1e-5, exposure_s=1e-4):
     n = len(rows)
     return StripeObservation(t_s, exposure_s, np.array(rows, float)[:, None] * row_time, np.zeros(n), np.ones(n),
                              np.zeros(n), 1.0)
-
-
-def test_unseen_chips_follow_the_frames_relative_phase():
-    evidence = IdEvidence()
-    evidence.add(_observation(0.0, [0, 40]))  # 0.4 ms of row starts + 0.1 ms exposure = 1.25 chips
-    assert evidence.unseen_chips() == pytest.approx(21 - 1.25, abs=0.1)
-    evidence.add(_observation(0.0042, [0, 40]))  # half a message later
-    assert evidence.unseen_chips() == pytest.approx(9.25, abs=0.1)
-    evidence.add(_observation(0.0084 * 7, [0, 840]))  # a whole message seven periods later
-    assert evidence.unseen_chips() == 0.0
 
 
 def test_burst_timing_tiles_the_message():
