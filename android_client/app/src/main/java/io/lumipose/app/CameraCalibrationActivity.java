@@ -108,6 +108,18 @@ public final class CameraCalibrationActivity extends StillActivity {
     }
 
     /**
+     * The file is the next instance's from here on: an upload of this one that ends later (its
+     * connection outlives the executor's shutdown) must not write its older session over it.
+     */
+    @Override
+    protected void onDestroy() {
+        synchronized (store.lock()) {
+            session = null;
+        }
+        super.onDestroy();
+    }
+
+    /**
      * The session saved before the screen was recreated or the process died (its views, coverage and
      * first photo's description); a file that cannot be read is said, dropped, and a new one starts.
      */
@@ -161,11 +173,12 @@ public final class CameraCalibrationActivity extends StillActivity {
             if (first != null) {
                 Json.put(o, "first_photo", first.toJson());
             }
-            try {
-                store.write(o.toString());
-            } catch (IOException e) {
-                showStatus("The calibration could not be saved on the phone: " + e.getMessage());
-            }
+            store.writeSoon(o.toString(), new SessionFile.Failure() {
+                @Override
+                public void failed(IOException e) {
+                    showStatus("The calibration could not be saved on the phone: " + e.getMessage());
+                }
+            });
         }
     }
 
@@ -237,7 +250,7 @@ public final class CameraCalibrationActivity extends StillActivity {
     }
 
     @Override
-    public void onPhoto(byte[] luma, FrameMeta meta) {
+    protected void handlePhoto(byte[] luma, FrameMeta meta) {
         final CalibrationSession s = session;
         if (s == null) {
             shutterBack(null);

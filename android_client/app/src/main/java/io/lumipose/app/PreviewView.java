@@ -26,6 +26,7 @@ final class PreviewView extends View {
 
     private GreyPreview preview;
     private Bitmap bitmap;
+    private int[] argb;
     private Overlay overlay;
     private TapListener taps;
     private float scale = 1f;
@@ -44,7 +45,8 @@ final class PreviewView extends View {
         if (bitmap == null || bitmap.getWidth() != p.width || bitmap.getHeight() != p.height) {
             bitmap = Bitmap.createBitmap(p.width, p.height, Bitmap.Config.ARGB_8888);
         }
-        bitmap.setPixels(p.argb(), 0, p.width, 0, 0, p.width, p.height);
+        argb = p.argb(argb);
+        bitmap.setPixels(argb, 0, p.width, 0, 0, p.width, p.height);
         invalidate();
     }
 

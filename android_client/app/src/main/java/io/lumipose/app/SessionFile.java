@@ -9,6 +9,13 @@ import java.io.FileOutputStream;
 import java.io.IOException;
 import java.io.InputStream;
 import java.nio.charset.StandardCharsets;
+import java.util.concurrent.ConcurrentHashMap;
+import java.util.concurrent.ExecutionException;
+import java.util.concurrent.ExecutorService;
+import java.util.concurrent.Executors;
+import java.util.concurrent.ThreadFactory;
+import java.util.concurrent.TimeUnit;
+import java.util.concurrent.TimeoutException;
 
 /**
  * A screen's session kept as one JSON file in the app's private storage ({@code getFilesDir()}),
@@ -16,25 +23,86 @@ import java.nio.charset.StandardCharsets;
  * process's death, which a Bundle (1 MB binder limit, and the views' corners are hundreds each) would
  * not for long sessions (docs/android.md, "Sessions across recreation"). Written whole to a
  * temporary file then renamed, so a kill mid-write leaves the previous file. Any thread; the screen
- * holds the object's lock around "is this still my session" and the write (see {@link #lock}).
+ * holds the file's lock around "is this still my session" and queueing the write (see {@link #lock}).
  */
 final class SessionFile {
+    /**
+     * One lock per file, not per screen: a recreated screen and its old instance (whose upload may
+     * still be running) share the file.
+     */
+    private static final ConcurrentHashMap<String, Object> LOCKS = new ConcurrentHashMap<String, Object>();
     private final File file;
     private final File temporary;
+    private final Object lock;
 
     SessionFile(Context context, String name) {
         File dir = context.getFilesDir();
         file = new File(dir, name);
         temporary = new File(dir, name + ".tmp");
+        Object mine = new Object();
+        Object shared = LOCKS.putIfAbsent(file.getAbsolutePath(), mine);
+        lock = shared != null ? shared : mine;
     }
 
     /** The lock to hold while checking the session is still the screen's and writing it. */
     Object lock() {
-        return this;
+        return lock;
     }
 
-    /** The saved text, or null when there is none. */
-    synchronized String read() throws IOException {
+    /** What a write that failed does (on the writer thread). */
+    interface Failure {
+        void failed(IOException e);
+    }
+
+    /**
+     * Writes go to one thread of the app's, in order, never shut down: not the UI thread (an fsync
+     * there is jank) and not the screen's executor, whose shutdown on pause would drop a queued write.
+     */
+    private static final ExecutorService WRITER = Executors.newSingleThreadExecutor(new ThreadFactory() {
+        @Override
+        public Thread newThread(Runnable r) {
+            Thread t = new Thread(r, "lumipose-session-writer");
+            t.setDaemon(true);
+            return t;
+        }
+    });
+    /** How long a read waits for the writes queued before it. */
+    private static final long FLUSH_TIMEOUT_MS = 5000;
+
+    /** Any thread: {@code json} written after the writes queued before it; {@code failure} told if it fails. */
+    void writeSoon(final String json, final Failure failure) {
+        WRITER.execute(new Runnable() {
+            @Override
+            public void run() {
+                try {
+                    write(json);
+                } catch (IOException e) {
+                    failure.failed(e);
+                }
+            }
+        });
+    }
+
+    /** The saved text, or null when there is none; after the writes queued so far have landed. */
+    String read() throws IOException {
+        try {
+            WRITER.submit(new Runnable() {
+                @Override
+                public void run() {
+                }
+            }).get(FLUSH_TIMEOUT_MS, TimeUnit.MILLISECONDS);
+        } catch (InterruptedException e) {
+            Thread.currentThread().interrupt();
+            throw new IOException("interrupted while the session's last change was written");
+        } catch (ExecutionException | TimeoutException e) {
+            throw new IOException("the session's last change was not written in time: " + e);
+        }
+        synchronized (lock) {
+            return readLocked();
+        }
+    }
+
+    private String readLocked() throws IOException {
         if (!file.exists()) {
             return null;
         }
@@ -51,7 +119,13 @@ final class SessionFile {
         }
     }
 
-    synchronized void write(String json) throws IOException {
+    void write(String json) throws IOException {
+        synchronized (lock) {
+            writeLocked(json);
+        }
+    }
+
+    private void writeLocked(String json) throws IOException {
         FileOutputStream out = new FileOutputStream(temporary);
         try {
             out.write(json.getBytes(StandardCharsets.UTF_8));
@@ -65,8 +139,16 @@ final class SessionFile {
     }
 
     /** Drops the file (the session finished, or the user started over, or it could not be read). */
-    synchronized void drop() {
-        file.delete();
-        temporary.delete();
+    void drop() {
+        // after the writes queued before it, or one of them would bring the file back
+        WRITER.execute(new Runnable() {
+            @Override
+            public void run() {
+                synchronized (lock) {
+                    file.delete();
+                    temporary.delete();
+                }
+            }
+        });
     }
 }

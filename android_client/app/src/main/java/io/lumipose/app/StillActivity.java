@@ -5,6 +5,7 @@ import android.widget.Button;
 import android.widget.LinearLayout;
 
 import java.util.concurrent.ExecutorService;
+import java.util.concurrent.atomic.AtomicBoolean;
 
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.capture.CapturePlan;
@@ -31,6 +32,7 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
     protected Button shutter;
     protected volatile CameraFacts facts;
     private volatile StillCapture capture;
+    private final AtomicBoolean photoInFlight = new AtomicBoolean();
 
     /** The describer of this screen's photos (the map's bearing; a calibration or not). */
     protected abstract FrameDescriber describer(CameraFacts facts, CapturePlan plan);
@@ -116,7 +118,9 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
         if (c != null) {
             c.close();
         }
-        shutter.setEnabled(true);
+        if (!photoInFlight.get()) {
+            shutter.setEnabled(true); // an armed shot went with the camera; a photo in flight enables it when done
+        }
     }
 
     /** Any thread: the shutter on again after a photo the screen could not handle (the screen was left). */
@@ -152,6 +156,20 @@ abstract class StillActivity extends CameraActivity implements StillCapture.List
         showStatus("Waiting for a usable frame: " + reason);
     }
 
+    /**
+     * A photo on the screen's executor. While one is being handled (uploaded) the shutter stays off,
+     * even across a pause: a second photo meanwhile would race the first for the session's order.
+     */
     @Override
-    public abstract void onPhoto(byte[] luma, FrameMeta meta);
+    public final void onPhoto(byte[] luma, FrameMeta meta) {
+        photoInFlight.set(true);
+        try {
+            handlePhoto(luma, meta);
+        } finally {
+            photoInFlight.set(false);
+        }
+    }
+
+    /** The screen's work on one photo (its executor); enables the shutter again when done. */
+    protected abstract void handlePhoto(byte[] luma, FrameMeta meta);
 }

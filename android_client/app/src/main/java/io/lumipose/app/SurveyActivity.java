@@ -103,6 +103,18 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     }
 
     /**
+     * The file is the next instance's from here on: an upload of this one that ends later (its
+     * connection outlives the executor's shutdown) must not write its older session over it.
+     */
+    @Override
+    protected void onDestroy() {
+        synchronized (store.lock()) {
+            session = null;
+        }
+        super.onDestroy();
+    }
+
+    /**
      * The session saved before the screen was recreated or the process died: its photos and labels,
      * back at the camera (the held photo's preview is not kept: labels go on the next photos). A file
      * that cannot be read is said, dropped, and a new survey starts.
@@ -137,11 +149,12 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             if (s != session) {
                 return;
             }
-            try {
-                store.write(s.toJson().toString());
-            } catch (IOException e) {
-                showStatus("The survey could not be saved on the phone: " + e.getMessage());
-            }
+            store.writeSoon(s.toJson().toString(), new SessionFile.Failure() {
+                @Override
+                public void failed(IOException e) {
+                    showStatus("The survey could not be saved on the phone: " + e.getMessage());
+                }
+            });
         }
     }
 
@@ -211,7 +224,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     }
 
     @Override
-    public void onPhoto(byte[] luma, FrameMeta meta) {
+    protected void handlePhoto(byte[] luma, FrameMeta meta) {
         final GreyPreview still = GreyPreview.of(ByteBuffer.wrap(luma), meta.width, meta.height, meta.width, 1,
                 StillCapture.PREVIEW_SIDE);
         final SurveySession s = session;
@@ -223,7 +236,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         int index = -1;
         try {
             SurveySession.Shot shot = s.addPhoto(luma, meta);
-            index = s.shots().size() - 1;
+            index = s.shots().indexOf(shot); // not the last: the screen's other photo may be in flight
             save(s);
             outcome = "Photo " + (index + 1) + " stored as " + shot.sampleId + ": tap each panel with its ID."
                     + (meta.compassBearingDeg == null ? " (no compass reading)" : "");

@@ -256,6 +256,19 @@ public class Camera2ControllerTest {
     }
 
     @Test
+    public void locksWhiteBalanceAsSoonAsTheCameraSaysItConverged() throws Exception {
+        start(1);
+        ShadowBurstSession s = camera.awaitBurst(TIMEOUT_MS);
+        int w = listener.plan.output.width;
+        int h = listener.plan.output.height;
+        camera.capture(s, 0, pattern(w, h, 1), w, h, false);
+        assertFalse("searching", s.burst().get(0).get(CaptureRequest.CONTROL_AWB_LOCK));
+        camera.awbState(CameraMetadata.CONTROL_AWB_STATE_CONVERGED);
+        camera.capture(s, 0, pattern(w, h, 2), w, h, false);
+        assertTrue("converged: locked", s.burst().get(0).get(CaptureRequest.CONTROL_AWB_LOCK));
+    }
+
+    @Test
     public void deliversPaddedYuvImagesWithTheirResults() throws Exception {
         start(4);
         ShadowBurstSession s = camera.awaitBurst(TIMEOUT_MS);
@@ -278,7 +291,8 @@ public class Camera2ControllerTest {
         assertEquals(FakeCamera.SKEW_NS, (long) pose.rollingShutterSkewNs);
         assertEquals(RequestSpec.ID, listener.results.get(1).request);
         assertEquals(t2, listener.results.get(1).timestampNs);
-        assertEquals("every image closed", 2, ShadowYuvImageReader.latest().acquired());
+        assertEquals("both images taken", 2, ShadowYuvImageReader.latest().acquired());
+        assertEquals("every image closed", 0, ShadowYuvImageReader.latest().open());
     }
 
     @Test

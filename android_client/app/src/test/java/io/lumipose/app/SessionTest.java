@@ -98,6 +98,31 @@ public class SessionTest {
                 .toString();
     }
 
+    /**
+     * A recreated screen's old instance whose upload ends after the recreation (its connection
+     * outlives the executor's shutdown) saves its older session: it must not write over the file
+     * the new instance has changed since.
+     */
+    @Test
+    public void theOldInstanceOfARecreatedScreenWritesNothingOverTheNewOnes() throws Exception {
+        ActivityController<SurveyActivity> c = Robolectric.buildActivity(SurveyActivity.class).setup();
+        SurveyActivity old = c.get();
+        shoot(old);
+        Object oldSession = Screens.get(old, "session");
+        c.recreate();
+        SurveyActivity now = c.get();
+        shoot(now);
+        label(now, 17, 10, 20);
+        java.lang.reflect.Method save = SurveyActivity.class.getDeclaredMethod("save",
+                io.lumipose.client.survey.SurveySession.class);
+        save.setAccessible(true);
+        save.invoke(old, oldSession); // the old upload's save, late
+        c.pause().stop().destroy();
+        SurveyActivity restored = Robolectric.buildActivity(SurveyActivity.class).setup().get();
+        assertEquals("the new instance's photo and label are kept", "photo 1: panels\nphoto 2: panels 17",
+                photos(restored));
+    }
+
     @Test
     public void surveyPhotosSurviveRecreationAndProcessDeathAndGoOn() throws Exception {
         ActivityController<SurveyActivity> c = Robolectric.buildActivity(SurveyActivity.class).setup();

@@ -54,6 +54,8 @@ public final class FakeCamera {
 
     private final CameraFacts facts;
     private long nextTimestampNs = 1_000_000_000L;
+    /** CONTROL_AWB_STATE the results report from now on (searching until a test says otherwise). */
+    private volatile int awbState = CaptureResult.CONTROL_AWB_STATE_SEARCHING;
 
     private FakeCamera(CameraFacts facts) {
         this.facts = facts;
@@ -71,6 +73,10 @@ public final class FakeCamera {
 
     public CameraFacts facts() {
         return facts;
+    }
+
+    public void awbState(int state) {
+        awbState = state;
     }
 
     /** Waits (up to {@code timeoutMs}) for the app to start a repeating burst; the session's shadow. */
@@ -146,6 +152,7 @@ public final class FakeCamera {
         shadow.set(CaptureResult.SENSOR_SENSITIVITY, request.get(CaptureRequest.SENSOR_SENSITIVITY));
         shadow.set(CaptureResult.SENSOR_FRAME_DURATION, request.get(CaptureRequest.SENSOR_FRAME_DURATION));
         shadow.set(CaptureResult.SENSOR_ROLLING_SHUTTER_SKEW, SKEW_NS);
+        shadow.set(CaptureResult.CONTROL_AWB_STATE, awbState);
         shadow.set(CaptureResult.LENS_FOCAL_LENGTH, (float) facts.availableFocalLengthsMm()[0]);
         shadow.set(CaptureResult.LENS_FOCUS_DISTANCE, request.get(CaptureRequest.LENS_FOCUS_DISTANCE));
         shadow.set(CaptureResult.SCALER_CROP_REGION, request.get(CaptureRequest.SCALER_CROP_REGION));

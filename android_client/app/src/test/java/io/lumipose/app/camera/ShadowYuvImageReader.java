@@ -25,6 +25,7 @@ public class ShadowYuvImageReader extends ShadowImageReader {
     @RealObject
     private ImageReader reader;
     private final Deque<Image> queued = new ArrayDeque<Image>();
+    private final java.util.List<Image> held = new java.util.ArrayList<Image>();
     private ImageReader.OnImageAvailableListener listener;
     private Handler handler;
     private int acquired;
@@ -38,12 +39,22 @@ public class ShadowYuvImageReader extends ShadowImageReader {
         latest = this;
     }
 
+    /** As the real reader: at most maxImages held (acquired, not closed) at once, else it throws. */
     @Implementation
     protected Image acquireNextImage() {
         synchronized (this) {
+            int open = 0;
+            for (Image i : held) {
+                open += i instanceof YuvImage && ((YuvImage) i).closed() ? 0 : 1;
+            }
+            if (open >= reader.getMaxImages()) {
+                throw new IllegalStateException("maxImages (" + reader.getMaxImages() + ") has already been acquired, "
+                        + "call #close before acquiring more.");
+            }
             Image next = queued.pollFirst();
             if (next != null) {
                 acquired++;
+                held.add(next);
             }
             return next;
         }
@@ -59,6 +70,9 @@ public class ShadowYuvImageReader extends ShadowImageReader {
                 }
                 newest = i;
                 acquired++;
+            }
+            if (newest != null) {
+                held.add(newest);
             }
             return newest;
         }
@@ -90,6 +104,15 @@ public class ShadowYuvImageReader extends ShadowImageReader {
 
     public synchronized int acquired() {
         return acquired;
+    }
+
+    /** Images acquired and not closed yet. */
+    public synchronized int open() {
+        int open = 0;
+        for (Image i : held) {
+            open += i instanceof YuvImage && ((YuvImage) i).closed() ? 0 : 1;
+        }
+        return open;
     }
 
     public static ShadowYuvImageReader latest() {

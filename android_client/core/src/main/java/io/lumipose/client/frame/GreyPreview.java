@@ -51,7 +51,12 @@ public final class GreyPreview {
 
     /** The picture as opaque ARGB, row after row (Android's Bitmap.createBitmap takes it as it is). */
     public int[] argb() {
-        int[] out = new int[pixels.length];
+        return argb(null);
+    }
+
+    /** {@link #argb()} into {@code reuse} when it is the right length (a view showing five a second keeps one). */
+    public int[] argb(int[] reuse) {
+        int[] out = reuse != null && reuse.length == pixels.length ? reuse : new int[pixels.length];
         for (int i = 0; i < out.length; i++) {
             int v = pixels[i] & 0xff;
             out[i] = 0xff000000 | v << 16 | v << 8 | v;
