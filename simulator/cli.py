@@ -93,6 +93,14 @@ def add_commands(commands) -> None:
     add_bench_flags(partial, figures="write partial.png (error against visible share) here, with partial.json "
                                      "beside it (default: no figures)")
     partial.set_defaults(run=_run_partial)
+    negatives = benches.add_parser("negatives", help="real photos of rooms and lamps (none of a panel): every fix is wrong")
+    negatives.add_argument("--local", type=Path,
+                           help="a folder with the manifest's photos that are not shipped (default: none)")
+    negatives.add_argument("--sigmas", type=float, nargs="+", default=[0.01, 0.05, 0.1, 0.5, 1.0],
+                           help="required_sigma_m of the maps, metres")
+    negatives.add_argument("--workers", type=int, default=2, help="processes (default: 2)")
+    negatives.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    negatives.set_defaults(run=_run_negatives)
     robustness = benches.add_parser("robustness", help="what each stage of a phone's image chain costs (issue 13)")
     robustness.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0], help="camera to beacon, metres")
     robustness.add_argument("--scales", type=float, nargs="+", default=[0.25, 1.0],
@@ -356,6 +364,14 @@ def _run_accuracy(args) -> int:
                   f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%")
     for ratio in ratios:
         print(f"{ratio['distance_m']:>7.1f}m  Blender's mean error / ours ({ratio['mode']}): {ratio['ratio']:.2f}")
+    return 0
+
+
+def _run_negatives(args) -> int:
+    from simulator.bench_negatives import format_negatives, run_negatives
+
+    report = run_negatives(args.local, args.workers, tuple(args.sigmas))
+    print(json.dumps(report, indent=2) if args.json else format_negatives(report))
     return 0
 
 
