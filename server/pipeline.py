@@ -6,7 +6,8 @@ corner path, for a square panel wholly in view. A panel cut by the frame border,
 that is not square (a rectangle, a circle), and a square whose outline gives no four sides or
 whose corners fix the position only to worse than the map's `required_sigma_m`, takes the
 outline path instead: beacon contour -> sub-pixel outline points -> outline fit
-(`server.pose.outline`), which refuses what it cannot pin down (`pose_uncertain`). Every refusal
+(`server.pose.outline`), which refuses what it cannot pin down (`pose_uncertain`), -> shape test
+(`server.pose.shape`), which refuses a blob that is not the map's panel (`shape_mismatch`). Every refusal
 is a `Refusal` with a reason; only unreadable input raises (in `server.ingest`). Which beacon
 is in view, and rooms of several panels, are decided above (`server.locator`).
 """
@@ -30,6 +31,7 @@ from server.geometry import (
     beacon_corners_m,
     beacon_to_world,
     camera_matrix,
+    dense_beacon_outline_m,
     distortion_vector,
     gravity_in_camera,
     world_to_camera,
@@ -39,6 +41,7 @@ from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.pose.ordering import order_corners
 from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
+from server.pose.shape import ShapeRules, shape_refusal, shape_test
 from server.pose.solve import GravityMode, PoseRules, side_errors, solve_pose
 from server.vision.binarize import Levels, blur, threshold
 from server.vision.contour import Blob, BlobRules, PanelLook, find_beacon_blob
@@ -78,6 +81,7 @@ class PipelineOptions:
     pose: PoseRules = PoseRules()
     outline_points: OutlineRules = OutlineRules()
     outline_fit: OutlineFitRules = OutlineFitRules()
+    shape: ShapeRules = ShapeRules()
     # the contour growth this device's whole panels showed (`Fix.growth_px`): given, the outline
     # fit of a cut panel need not tell it from distance (`server.tracking.session` keeps it)
     growth_px: float | None = None
@@ -410,6 +414,10 @@ def _locate_by_outline(
         )
     if isinstance(fit, Refusal):
         return timer.refusal(fit)
+    with timer.stage("shape"):
+        mismatch = _shape_mismatch(frame, [beacon], fit, found.points_px, found.edge_noise_px, options)
+    if mismatch is not None:
+        return timer.refusal(mismatch)
     what = "a panel cut by the frame border" if cut else "the panel"
     note = f"pose from the visible outline of {what} ({fit.points} points, growth {fit.growth_px:.2f} px)"
     return _outline_fix(frame, beacon, fit, id_source, gravity is not None, note, timer)
@@ -453,8 +461,56 @@ def locate_by_outlines(
         )
     if isinstance(fit, Refusal):
         return timer.refusal(fit)
+    with timer.stage("shape"):
+        noises = [f.edge_noise_px for f in found if np.isfinite(f.edge_noise_px)]
+        every = np.vstack([f.points_px for f in found])
+        noise = float(np.median(noises)) if noises else float("nan")
+        mismatch = _shape_mismatch(frame, [b for b, _ in points], fit, every, noise, options)
+    if mismatch is not None:
+        return timer.refusal(mismatch)
     note = f"pose from the visible outlines of cut panels {[b.id for b, _ in points]} together ({fit.points} points)"
     return _outline_fix(frame, points[0][0], fit, BeaconIdSource.track, gravity is not None, note, timer)
+
+
+def _shape_mismatch(
+    frame: LumaFrame,
+    beacons: list[Beacon],
+    fit: OutlineFit,
+    points_px: np.ndarray,
+    edge_noise_px: float,
+    options: PipelineOptions,
+) -> Refusal | None:
+    """The shape test of an outline fit (`server.pose.shape`): None when the blob is the panel's shape."""
+    in_view = _outline_in_view_px(frame, beacons, fit, options.outline_points.border_px)
+    test = shape_test(fit.residuals_px, fit.parameters, edge_noise_px, in_view, points_px, fit.growth_px, options.shape)
+    return shape_refusal(test, beacons[0], options.shape)
+
+
+def _outline_in_view_px(frame: LumaFrame, beacons: list[Beacon], fit: OutlineFit, border_px: float) -> np.ndarray:
+    """The fitted panels' outlines (M, 2), about a pixel apart, where they lie in the frame (frame
+    pixels, more than `border_px` inside its border): where the outline points should be."""
+    matrix, distortion = camera_matrix(frame.camera), distortion_vector(frame.camera)
+    height, width = frame.pixels.shape
+    seen = []
+    for beacon in beacons:
+        distance_m = float(np.linalg.norm(np.subtract(beacon.center_m, fit.position_m)))
+        span_px = min(float(matrix[0, 0]) * beacon.size_m / max(distance_m, 1e-3), 8000.0)
+        outline = beacon_to_world(beacon, dense_beacon_outline_m(beacon, span_px))
+        in_camera = world_to_camera(outline, fit.position_m, fit.rotation_wc)
+        in_camera = in_camera[in_camera[:, 2] > 1e-6]
+        # the lens's distortion only where the ideal projection is near the frame (its polynomial
+        # folds far outside it)
+        ideal = in_camera[:, :2] / in_camera[:, 2:] * np.diag(matrix)[:2] + matrix[:2, 2]
+        near = np.all((ideal > -0.1 * np.array([width, height])) & (ideal < 1.1 * np.array([width, height])), axis=1)
+        if not near.any():
+            continue
+        projected, _ = cv2.projectPoints(in_camera[near], np.zeros(3), np.zeros(3), matrix, distortion)
+        seen.append(projected.reshape(-1, 2))
+    if not seen:
+        return np.zeros((0, 2))
+    px = np.vstack(seen)
+    inside = np.all((px > border_px) & (px < np.array([width, height]) - 1 - border_px), axis=1)
+    return px[inside]
 
 
 def _gravity(frame: LumaFrame, options: PipelineOptions) -> np.ndarray | None:

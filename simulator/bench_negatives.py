@@ -11,10 +11,15 @@ Two parts, figures, not tests (docs/reliability.md, "A fix answers to its own ev
   alone scales the distance, and the wrong beacon of the same shape moves the fix by the beacons'
   offset; neither changes what one frame shows, so no test of one frame can see them (the survey
   measures sizes, the ID names the beacon).
-- **Real photos** of ordinary rooms and ceilings (`simulator/negatives/photos/manifest.json`,
-  each file's source, commit and licence): each located with a bundled profile and one-beacon maps
-  of every panel shape, at every `required_sigma_m` from 1 cm to 1 m; none of them is a panel of
-  those maps, so every fix is a false one.
+- **Real photos** of rooms, ceilings and lamps, none of a Lumipose panel
+  (`simulator/negatives/photos/manifest.json`: each file's repository, commit, path and licence;
+  the shipped ones, and with `--local` those whose licence keeps them out of the repository,
+  fetched as the manifest says): each located with a bundled profile against the bundled panels
+  (the test bench's and the scenes' 174 mm square at 1.0, 2.72 and 3.0 m, the first beacon named
+  where a map has several, as the app may send it; the shapes bench's 600 mm square and
+  1200 x 300 mm rectangle) at each `required_sigma_m` from 1 cm to 1 m: any fix is a wrong one.
+  A refusal at one sigma is one at every smaller sigma too (the gates only tighten), so only a
+  fix is tried again at the next one down.
 
 Poses, rendering and locating are `lumipose bench accuracy --shape`'s (`simulator.bench_shapes`).
 """
@@ -27,6 +32,7 @@ import math
 import os
 import platform
 import time
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -34,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from server.camera import intrinsics_from_profile
-from server.ingest import FrameError, LumaFrame, read_photo_file
+from server.ingest import LumaFrame, read_photo_file
 from server.locator import locate
 from server.options import LocateOptions
 from server.pipeline import PipelineOptions
@@ -47,9 +53,9 @@ from simulator.fixtures import fixture_meta
 from simulator.render import SensorModel, render_frame
 
 PHOTOS = Path(__file__).parent / "negatives" / "photos"
-REQUIRED_SIGMAS_M = (0.01, 0.05, 0.1, 0.5, 1.0)
+SIGMAS_M = (0.01, 0.05, 0.1, 0.5, 1.0)
 ABOVE_M = 1.4  # the shapes bench's: a 2.7 m ceiling, the phone at 1.3 m
-PHOTO_PROFILE = "xiaomi-mi8-rear"
+PROFILE = "xiaomi-mi8-rear"  # the real photos' (a phone's main camera)
 
 
 @dataclass(frozen=True)
@@ -126,7 +132,9 @@ class NegativesConfig:
     scale: float = 0.25
     required_sigma_m: float = 0.01  # the wrong maps' (the bundled maps' default)
     seed: int = 1
-    photos: Path | None = PHOTOS
+    photos: bool = True  # the real photos too
+    local: Path | None = None  # the manifest's photos that are not shipped, fetched here as it says
+    sigmas_m: tuple[float, ...] = SIGMAS_M  # the real photos' maps' required_sigma_m
     shapes: ShapesConfig = field(default_factory=ShapesConfig)
 
 
@@ -191,45 +199,43 @@ def summarize_row(samples: list[dict]) -> dict:
     return row
 
 
-def photo_maps(above_m: float = ABOVE_M) -> dict[str, Beacon]:
-    """One-beacon maps of every panel shape the service knows, for the real photos."""
-    centre = [0.0, 0.0, above_m]
-    return {
-        "square-174": Beacon(id=0, center_m=centre, side_m=0.174, corner_radius_m=0.02),
-        "square-600": Beacon(id=0, center_m=centre, side_m=0.6, corner_radius_m=0.01),
-        "rectangle-1200x300": Beacon(id=0, center_m=centre, width_m=1.2, height_m=0.3, corner_radius_m=0.01),
-        "circle-200": Beacon(id=0, center_m=centre, shape=PanelShape.circle, diameter_m=0.2),
-    }
+def bench_maps() -> dict[str, BeaconMap]:
+    """The panels the photos are located against, by name."""
+    from shared_schemas.cli import read_map_argument
+    from simulator.bench_shapes import shape_cases
+    from simulator.scene import find_scene
+
+    maps = {"test-bench": read_map_argument("test-bench", None)}
+    for name in ("office", "android-bench"):  # paper-bench, walk-one-panel, office-9: the same panel at these heights
+        maps[name] = find_scene(name).beacon_map()
+    for key in ("square-600", "rectangle-1200x300"):
+        maps[key] = BeaconMap(name=key, beacons=[shape_cases()[key].beacon])
+    return maps
 
 
-def photo_files(folder: Path) -> list[dict]:
-    """The manifest's photos that are in the folder (`shipped`); the others are listed, not located."""
-    manifest = folder / "manifest.json"
-    if not manifest.is_file():
-        return []
-    entries = json.loads(manifest.read_text())["photos"]
-    return [e for e in entries if e.get("shipped", True) and (folder / e["file"]).is_file()]
+def photo_rows(path: Path, sigmas_m: tuple[float, ...] = SIGMAS_M) -> list[dict]:
+    """One row per (map, sigma) of the photo at `path`."""
+    from server.camera import resolve_profile_args
 
-
-def photo_sample(args: tuple[Path, str]) -> dict:
-    """One real photo located with every map at every required_sigma_m: the fixes it gave."""
-    folder, name = args
-    try:
-        frame, _ = read_photo_file(folder / name, profile=device_profiles()[PHOTO_PROFILE])
-    except FrameError as error:
-        return {"file": name, "unreadable": str(error), "fixes": [], "outcomes": {}}
-    fixes: list[dict] = []
-    outcomes: dict[str, int] = {}
-    for key, beacon in photo_maps().items():
-        for sigma in REQUIRED_SIGMAS_M:
-            options = LocateOptions(pipeline=PipelineOptions(outline_fit=OutlineFitRules(max_sigma_m=sigma)))
-            beacon_map = BeaconMap(name="bench-negatives", beacons=[beacon], required_sigma_m=sigma)
-            result = locate(frame, beacon_map, options)
-            outcome = "fix" if result.ok else result.reason.value
-            outcomes[outcome] = outcomes.get(outcome, 0) + 1
-            if result.ok:
-                fixes.append({"map": key, "required_sigma_m": sigma, "position_m": result.position_m})
-    return {"file": name, "fixes": fixes, "outcomes": dict(sorted(outcomes.items()))}
+    profiles, profile = resolve_profile_args([PROFILE])
+    frame = read_photo_file(path, profiles, None, profile)[0]
+    rows: list[dict] = []
+    for name, beacon_map in bench_maps().items():
+        beacon_id = beacon_map.beacons[0].id if len(beacon_map.beacons) > 1 else None
+        refused = None
+        for sigma in sorted(sigmas_m, reverse=True):
+            if refused is None:
+                asked = beacon_map.model_copy(update={"required_sigma_m": sigma})
+                result = locate(frame, asked, beacon_id=beacon_id)
+                ok, reason = result.ok, None if result.ok else str(result.reason)
+                message = (result.warnings[0] if result.warnings else "") if result.ok else result.message or ""
+                if not ok:
+                    refused = reason
+            else:
+                ok, reason, message = False, refused, "refused at a larger sigma"
+            rows.append({"photo": path.name, "map": name, "sigma_m": sigma, "ok": ok, "reason": reason,
+                         "message": message[:200]})  # fmt: skip
+    return rows
 
 
 def run_negatives(config: NegativesConfig, workers: int | None = None) -> dict:
@@ -239,15 +245,10 @@ def run_negatives(config: NegativesConfig, workers: int | None = None) -> dict:
     jobs = [(config, row, index) for row in rows for index in range(config.frames)]
     start = time.perf_counter()
     samples: list[dict] = []
-    photos = photo_files(config.photos) if config.photos is not None else []
     with ProcessPoolExecutor(max_workers=workers) as pool:
         for sample in pool.map(wrong_map_sample, jobs, chunksize=2):
             samples.append(sample)
             progress(len(samples), len(jobs), "wrong maps")
-        located = []
-        for sample in pool.map(photo_sample, [(config.photos, p["file"]) for p in photos], chunksize=1):
-            located.append(sample)
-            progress(len(located), len(photos), "real photos")
     table = {}
     for row in rows:
         mine = [s for s in samples if s["row"] == row.key]
@@ -257,22 +258,12 @@ def run_negatives(config: NegativesConfig, workers: int | None = None) -> dict:
             "mapped": row.mapped.model_dump(mode="json", exclude_none=True),
             **summarize_row(mine),
         }
-    attempts = len(photo_maps()) * len(REQUIRED_SIGMAS_M)
     settings = asdict(config)
-    settings["photos"] = None if config.photos is None else str(config.photos)
+    settings["local"] = None if config.local is None else str(config.local)
     return {
         "config": settings,
         "wrong_maps": table,
-        "photos": {
-            "folder": settings["photos"],
-            "located": len(located),
-            "attempts_each": attempts,
-            "fixes": sum(len(p["fixes"]) for p in located),
-            "photos_with_a_fix": sorted(p["file"] for p in located if p["fixes"]),
-            "unreadable": sorted(p["file"] for p in located if "unreadable" in p),
-            "outcomes": _merged([p["outcomes"] for p in located]),
-            "per_photo": located,
-        },
+        "photos": run_photos(config.local, workers, config.sigmas_m) if config.photos else None,
         "wall_s": time.perf_counter() - start,
         "workers": workers,
         "cpu_count": os.cpu_count(),
@@ -280,12 +271,33 @@ def run_negatives(config: NegativesConfig, workers: int | None = None) -> dict:
     }
 
 
-def _merged(counts: list[dict[str, int]]) -> dict[str, int]:
-    total: dict[str, int] = {}
-    for c in counts:
-        for k, v in c.items():
-            total[k] = total.get(k, 0) + v
-    return dict(sorted(total.items()))
+def run_photos(local: Path | None = None, workers: int = 2, sigmas_m: tuple[float, ...] = SIGMAS_M) -> dict:
+    """Locate every photo of the manifest found here (and in `local`); the fixes by map and sigma."""
+    entries = json.loads((PHOTOS / "manifest.json").read_text())["photos"]
+    paths = []
+    for entry in entries:
+        where = PHOTOS if entry["shipped"] else local
+        if where is not None and (where / entry["file"]).is_file():
+            paths.append(where / entry["file"])
+    start = time.perf_counter()
+    with ProcessPoolExecutor(max(1, workers)) as pool:
+        rows = [row for rows in pool.map(photo_rows, paths, [sigmas_m] * len(paths)) for row in rows]
+    fixes = [row for row in rows if row["ok"]]
+    return {
+        "photos": len(paths),
+        "listed": len(entries),
+        "locates": len(rows),
+        "fixes": len(fixes),
+        "fixes_by_map_sigma": {
+            f"{m} {s:g}": n for (m, s), n in sorted(Counter((r["map"], r["sigma_m"]) for r in fixes).items())
+        },
+        "photos_with_fixes": sorted({r["photo"] for r in fixes}),
+        "reasons": dict(Counter(r["reason"] or "fix" for r in rows).most_common()),
+        "wall_s": round(time.perf_counter() - start, 1),
+        "rows": rows,
+    }
+
+
 
 
 def _num(row: dict, key: str, width: int, digits: int = 1) -> str:
@@ -310,27 +322,29 @@ def format_negatives(report: dict) -> str:
             f"{_num(row, 'mean_mm', 8)} {_num(row, 'max_mm', 8)} {_num(row, 'inside_95_pct', 5, 0)}"
             f"{'%' if row.get('inside_95_pct') is not None else ' '} {_num(row, 'mean_sigma_mm', 6)}  {refusals}"
         )
-    photos = report["photos"]
-    if photos["located"]:
-        lines.append(
-            f"real photos: {photos['located']} from {photos['folder']}, each located {photos['attempts_each']} times "
-            f"(maps {', '.join(photo_maps())}; required_sigma_m {', '.join(f'{s:g}' for s in REQUIRED_SIGMAS_M)}): "
-            f"{photos['fixes']} fixes"
-            + (f" from {', '.join(photos['photos_with_a_fix'])}" if photos["photos_with_a_fix"] else "")
-        )
-        lines.append("  outcomes: " + ", ".join(f"{k} {v}" for k, v in photos["outcomes"].items()))
-    elif photos["folder"] is not None:
-        lines.append(f"real photos: none found in {photos['folder']} (its manifest.json lists them)")
+    if report["photos"] is not None:
+        lines.append("real photos (maps " + ", ".join(bench_maps()) + "; required_sigma_m "
+                     + ", ".join(f"{s:g}" for s in config["sigmas_m"]) + "): " + format_photos(report["photos"]))
     lines.append(f"  wall time {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')}")
     return "\n".join(lines)
 
 
 def run_negatives_command(args: argparse.Namespace) -> int:
-    if args.frames < 1 or args.scale <= 0 or args.required_sigma <= 0:
-        return report_bad_input(BadInput("--frames must be at least 1, --scale and --required-sigma positive"),
+    if args.frames < 1 or args.scale <= 0 or args.required_sigma <= 0 or min(args.sigmas) <= 0:
+        return report_bad_input(BadInput("--frames must be at least 1, --scale, --required-sigma and --sigmas positive"),
                                 args.json)  # fmt: skip
     config = NegativesConfig(frames=args.frames, scale=args.scale, required_sigma_m=args.required_sigma,
-                             seed=args.seed, photos=None if args.no_photos else args.photos)  # fmt: skip
+                             seed=args.seed, photos=not args.no_photos, local=args.local,
+                             sigmas_m=tuple(args.sigmas))  # fmt: skip
     report = run_negatives(config, args.workers)
     print(json.dumps(report, indent=2) if args.json else format_negatives(report))
     return 0
+
+
+def format_photos(report: dict) -> str:
+    lines = [f"{report['photos']} of {report['listed']} photos, {report['locates']} locates, {report['fixes']} fixes "
+             f"({report['wall_s']:.0f} s)"]  # fmt: skip
+    lines += [f"  fixes {key}: {count}" for key, count in report["fixes_by_map_sigma"].items()]
+    lines += [f"  photo with fixes: {name}" for name in report["photos_with_fixes"]]
+    lines.append("  outcomes: " + ", ".join(f"{k} {v}" for k, v in report["reasons"].items()))
+    return "\n".join(lines)

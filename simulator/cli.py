@@ -14,31 +14,16 @@ from shared_schemas.cli import BadInput, describe_file_error, plural, read_map_a
 # every command that draws: `--figures DIR`, no figures unless asked; the data drawn from goes beside them
 FIGURES_HELP = "write {pngs} into this folder, with {data} beside them (default: no figures, nothing written)"
 
-ROBUSTNESS_GROUPS = (
-    "reference",
-    "defocus",
-    "glare",
-    "binning",
-    "demosaic",
-    "noise",
-    "sharpen",
-    "tone",
-    "jpeg",
-    "motion",
-    "panel",
-)
+ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
+                     "motion", "panel")
 
 
 def add_bench_flags(parser, *, seed: int | None | bool = 1, workers: bool = True, figures: str | None = None) -> None:
     """The flags the benches share, meaning the same on each: `--seed` (an int default, None: the scene file's,
     False: none), `--workers`, `--figures DIR` (its help says what is drawn) and `--json`."""
     if seed is not False:
-        parser.add_argument(
-            "--seed",
-            type=int,
-            default=seed,
-            help="random seed" + (" (default: the scene file's)" if seed is None else ""),
-        )
+        parser.add_argument("--seed", type=int, default=seed,
+                            help="random seed" + (" (default: the scene file's)" if seed is None else ""))
     if workers:
         parser.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     if figures is not None:
@@ -49,31 +34,15 @@ def add_bench_flags(parser, *, seed: int | None | bool = 1, workers: bool = True
 def add_commands(commands) -> None:
     render = commands.add_parser("render", help="render a fixture (NAME.y + NAME.json) for a given pose")
     render.add_argument("out", type=Path, help="output stem, e.g. out/frame1")
-    render.add_argument(
-        "--profile",
-        default="xiaomi-mi8-front",
-        choices=sorted(device_profiles()),
-        help="bundled device profile of the camera",
-    )
+    render.add_argument("--profile", default="xiaomi-mi8-front", choices=sorted(device_profiles()),
+                        help="bundled device profile of the camera")
     render.add_argument("--scale", type=float, default=1.0, help="of the profile's native resolution")
     render.add_argument("--map", default=DEMO_MAP_NAME, help="a map file, or a bundled map's name")
     render.add_argument("--beacon-id", type=int, default=None, help="default: the map's first beacon")
-    render.add_argument(
-        "--position",
-        type=float,
-        nargs=3,
-        default=[0.0, 0.0, 0.0],
-        metavar=("X", "Y", "Z"),
-        help="camera position in the map, metres",
-    )
-    render.add_argument(
-        "--ypr",
-        type=float,
-        nargs=3,
-        default=[0.0, 0.0, 0.0],
-        metavar=("YAW", "PITCH", "ROLL"),
-        help="camera attitude in degrees, R_wc = Rz(yaw) Ry(pitch) Rx(roll)",
-    )
+    render.add_argument("--position", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("X", "Y", "Z"),
+                        help="camera position in the map, metres")
+    render.add_argument("--ypr", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("YAW", "PITCH", "ROLL"),
+                        help="camera attitude in degrees, R_wc = Rz(yaw) Ry(pitch) Rx(roll)")
     render.add_argument("--psf", type=float, default=1.0, help="PSF sigma, pixels")
     render.add_argument("--overexposure", type=float, default=4.0, help="panel level / saturation")
     render.add_argument("--seed", type=int, default=0, help="sensor noise seed")
@@ -86,242 +55,144 @@ def add_commands(commands) -> None:
     simulate = commands.add_parser("simulate", help="render a scene's series (or one pose) into fixture files")
     simulate.add_argument("scene", help="scene file, or a bundled scene: " + ", ".join(_bundled_scenes()))
     simulate.add_argument("out", type=Path, help="output folder (fixtures, scene.json, map.json)")
-    simulate.add_argument(
-        "--pose",
-        type=float,
-        nargs=3,
-        default=None,
-        metavar=("X", "Y", "Z"),
-        help="one sample at this camera position instead of the scene's series",
-    )
-    simulate.add_argument(
-        "--ypr",
-        type=float,
-        nargs=3,
-        default=[0.0, 0.0, 0.0],
-        metavar=("YAW", "PITCH", "ROLL"),
-        help="with --pose: camera attitude in degrees",
-    )
+    simulate.add_argument("--pose", type=float, nargs=3, default=None, metavar=("X", "Y", "Z"),
+                          help="one sample at this camera position instead of the scene's series")
+    simulate.add_argument("--ypr", type=float, nargs=3, default=[0.0, 0.0, 0.0], metavar=("YAW", "PITCH", "ROLL"),
+                          help="with --pose: camera attitude in degrees")
     simulate.add_argument("--limit", type=int, default=None, help="only the first N samples of the series")
     simulate.add_argument("--scale", type=float, default=None, help="override the camera's resolution scale")
     simulate.add_argument("--seed", type=int, default=None, help="override the scene's seed")
     simulate.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
-    simulate.add_argument(
-        "--bursts",
-        action="store_true",
-        help="each sample as the app captures it: a pose frame, then ID frames (NAME_0000_0_pose, "
-        "NAME_0000_1_id, ...; the scene's id_frames settings)",
-    )
+    simulate.add_argument("--bursts", action="store_true",
+                          help="each sample as the app captures it: a pose frame, then ID frames (NAME_0000_0_pose, "
+                               "NAME_0000_1_id, ...; the scene's id_frames settings)")
     simulate.set_defaults(run=_run_simulate)
 
     bench = commands.add_parser("bench", help="benchmarks that print figures")
     benches = bench.add_subparsers(dest="bench", required=True)
     accuracy = benches.add_parser("accuracy", help="position error over rendered test-bench frames")
-    accuracy.add_argument(
-        "--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0], help="camera to beacon, metres"
-    )
+    accuracy.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0],
+                          help="camera to beacon, metres")
     accuracy.add_argument("--frames", type=int, default=None, help="per distance (200); with --shape, per shape (100)")
     accuracy.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
     accuracy.add_argument("--max-tilt", type=float, default=10.0, help="largest random camera tilt, degrees")
     accuracy.add_argument("--gravity-sigma", type=float, default=0.1, help="gravity sensor error, degrees")
     add_bench_flags(accuracy)
-    accuracy.add_argument(
-        "--renderer",
-        choices=["ours", "blender", "both"],
-        default="ours",
-        help="blender: Cycles' radiance through the same sensor (needs bpy); both: the same frames "
-        "from each, and the ratio of their mean errors",
-    )
-    accuracy.add_argument(
-        "--shape",
-        action="store_true",
-        help="instead of the distance table, the panel-shape table (issue 11: 600 x 600 mm, "
-        "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)",
-    )
+    accuracy.add_argument("--renderer", choices=["ours", "blender", "both"], default="ours",
+                          help="blender: Cycles' radiance through the same sensor (needs bpy); both: the same frames "
+                               "from each, and the ratio of their mean errors")
+    accuracy.add_argument("--shape", action="store_true",
+                          help="instead of the distance table, the panel-shape table (issue 11: 600 x 600 mm, "
+                               "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)")
     accuracy.set_defaults(run=_run_accuracy)
     partial = benches.add_parser("partial", help="panels cut by the image border: coverage and error by visible share")
     partial.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0, 3.0], help="camera to beacon, metres")
     partial.add_argument("--frames", type=int, default=40, help="per distance and resolution")
-    partial.add_argument(
-        "--scales",
-        type=float,
-        nargs="+",
-        default=[1.0, 0.25],
-        help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)",
-    )
-    add_bench_flags(
-        partial,
-        figures="write partial.png (error against visible share) here, with partial.json "
-        "beside it (default: no figures)",
-    )
+    partial.add_argument("--scales", type=float, nargs="+", default=[1.0, 0.25],
+                         help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
+    add_bench_flags(partial, figures="write partial.png (error against visible share) here, with partial.json "
+                                     "beside it (default: no figures)")
     partial.set_defaults(run=_run_partial)
+    negatives = benches.add_parser("negatives", help="frames the map does not describe: wrong maps on rendered "
+                                   "frames, real photos of rooms and lamps (every fix of those is wrong)")
+    negatives.add_argument("--frames", type=int, default=20, help="rendered frames per wrong map")
+    negatives.add_argument("--scale", type=float, default=0.25, help="of the profile's native resolution")
+    negatives.add_argument("--required-sigma", type=float, default=0.01,
+                           help="the wrong maps' required_sigma_m, metres")
+    negatives.add_argument("--sigmas", type=float, nargs="+", default=[0.01, 0.05, 0.1, 0.5, 1.0],
+                           help="required_sigma_m of the real photos' maps, metres")
+    negatives.add_argument("--local", type=Path,
+                           help="a folder with the manifest's photos that are not shipped (default: none)")
+    negatives.add_argument("--no-photos", action="store_true", help="only the wrong maps")
+    add_bench_flags(negatives)
+    negatives.set_defaults(run=_run_negatives)
     robustness = benches.add_parser("robustness", help="what each stage of a phone's image chain costs (issue 13)")
     robustness.add_argument("--distances", type=float, nargs="+", default=[1.0, 2.0], help="camera to beacon, metres")
-    robustness.add_argument(
-        "--scales",
-        type=float,
-        nargs="+",
-        default=[0.25, 1.0],
-        help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)",
-    )
+    robustness.add_argument("--scales", type=float, nargs="+", default=[0.25, 1.0],
+                            help="of the Mi 8 front camera's native resolution (0.25: 970 x 1296)")
     robustness.add_argument("--frames", type=int, default=40, help="per cell (effect x distance x scale)")
-    robustness.add_argument(
-        "--effects",
-        nargs="+",
-        default=list(ROBUSTNESS_GROUPS),
-        metavar="GROUP",
-        help="effect groups: " + ", ".join(ROBUSTNESS_GROUPS[1:]) + " (the references no chain, "
-        "ISP off and ISP on always run)",
-    )
+    robustness.add_argument("--effects", nargs="+", default=list(ROBUSTNESS_GROUPS), metavar="GROUP",
+                            help="effect groups: " + ", ".join(ROBUSTNESS_GROUPS[1:]) + " (the references no chain, "
+                                 "ISP off and ISP on always run)")
     add_bench_flags(robustness)
     robustness.set_defaults(run=_run_robustness)
     speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
     speed.add_argument("--repeats", type=int, default=50, help="timed runs")
     speed.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
     speed.add_argument("--no-gravity", action="store_true", help="leave the gravity vector out (no MAP pose fit)")
-    speed.add_argument(
-        "--frames",
-        type=int,
-        default=None,
-        help="instead: N accuracy-bench frames per distance (1, 2, 3 m), the median ratio over them",
-    )
+    speed.add_argument("--frames", type=int, default=None,
+                       help="instead: N accuracy-bench frames per distance (1, 2, 3 m), the median ratio over them")
     speed.add_argument("--rounds", type=int, default=5, help="with --frames: passes over all the frames")
     add_bench_flags(speed, seed=False, workers=False)
     speed.set_defaults(run=_run_speed)
-    load = benches.add_parser(
-        "load",
-        help="the HTTP service under concurrent clients (over 3 minutes by default)",
-        description="The HTTP service under concurrent clients (its own server, or --url). One "
-        "run per frame kind, client count and encoding: the defaults take over 3 "
-        "minutes (9 runs of 20 s).",
-    )
-    load.add_argument(
-        "--frames",
-        nargs="+",
-        choices=["1080p", "full", "full-window"],  # bench_service.FRAME_WIDTHS
-        default=["1080p", "full", "full-window"],
-        help="full-window: the full frame cut to the beacon's window by the client",
-    )
+    load = benches.add_parser("load", help="the HTTP service under concurrent clients (over 3 minutes by default)",
+                              description="The HTTP service under concurrent clients (its own server, or --url). One "
+                                          "run per frame kind, client count and encoding: the defaults take over 3 "
+                                          "minutes (9 runs of 20 s).")
+    load.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],  # bench_service.FRAME_WIDTHS
+                      default=["1080p", "full", "full-window"],
+                      help="full-window: the full frame cut to the beacon's window by the client")
     load.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4], help="concurrent clients, one run each")
-    load.add_argument(
-        "--seconds",
-        type=float,
-        default=20.0,
-        help="per run, one per frame x client count x encoding (default: 20; with the other defaults "
-        "9 runs, over 3 minutes)",
-    )
-    load.add_argument(
-        "--encodings",
-        nargs="+",
-        choices=["none", "gzip", "zstd"],
-        default=["none"],
-        help="upload compression, one run each",
-    )
+    load.add_argument("--seconds", type=float, default=20.0,
+                      help="per run, one per frame x client count x encoding (default: 20; with the other defaults "
+                           "9 runs, over 3 minutes)")
+    load.add_argument("--encodings", nargs="+", choices=["none", "gzip", "zstd"], default=["none"],
+                      help="upload compression, one run each")
     load.add_argument("--workers", type=int, default=1, help="uvicorn worker processes")
-    load.add_argument(
-        "--url",
-        help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
-        "no server-side figures then (default: our own server)",
-    )
-    load.add_argument(
-        "--devices",
-        action="store_true",
-        help="client n sends X-Lumipose-Device: load-<n>, as phones do: the live board records every "
-        "frame and keeps its picture's source (default: no device header)",
-    )
-    load.add_argument(
-        "--watchers",
-        type=int,
-        default=0,
-        help="open operator pages: subscribers that read /v1/live/events through each run",
-    )
-    load.add_argument(
-        "--picture-every-s",
-        type=float,
-        default=2.0,
-        help="with --devices and --watchers: one watcher fetches device load-0's newest kept picture "
-        "this often, as the page's frame view; 0: none",
-    )
-    load.add_argument(
-        "--live-frames",
-        type=int,
-        help="the started server's serve --live-frames (pictures kept per device; 0: none) (default: the server's, 3)",
-    )
+    load.add_argument("--url",
+                      help="load-test the running service there (e.g. the nginx replicas) instead of starting one; "
+                           "no server-side figures then (default: our own server)")
+    load.add_argument("--devices", action="store_true",
+                      help="client n sends X-Lumipose-Device: load-<n>, as phones do: the live board records every "
+                           "frame and keeps its picture's source (default: no device header)")
+    load.add_argument("--watchers", type=int, default=0,
+                      help="open operator pages: subscribers that read /v1/live/events through each run")
+    load.add_argument("--picture-every-s", type=float, default=2.0,
+                      help="with --devices and --watchers: one watcher fetches device load-0's newest kept picture "
+                           "this often, as the page's frame view; 0: none")
+    load.add_argument("--live-frames", type=int,
+                      help="the started server's serve --live-frames (pictures kept per device; 0: none) "
+                           "(default: the server's, 3)")
     load.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     load.set_defaults(run=_run_load)
-    replicas = benches.add_parser(
-        "replicas",
-        help="bench load through nginx to 1, 2, 3 replicas sharing Redis; "
-        "Redis against memory; bytes per device (minutes)",
-        description="Starts redis-server, the replicas (lumipose serve --redis) and nginx "
-        "(docker/nginx.conf) on 127.0.0.1 itself; needs Debian's redis-server "
-        "and nginx. One run per replica count, frame kind and client count, "
-        "then one replica straight with and without Redis.",
-    )
-    replicas.add_argument(
-        "--replicas", type=int, nargs="+", default=[1, 2, 3], help="replica counts, one set of runs each"
-    )
-    replicas.add_argument(
-        "--frames",
-        nargs="+",
-        choices=["1080p", "full", "full-window"],
-        default=["1080p", "full-window"],
-        help="frame kinds, as bench load's",
-    )
+    replicas = benches.add_parser("replicas", help="bench load through nginx to 1, 2, 3 replicas sharing Redis; "
+                                                   "Redis against memory; bytes per device (minutes)",
+                                  description="Starts redis-server, the replicas (lumipose serve --redis) and nginx "
+                                              "(docker/nginx.conf) on 127.0.0.1 itself; needs Debian's redis-server "
+                                              "and nginx. One run per replica count, frame kind and client count, "
+                                              "then one replica straight with and without Redis.")
+    replicas.add_argument("--replicas", type=int, nargs="+", default=[1, 2, 3], help="replica counts, one set of "
+                                                                                    "runs each")
+    replicas.add_argument("--frames", nargs="+", choices=["1080p", "full", "full-window"],
+                          default=["1080p", "full-window"], help="frame kinds, as bench load's")
     replicas.add_argument("--clients", type=int, nargs="+", default=[1, 2, 4], help="concurrent clients, one run each")
     replicas.add_argument("--seconds", type=float, default=10.0, help="per run")
     replicas.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     replicas.set_defaults(run=_run_replicas)
-    for name, help_text in (
-        ("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
-        ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)"),
-    ):
+    for name, help_text in (("grid", "the paper's simulated 391-point grid (Table 1, Figs. 11-12)"),
+                            ("bench-real", "the grid as the paper's real bench saw it (Table 2, Figs. 13-14)")):
         grid = benches.add_parser(name, help=help_text)
-        add_bench_flags(
-            grid,
-            seed=None,
-            figures=FIGURES_HELP.format(
-                pngs="the scatter and heat map", data="report.json, outcomes.json and scene.json"
-            ),
-        )
+        add_bench_flags(grid, seed=None, figures=FIGURES_HELP.format(
+            pngs="the scatter and heat map", data="report.json, outcomes.json and scene.json"))
         grid.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
         grid.add_argument("--limit", type=int, default=None, help="only about N evenly spread grid points")
         if name == "bench-real":
-            grid.add_argument(
-                "--uncalibrated",
-                action="store_true",
-                help="the pipeline assumes the datasheet pinhole without distortion, as the paper's",
-            )
-            grid.add_argument(
-                "--profile",
-                type=Path,
-                default=None,
-                help="the pipeline uses this calibrated profile (e.g. from `lumipose bench calibration "
-                "--lens bench-real --out profile.json`)",
-            )
+            grid.add_argument("--uncalibrated", action="store_true",
+                              help="the pipeline assumes the datasheet pinhole without distortion, as the paper's")
+            grid.add_argument("--profile", type=Path, default=None,
+                              help="the pipeline uses this calibrated profile (e.g. from `lumipose bench calibration "
+                                   "--lens bench-real --out profile.json`)")
         else:
-            grid.add_argument(
-                "--scene",
-                default=None,
-                help="locate the series of this scene file instead (its own resolution; --scale ignored)",
-            )
-            grid.add_argument(
-                "--yaw-jitter",
-                type=float,
-                default=0.0,
-                help="random phone yaw within +-this many degrees (0: exactly face to face, the paper's)",
-            )
+            grid.add_argument("--scene", default=None,
+                              help="locate the series of this scene file instead (its own resolution; --scale ignored)")
+            grid.add_argument("--yaw-jitter", type=float, default=0.0,
+                              help="random phone yaw within +-this many degrees (0: exactly face to face, the paper's)")
         grid.set_defaults(run=_run_grid_bench, bench_name=name)
     distance = benches.add_parser("distance", help="2D error from 1 m to 3 m (5 x 5 points over the FOV each)")
-    distance.add_argument(
-        "--distances", type=float, nargs="+", default=None, help="metres (default: 1.0 to 3.0 by 0.1)"
-    )
-    distance.add_argument(
-        "--yaw-jitter",
-        type=float,
-        default=0.0,
-        help="random phone yaw within +-this many degrees (0: exactly face to face)",
-    )
+    distance.add_argument("--distances", type=float, nargs="+", default=None,
+                          help="metres (default: 1.0 to 3.0 by 0.1)")
+    distance.add_argument("--yaw-jitter", type=float, default=0.0,
+                          help="random phone yaw within +-this many degrees (0: exactly face to face)")
     tilt = benches.add_parser("tilt", help="2D error against camera tilt at 1 m")
     tilt.add_argument("--tilts", type=float, nargs="+", default=None, help="degrees (default: 0 to 15 by 2.5)")
     for sweep, name in ((distance, "distance"), (tilt, "tilt")):
@@ -331,57 +202,28 @@ def add_commands(commands) -> None:
     calibration = benches.add_parser("calibration", help="camera calibration on rendered ChArUco photos (issue 14)")
     calibration.add_argument("--views", type=int, default=20, help="photos per set")
     calibration.add_argument("--scale", type=float, default=1.0, help="of the Mi 8 front camera's native resolution")
-    calibration.add_argument(
-        "--lens",
-        choices=["phone", "phone-k3", "bench-real"],
-        default="phone",
-        help="phone: a phone-like Mi 8 front lens (k3 0); phone-k3: the same with k3 0.002; "
-        "bench-real: `bench bench-real`'s lens",
-    )
-    calibration.add_argument(
-        "--corner-views",
-        type=int,
-        default=None,
-        help="views of the good set reaching into the image's corners, the rest spread (default 12: three per corner)",
-    )
+    calibration.add_argument("--lens", choices=["phone", "phone-k3", "bench-real"], default="phone",
+                             help="phone: a phone-like Mi 8 front lens (k3 0); phone-k3: the same with k3 0.002; "
+                                  "bench-real: `bench bench-real`'s lens")
+    calibration.add_argument("--corner-views", type=int, default=None,
+                             help="views of the good set reaching into the image's corners, the rest spread "
+                                  "(default 12: three per corner)")
     calibration.add_argument("--no-poor-sets", action="store_true", help="skip the frontal and corner-only sets")
     calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
     add_bench_flags(calibration, workers=False)
     calibration.set_defaults(run=_run_calibration_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
-    fidelity.add_argument(
-        "--distances", type=float, nargs="+", default=None, help="metres (default: 1.0 to 3.0 by 0.1)"
-    )
+    fidelity.add_argument("--distances", type=float, nargs="+", default=None,
+                          help="metres (default: 1.0 to 3.0 by 0.1)")
     fidelity.add_argument("--blender", action="store_true", help="also render each view with Blender (needs bpy)")
-    add_bench_flags(
-        fidelity, seed=False, workers=False, figures=FIGURES_HELP.format(pngs="fidelity.png", data="report.json")
-    )
+    add_bench_flags(fidelity, seed=False, workers=False,
+                    figures=FIGURES_HELP.format(pngs="fidelity.png", data="report.json"))
     fidelity.set_defaults(run=_run_fidelity)
     render_speed = benches.add_parser("render", help="time to render one full-resolution frame of a scene")
     render_speed.add_argument("--scene", default="paper-bench", help="a scene file or a bundled scene")
     render_speed.add_argument("--repeats", type=int, default=10, help="timed renders")
     add_bench_flags(render_speed, seed=False, workers=False)
     render_speed.set_defaults(run=_run_render_speed)
-    negatives = benches.add_parser(
-        "negatives", help="frames the map does not describe: wrong maps on rendered frames, real room photos (issue 27)"
-    )
-    negatives.add_argument("--frames", type=int, default=20, help="rendered frames per wrong map")
-    negatives.add_argument("--scale", type=float, default=0.25, help="of the profile's native resolution")
-    negatives.add_argument(
-        "--required-sigma",
-        type=float,
-        default=0.01,
-        help="the wrong maps' required_sigma_m, metres (the real photos run 0.01 to 1)",
-    )
-    negatives.add_argument(
-        "--photos",
-        type=Path,
-        default=Path(__file__).parent / "negatives" / "photos",
-        help="a folder of real photos with its manifest.json",
-    )
-    negatives.add_argument("--no-photos", action="store_true", help="only the wrong maps")
-    add_bench_flags(negatives)
-    negatives.set_defaults(run=_run_negatives)
     from simulator.vlc_cli import add_vlc_benches  # `bench vlc` and `bench office` (issue 4)
 
     add_vlc_benches(benches)
@@ -390,31 +232,16 @@ def add_commands(commands) -> None:
     add_survey_bench(benches)
 
 
-def _run_negatives(args) -> int:
-    from simulator.bench_negatives import run_negatives_command
-
-    return run_negatives_command(args)
-
-
 def plot_sample_evaluation(report, folder: Path, cell_m: float) -> list[Path]:
     """The paper's Figs. 13-14 (scatter, heat map) of the service's sample evaluation (a
     shared_schemas.api.Evaluation): `lumipose client samples evaluate --figures DIR`; heat-map cells of
     `cell_m` (the `--cell` the 'i,j' labels were read with), cells without a sample shown as not run."""
     from simulator.reports import Outcome, plot_heatmap, plot_scatter
 
-    outcomes = [
-        Outcome(
-            index=i,
-            label=row.label or row.id,
-            true_m=tuple(row.truth_m),
-            estimate_m=tuple(row.position_m) if row.ok else None,
-            reason=row.reason,
-            message=None,
-            reprojection_px=None,
-        )
-        for i, row in enumerate(report.rows)
-        if row.truth_m is not None
-    ]
+    outcomes = [Outcome(index=i, label=row.label or row.id, true_m=tuple(row.truth_m),
+                        estimate_m=tuple(row.position_m) if row.ok else None, reason=row.reason, message=None,
+                        reprojection_px=None)
+                for i, row in enumerate(report.rows) if row.truth_m is not None]
     if not outcomes:
         raise ValueError("no stored sample has a truth (ground_truth or an 'i,j' label) to plot")
     folder.mkdir(parents=True, exist_ok=True)
@@ -487,23 +314,14 @@ def _run_simulate(args) -> int:
             scene = scene.model_copy(update={"series": series})
         elif args.limit is not None:
             # the drawn attitudes become explicit poses, so scene.json reproduces exactly these samples
-            poses = [
-                PoseSpec(
-                    position_m=list(p.position_m),
-                    ypr_deg=list(p.ypr_deg),
-                    t_s=p.t_s,
-                    velocity_mps=list(p.velocity_mps),
-                    angular_velocity_dps=list(p.angular_velocity_dps),
-                )
-                for p in series_poses(scene)[: max(args.limit, 1)]
-            ]
+            poses = [PoseSpec(position_m=list(p.position_m), ypr_deg=list(p.ypr_deg), t_s=p.t_s,
+                              velocity_mps=list(p.velocity_mps), angular_velocity_dps=list(p.angular_velocity_dps))
+                     for p in series_poses(scene)[: max(args.limit, 1)]]
             scene = scene.model_copy(update={"series": SeriesSpec(path=PosesSeries(poses=poses))})
         stems = write_series(scene, args.out, args.workers, bursts=args.bursts)
     except (OSError, ValueError, ValidationError) as error:
         return report_bad_input(BadInput(str(error)))
-    print(
-        f"wrote {plural(len(stems), 'fixture')} ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}"
-    )
+    print(f"wrote {plural(len(stems), 'fixture')} ({stems[0]} ... {stems[-1]}), scene.json and map.json into {args.out}")
     return 0
 
 
@@ -531,39 +349,33 @@ def _run_accuracy(args) -> int:
     renderers = ["ours", "blender"] if args.renderer == "both" else [args.renderer]
     for distance in args.distances:
         for renderer in renderers:
-            config = AccuracyConfig(
-                distance_m=distance,
-                frames=frames,
-                scale=args.scale,
-                max_tilt_deg=args.max_tilt,
-                gravity_sigma_deg=args.gravity_sigma,
-                seed=args.seed,
-                renderer=renderer,
-            )
+            config = AccuracyConfig(distance_m=distance, frames=frames, scale=args.scale, max_tilt_deg=args.max_tilt,
+                                    gravity_sigma_deg=args.gravity_sigma, seed=args.seed, renderer=renderer)
             reports.append(run_accuracy(config, args.workers))
     ratios = renderer_ratios(reports) if args.renderer == "both" else []
     if args.json:
-        print(
-            json.dumps({"accuracy": reports, "renderer_ratios": ratios} if ratios else {"accuracy": reports}, indent=2)
-        )
+        print(json.dumps({"accuracy": reports, "renderer_ratios": ratios} if ratios else {"accuracy": reports},
+                         indent=2))
         return 0
-    print(
-        f"{'distance':>8} {'renderer':>8} {'mode':>8} {'mean':>7} {'std':>7} {'min':>7} {'max':>7} {'p95':>7} "
-        f"{'cover':>6}  (2D, mm)"
-    )
+    print(f"{'distance':>8} {'renderer':>8} {'mode':>8} {'mean':>7} {'std':>7} {'min':>7} {'max':>7} {'p95':>7} "
+          f"{'cover':>6}  (2D, mm)")
     for report in reports:
         head = f"{report['distance_m']:>7.1f}m {report['renderer']:>8}"
         for mode, s in report["modes"].items():
             if "mean_mm" not in s:
                 print(f"{head} {mode:>8}  no fix in any frame {s['refusals']}")
                 continue
-            print(
-                f"{head} {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
-                f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%"
-            )
+            print(f"{head} {mode:>8} {s['mean_mm']:7.3f} {s['std_mm']:7.3f} {s['min_mm']:7.3f} "
+                  f"{s['max_mm']:7.3f} {s['p95_mm']:7.3f} {s['coverage_pct']:5.1f}%")
     for ratio in ratios:
         print(f"{ratio['distance_m']:>7.1f}m  Blender's mean error / ours ({ratio['mode']}): {ratio['ratio']:.2f}")
     return 0
+
+
+def _run_negatives(args) -> int:
+    from simulator.bench_negatives import run_negatives_command
+
+    return run_negatives_command(args)
 
 
 def _run_partial(args) -> int:
@@ -572,9 +384,8 @@ def _run_partial(args) -> int:
 
     if args.frames < 1 or min(args.scales) <= 0:
         return report_bad_input(BadInput("--frames must be at least 1 and every --scales positive"), args.json)
-    config = PartialConfig(
-        distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames, seed=args.seed
-    )
+    config = PartialConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
+                           seed=args.seed)
     report = run_partial(config, args.workers)
     if args.figures is not None:
         args.figures.mkdir(parents=True, exist_ok=True)
@@ -602,14 +413,10 @@ def _print_report(report: dict, as_json: bool) -> None:
     print(format_table(report["summary"], report["title"]))
     paper = report.get("paper")
     if paper:
-        print(
-            f"  paper        mean {paper['mean_mm']} mm, max {paper['max_mm']} mm, coverage {paper['coverage_pct']} %"
-        )
+        print(f"  paper        mean {paper['mean_mm']} mm, max {paper['max_mm']} mm, coverage {paper['coverage_pct']} %")
     for failure in report.get("failures", [])[:20]:
-        print(
-            f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
-            f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}"
-        )
+        print(f"  failed {failure['label'] or failure['index']}: {failure['reason'] or 'outlier'} "
+              f"{failure['error_2d_mm'] if failure['error_2d_mm'] is not None else ''} {failure['message'] or ''}")
     print(f"  wall time    {report['wall_s']:.0f} s on {plural(report['workers'], 'worker')} (render + locate)")
     print_figures(report.get("figures", []), as_json)
 
@@ -619,9 +426,8 @@ def _run_grid_bench(args) -> int:
 
     if args.bench_name == "grid":
         try:
-            report = bench_grid(
-                args.figures, args.scale, args.seed, args.workers, args.limit, args.scene, args.yaw_jitter
-            )
+            report = bench_grid(args.figures, args.scale, args.seed, args.workers, args.limit, args.scene,
+                                args.yaw_jitter)
         except ValueError as error:
             return report_bad_input(BadInput(str(error)), args.json)
     else:
@@ -636,15 +442,8 @@ def _run_grid_bench(args) -> int:
             except (OSError, ValidationError) as error:
                 problem = BadInput(f"--profile {describe_file_error(args.profile, error)}", field="profile")
                 return report_bad_input(problem, args.json)
-        report = bench_real(
-            args.figures,
-            RealBench(calibrated=not args.uncalibrated),
-            args.scale,
-            args.seed,
-            args.workers,
-            args.limit,
-            profile,
-        )
+        report = bench_real(args.figures, RealBench(calibrated=not args.uncalibrated), args.scale, args.seed,
+                            args.workers, args.limit, profile)
     _write_report(report, args.figures)
     _print_report(report, args.json)
     return 0
@@ -657,9 +456,8 @@ def _run_calibration_bench(args) -> int:
     if args.views < 3 or args.scale <= 0 or not 0 <= corner_views <= args.views:
         problem = BadInput("--views must be at least 3, --scale positive and --corner-views within 0..views")
         return report_bad_input(problem, args.json)
-    result = bench_calibration(
-        args.views, args.scale, args.seed, args.lens, not args.no_poor_sets, corner_views=corner_views
-    )
+    result = bench_calibration(args.views, args.scale, args.seed, args.lens, not args.no_poor_sets,
+                               corner_views=corner_views)
     profile = result["report"]["profile"]
     if args.out is not None:
         if profile is None:
@@ -708,14 +506,10 @@ def _run_render_speed(args) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print(
-        f"render {report['scene']} sample {report['sample']}, {report['frame']}, "
-        f"{plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}"
-    )
-    print(
-        f"median {report['median_ms']:.0f} ms wall (max {report['max_ms']:.0f} ms), {report['cpu_median_ms']:.0f} ms CPU; "
-        f"load average {report['load_average_1min']:.1f}"
-    )
+    print(f"render {report['scene']} sample {report['sample']}, {report['frame']}, "
+          f"{plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}")
+    print(f"median {report['median_ms']:.0f} ms wall (max {report['max_ms']:.0f} ms), {report['cpu_median_ms']:.0f} ms CPU; "
+          f"load average {report['load_average_1min']:.1f}")
     print(f"for scale: one full-frame Gaussian draw takes {report['gaussian_noise_median_ms']:.0f} ms")
     return 0
 
@@ -729,15 +523,11 @@ def _run_speed(args) -> int:
             print(json.dumps(many, indent=2))
             return 0
         rounds = ", ".join(f"{r:.2f}" for r in many["round_median_ratios"])
-        print(
-            f"{plural(many['frames'], 'frame')} at {many['distances_m']} m, {plural(many['rounds'], 'round')}, "
-            f"{plural(many['cpu_count'], 'core')}"
-        )
-        print(
-            f"pipeline / cv2.threshold: median {many['median_ratio_to_threshold']:.2f} "
-            f"(p90 {many['p90_ratio']:.2f}; per round {rounds}); pipeline median {many['median_ms']:.2f} ms, "
-            f"{plural(many['refusals'], 'refusal')}"
-        )
+        print(f"{plural(many['frames'], 'frame')} at {many['distances_m']} m, {plural(many['rounds'], 'round')}, "
+              f"{plural(many['cpu_count'], 'core')}")
+        print(f"pipeline / cv2.threshold: median {many['median_ratio_to_threshold']:.2f} "
+              f"(p90 {many['p90_ratio']:.2f}; per round {rounds}); pipeline median {many['median_ms']:.2f} ms, "
+              f"{plural(many['refusals'], 'refusal')}")
         return 0
     report = run_speed(args.repeats, args.distance, gravity=not args.no_gravity)
     if args.json:
@@ -756,18 +546,11 @@ def _run_robustness(args) -> int:
 
     unknown = sorted(set(args.effects) - set(GROUPS))
     if unknown or args.frames < 1 or min(args.scales) <= 0:
-        problem = BadInput(
-            f"--frames must be at least 1, every --scales positive and --effects among "
-            f"{', '.join(GROUPS)}{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}"
-        )
+        problem = BadInput(f"--frames must be at least 1, every --scales positive and --effects among "
+                           f"{', '.join(GROUPS)}{' (unknown: ' + ', '.join(unknown) + ')' if unknown else ''}")
         return report_bad_input(problem, args.json)
-    config = RobustnessConfig(
-        distances_m=tuple(args.distances),
-        scales=tuple(args.scales),
-        frames=args.frames,
-        effects=tuple(args.effects),
-        seed=args.seed,
-    )
+    config = RobustnessConfig(distances_m=tuple(args.distances), scales=tuple(args.scales), frames=args.frames,
+                              effects=tuple(args.effects), seed=args.seed)
     report = run_robustness(config, args.workers)
     print(json.dumps(report, indent=2) if args.json else format_robustness(report))
     return 0

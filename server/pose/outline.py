@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import SimpleNamespace
 
@@ -87,6 +87,9 @@ class OutlineFit:
     point_sigma_px: float  # the points' noise, correlation included
     points: int
     orientation_rule: OrientationRule | None  # None: a circle, whose yaw came from the heading
+    # per point, for the shape test (`server.pose.shape`): its signed distance (px) to the fitted outline
+    residuals_px: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    parameters: int = 9  # the fit's free parameters (pose, growth and its gradient)
 
     @property
     def sigma_2d_m(self) -> float:
@@ -642,6 +645,7 @@ def _finish(
         point_sigma_px=measured,
         points=len(distances),
         orientation_rule=rule,
+        residuals_px=distances,
     )
     if fit.sigma_2d_m > rules.max_sigma_m:
         return Refusal(

@@ -7,6 +7,11 @@ moved along its outward normal to the sub-pixel crossing of the mid level (the p
 `subpixel`), and left out where they do not belong to the panel:
 - within `border_px` of the frame border: there the contour runs along the cut, not the panel;
 - within `neighbour_px` of another bright blob: its light overlaps the profile.
+
+The points' own noise is measured here too, without any model of the panel: the scatter of each
+point about the chord of its two neighbours along short runs of the outline (`edge_noise_px`),
+what the outline fit's residuals must come down to if the model is the right shape
+(`server.pose.shape`).
 """
 
 from __future__ import annotations
@@ -35,10 +40,45 @@ class OutlinePoints:
     """Points (N, 2) on the blob's mid-level outline, frame pixels (distorted), in contour order;
     `level_gap_px`, the
     median distance from the mid-level to the quarter-level crossing (the edge's blur, NaN
-    when unmeasured; `server.vision.subpixel.blur_sigma_px`)."""
+    when unmeasured; `server.vision.subpixel.blur_sigma_px`); `edge_noise_px`, one point's
+    noise across the edge (`run_scatter_px`, NaN with too few points)."""
 
     points_px: np.ndarray
     level_gap_px: float = float("nan")
+    edge_noise_px: float = float("nan")
+
+
+MIN_RUN_POINTS = 12  # fewer triples of neighbours than this measure no scatter
+
+
+def run_scatter_px(points_px: np.ndarray, trend_points: int = 15) -> float:
+    """The noise (px, 1 sigma) of points (N, 2) along a smooth edge, in contour order.
+
+    Each point's signed distance from the chord of its two neighbours is its own error less the
+    mean of theirs, plus the curve's sagitta (h^2 / 2R for spacing h, radius R): the sagitta
+    changes slowly along the outline and a running median of `trend_points` removes it; what is
+    left has variance 1.5 sigma^2 for independent errors (1 + 1/4 + 1/4). Triples across a gap
+    (the frame border, a neighbour's light) are left out. Robust: 1.4826 MAD. NaN with fewer
+    than `MIN_RUN_POINTS` triples.
+    """
+    if len(points_px) < MIN_RUN_POINTS + 2:
+        return float("nan")
+    before, here, after = points_px[:-2], points_px[1:-1], points_px[2:]
+    chord = after - before
+    length = np.linalg.norm(chord, axis=1)
+    spacing = np.linalg.norm(np.diff(points_px, axis=0), axis=1)
+    typical = float(np.median(spacing))
+    joined = (spacing[:-1] < 2.5 * typical) & (spacing[1:] < 2.5 * typical) & (length > 1e-9)
+    if joined.sum() < MIN_RUN_POINTS:
+        return float("nan")
+    offset = here - before
+    sagitta = (chord[:, 0] * offset[:, 1] - chord[:, 1] * offset[:, 0]) / np.maximum(length, 1e-9)
+    sagitta = sagitta[joined]
+    half = trend_points // 2
+    padded = np.pad(sagitta, half, mode="edge")
+    trend = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
+    left = sagitta - trend
+    return float(1.4826 * np.median(np.abs(left - np.median(left))) / np.sqrt(1.5))
 
 
 def _outward_normals(contour: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -97,7 +137,8 @@ def outline_points(
         shift = level_crossings(profiles, offsets, level)
     gap = level_crossings(profiles, offsets, (level + background) / 2) - shift
     found = np.isfinite(shift)
-    return OutlinePoints(contour[found] + shift[found, None] * normal[found] + [x0, y0], _median(gap))
+    points = contour[found] + shift[found, None] * normal[found] + [x0, y0]
+    return OutlinePoints(points, _median(gap), run_scatter_px(points))
 
 
 def _median(values: np.ndarray) -> float:
