@@ -37,6 +37,7 @@ from server.geometry import (
 )
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
+from server.pose.consistency import ConsistencyRules, check_fit
 from server.pose.ordering import order_corners
 from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
 from server.pose.solve import GravityMode, PoseRules, side_errors, solve_pose
@@ -76,6 +77,7 @@ class PipelineOptions:
     polygon: PolygonRules = PolygonRules()
     edges: EdgeRules = EdgeRules()
     pose: PoseRules = PoseRules()
+    consistency: ConsistencyRules = ConsistencyRules()
     outline_points: OutlineRules = OutlineRules()
     outline_fit: OutlineFitRules = OutlineFitRules()
     # the contour growth this device's whole panels showed (`Fix.growth_px`): given, the outline
@@ -255,7 +257,9 @@ def _locate_beacon(
     unknown = [edges.curvature_px if device_curve else 0.0, edges.uneven_px] if edges is not None else []
     growth_sigma = None
     if any(unknown):
-        predicted = side_errors(ordered.corners, beacon, corner_sigma, rules=options.pose).growth_sigma
+        predicted = side_errors(
+            ordered.corners, beacon, corner_sigma, rules=options.pose, locking_sigma_px=edges.locking_px
+        ).growth_sigma
         growth_sigma = math.hypot(predicted, *unknown)
     # Motion skews and smears the square (rolling shutter, blur), which the corners read as tilt;
     # the gravity sensor does not see it: in auto mode it then sets the tilt.
@@ -276,6 +280,7 @@ def _locate_beacon(
         corner_sigma_px=corner_sigma,
         rules=options.pose,
         growth_sigma_px=growth_sigma,
+        locking_sigma_px=edges.locking_px if edges is not None else None,
     )
 
     with timer.stage("pose"):
@@ -300,6 +305,13 @@ def _locate_beacon(
             Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers"),
             warnings,
         )
+    if edges is not None and pose.residuals is not None:
+        # the fix must answer to its own evidence: the corners against the map beacon's shape, within
+        # the noise the sides measured (the paper's paths measure none: their corners are the mask's)
+        with timer.stage("consistency"):
+            judged = check_fit(pose.residuals, beacon, options.consistency)
+        if isinstance(judged, Refusal):
+            return timer.refusal(judged, warnings)
     fix = Fix(
         position_m=pose.position_m,
         rotation_wc=pose.rotation_wc,
