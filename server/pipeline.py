@@ -258,12 +258,7 @@ def _locate_beacon(
     growth_sigma = None
     if any(unknown):
         predicted = side_errors(
-            ordered.corners,
-            beacon,
-            corner_sigma,
-            rules=options.pose,
-            locking_sigma_px=edges.locking_px,
-            growth_spread_px=edges.growth_spread_px,
+            ordered.corners, beacon, corner_sigma, rules=options.pose, locking_sigma_px=edges.locking_px
         ).growth_sigma
         growth_sigma = math.hypot(predicted, *unknown)
     # Motion skews and smears the square (rolling shutter, blur), which the corners read as tilt;
@@ -286,7 +281,6 @@ def _locate_beacon(
         rules=options.pose,
         growth_sigma_px=growth_sigma,
         locking_sigma_px=edges.locking_px if edges is not None else None,
-        growth_spread_px=edges.growth_spread_px if edges is not None else 0.0,
     )
 
     with timer.stage("pose"):

@@ -100,8 +100,6 @@ class EdgeFit:
     # rms of a crossing's pixel-locking error at this frame's blur and growth (`locking_sigma_px`;
     # px), None when the corners measured neither
     locking_px: float | None = None
-    # how much the growth differs from corner to corner beyond their scatter (`growth_spread_px`; px)
-    growth_spread_px: float = 0.0
 
 
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -437,21 +435,6 @@ def side_growths(growth_px: float, level_gap_px: float, side_gaps_px: np.ndarray
     return growth_px * own / common
 
 
-def _corner_radii(corners_px: np.ndarray, arc_points_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(radius (4, m) in the unit square of the sides on whose circle each arc point lies, NaN where
-    unusable; usable (4, m)), for `contour_growth`."""
-    homography = cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
-    shape = arc_points_px.shape
-    plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
-    relative = plane - UNIT_SQUARE[:, None, :]
-    x = np.sum(relative * (UNIT_SQUARE[NEXT] - UNIT_SQUARE)[:, None, :], axis=2)
-    y = np.sum(relative * (UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE)[:, None, :], axis=2)
-    usable = (x > 0) & (y > 0)  # NaN compares False
-    with np.errstate(invalid="ignore"):
-        radii = np.where(usable, x + y + np.sqrt(np.abs(2 * x * y)), np.nan)
-    return radii, usable
-
-
 def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float) -> float | None:
     """How far (px, >= 0 outward) the measured contour lies outside the panel's outline.
 
@@ -462,29 +445,19 @@ def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fra
     the circle of radius R tangent to both axes (centre (R, R)) when R = x + y + sqrt(2 x y)
     (the root on the corner side of the centre). None when fewer than 8 points are usable.
     """
-    radii, usable = _corner_radii(corners_px, arc_points_px)
+    homography = cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
+    shape = arc_points_px.shape
+    plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
+    relative = plane - UNIT_SQUARE[:, None, :]
+    x = np.sum(relative * (UNIT_SQUARE[NEXT] - UNIT_SQUARE)[:, None, :], axis=2)
+    y = np.sum(relative * (UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE)[:, None, :], axis=2)
+    usable = (x > 0) & (y > 0)  # NaN compares False
     if usable.sum() < 8:
         return None
-    growth_units = (float(np.median(radii[usable])) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
+    radii = x[usable] + y[usable] + np.sqrt(2 * x[usable] * y[usable])
+    growth_units = (float(np.median(radii)) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
     side_px = float(np.mean(np.linalg.norm(corners_px[NEXT] - corners_px, axis=1)))
     return growth_units * side_px
-
-
-def growth_spread_px(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float) -> float:
-    """How much (px, rms) the growth differs from corner to corner beyond what the corners' own
-    scatter explains: a brightness gradient over the panel (vignetting, an uneven panel) grows
-    its sides by different amounts, which the one common growth leaves in the sides' offsets and
-    turns. 0 when fewer than 4 points on every corner. Each corner's growth is its points' median
-    (error 1.2533 sd / sqrt(n)); the spread is that of the four less the mean of those errors^2.
-    """
-    radii, usable = _corner_radii(corners_px, arc_points_px)
-    counts = usable.sum(axis=1)
-    if counts.min() < 4:
-        return 0.0
-    scale = float(np.mean(np.linalg.norm(corners_px[NEXT] - corners_px, axis=1))) / (1.0 - 2.0 * radius_fraction)
-    medians = np.nanmedian(radii, axis=1) * scale
-    errors2 = (1.2533 * np.nanstd(radii, axis=1) * scale) ** 2 / counts
-    return float(np.sqrt(max(float(np.var(medians, ddof=1)) - float(np.mean(errors2)), 0.0)))
 
 
 def refine_edges(
@@ -557,7 +530,7 @@ def refine_edges(
         side_points, side_valid.astype(float), normals, np.where(side_valid[..., None], sensor_points, 0.0)
     )
 
-    shift, curvature_px, uneven_px, locking, spread = 0.0, 0.0, 0.0, None, 0.0
+    shift, curvature_px, uneven_px, locking = 0.0, 0.0, 0.0, None
     side_shifts = np.zeros(4)
     if use_arcs:
         first = 4 * n_along
@@ -575,7 +548,6 @@ def refine_edges(
             warnings.append("too few corner points: sides taken at the mid level")
         else:
             shift = -growth
-            spread = growth_spread_px(square, arc_points, radius_fraction)
             if blur_px is not None:
                 locking = locking_sigma_px(blur_px, growth)
             side_shifts[:] = shift
@@ -602,5 +574,4 @@ def refine_edges(
         curvature_px=curvature_px,
         uneven_px=uneven_px,
         locking_px=locking,
-        growth_spread_px=spread,
     )
