@@ -1,8 +1,9 @@
 """The one-panel pipeline: chains the stages and times each one. No vision happens here.
 
 coarse ROI -> blur -> threshold -> beacon contour -> hull / RDP / sides -> sub-pixel sides
--> centre from the diagonals -> corner order -> pose, for one known map beacon: the paper's
-corner path, for a square panel wholly in view. A panel cut by the frame border, any panel
+-> centre from the diagonals -> corner order -> pose -> consistency (the fitted panel must explain
+the corners within the noise the frame measured, else `shape_mismatch`), for one known map beacon:
+the paper's corner path, for a square panel wholly in view. A panel cut by the frame border, any panel
 that is not square (a rectangle, a circle), and a square whose outline gives no four sides or
 whose corners fix the position only to worse than the map's `required_sigma_m`, takes the
 outline path instead: beacon contour -> sub-pixel outline points -> outline fit

@@ -3,10 +3,11 @@
 A pose always fits: given any four corners and a map beacon, the solver returns the view of the
 beacon nearest to them. Whether that view explains what the frame shows is a separate question,
 asked here of every fix of the corner path: the residuals the fit left (the four corners against
-the map beacon's projected corners, and the tilt against the gravity sensor when the fit weighed
-it) are compared with the noise that frame's own sides measured (`solve.corner_covariance`: the
-sides' scatter and slow wave, their pixel-locking, the clipped-edge growth's error) and the
-sensor's sigma, as a chi-square.
+the map beacon's projected corners, and the tilt against the gravity sensor when the frame has
+one) are compared with the noise that frame's own sides measured (`solve.corner_covariance`: the
+sides' scatter and slow wave, their pixel-locking at the frame's blur, the clipped-edge growth's
+error and its spread over the corners) and the sensor's sigma, as a chi-square. The paper's own
+paths (`--no-subpixel`) measure no noise of their own and are not tested.
 
 The chi-square is the generalised least-squares one, r^T (S^-1 - S^-1 J (J^T S^-1 J)^-1 J^T S^-1) r
 (r residuals, S their covariance, J their Jacobian in the fit's free parameters): the smallest
