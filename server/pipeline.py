@@ -282,6 +282,7 @@ def _locate_beacon(
         rules=options.pose,
         growth_sigma_px=growth_sigma,
         locking_sigma_px=edges.locking_px if edges is not None else None,
+        uneven_px=edges.uneven_px if edges is not None else 0.0,
     )
 
     with timer.stage("pose"):

@@ -316,6 +316,9 @@ class SideErrors:
     # per side (px, end to end of the side): the slope of the pixel-locking error over the part of its
     # period the side's line crosses, which its own turn takes up where no series was fitted (0 then)
     locking_turn_sigma: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
+    # motion's uneven term (px, `EdgeFit.uneven_px`): each side moved in by its own growth, read off
+    # its own blur by a Gaussian edge's rule, which a motion-blurred edge follows only roughly
+    uneven: float = 0.0
 
 
 def side_errors(
@@ -326,6 +329,7 @@ def side_errors(
     rules: PoseRules = PoseRules(),
     geometry: tuple[list[tuple[float, float]], list[float], list[float]] | None = None,
     locking_sigma_px: float | None = None,
+    uneven_px: float = 0.0,
 ) -> SideErrors:
     """The sides' error model of one frame from the sides' measured error and the panel's geometry.
 
@@ -361,23 +365,23 @@ def side_errors(
     radius_px = rho * sum(lengths) / 4.0
     if radius_px < edges.min_corner_radius_px:  # no growth measured: the sides stay at the mid level
         growth = rules.unmeasured_growth_sigma_px if growth_sigma_px is None else growth_sigma_px
-        return SideErrors(side_sigma, locking, growth, 0.0, fit_fraction, locking_turn)
+        return SideErrors(side_sigma, locking, growth, 0.0, fit_fraction, locking_turn, uneven_px)
     if growth_sigma_px is None:
         per_side = min(max(min(lengths) / 2.0, 12.0), edges.max_profiles_per_side)
         per_arc = min(max(math.radians(edges.arc_span_deg) * radius_px, 6.0), edges.max_profiles_per_corner)
         crossing = math.hypot(side_sigma * math.sqrt(per_side), locking_rms)
         growth_sigma_px = 1.2533 * (1.0 + math.sqrt(2.0)) / (1.0 - 2.0 * rho) * crossing / math.sqrt(4.0 * per_arc)
     coupling = 2.0 * (1.0 + math.sqrt(0.5)) / (1.0 - 2.0 * rho)
-    return SideErrors(side_sigma, locking, float(growth_sigma_px), coupling, fit_fraction, locking_turn)
+    return SideErrors(side_sigma, locking, float(growth_sigma_px), coupling, fit_fraction, locking_turn, uneven_px)
 
 
 def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> np.ndarray:
     """(8, 9): the corners' moves (rows x0 y0 x1 y1 ...) per unit of each independent error,
     scaled by its sigma: 4 side offsets, 4 side turns, the growth's error (last column). The
     corners' covariance is design design^T (see `corner_covariance`)."""
-    own = math.hypot(errors.side_sigma, errors.locking_sigma)
+    own = math.hypot(errors.side_sigma, errors.locking_sigma, errors.uneven)
     noise_turn = errors.side_sigma * math.sqrt(12.0) / errors.fit_fraction
-    turns = [math.hypot(noise_turn, locking) for locking in errors.locking_turn_sigma]
+    turns = [math.hypot(noise_turn, locking, errors.uneven) for locking in errors.locking_turn_sigma]
     share = errors.growth_coupling / 4.0 * own
     rows = [[0.0] * 9 for _ in range(8)]
     for k in range(4):
@@ -484,7 +488,7 @@ def _position_covariance(
     beacon: Beacon,
     image_points: np.ndarray,
     fit: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    sigmas: tuple[float, float, float | None, float | None],
+    sigmas: tuple[float, float, float | None, float | None, float],
     gravity: tuple[np.ndarray, float, GravityMode] | None,
     rules: PoseRules,
 ) -> tuple[np.ndarray | None, float, FitResiduals]:
@@ -493,7 +497,8 @@ def _position_covariance(
 
     fit: (rvec, tvec, projected (5, 1, 2), Jacobian (10, >= 6)) of the final pose; sigmas: the
     sides' measured error, the corner sigma the fits weighed with, the growth's error and the
-    crossings' pixel-locking error (px, None: predicted, the rule's); gravity: (measured vector,
+    crossings' pixel-locking error (px, None: predicted, the rule's), motion's uneven term (px);
+    gravity: (measured vector,
     sensor sigma in degrees, mode) when the fit used it.
 
     With the corners' noise as D D^T (D = `_corner_design`, scaled columns) and the fit's
@@ -503,10 +508,10 @@ def _position_covariance(
     Few, small numpy calls: this runs on every fix (~0.1 ms).
     """
     rvec, tvec, projected, jacobian = fit
-    side_sigma, weight_sigma, growth_sigma, locking_sigma = sigmas
+    side_sigma, weight_sigma, growth_sigma, locking_sigma, uneven = sigmas
     corners = image_points[:4]
     geometry = _side_geometry(corners)
-    errors = side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry, locking_sigma)
+    errors = side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry, locking_sigma, uneven)
     design = _corner_design(geometry[0], errors)
     pixel_jacobian = jacobian[:, :6]
     residuals = projected.reshape(-1)[:8] - image_points[:4].reshape(-1)
@@ -571,6 +576,7 @@ def solve_pose(
     rules: PoseRules = PoseRules(),
     growth_sigma_px: float | None = None,
     locking_sigma_px: float | None = None,
+    uneven_px: float = 0.0,
 ) -> PoseSolution | Refusal:
     """Camera pose in the map from corners (4, 2) in model order and the centre (2,).
 
@@ -578,8 +584,10 @@ def solve_pose(
     growth_sigma_px: the error of the clipped-edge growth that moved all four sides, when the
     sides' stage measured it (else `side_errors` predicts it from the panel's geometry);
     locking_sigma_px: a crossing's pixel-locking error at the frame's blur (`EdgeFit.locking_px`,
-    else `PoseRules.pixel_locking_sigma_px`). All set the position's covariance and the noise the
-    consistency test weighs the residuals with; the first also the fits' weights.
+    else `PoseRules.pixel_locking_sigma_px`); uneven_px: how far the sides' own growths lie from the
+    common one (`EdgeFit.uneven_px`, motion), an error of each side's own. All set the position's
+    covariance and the noise the consistency test weighs the residuals with; the first also the
+    fits' weights.
     """
     corners4 = beacon_corners_m(beacon)
     object_points = np.vstack([corners4, np.zeros(3)])
@@ -622,7 +630,7 @@ def solve_pose(
             beacon,
             image_points,
             (rvec, tvec, projected, jacobian),
-            (corner_sigma_px, corner_sigma, growth_sigma_px, locking_sigma_px),
+            (corner_sigma_px, corner_sigma, growth_sigma_px, locking_sigma_px, uneven_px),
             (np.asarray(gravity_camera, dtype=float), gravity_sigma_deg, gravity_mode) if use_gravity else None,
             rules,
         )

@@ -32,6 +32,7 @@ from the image itself, in the way of AprilTag's edge refinement:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -356,10 +357,14 @@ def locking_sigma_px(blur_px: float, growth_px: float, phases: int = 32) -> floa
     corners measure with the rest; its spread is returned (0.06 px at s = 1 px, a = 4; 0.1 px at
     s = 0.8 px, a = 6: sharper edges and brighter panels lock harder).
     """
-    s = max(blur_px, 0.1)
-    gain = 1.0 / (2.0 * max(float(ndtr(-max(growth_px, 0.0) / s)), 1e-6))
+    if not (math.isfinite(blur_px) and math.isfinite(growth_px)):
+        return 0.0
+    s = min(max(blur_px, 0.1), 8.0)  # `blur_sigma_px`'s table
+    growth = min(max(growth_px, 0.0), 4.0 * s)  # beyond, the mid level lies in a tail of no light
+    gain = 1.0 / (2.0 * max(float(ndtr(-growth / s)), 1e-6))
     phase = (np.arange(phases) + 0.5) / phases
-    centres = np.arange(-int(np.ceil(6 * s + growth_px)) - 2, int(np.ceil(6 * s + growth_px)) + 3)
+    reach = int(np.ceil(6 * s + growth)) + 2
+    centres = np.arange(-reach, reach + 1)
     values = np.minimum(gain * ndtr((phase[:, None] - centres[None, :]) / s), 1.0)  # edge at x = phase
     below = np.argmax(values < 0.5, axis=1) - 1  # the last pixel centre at or above the mid level
     rows = np.arange(phases)

