@@ -257,7 +257,7 @@ def _locate_beacon(
     device_curve = edges is not None and frame.meta.tone_curve is ToneCurve.device
     unknown = [edges.curvature_px if device_curve else 0.0, edges.uneven_px] if edges is not None else []
     growth_sigma = None
-    if any(unknown):
+    if edges is not None and any(unknown):
         predicted = side_errors(
             ordered.corners, beacon, corner_sigma, rules=options.pose, locking_sigma_px=edges.locking_px
         ).growth_sigma
