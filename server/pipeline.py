@@ -1,8 +1,9 @@
 """The one-panel pipeline: chains the stages and times each one. No vision happens here.
 
 coarse ROI -> blur -> threshold -> beacon contour -> hull / RDP / sides -> sub-pixel sides
--> centre from the diagonals -> corner order -> pose, for one known map beacon: the paper's
-corner path, for a square panel wholly in view. A panel cut by the frame border, any panel
+-> centre from the diagonals -> corner order -> pose -> consistency (the fitted panel must explain
+the corners within the noise the frame measured, else `shape_mismatch`), for one known map beacon:
+the paper's corner path, for a square panel wholly in view. A panel cut by the frame border, any panel
 that is not square (a rectangle, a circle), and a square whose outline gives no four sides or
 whose corners fix the position only to worse than the map's `required_sigma_m`, takes the
 outline path instead: beacon contour -> sub-pixel outline points -> outline fit
@@ -39,6 +40,7 @@ from server.geometry import (
 )
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
+from server.pose.consistency import ConsistencyRules, check_fit
 from server.pose.ordering import order_corners
 from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
 from server.pose.shape import ShapeRules, shape_refusal, shape_test
@@ -79,6 +81,7 @@ class PipelineOptions:
     polygon: PolygonRules = PolygonRules()
     edges: EdgeRules = EdgeRules()
     pose: PoseRules = PoseRules()
+    consistency: ConsistencyRules = ConsistencyRules()
     outline_points: OutlineRules = OutlineRules()
     outline_fit: OutlineFitRules = OutlineFitRules()
     shape: ShapeRules = ShapeRules()
@@ -258,8 +261,10 @@ def _locate_beacon(
     device_curve = edges is not None and frame.meta.tone_curve is ToneCurve.device
     unknown = [edges.curvature_px if device_curve else 0.0, edges.uneven_px] if edges is not None else []
     growth_sigma = None
-    if any(unknown):
-        predicted = side_errors(ordered.corners, beacon, corner_sigma, rules=options.pose).growth_sigma
+    if edges is not None and any(unknown):
+        predicted = side_errors(
+            ordered.corners, beacon, corner_sigma, rules=options.pose, locking_sigma_px=edges.locking_px
+        ).growth_sigma
         growth_sigma = math.hypot(predicted, *unknown)
     # Motion skews and smears the square (rolling shutter, blur), which the corners read as tilt;
     # the gravity sensor does not see it: in auto mode it then sets the tilt.
@@ -280,6 +285,8 @@ def _locate_beacon(
         corner_sigma_px=corner_sigma,
         rules=options.pose,
         growth_sigma_px=growth_sigma,
+        locking_sigma_px=edges.locking_px if edges is not None else None,
+        uneven_px=edges.uneven_px if edges is not None else 0.0,
     )
 
     with timer.stage("pose"):
@@ -304,6 +311,13 @@ def _locate_beacon(
             Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers"),
             warnings,
         )
+    if edges is not None and pose.residuals is not None:
+        # the fix must answer to its own evidence: the corners against the map beacon's shape, within
+        # the noise the sides measured (the paper's paths measure none: their corners are the mask's)
+        with timer.stage("consistency"):
+            judged = check_fit(pose.residuals, beacon, options.consistency)
+        if isinstance(judged, Refusal):
+            return timer.refusal(judged, warnings)
     fix = Fix(
         position_m=pose.position_m,
         rotation_wc=pose.rotation_wc,

@@ -136,3 +136,25 @@ def walk_frames(captures):
 def answer_without_timings(result) -> dict:
     """A result as JSON without its timings: what two ways of locating one frame must agree on."""
     return result.model_dump(mode="json", exclude={"timing_ms"})
+
+
+# A 0.6 m panel of 10 mm corner radius (issue 27), a map that gets its corner radius wrong, and a room of
+# two panels of different shapes: frames of the first are `render_panel_frame`'s
+PANEL = BeaconMap(name="panel", beacons=[Beacon(id=1, center_m=[0, 0, 1], side_m=0.6, corner_radius_m=0.01)])
+PANEL_WRONG_RADIUS = BeaconMap(name="panel-r05", beacons=[PANEL.beacons[0].model_copy(update={"corner_radius_m": 0.05})])
+TWO_SHAPES = BeaconMap(
+    name="two-shapes",
+    beacons=[PANEL.beacons[0], Beacon(id=2, center_m=[2.0, 0, 1], side_m=0.3, corner_radius_m=0.03)],
+)
+
+
+def render_panel_frame(folder) -> str:
+    """`lumipose render` of PANEL from (0.1, 0.2, 0), ypr (5, 2, -1), at quarter scale: the frame's JSON path."""
+    from lumipose_cli.main import main
+
+    panel = folder / "panel.json"
+    panel.write_text(PANEL.model_dump_json())
+    stem = str(folder / "mine")
+    args = ["--map", str(panel), "--position", "0.1", "0.2", "0", "--ypr", "5", "2", "-1", "--scale", "0.25"]
+    assert main(["render", stem, *args]) == 0
+    return f"{stem}.json"

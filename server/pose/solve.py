@@ -46,7 +46,8 @@ import numpy as np
 
 from server.geometry import angle_deg, beacon_corners_m, beacon_rotation, beacon_to_world, orthonormal_pair, rotation_z
 from server.outcomes import Refusal
-from server.vision.subpixel import MIN_PHASE_SPAN_PX, EdgeRules
+from server.pose.consistency import FitResiduals, chi_square
+from server.vision.subpixel import MIN_LOCKING_PERIOD_PX, EdgeRules
 from shared_schemas import Beacon, FailureReason
 
 
@@ -86,6 +87,9 @@ class PoseSolution:
     gravity_used: bool
     covariance_m2: np.ndarray | None = None  # (3, 3) of position_m, map frame
     consistency_factor: float = 1.0  # corner noise scale from the fit's chi-square (>= 1)
+    # the corners' (and the tilt's) residuals with their measured noise, for `consistency.check_fit`;
+    # None when the noise model could not be built (a degenerate quad)
+    residuals: FitResiduals | None = None
 
 
 def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -309,6 +313,12 @@ class SideErrors:
     growth_sigma: float
     growth_coupling: float
     fit_fraction: float  # share of each side (its middle) the line was fitted to
+    # per side (px, end to end of the side): the slope of the pixel-locking error over the part of its
+    # period the side's line crosses, which its own turn takes up where no series was fitted (0 then)
+    locking_turn_sigma: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
+    # motion's uneven term (px, `EdgeFit.uneven_px`): each side moved in by its own growth, read off
+    # its own blur by a Gaussian edge's rule, which a motion-blurred edge follows only roughly
+    uneven: float = 0.0
 
 
 def side_errors(
@@ -318,6 +328,8 @@ def side_errors(
     growth_sigma_px: float | None = None,
     rules: PoseRules = PoseRules(),
     geometry: tuple[list[tuple[float, float]], list[float], list[float]] | None = None,
+    locking_sigma_px: float | None = None,
+    uneven_px: float = 0.0,
 ) -> SideErrors:
     """The sides' error model of one frame from the sides' measured error and the panel's geometry.
 
@@ -337,29 +349,39 @@ def side_errors(
     edges = _EDGES
     rho = beacon.corner_radius_m / min(beacon.extent_m)
     fit_fraction = max(1.0 - 2.0 * rho - 2.0 * edges.corner_margin, 0.1)
-    # a side crosses the pixel grid when its line drifts over MIN_PHASE_SPAN_PX of its outward axis
-    crosses_grid = fit_fraction * max(across) >= MIN_PHASE_SPAN_PX
-    locking = 0.0 if crosses_grid else rules.pixel_locking_sigma_px
+    # the pixel-locking term is fitted (and so left out) when a side's line drifts over half its period
+    crosses_grid = fit_fraction * max(across) >= MIN_LOCKING_PERIOD_PX
+    # the frame's own (`subpixel.locking_sigma_px`, from the blur and growth it measured) where it is the
+    # larger: below the rule's, sides along the grid kept more than the model says (the grid bench's
+    # ellipses held 74 % of the errors instead of 97 %)
+    locking_rms = max(rules.pixel_locking_sigma_px, locking_sigma_px or 0.0)
+    locking = 0.0 if crosses_grid else locking_rms
+    # a side whose line drifts over part of the period takes the error's slope there as a turn of its
+    # own: 2 pi rms (the first harmonic's) per period, over the whole side's drift (at most a period)
+    locking_turn = tuple(
+        0.0 if crosses_grid else 2.0 * math.pi * locking_rms * min(drift, 1.0 / fit_fraction) for drift in across
+    )
     side_sigma = max(side_sigma_px, rules.side_sigma_floor_px)
     radius_px = rho * sum(lengths) / 4.0
     if radius_px < edges.min_corner_radius_px:  # no growth measured: the sides stay at the mid level
         growth = rules.unmeasured_growth_sigma_px if growth_sigma_px is None else growth_sigma_px
-        return SideErrors(side_sigma, locking, growth, 0.0, fit_fraction)
+        return SideErrors(side_sigma, locking, growth, 0.0, fit_fraction, locking_turn, uneven_px)
     if growth_sigma_px is None:
         per_side = min(max(min(lengths) / 2.0, 12.0), edges.max_profiles_per_side)
         per_arc = min(max(math.radians(edges.arc_span_deg) * radius_px, 6.0), edges.max_profiles_per_corner)
-        crossing = math.hypot(side_sigma * math.sqrt(per_side), rules.pixel_locking_sigma_px)
+        crossing = math.hypot(side_sigma * math.sqrt(per_side), locking_rms)
         growth_sigma_px = 1.2533 * (1.0 + math.sqrt(2.0)) / (1.0 - 2.0 * rho) * crossing / math.sqrt(4.0 * per_arc)
     coupling = 2.0 * (1.0 + math.sqrt(0.5)) / (1.0 - 2.0 * rho)
-    return SideErrors(side_sigma, locking, float(growth_sigma_px), coupling, fit_fraction)
+    return SideErrors(side_sigma, locking, float(growth_sigma_px), coupling, fit_fraction, locking_turn, uneven_px)
 
 
 def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> np.ndarray:
     """(8, 9): the corners' moves (rows x0 y0 x1 y1 ...) per unit of each independent error,
     scaled by its sigma: 4 side offsets, 4 side turns, the growth's error (last column). The
     corners' covariance is design design^T (see `corner_covariance`)."""
-    own = math.hypot(errors.side_sigma, errors.locking_sigma)
-    turn = errors.side_sigma * math.sqrt(12.0) / errors.fit_fraction
+    own = math.hypot(errors.side_sigma, errors.locking_sigma, errors.uneven)
+    noise_turn = errors.side_sigma * math.sqrt(12.0) / errors.fit_fraction
+    turns = [math.hypot(noise_turn, locking, errors.uneven) for locking in errors.locking_turn_sigma]
     share = errors.growth_coupling / 4.0 * own
     rows = [[0.0] * 9 for _ in range(8)]
     for k in range(4):
@@ -376,8 +398,8 @@ def _corner_design(normals: list[tuple[float, float]], errors: SideErrors) -> np
                 row[j] = -out * share
             row[before] += by_arriving[axis] * own
             row[k] += by_leaving[axis] * own
-            row[4 + before] = 0.5 * by_arriving[axis] * turn
-            row[4 + k] = -0.5 * by_leaving[axis] * turn
+            row[4 + before] = 0.5 * by_arriving[axis] * turns[before]
+            row[4 + k] = -0.5 * by_leaving[axis] * turns[k]
             row[8] = out * errors.growth_sigma
     return np.array(rows)
 
@@ -430,35 +452,54 @@ def consistency_factor(
     chi-square exceeds `significant_chi_square` (else 1).
 
     residuals_px (8,): projected minus measured corners at any pose near the fit; jacobian (8, 6)
-    there. The generalised least-squares chi-square e^T (S^-1 - S^-1 J (J^T S^-1 J)^-1 J^T S^-1) e
-    does not depend on the pose it is taken at (to first order): it measures only how far the
-    corners are from every view of the panel, 8 - 6 = 2 degrees of freedom.
+    there. The generalised least-squares chi-square (`consistency.chi_square`) does not depend on
+    the pose it is taken at (to first order): it measures only how far the corners are from every
+    view of the panel, 8 - 6 = 2 degrees of freedom.
     """
-    ok, solved = cv2.solve(covariance, np.column_stack([residuals_px, jacobian]), flags=cv2.DECOMP_CHOLESKY)
-    if not ok:
-        return 1.0
-    b = jacobian.T @ solved[:, 0]
-    ok, step = cv2.solve(jacobian.T @ solved[:, 1:], b, flags=cv2.DECOMP_CHOLESKY)
-    if not ok:
-        return 1.0
-    chi_square = float(residuals_px @ solved[:, 0] - b @ step.ravel())
-    return chi_square / 2.0 if chi_square > significant_chi_square else 1.0
+    value, dof = chi_square(residuals_px, covariance, jacobian)
+    return value / dof if dof > 0 and value > significant_chi_square else 1.0
+
+
+def _fit_residuals(
+    corner_residuals_px: np.ndarray,
+    corner_covariance: np.ndarray,
+    pixel_jacobian: np.ndarray,
+    tilt: tuple[np.ndarray, np.ndarray, float] | None,
+) -> FitResiduals:
+    """The fit's residuals and their noise (`consistency.FitResiduals`) in the six pose parameters.
+
+    corner_residuals_px (8,), corner_covariance (8, 8), pixel_jacobian (8, 6) in (rvec, tvec);
+    tilt: (the tilt's residual against the sensor (2,) rad, its Jacobian (2, 3) in rvec, the
+    sensor's sigma in rad), None without gravity. The sensor's tilt is a measurement with its own
+    error whether the fit weighed it ("auto") or took it as it is ("always"): the question is
+    whether any pose explains the corners and the sensor within their noise.
+    """
+    if tilt is None:
+        return FitResiduals(corner_residuals_px, corner_covariance, pixel_jacobian, 8)
+    residual, rows, sigma_rad = tilt
+    covariance = np.zeros((10, 10))
+    covariance[:8, :8] = corner_covariance
+    covariance[8, 8] = covariance[9, 9] = sigma_rad**2
+    jacobian = np.vstack([pixel_jacobian, np.hstack([rows, np.zeros((2, 3))])])
+    return FitResiduals(np.concatenate([corner_residuals_px, residual]), covariance, jacobian, 8)
 
 
 def _position_covariance(
     beacon: Beacon,
     image_points: np.ndarray,
     fit: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    sigmas: tuple[float, float, float | None],
+    sigmas: tuple[float, float, float | None, float | None, float],
     gravity: tuple[np.ndarray, float, GravityMode] | None,
     rules: PoseRules,
-) -> tuple[np.ndarray | None, float]:
+) -> tuple[np.ndarray | None, float, FitResiduals]:
     """(covariance (3, 3) of the camera's position in the map, m^2, None when a solve fails; the
-    sides' noise scale).
+    sides' noise scale; the corners' and the tilt's residuals under the unscaled noise model).
 
     fit: (rvec, tvec, projected (5, 1, 2), Jacobian (10, >= 6)) of the final pose; sigmas: the
-    sides' measured error, the corner sigma the fits weighed with, the growth's error (px, None:
-    predicted); gravity: (measured vector, sensor sigma in degrees, mode) when the fit used it.
+    sides' measured error, the corner sigma the fits weighed with, the growth's error and the
+    crossings' pixel-locking error (px, None: predicted, the rule's), motion's uneven term (px);
+    gravity: (measured vector,
+    sensor sigma in degrees, mode) when the fit used it.
 
     With the corners' noise as D D^T (D = `_corner_design`, scaled columns) and the fit's
     normal matrix H, the parameters move by X = H^-1 J^T L D (L: corners to the five points)
@@ -467,15 +508,17 @@ def _position_covariance(
     Few, small numpy calls: this runs on every fix (~0.1 ms).
     """
     rvec, tvec, projected, jacobian = fit
-    side_sigma, weight_sigma, growth_sigma = sigmas
+    side_sigma, weight_sigma, growth_sigma, locking_sigma, uneven = sigmas
     corners = image_points[:4]
     geometry = _side_geometry(corners)
-    design = _corner_design(geometry[0], side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry))
+    errors = side_errors(corners, beacon, side_sigma, growth_sigma, rules, geometry, locking_sigma, uneven)
+    design = _corner_design(geometry[0], errors)
     pixel_jacobian = jacobian[:, :6]
+    residuals = projected.reshape(-1)[:8] - image_points[:4].reshape(-1)
+    noise = design @ design.T
     factor = 1.0
     if rules.consistency_scaling:
-        residuals = projected.reshape(-1)[:8] - image_points[:4].reshape(-1)
-        factor = consistency_factor(residuals, pixel_jacobian[:8], design @ design.T, rules.consistency_chi_square)
+        factor = consistency_factor(residuals, pixel_jacobian[:8], noise, rules.consistency_chi_square)
         if factor != 1.0:
             design[:, :8] *= math.sqrt(factor)
     # L D, L = [I; d centre / d corners]: the centre is the corners' function, not a measurement
@@ -484,12 +527,15 @@ def _position_covariance(
     rotation, rotation_jacobian = cv2.Rodrigues(rvec)  # d R[r, c] / d rvec_i at [i, 3 r + c]
     by_rvec = rotation_jacobian.reshape(3, 3, 3)
     if gravity is None:
+        fitted = _fit_residuals(residuals, noise, pixel_jacobian[:8], None)
         ok, parameters = cv2.solve(normal, moves, flags=cv2.DECOMP_CHOLESKY)
     else:
         vector, sigma_deg, mode = gravity
         sigma_rad = math.radians(sigma_deg)
+        across = orthonormal_pair(vector / math.sqrt(float(vector @ vector)))
         # d (across . -R[:, 2]) / d rvec (2, 3); tvec does not move the predicted gravity
-        tilt = -(orthonormal_pair(vector / math.sqrt(float(vector @ vector))) @ by_rvec[:, :, 2].T)
+        tilt = -(across @ by_rvec[:, :, 2].T)
+        fitted = _fit_residuals(residuals, noise, pixel_jacobian[:8], (across @ -rotation[:, 2], tilt, sigma_rad))
         if mode is GravityMode.always:
             # the tilt taken as measured: min |J d - dz|^2 subject to T d = dg (KKT system)
             system = np.zeros((8, 8))
@@ -510,12 +556,12 @@ def _position_covariance(
             right[:3, 9:] = weight2 * sigma_rad * tilt.T
             ok, parameters = cv2.solve(normal, right, flags=cv2.DECOMP_CHOLESKY)
     if not ok:
-        return None, factor
+        return None, factor, fitted
     to_beacon = np.empty((3, 6))  # d (-R^T t) / d (rvec, tvec)
     to_beacon[:, :3] = -(tvec.ravel() @ by_rvec).T
     to_beacon[:, 3:] = -rotation.T
     position = beacon_rotation(beacon) @ (to_beacon @ parameters)
-    return position @ position.T, factor
+    return position @ position.T, factor, fitted
 
 
 def solve_pose(
@@ -529,13 +575,19 @@ def solve_pose(
     corner_sigma_px: float = 0.03,
     rules: PoseRules = PoseRules(),
     growth_sigma_px: float | None = None,
+    locking_sigma_px: float | None = None,
+    uneven_px: float = 0.0,
 ) -> PoseSolution | Refusal:
     """Camera pose in the map from corners (4, 2) in model order and the centre (2,).
 
     corner_sigma_px: the sides' measured position error (`EdgeFit.line_sigma_px`);
     growth_sigma_px: the error of the clipped-edge growth that moved all four sides, when the
-    sides' stage measured it (else `side_errors` predicts it from the panel's geometry). Both
-    set the position's covariance; the first also the fits' weights.
+    sides' stage measured it (else `side_errors` predicts it from the panel's geometry);
+    locking_sigma_px: a crossing's pixel-locking error at the frame's blur (`EdgeFit.locking_px`,
+    else `PoseRules.pixel_locking_sigma_px`); uneven_px: how far the sides' own growths lie from the
+    common one (`EdgeFit.uneven_px`, motion), an error of each side's own. All set the position's
+    covariance and the noise the consistency test weighs the residuals with; the first also the
+    fits' weights.
     """
     corners4 = beacon_corners_m(beacon)
     object_points = np.vstack([corners4, np.zeros(3)])
@@ -572,12 +624,13 @@ def solve_pose(
         )
     position, rotation_wc = _camera_in_map(beacon, rvec, tvec)
     projected, jacobian = cv2.projectPoints(object_points, rvec, tvec, camera_matrix, None)
+    fitted: FitResiduals | None = None
     try:
-        covariance, factor = _position_covariance(
+        covariance, factor, fitted = _position_covariance(
             beacon,
             image_points,
             (rvec, tvec, projected, jacobian),
-            (corner_sigma_px, corner_sigma, growth_sigma_px),
+            (corner_sigma_px, corner_sigma, growth_sigma_px, locking_sigma_px, uneven_px),
             (np.asarray(gravity_camera, dtype=float), gravity_sigma_deg, gravity_mode) if use_gravity else None,
             rules,
         )
@@ -594,4 +647,5 @@ def solve_pose(
         gravity_used=use_gravity,
         covariance_m2=covariance,
         consistency_factor=factor,
+        residuals=fitted,
     )

@@ -32,6 +32,7 @@ from the image itself, in the way of AprilTag's edge refinement:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -46,6 +47,12 @@ NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or sid
 # axis (a tenth of L's period, several times the crossings' 0.01-0.04 px noise): below it
 # the crossings' phases are set by their noise, not by the geometry.
 MIN_PHASE_SPAN_PX = 0.1
+# ... and L is fitted at all only when one side's line crosses half a period of it: over less
+# each side's own turn and shift take up what the series would, and the fit moves the sides by
+# what it makes of their noise (0.3 px at 2 m, quarter resolution, four sides 0.15 px across the
+# grid: corners the noise model put at 0.06 px, found by the consistency test, `pose/consistency.py`;
+# 0.8 px across it, the fit takes a two-harmonic L out to 0.01 px, tests/server/vision/test_subpixel.py).
+MIN_LOCKING_PERIOD_PX = 0.5
 # A gap between two level crossings along a pixel row or column is off by their pixel-locking
 # errors (~0.06 px rms each, `PoseRules.pixel_locking_sigma_px`), which do not average out there.
 LOCKING_GAP_PX = 0.085
@@ -91,6 +98,9 @@ class EdgeFit:
     # how far the sides' own growths lie from the common one when their blur differs (px, >= 0;
     # 0 when it does not): motion during the exposure blurs the sides across it more
     uneven_px: float = 0.0
+    # rms of a crossing's pixel-locking error at this frame's blur and growth (`locking_sigma_px`;
+    # px), None when the corners measured neither
+    locking_px: float | None = None
 
 
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -213,7 +223,14 @@ def _fit_lines(
 
 
 def _remove_pixel_locking(
-    lines, points, weights, phase_points, centres, harmonics: int = 2, min_phase_span_px: float = MIN_PHASE_SPAN_PX
+    lines,
+    points,
+    weights,
+    phase_points,
+    centres,
+    harmonics: int = 2,
+    min_phase_span_px: float = MIN_PHASE_SPAN_PX,
+    min_period_span_px: float = MIN_LOCKING_PERIOD_PX,
 ):
     """Refit the four lines together with the crossings' pixel-locking error.
 
@@ -232,8 +249,10 @@ def _remove_pixel_locking(
     phase, L is a constant there and cannot be told from the side's own offset (the
     within-side spread of the phase is then the crossings' own noise, so fitting L on it
     would fit the noise and move the side). L from the other sides is still taken out of
-    such a side (a trapezoid seen under a tilt); when no side qualifies (a face-to-face view)
-    nothing is refitted and each side keeps its L in its offset.
+    such a side (a trapezoid seen under a tilt). When no side's line crosses `min_period_span_px`
+    of the period (a face-to-face view, or a panel square to the pixel grid) nothing is
+    refitted and each side keeps its L in its offset and, over the part of the period it crosses,
+    in its turn (`solve.side_errors` counts both).
     """
     normal = lines[:, :2]
     tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -247,7 +266,7 @@ def _remove_pixel_locking(
     extent = np.where(kept, along, -np.inf).max(axis=1) - np.where(kept, along, np.inf).min(axis=1)
     spans = np.abs(tangent[np.arange(4), axis]) * extent  # px the line crosses on its outward axis
     sampled = spans >= min_phase_span_px
-    if not sampled.any():
+    if spans.max() < min_period_span_px:
         return lines, residuals
     # columns: a small turn of each side (4), a shift of each side (4), the series (2 per harmonic)
     design = np.zeros(points.shape[:2] + (8 + 2 * harmonics,))
@@ -323,6 +342,35 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
     with np.errstate(invalid="ignore", divide="ignore"):  # both tails underflow for the narrowest blurs
         ratio = ndtr(-(growth + level_gap_px) / sigmas) / ndtr(-growth / sigmas)
     return float(np.interp(0.5, np.nan_to_num(ratio, nan=0.0), sigmas))  # the ratio's limit there is 0
+
+
+def locking_sigma_px(blur_px: float, growth_px: float, phases: int = 32) -> float:
+    """rms (px) over the edge's sub-pixel phase of a mid-level crossing's pixel-locking error, for
+    a Gaussian edge of blur `blur_px` (PSF and pixel together) whose mid level lies `growth_px`
+    outside it: what a side along the pixel grid keeps as an offset of its own.
+
+    The crossing is read off the profile interpolated linearly between pixel centres (bilinear
+    sampling), where the edge's profile is curved; how much it errs depends on where the edge
+    falls between two pixel centres (the phase). The profile is that of the clipped panel:
+    a Phi(-x / s) against a saturation of 1, with a = 1 / (2 Phi(-D / s)) putting the mid level
+    at D (the growth the corners measured). Its mean over the phase is a common growth, which the
+    corners measure with the rest; its spread is returned (0.06 px at s = 1 px, a = 4; 0.1 px at
+    s = 0.8 px, a = 6: sharper edges and brighter panels lock harder).
+    """
+    if not (math.isfinite(blur_px) and math.isfinite(growth_px)):
+        return 0.0
+    s = min(max(blur_px, 0.1), 8.0)  # `blur_sigma_px`'s table
+    growth = min(max(growth_px, 0.0), 4.0 * s)  # beyond, the mid level lies in a tail of no light
+    gain = 1.0 / (2.0 * max(float(ndtr(-growth / s)), 1e-6))
+    phase = (np.arange(phases) + 0.5) / phases
+    reach = int(np.ceil(6 * s + growth)) + 2
+    centres = np.arange(-reach, reach + 1)
+    values = np.minimum(gain * ndtr((phase[:, None] - centres[None, :]) / s), 1.0)  # edge at x = phase
+    below = np.argmax(values < 0.5, axis=1) - 1  # the last pixel centre at or above the mid level
+    rows = np.arange(phases)
+    upper, lower = values[rows, below], values[rows, below + 1]
+    crossing = centres[below] + (upper - 0.5) / (upper - lower)
+    return float(np.std(crossing - phase))
 
 
 # Where a bare panel's blurred edge has fallen to the background: this band beyond its mid-level
@@ -487,7 +535,7 @@ def refine_edges(
         side_points, side_valid.astype(float), normals, np.where(side_valid[..., None], sensor_points, 0.0)
     )
 
-    shift, curvature_px, uneven_px = 0.0, 0.0, 0.0
+    shift, curvature_px, uneven_px, locking = 0.0, 0.0, 0.0, None
     side_shifts = np.zeros(4)
     if use_arcs:
         first = 4 * n_along
@@ -505,6 +553,8 @@ def refine_edges(
             warnings.append("too few corner points: sides taken at the mid level")
         else:
             shift = -growth
+            if blur_px is not None:
+                locking = locking_sigma_px(blur_px, growth)
             side_shifts[:] = shift
             if side_gaps_px is not None and blur_px is not None:
                 side_shifts = -side_growths(growth, level_gap_px, side_gaps_px)
@@ -528,4 +578,5 @@ def refine_edges(
         warnings=tuple(warnings),
         curvature_px=curvature_px,
         uneven_px=uneven_px,
+        locking_px=locking,
     )

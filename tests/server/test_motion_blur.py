@@ -10,6 +10,7 @@ quarter resolution; errors against where the camera was when the panel's rows we
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from server.locator import locate
 from server.outcomes import Fix

@@ -13,6 +13,7 @@ from server.ingest import LumaFrame, read_fixture
 from server.locator import locate as locate_frame
 from server.options import LocateOptions
 from server.pipeline import CornerMethod, PipelineOptions
+from server.pose.consistency import ConsistencyRules
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, FailureReason, device_profiles, load_map
 from simulator.fixtures import fixture_meta
@@ -73,9 +74,14 @@ def test_lens_distortion_is_undone():
     position = np.array([0.3, -0.35, 0.0])
     frame = frame_at(position, (5, 2, -2), camera=distorted)
     with_model = locate(frame, MAP, PipelineOptions(gravity_mode=GravityMode.never))
-    ignoring = locate(LumaFrame(frame.pixels, frame.meta, CAMERA), MAP, PipelineOptions(gravity_mode=GravityMode.never))
+    undistorted = LumaFrame(frame.pixels, frame.meta, CAMERA)
+    unchecked = PipelineOptions(gravity_mode=GravityMode.never, consistency=ConsistencyRules(check=False))
+    ignoring = locate(undistorted, MAP, unchecked)
     assert error_2d_mm(with_model, position) < 3.0
     assert error_2d_mm(ignoring, position) > 2 * error_2d_mm(with_model, position)
+    # the bent corners are no view of the square: the fix does not answer to its own evidence
+    refused = locate(undistorted, MAP, PipelineOptions(gravity_mode=GravityMode.never))
+    assert not refused.ok and refused.reason is FailureReason.shape_mismatch
 
 
 def test_square_corner_path_refuses_the_rounded_panel():

@@ -180,7 +180,9 @@ def test_sides_along_the_pixel_grid_are_left_as_fitted():
     # their own position) and moves the sides (measured: 0.12-0.18 px over seeds 0-3, against
     # 0.002 px of noise in a side's position): the regression of commit ba27a16.
     centres = measured.mean(axis=1)
-    forced, _ = _remove_pixel_locking(plain, measured, weights, measured, centres, min_phase_span_px=0.0)
+    forced, _ = _remove_pixel_locking(
+        plain, measured, weights, measured, centres, min_phase_span_px=0.0, min_period_span_px=0.0
+    )
     assert np.abs(forced[:, 2] - plain[:, 2]).max() > 0.05
 
 
