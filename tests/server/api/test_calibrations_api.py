@@ -104,7 +104,7 @@ def test_multipart_photos_calibrate_and_list_a_photo_without_board(server_url):
     ({"board": None}, 422, "board", "the board spec (JSON) is missing"),
     ({"device": "nokia-3310"}, 422, "device", "no device profile"),
     ({"profile_id": "bad id!"}, 422, "profile_id", "should match pattern"),
-    ({"photos": [("a.png", b"not a photo")]}, 422, "photos", "no photo is readable"),
+    ({"photos": [("a.png", b"not a photo")]}, 400, "photos", "no photo is readable"),
     ({"photos": "mixed"}, 422, "photos", "must all have one size"),
     ({"photos": []}, 422, "photos", "no photo was sent"),
 ])
