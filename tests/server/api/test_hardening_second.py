@@ -67,7 +67,8 @@ def _jpeg(width: int, height: int, focal_35mm: int) -> bytes:
 
 def _heic(pixels: np.ndarray, exif: bytes | None = None) -> bytes:
     buffer = io.BytesIO()
-    Image.fromarray(np.stack([pixels] * 3, axis=-1)).save(buffer, "HEIF", quality=90, **({"exif": exif} if exif else {}))
+    extra = {"exif": exif} if exif else {}
+    Image.fromarray(np.stack([pixels] * 3, axis=-1)).save(buffer, "HEIF", quality=90, **extra)
     return buffer.getvalue()
 
 
@@ -134,7 +135,8 @@ def test_a_damaged_or_lying_heic_is_a_400(server_url):
         (_heic(np.full((48, 64), 90, np.uint8), NEGATIVE_EXIF_OFFSET), "cannot be decoded", "negative seek"),
     ]
     for data, *words in cases:
-        response, seconds = _post(f"{server_url}/v1/locate{camera}", content=data, headers={"Content-Type": "image/heic"})
+        response, seconds = _post(f"{server_url}/v1/locate{camera}", content=data,
+                                  headers={"Content-Type": "image/heic"})
         assert _refused(response, 400, "frame", *words)["error"] == "bad_frame"
         assert seconds < 2.0
 
