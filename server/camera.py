@@ -125,6 +125,11 @@ FOCAL_SIGMA_DATASHEET = 0.015
 FOCAL_SIGMA_EXIF_35MM = 0.04
 FULL_FRAME_DIAGONAL_MM = 43.2666  # of a 36 x 24 mm frame: the 35 mm equivalent's diagonal rule
 PORTRAIT_ORIENTATION = 6  # a phone's stored landscape image shown upright (rear camera, held upright)
+# EXIF's FocalLengthIn35mmFilm is a SHORT (0-65535 mm): a pinhole within 4-2400 mm, from a 9 mm fisheye-like
+# ultra-wide (a 134-degree diagonal) past the longest phone and bridge-camera zooms; beyond, the tag is junk.
+MIN_FOCAL_35MM_MM = 4.0
+MAX_FOCAL_35MM_MM = 2400.0
+EXIF_FOCAL_35MM_FIELD = "exif.FocalLengthIn35mmFilm"
 
 
 @dataclass(frozen=True)
@@ -278,16 +283,40 @@ def photo_camera(
         chosen = _profile_photo_camera(matched, size, exif, CameraSource.exif_profile)
         return replace(chosen, detail=f"EXIF '{exif.make} {exif.model}' -> {chosen.detail}")
     if exif.focal_35mm_mm is not None:
-        focal_px = exif.focal_35mm_mm / FULL_FRAME_DIAGONAL_MM * math.hypot(width, height)
-        intrinsics = CameraIntrinsics(fx=focal_px, fy=focal_px, cx=(width - 1) / 2, cy=(height - 1) / 2)
         detail = f"EXIF 35 mm equivalent focal length {exif.focal_35mm_mm:g} mm, principal point at the centre"
-        return PhotoCamera(intrinsics, CameraSource.exif_35mm, detail, FOCAL_SIGMA_EXIF_35MM)
+        return PhotoCamera(
+            _exif_35mm_camera(exif.focal_35mm_mm, size, ask), CameraSource.exif_35mm, detail, FOCAL_SIGMA_EXIF_35MM
+        )
     seen = f"EXIF make/model '{exif.make} {exif.model}' matches no profile" if exif.model else "no EXIF camera"
     raise FrameError(
         f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass {ask[0]} "
         f"(known: {', '.join(sorted(profiles))}) or {ask[1]}",
         field="camera",
     )
+
+
+def _exif_35mm_camera(focal_35mm_mm: float, size: tuple[int, int], ask: tuple[str, str]) -> CameraIntrinsics:
+    """The pinhole of EXIF's 35 mm equivalent focal length (diagonal rule, principal point at the centre), or a
+    FrameError naming the EXIF field when it is no lens's (65535 mm) or gives no pinhole within the contract on
+    this photo (1 mm on 16 x 16 pixels is a focal length of half a pixel)."""
+    width, height = size
+    ask_for = f"pass {ask[0]} or {ask[1]}"
+    if not MIN_FOCAL_35MM_MM <= focal_35mm_mm <= MAX_FOCAL_35MM_MM:
+        raise FrameError(
+            f"the photo's EXIF 35 mm equivalent focal length {focal_35mm_mm:g} mm is no camera's (a lens is "
+            f"{MIN_FOCAL_35MM_MM:g}-{MAX_FOCAL_35MM_MM:g} mm): {ask_for}",
+            field=EXIF_FOCAL_35MM_FIELD,
+        )
+    focal_px = focal_35mm_mm / FULL_FRAME_DIAGONAL_MM * math.hypot(width, height)
+    try:
+        return CameraIntrinsics(fx=focal_px, fy=focal_px, cx=(width - 1) / 2, cy=(height - 1) / 2)
+    except ValidationError as error:
+        problem = error.errors()[0]
+        raise FrameError(
+            f"the photo's EXIF 35 mm equivalent focal length {focal_35mm_mm:g} mm on {width}x{height} pixels is a "
+            f"focal length of {focal_px:.4g} px, out of the contract's range ({problem['msg']}): {ask_for}",
+            field=EXIF_FOCAL_35MM_FIELD,
+        ) from None
 
 
 def resolve_profile_args(values: Iterable[str]) -> tuple[dict[str, DeviceProfile], DeviceProfile | None]:

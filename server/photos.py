@@ -11,10 +11,16 @@ upright by the EXIF orientation's rotation (1, 3, 6, 8) as they are decoded; mir
 from __future__ import annotations
 
 import io
+import struct
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 from PIL import Image, UnidentifiedImageError
+
+from shared_schemas.fixture_files import PNG_SIGNATURE
 
 MAX_PHOTO_PIXELS = 100_000_000  # as a frame (server.ingest.MAX_PIXELS): a 50 MP phone photo fits twice
 PHOTO_KINDS = ("JPEG", "PNG", "HEIF")
@@ -61,6 +67,25 @@ class Photo:
     kind: str  # "JPEG", "PNG" or "HEIF"
 
 
+# What Pillow and pillow-heif raise on a damaged file: truncated data, a bad EXIF offset or value (a
+# negative SLONG is a negative seek), a TIFF header that is none (SyntaxError), libheif's refusals (ValueError,
+# RuntimeError for its security limits, for example an `ispe` size that lies).
+_DAMAGE = (OSError, ValueError, SyntaxError, EOFError, struct.error, RuntimeError)
+
+
+@contextmanager
+def _reading(name: str) -> Iterator[None]:
+    """Any damage met while reading the photo's header, EXIF or pixels, as one PhotoError naming the photo."""
+    try:
+        yield
+    except PhotoError:
+        raise
+    except Image.DecompressionBombError as error:  # Pillow's own limit, far above ours
+        raise PhotoError(f"'{name}' has more than {MAX_PHOTO_PIXELS // 1_000_000} megapixels ({error})") from None
+    except _DAMAGE as error:
+        raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated: {error})") from None
+
+
 def _open(data: bytes, name: str) -> Image.Image:
     try:
         image = Image.open(io.BytesIO(data))
@@ -68,9 +93,10 @@ def _open(data: bytes, name: str) -> Image.Image:
         raise PhotoError(f"'{name}' has more than {MAX_PHOTO_PIXELS // 1_000_000} megapixels ({error})") from None
     except UnidentifiedImageError:  # its message names the in-memory buffer, not the photo
         raise PhotoError(f"'{name}' is not a readable JPEG, PNG or HEIC photo (not an image file)") from None
-    except (OSError, ValueError) as error:
+    except _DAMAGE as error:
         raise PhotoError(f"'{name}' is not a readable JPEG, PNG or HEIC photo ({error})") from None
     if image.format not in PHOTO_KINDS:
+        image.close()
         raise PhotoError(f"'{name}' is a {image.format} image; give a JPEG, PNG or HEIC photo")
     return image
 
@@ -80,14 +106,26 @@ def _refuse_heic_unreadable(data: bytes, name: str) -> None:
         raise PhotoError(f"'{name}' is HEIC, which needs the pillow-heif package (pip install pillow-heif)")
 
 
-def photo_size(data: bytes, name: str) -> tuple[int, int]:
-    """The upright (width, height) from the photo's header, without decoding it; PhotoError when it is no photo
-    or is mirrored."""
+@contextmanager
+def _header(data: bytes, name: str, max_pixels: int) -> Iterator[tuple[Image.Image, PhotoExif]]:
+    """The opened photo and its EXIF, in this order: its size from the header checked against `max_pixels`
+    first (before any EXIF or pixel is read: Pillow decodes a whole PNG to find an EXIF chunk after its
+    pixels), then its EXIF, then its orientation; every path (`photo_size`, `read_photo`) reads a photo so."""
     _refuse_heic_unreadable(data, name)
     with _open(data, name) as image:
+        _check_size(image.size, name, max_pixels)
+        with _reading(name):
+            exif = _exif(image, data)
+        _upright_orientation(exif, name)
+        yield image, exif
+
+
+def photo_size(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> tuple[int, int]:
+    """The upright (width, height) from the photo's header, without decoding it; PhotoError when it is no photo,
+    has more than `max_pixels`, a damaged EXIF, or is mirrored (as `read_photo` would refuse it)."""
+    with _header(data, name, max_pixels) as (image, exif):
         width, height = image.size
-        turned = _upright_orientation(read_exif(image), name) in (6, 8)
-        return (height, width) if turned else (width, height)
+        return (height, width) if exif.orientation in (6, 8) else (width, height)
 
 
 def _check_size(size: tuple[int, int], name: str, max_pixels: int) -> None:
@@ -97,14 +135,65 @@ def _check_size(size: tuple[int, int], name: str, max_pixels: int) -> None:
         raise PhotoError(f"'{name}' has {width}x{height} pixels, more than the {allowed}")
 
 
-def _luma(image: Image.Image) -> Image.Image:
+_STRIP_ROWS = 256  # rows of a colour photo turned to luma at a time: a few MB
+COLOUR_DECODE_BUDGET_BYTES = 256 << 20  # decoded colour the process's photo decodes hold at once, beyond their luma
+
+
+class _DecodeBudget:
+    """The decoded colour pixels that photo decodes hold at once in this process (Pillow's RGB, RGBA, CMYK or
+    palette image, 4 bytes a pixel, before it becomes the 1-byte luma that stays): a decode waits until its copy fits
+    the budget, and one larger than the whole budget runs alone. Its only owner is this module (`_COLOUR`)."""
+
+    def __init__(self, limit_bytes: int) -> None:
+        self._limit, self._held = limit_bytes, 0
+        self._changed = threading.Condition()
+
+    @contextmanager
+    def holding(self, size_bytes: int) -> Iterator[None]:
+        with self._changed:
+            self._changed.wait_for(lambda: self._held == 0 or self._held + size_bytes <= self._limit)
+            self._held += size_bytes
+        try:
+            yield
+        finally:
+            with self._changed:
+                self._held -= size_bytes
+                self._changed.notify_all()
+
+
+_COLOUR = _DecodeBudget(COLOUR_DECODE_BUDGET_BYTES)
+# Pillow keeps an image in blocks of 16 MB by default: below glibc's largest mmap threshold (32 MB), so a
+# decoded photo's blocks come from the malloc arena of the thread that decoded it and stay in the process
+# once freed (six 67-megapixel colour photos left +0.4-0.9 GB behind). Blocks of 64 MB are mapped and unmapped
+# whole; an image smaller than a block takes only its own size.
+PILLOW_BLOCK_BYTES = 64 << 20
+Image.core.set_block_size(PILLOW_BLOCK_BYTES)
+
+
+def _colour_luma(image: Image.Image) -> np.ndarray:
+    """The luma of a decoded colour image, converted a strip at a time into one array: the decoded image and
+    the luma are all it holds (no full-size L image and copy of it). Pillow's L conversion is ITU-R BT.601
+    (299, 587, 114) on the encoded values, from RGB, RGBA (alpha dropped), palette or CMYK."""
+    width, height = image.size
+    luma = np.empty((height, width), np.uint8)
+    for row in range(0, height, _STRIP_ROWS):
+        with image.crop((0, row, width, min(height, row + _STRIP_ROWS))) as strip, strip.convert("L") as grey:
+            luma[row : row + grey.height] = np.asarray(grey)
+    return luma
+
+
+def _luma(image: Image.Image) -> np.ndarray:
+    """The photo's luma plane as stored (not yet turned upright); a colour decode within the process's budget."""
     if image.format == "JPEG":
         image.draft("L", image.size)  # libjpeg hands out the stored Y channel itself
     if image.mode in ("I;16", "I;16B", "I", "F"):
         raise PhotoError(f"{image.mode} images are not 8-bit; give an 8-bit photo")
-    # Pillow's L conversion is ITU-R BT.601 (299, 587, 114) on the encoded values, straight from RGB, RGBA,
-    # palette or CMYK (alpha dropped): one luma image, no full-size RGB copy.
-    return image if image.mode == "L" else image.convert("L")
+    width, height = image.size
+    with _COLOUR.holding(0 if image.mode == "L" else 4 * width * height):
+        image.load()
+        if image.mode != "L":
+            return _colour_luma(image)
+        return np.asarray(image, dtype=np.uint8)
 
 
 def _positive(value: object) -> float | None:
@@ -120,9 +209,28 @@ def _text(value: object) -> str | None:
     return text.strip("\x00 ").strip() or None if isinstance(text, str) else None
 
 
-def read_exif(image: Image.Image) -> PhotoExif:
-    """The camera facts of `image`'s EXIF (empty when it has none)."""
-    tags = image.getexif()
+def _png_exif_chunk(data: bytes) -> bytes | None:
+    """The data of a PNG's eXIf chunk, before or after its pixels, found by walking the chunk headers."""
+    at = len(PNG_SIGNATURE)
+    while at + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[at : at + 8])
+        if kind == b"eXIf":
+            return data[at + 8 : at + 8 + length]
+        if kind == b"IEND":
+            break
+        at += 12 + length  # length, type, data, CRC
+    return None
+
+
+def _exif(image: Image.Image, data: bytes) -> PhotoExif:
+    """The camera facts of the photo's EXIF (empty when it has none); a PNG's without decoding its pixels."""
+    if image.format == "PNG":
+        tags = Image.Exif()
+        chunk = _png_exif_chunk(data)
+        if chunk:
+            tags.load(chunk)
+    else:
+        tags = image.getexif()
     shot = tags.get_ifd(_EXIF_IFD)
     orientation = tags.get(_ORIENTATION, 1)
     iso = shot.get(_ISO)
@@ -154,27 +262,16 @@ _UPRIGHT_TURNS = {3: 2, 6: -1, 8: 1}
 def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Photo:
     """The photo's luma, turned upright by its EXIF orientation, and its EXIF; PhotoError names what is wrong.
 
-    Mirrored orientations and too many pixels are refused from the header, before decoding.
+    Too many pixels are refused from the header before anything else is read, a damaged EXIF and mirrored
+    orientations before decoding (`_header`, as `photo_size`).
     """
-    _refuse_heic_unreadable(data, name)
-    with _open(data, name) as image:
-        _check_size(image.size, name, max_pixels)
+    with _header(data, name, max_pixels) as (image, exif):
         kind, size = image.format or "", image.size
-        try:  # a PNG's EXIF may follow its pixels: reading it can meet the damage too
-            exif = read_exif(image)
-            turns = _UPRIGHT_TURNS.get(_upright_orientation(exif, name), 0)
-            luma = _luma(image)
-            luma.load()
-            if luma is not image:
-                image.close()  # the decoded RGB(A) goes now, before the luma is copied out
-            pixels = np.asarray(luma, dtype=np.uint8)
-            luma.close()
-        except (OSError, ValueError, SyntaxError) as error:
-            if isinstance(error, PhotoError):
-                raise
-            raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated: {error})") from None
+        with _reading(name):
+            pixels = _luma(image)
     if pixels.shape != (size[1], size[0]):
         raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
+    turns = _UPRIGHT_TURNS.get(exif.orientation, 0)
     if turns:
         pixels = np.ascontiguousarray(np.rot90(pixels, turns))
     pixels.flags.writeable = False

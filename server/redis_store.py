@@ -221,6 +221,9 @@ class RedisMaps:
                 return change.delete is None or done[-1] == 1
         raise StoreError(UNAVAILABLE, f"{self.place}: the maps kept changing; try again")
 
+    def unwritable(self) -> str | None:
+        return None  # nothing is written to the data folder: Redis's own limits answer for its room
+
     def recover(self) -> None:
         """Nothing is left half-written in Redis; only note the damaged maps."""
         self.readable()

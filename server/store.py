@@ -24,6 +24,7 @@ hidden names) is never listed, and is removed when a store is built (`recover`).
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import logging
 import os
@@ -52,6 +53,9 @@ LOCK_FILE = ".write.lock"
 LOCK_WAIT_S = 5.0  # the start-up clean-up waits this long for writers in other processes
 STALE_AFTER_S = 600.0  # without the lock, only leftovers older than this are surely dead
 UNAVAILABLE = "redis_unavailable"  # StoreError code: a shared store (Redis) cannot be reached; try again
+INSUFFICIENT_STORAGE = "insufficient_storage"  # StoreError code: the data folder has no room for a write
+# A write that fails for want of room: the disk (or the volume) full, a quota reached, a file size limit
+NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 
 _NAME = re.compile(NAME_PATTERN)
 _SAMPLE_ID = re.compile(r"^[0-9a-f]{32}$")
@@ -68,6 +72,36 @@ class StoreError(Exception):
     def __init__(self, code: str, message: str, field: str | None = None):
         super().__init__(message)
         self.code, self.message, self.field = code, message, field
+
+
+class FolderRoom:
+    """Whether one store's last write found no room in the data folder (ENOSPC, EDQUOT, EFBIG), until one of its
+    writes succeeds: what `/healthz` reports. Written only by its store's writes (`writing`)."""
+
+    def __init__(self, data_dir: Path) -> None:
+        self.data_dir = data_dir
+        self.problem: str | None = None
+
+    @contextmanager
+    def writing(self, what: str) -> Iterator[None]:
+        """Run a write of `what`; no room becomes an `insufficient_storage` StoreError naming the data folder.
+        The write itself removes its temporary file or staging folder, so the old data stays whole."""
+        try:
+            yield
+        except OSError as error:
+            if error.errno not in NO_ROOM_ERRNOS:
+                raise
+            why = os.strerror(error.errno)
+            self.problem = f"data folder {self.data_dir}: no room to write {what} ({why})"
+            log.warning("lumipose: %s", self.problem)
+            raise StoreError(
+                INSUFFICIENT_STORAGE,
+                f"{what} was not stored: the data folder {self.data_dir} has no room ({why}); what it held is "
+                "unchanged. Free space there (or raise its quota) and send it again",
+            ) from None
+        if self.problem is not None:
+            log.warning("lumipose: data folder %s: writes succeed again", self.data_dir)
+            self.problem = None
 
 
 def _fsync_folder(folder: Path) -> None:
@@ -288,6 +322,10 @@ class _JsonFolder(Generic[Model]):
     damage: Damage
     key_field: str = "name"  # the route's parameter that names an item, for errors
     problem: Callable[[str, Model], str | None] = lambda name, item: None
+    room: FolderRoom = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "room", FolderRoom(self.data_dir))
 
     @property
     def path(self) -> Path:
@@ -348,9 +386,10 @@ class _JsonFolder(Generic[Model]):
 
     def put(self, name: str, item: Model) -> None:
         path = self.path / f"{name}.json"
-        self.path.mkdir(parents=True, exist_ok=True)
-        with _data_lock(self.data_dir, exclusive=False):
-            write_atomic(path, item.model_dump_json(by_alias=True, exclude_none=True, indent=2).encode())
+        with self.room.writing(f"{self.kind} '{name}'"):
+            self.path.mkdir(parents=True, exist_ok=True)
+            with _data_lock(self.data_dir, exclusive=False):
+                write_atomic(path, item.model_dump_json(by_alias=True, exclude_none=True, indent=2).encode())
         self.damage.update(self.relative(path), {})
 
     def delete(self, name: str) -> bool:
@@ -426,6 +465,10 @@ class MapBackend(MapView, Protocol):
         """Clear what interrupted writes left; note every damaged map."""
         ...
 
+    def unwritable(self) -> str | None:
+        """Why the last write found no room in the data folder (None: it had room, or the maps live elsewhere)."""
+        ...
+
 
 @dataclass(frozen=True)
 class FolderMaps:
@@ -470,10 +513,14 @@ class FolderMaps:
         with self._choosing:
             change = decide(self)
             if change.active is not None:
-                with _data_lock(self.data_dir, exclusive=False):
-                    payload = ActiveMap(name=change.active).model_dump_json().encode()
+                payload = ActiveMap(name=change.active).model_dump_json().encode()
+                room = self._files.room.writing(f"the active map's name ({ACTIVE_MAP_FILE})")
+                with room, _data_lock(self.data_dir, exclusive=False):
                     write_atomic(self.data_dir / ACTIVE_MAP_FILE, payload)
             return change.delete is None or self._files.delete(change.delete)
+
+    def unwritable(self) -> str | None:
+        return self._files.room.problem
 
     def recover(self) -> None:
         if not self.data_dir.is_dir():
@@ -557,6 +604,10 @@ class MapStore:
             MapSummary(name=name, beacons=len(beacon_map.beacons), active=name == active, source=source)
             for name, source, beacon_map in self._readable()
         ]
+
+    def unwritable(self) -> str | None:
+        """Why the last map or activation write found no room in the data folder; None once one succeeds."""
+        return self._stored.unwritable()
 
     def damaged(self) -> list[str]:
         """The damaged stored maps and active map's name (their places), checked now."""
@@ -733,6 +784,10 @@ class ProfileStore:
         if not self._files.delete(profile_id):
             raise StoreError("not_found", f"no stored device profile '{profile_id}'", field="profile_id")
 
+    def unwritable(self) -> str | None:
+        """Why the last profile write found no room in the data folder; None once one succeeds."""
+        return self._files.room.problem
+
     def damaged(self) -> list[str]:
         """The damaged profile files, relative to the data folder, checked now."""
         self._files.readable()
@@ -761,10 +816,16 @@ class SampleStore:
 
     data_dir: Path
     _damage: Damage = field(init=False, repr=False, compare=False)
+    _room: FolderRoom = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_damage", Damage(_in_folder(self.data_dir)))
+        object.__setattr__(self, "_room", FolderRoom(self.data_dir))
         self.recover()
+
+    def unwritable(self) -> str | None:
+        """Why the last sample write found no room in the data folder; None once one succeeds."""
+        return self._room.problem
 
     @property
     def _root(self) -> Path:
@@ -838,21 +899,22 @@ class SampleStore:
             meta=meta,
             result=result,
         )
-        self._root.mkdir(parents=True, exist_ok=True)
         staging = self._root / f".{sample_id}.tmp"  # a hidden name: never listed, removed at start-up
-        with _data_lock(self.data_dir, exclusive=False):
-            staging.mkdir()
-            try:
-                for name, data in (
-                    ("frame.bin", frame),
-                    ("meta.json", meta.model_dump_json(by_alias=True, exclude_none=True).encode()),
-                    ("sample.json", info.model_dump_json(by_alias=True).encode()),
-                ):
-                    _write_durably(staging / name, data)
-                os.replace(staging, self._root / sample_id)
-                _fsync_folder(self._root)
-            finally:
-                shutil.rmtree(staging, ignore_errors=True)
+        with self._room.writing(f"sample of {len(frame)} frame bytes"):
+            self._root.mkdir(parents=True, exist_ok=True)
+            with _data_lock(self.data_dir, exclusive=False):
+                staging.mkdir()
+                try:
+                    for name, data in (
+                        ("frame.bin", frame),
+                        ("meta.json", meta.model_dump_json(by_alias=True, exclude_none=True).encode()),
+                        ("sample.json", info.model_dump_json(by_alias=True).encode()),
+                    ):
+                        _write_durably(staging / name, data)
+                    os.replace(staging, self._root / sample_id)
+                    _fsync_folder(self._root)
+                finally:
+                    shutil.rmtree(staging, ignore_errors=True)
         return info
 
     def all(self) -> list[SampleInfo]:

@@ -40,7 +40,9 @@ class Health(BaseModel):
         default_factory=list,
         description="shared stores that do not answer, each with the reason (Redis, with `serve --redis`: 'maps: ...', "
         "'device sessions: ...'); until it is back the routes that read maps answer 503 `redis_unavailable` "
-        "(`active_map` is then the default map's name), and frames in a device's session 503",
+        "(`active_map` is then the default map's name), and frames in a device's session 503; and a data folder "
+        "whose last map, profile or sample write found no room ('data folder DIR: no room to write ...'; those "
+        "writes answer 507 `insufficient_storage` until one succeeds)",
     )
 
 

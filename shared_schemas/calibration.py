@@ -11,14 +11,15 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Annotated, Final, Literal
 
-from pydantic import ConfigDict, Field, model_validator
+from pydantic import ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
-from shared_schemas.models import MAX_SIDE_PX, DeviceProfile, Point2, Strict
+from shared_schemas.models import MAX_SIDE_PX, DeviceProfile, Strict
 
 BOARD_SCHEMA: Final = "lumipose.board/1"
 CALIBRATION_SCHEMA: Final = "lumipose.calibration/1"
 MAX_BOARD_SQUARES: Final = 64  # per side: a board of 64 x 64 squares needs 2048 markers (DICT_*_1000 holds 1000)
 MAX_VIEWS: Final = 200  # photos in one calibration: OpenCV's fit is cubic in them; 20-40 is plenty
+MAX_VIEW_NAME: Final = 256  # characters of a view's name (a photo's file name)
 MIN_SQUARE_M: Final = 1e-3
 MAX_SQUARE_M: Final = 1.0
 
@@ -76,16 +77,22 @@ class BoardSpec(Strict):
 
 
 CornerId = Annotated[int, Field(ge=0, lt=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES)]
+# An image point: pixel centres at integers, so the image spans [-0.5, side - 0.5] (the view's own width and
+# height bound it further, checked by BoardView).
+CornerPoint = Annotated[list[Annotated[float, Field(ge=-0.5, le=MAX_SIDE_PX)]], Field(min_length=2, max_length=2)]
 
 
 class BoardView(Strict):
     """The board's corners found on one photo: ChArUco corner ids and their sub-pixel image points."""
 
-    name: str = Field(max_length=256, description="the photo's name, for the report")
+    name: str = Field(max_length=MAX_VIEW_NAME, description="the photo's name, for the report")
     width: int = Field(ge=1, le=MAX_SIDE_PX)
     height: int = Field(ge=1, le=MAX_SIDE_PX)
     corner_ids: list[CornerId] = Field(max_length=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES)
-    corners_px: list[Point2] = Field(max_length=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES)
+    corners_px: list[CornerPoint] = Field(
+        max_length=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES,
+        description="image points, finite and within the photo: x in [-0.5, width - 0.5], y in [-0.5, height - 0.5]",
+    )
 
     @model_validator(mode="after")
     def _paired(self) -> BoardView:
@@ -94,6 +101,20 @@ class BoardView(Strict):
         if len(set(self.corner_ids)) != len(self.corner_ids):
             raise ValueError("corner_ids must be unique")
         return self
+
+    @field_validator("corners_px")
+    @classmethod
+    def _within_photo(cls, corners: list[list[float]], info: ValidationInfo) -> list[list[float]]:
+        width, height = info.data.get("width"), info.data.get("height")
+        if width is None or height is None:
+            return corners  # refused already
+        for index, (x, y) in enumerate(corners):
+            if x > width - 0.5 or y > height - 0.5:
+                raise ValueError(
+                    f"point {index} ({x:g}, {y:g}) lies outside the {width} x {height} photo "
+                    f"(x at most {width - 0.5:g}, y at most {height - 0.5:g})"
+                )
+        return corners
 
 
 class CalibrationRequest(Strict):

@@ -18,7 +18,7 @@ from starlette.requests import ClientDisconnect
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from server.outcomes import FrameError
-from server.store import UNAVAILABLE, StoreError
+from server.store import INSUFFICIENT_STORAGE, UNAVAILABLE, StoreError
 from server.tracking.devices import SessionStoreError
 from shared_schemas import ErrorBody
 
@@ -35,6 +35,7 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         413: "upload or body too large",
         415: "unsupported content type or encoding",
         422: "invalid parameter",
+        507: "the data folder has no room for the write (disk full, quota, file size limit); nothing was changed",
         503: "too many frame uploads held at once (frame routes), or Redis (maps, device sessions) cannot be "
         "reached, or a device's session is busy; try again",
     }.items()
@@ -52,6 +53,7 @@ STORE_STATUS = {
     "active_map": 409,
     "fixed_map": 409,
     UNAVAILABLE: 503,
+    INSUFFICIENT_STORAGE: 507,
 }
 
 

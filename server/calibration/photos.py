@@ -10,40 +10,53 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from server.calibration.board import find_board
-from server.photos import PhotoError, photo_size, read_grey
+from server.photos import MAX_PHOTO_PIXELS, PhotoError, photo_size, read_grey
 from shared_schemas.calibration import BoardSpec, BoardView, ViewFit
 
-__all__ = ["PhotoError", "find_views"]
+__all__ = ["PhotoError", "UnreadablePhotos", "find_views"]
 
 
-def find_views(photos: Sequence[tuple[str, bytes]], spec: BoardSpec) -> tuple[list[BoardView], list[ViewFit]]:
+class UnreadablePhotos(PhotoError):
+    """Not one of the photos can be read (each one's reason in the message): bad input, as one unreadable photo
+    sent to /v1/calibrations/views is."""
+
+
+def find_views(
+    photos: Sequence[tuple[str, bytes]], spec: BoardSpec, max_pixels: int = MAX_PHOTO_PIXELS
+) -> tuple[list[BoardView], list[ViewFit]]:
     """The board's views on (name, bytes) photos, and the photos left out with why (unreadable, no board).
 
+    Each photo is read as every photo is (`server.photos`): its size from the header against `max_pixels`
+    first, then its EXIF, then its pixels; one that fails any of them is left out with why.
     Raises PhotoError when no photo is readable or the photos differ in size (one camera mode only).
     """
     sizes, skipped = {}, []
     for name, data in photos:
         try:
-            sizes[name] = photo_size(data, name)
+            sizes[name] = photo_size(data, name, max_pixels)
         except PhotoError as error:
             skipped.append(ViewFit(name=name, corners=0, note=f"unreadable: {error}"))
     if not sizes:
-        raise PhotoError("no photo is readable: " + "; ".join(view.note or "" for view in skipped))
+        raise UnreadablePhotos("no photo is readable: " + "; ".join(view.note or "" for view in skipped))
     distinct = sorted(set(sizes.values()))
     if len(distinct) > 1:
         examples = ", ".join(f"{w}x{h} ('{next(n for n, s in sizes.items() if s == (w, h))}')" for w, h in distinct)
         raise PhotoError(f"the photos must all have one size; got {examples}")
-    views = []
+    views, decoded = [], 0
     for name, data in photos:
         if name not in sizes:
             continue
         try:
-            view = find_board(read_grey(data, name), spec, name)
+            pixels = read_grey(data, name, max_pixels)
         except PhotoError as error:
             skipped.append(ViewFit(name=name, corners=0, note=f"unreadable: {error}"))
             continue
+        decoded += 1
+        view = find_board(pixels, spec, name)
         if view is None:
             skipped.append(ViewFit(name=name, corners=0, note="no board found (does the board spec match it?)"))
         else:
             views.append(view)
+    if not decoded:  # every header read, no pixels: as unreadable as no header
+        raise UnreadablePhotos("no photo is readable: " + "; ".join(view.note or "" for view in skipped))
     return views, skipped

@@ -66,8 +66,9 @@ def load_device(
         return _read_session(stored, beacon_map, rules), waiting
     except StateError:
         raise
-    except (ValueError, KeyError, TypeError, IndexError) as error:
-        raise StateError(f"a damaged device record: {error!r}") from None
+    except (ValueError, KeyError, TypeError, IndexError, RecursionError) as error:
+        # RecursionError: JSON nested thousands deep (json.loads recurses per level); not a record we wrote
+        raise StateError(f"a damaged device record: {type(error).__name__}: {str(error)[:200]}") from None
 
 
 def _array(values: np.ndarray) -> dict[str, Any]:

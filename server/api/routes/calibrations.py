@@ -19,12 +19,19 @@ from starlette.formparsers import MultiPartException, MultiPartParser
 from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
-from server.api.params import FRAME_REQUEST_BODY, BoardPixelsDep, PhotosBodyDep
+from server.api.params import FRAME_REQUEST_BODY, BoardPixelsDep, PhotosBodyDep, photo_pixel_limit
 from server.calibration.board import find_board
-from server.calibration.photos import PhotoError, find_views
+from server.calibration.photos import PhotoError, UnreadablePhotos, find_views
 from server.calibration.report import CalibrationInputError, calibrate, no_board_report
 from shared_schemas import DeviceProfile
-from shared_schemas.calibration import MAX_VIEWS, BoardSpec, BoardView, CalibrationReport, CalibrationRequest
+from shared_schemas.calibration import (
+    MAX_VIEW_NAME,
+    MAX_VIEWS,
+    BoardSpec,
+    BoardView,
+    CalibrationReport,
+    CalibrationRequest,
+)
 
 BOARD_HEADER = "X-Lumipose-Board"
 MULTIPART = "multipart/form-data"
@@ -37,7 +44,7 @@ router = APIRouter(
 BoardHeader = Annotated[str | None, Header(alias=BOARD_HEADER, description="the board spec (lumipose.board/1) as JSON")]
 # the JSON request's own rule for the id, for the multipart field
 PROFILE_ID: TypeAdapter[str] = TypeAdapter(cast(Any, Annotated[str, CalibrationRequest.model_fields["profile_id"]]))
-NameQuery = Annotated[str, Query(max_length=256, description="the photo's name in the view")]
+NameQuery = Annotated[str, Query(max_length=MAX_VIEW_NAME, description="the photo's name in the view")]
 
 CALIBRATION_REQUEST_BODY: dict[str, Any] = {
     "requestBody": {
@@ -72,6 +79,13 @@ def _invalid(field: str, error: ValidationError | ValueError) -> ApiError:
     else:
         message = f"{field}: {error}"
     return ApiError(422, "invalid_request", message, field=field)
+
+
+def _invalid_body(error: ValidationError) -> ApiError:
+    """A JSON body's first problem, named by its place in the body (for example 'views.0.corners_px.3.0')."""
+    problem = error.errors()[0]
+    field = ".".join(str(part) for part in problem["loc"]) or "body"
+    return ApiError(422, "invalid_request", f"{field}: {problem['msg']}", field=field)
 
 
 def _board(text: str | None, field: str) -> BoardSpec:
@@ -145,15 +159,23 @@ async def _multipart(request: Request, body: bytes) -> tuple[str | None, str | N
     for index, item in enumerate(form.getlist("photos")):
         if not isinstance(item, UploadFile):
             raise ApiError(422, "invalid_request", "photos: each photo must be a file part", field="photos")
-        photos.append((item.filename or f"photo {index + 1}", await item.read()))
+        name = item.filename or f"photo {index + 1}"
+        if len(name) > MAX_VIEW_NAME:  # it names the photo's view (BoardView.name) and its line in the report
+            raise ApiError(
+                400,
+                "bad_multipart",
+                f"photos: part {index + 1}'s file name has {len(name)} characters; at most {MAX_VIEW_NAME}",
+                field="photos",
+            )
+        photos.append((name, await item.read()))
     await form.close()
     return fields["board"], fields["device"], fields["profile_id"], photos
 
 
 def _calibrate_photos(
-    photos: list, spec: BoardSpec, device: DeviceProfile, profile_id: str | None
+    photos: list, spec: BoardSpec, device: DeviceProfile, profile_id: str | None, max_pixels: int
 ) -> CalibrationReport:
-    views, skipped = find_views(photos, spec)
+    views, skipped = find_views(photos, spec, max_pixels)
     if not views:
         return no_board_report(skipped)
     report = calibrate(views, spec, device, profile_id)
@@ -171,7 +193,7 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
         try:
             calibration = CalibrationRequest.model_validate_json(body)
         except ValidationError as error:
-            raise _invalid("body", error) from None
+            raise _invalid_body(error) from None
         spec, device = calibration.board, _device(calibration.device, await _profiles(services))
         work = partial(calibrate, calibration.views, spec, device, calibration.profile_id)
     elif content_type == MULTIPART:
@@ -186,7 +208,8 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
                 PROFILE_ID.validate_python(profile_id)
             except ValidationError as error:
                 raise _invalid("profile_id", error) from None
-        work = partial(_calibrate_photos, photos, spec, _device(device_text, await _profiles(services)), profile_id)
+        device = _device(device_text, await _profiles(services))
+        work = partial(_calibrate_photos, photos, spec, device, profile_id, photo_pixel_limit(services))
     else:
         raise ApiError(
             415,
@@ -198,6 +221,8 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
     try:
         async with services.pipeline_limiter:
             return await run_in_threadpool(work)
+    except UnreadablePhotos as error:  # as /v1/calibrations/views answers one unreadable photo
+        raise ApiError(400, "bad_frame", str(error), field="photos") from None
     except (CalibrationInputError, PhotoError) as error:
         raise ApiError(
             422, "invalid_request", str(error), field="photos" if isinstance(error, PhotoError) else "views"

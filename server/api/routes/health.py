@@ -16,8 +16,8 @@ router = APIRouter(tags=["health"])
 
 @router.get("/healthz", response_model=Health)
 async def health(services: ServicesDep) -> Health:
-    """200 while the service runs; 'degraded' names the stored files that cannot be read, and a shared
-    store (Redis) that does not answer."""
+    """200 while the service runs; 'degraded' names the stored files that cannot be read, a shared store
+    (Redis) that does not answer, and a data folder whose last write found no room."""
     return await run_in_threadpool(_health, services)
 
 
@@ -35,6 +35,8 @@ def _health(services: Services) -> Health:
     sessions_problem = services.devices.unavailable()
     if sessions_problem is not None:
         unavailable.append(f"device sessions: {sessions_problem}")
+    stores = (services.maps, services.profiles, services.samples)
+    unavailable += [problem for problem in (store.unwritable() for store in stores) if problem is not None]
     damaged = sorted(damaged_maps + services.profiles.damaged() + services.samples.damaged())
     return Health(
         status="degraded" if damaged or unavailable else "ok",
