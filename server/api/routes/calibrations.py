@@ -1,6 +1,9 @@
 """Camera calibration: find the board on one photo, or calibrate from views or photos (issue 14).
 
-HTTP only: the work is `server.calibration`'s, run in a worker thread under the pipeline limiter.
+HTTP only: the work is `server.calibration`'s. Finding a board on one photo runs in a worker thread under
+the pipeline limiter, as a locate; a calibration (up to tens of seconds of fitting) takes one of its own
+slots (`Services.calibration_slots`: one running, one waiting, 503 beyond) and runs in a child process
+stopped at `--calibration-timeout-s` (`server.api.child`), so locates never wait behind it.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 
+from server.api.child import WorkTimedOut
 from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
@@ -160,6 +164,14 @@ def _calibrate_photos(
     return report.model_copy(update={"views": report.views + skipped})
 
 
+def _in_child(work: Callable[[], CalibrationReport]) -> CalibrationReport | tuple[str, str]:
+    """(In the child process.) The report, or the refused input as (field, message): plain values cross back."""
+    try:
+        return work()
+    except (CalibrationInputError, PhotoError) as error:
+        return ("photos" if isinstance(error, PhotoError) else "views", str(error))
+
+
 @router.post("", response_model=CalibrationReport, openapi_extra=CALIBRATION_REQUEST_BODY)
 async def create_calibration(request: Request, services: ServicesDep, body: PhotosBodyDep) -> CalibrationReport:
     """Calibrate a camera: 200 with the report, `ok: true` and the calibrated `profile` when the set passes,
@@ -169,7 +181,8 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
     work: Callable[[], CalibrationReport]
     if content_type == JSON:
         try:
-            calibration = CalibrationRequest.model_validate_json(body)
+            # up to 64 MB of views: parsed off the event loop
+            calibration = await run_in_threadpool(CalibrationRequest.model_validate_json, body)
         except ValidationError as error:
             raise _invalid("body", error) from None
         spec, device = calibration.board, _device(calibration.device, await _profiles(services))
@@ -195,10 +208,14 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
             f"send {JSON} (CalibrationRequest) or {MULTIPART} (photos)",
             field="Content-Type",
         )
-    try:
-        async with services.pipeline_limiter:
-            return await run_in_threadpool(work)
-    except (CalibrationInputError, PhotoError) as error:
-        raise ApiError(
-            422, "invalid_request", str(error), field="photos" if isinstance(error, PhotoError) else "views"
-        ) from None
+    async with services.calibration_slots.slot():
+        try:
+            answer = await run_in_threadpool(services.calibrator.run, _in_child, work)
+        except WorkTimedOut:
+            limit_s = services.calibrator.limit_s
+            message = f"the calibration took longer than {limit_s:g} s and was stopped: send fewer views or photos"
+            raise ApiError(503, "timeout", message, field="views") from None
+    if isinstance(answer, tuple):
+        field, message = answer
+        raise ApiError(422, "invalid_request", message, field=field)
+    return answer
