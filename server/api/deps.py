@@ -63,8 +63,8 @@ class WorkSlots:
             error = ApiError(
                 503,
                 "busy",
-                f"{self.running} {self.what} running and {self.waiting} waiting, the most this server takes at once; "
-                f"try again in {self.retry_after_s} s",
+                f"{self.what}: {self.running} running and {self.waiting} waiting, the most this server takes at "
+                f"once; try again in {self.retry_after_s} s",
             )
             error.headers["Retry-After"] = str(self.retry_after_s)
             raise error
