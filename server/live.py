@@ -155,7 +155,7 @@ class LiveBoard:
             if cached is not None and cached[0] == version:
                 return cached
             version, live = self.devices(since_version)
-            data = live.model_dump_json().encode() if live.devices or since_version == 0 else None
+            data = live.model_dump_json(by_alias=True).encode() if live.devices or since_version == 0 else None
             if any(built != version for built, _ in self._shared.values()):
                 self._shared = {}  # the board changed: what was built before is stale
             self._shared[since_version] = (version, data)

@@ -263,7 +263,9 @@ def test_a_long_exif_string_is_cut_and_the_board_and_the_result_header_stay_smal
         assert detail.startswith("EXIF 'Xiaomi---") and len(detail) < 200, len(detail)
     board = httpx.get(f"{server.url}/v1/live/devices", timeout=30)
     assert board.status_code == 200
+    assert '"schema_"' not in board.text  # the contract's names, as FastAPI would have written them
     mine = next(d for d in board.json()["devices"] if d["device"] == device)
+    assert mine["last"]["schema"] == "lumipose.result/1"
     assert len(mine["last"]["camera_used"]["detail"]) <= MAX_MESSAGE_CHARS
     annotated = httpx.post(f"{server.url}/v1/locate", content=photo, params={"annotate": 1}, timeout=60,
                            headers={"Content-Type": "image/png"})
