@@ -176,31 +176,10 @@ def _in_child(work: Callable[[], CalibrationReport]) -> CalibrationReport | tupl
 async def create_calibration(request: Request, services: ServicesDep, body: PhotosBodyDep) -> CalibrationReport:
     """Calibrate a camera: 200 with the report, `ok: true` and the calibrated `profile` when the set passes,
     `ok: false` with `advice` (what to shoot next) when it does not. 422 for bad input (views of
-    different sizes, a board spec the views do not fit, an unknown device, no readable photo)."""
+    different sizes, a board spec the views do not fit, an unknown device, no readable photo).
+    503 `busy` while one calibration runs and another waits; 503 `timeout` past `--calibration-timeout-s`."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    work: Callable[[], CalibrationReport]
-    if content_type == JSON:
-        try:
-            # up to 64 MB of views: parsed off the event loop
-            calibration = await run_in_threadpool(CalibrationRequest.model_validate_json, body)
-        except ValidationError as error:
-            raise _invalid("body", error) from None
-        spec, device = calibration.board, _device(calibration.device, await _profiles(services))
-        work = partial(calibrate, calibration.views, spec, device, calibration.profile_id)
-    elif content_type == MULTIPART:
-        board, device_text, profile_id, photos = await _multipart(request, body)
-        spec = _board(board, "board")
-        if not device_text:
-            raise ApiError(422, "invalid_request", "device: a profile id or profile JSON is needed", field="device")
-        if not photos:
-            raise ApiError(422, "invalid_request", "photos: no photo was sent", field="photos")
-        if profile_id is not None:
-            try:
-                PROFILE_ID.validate_python(profile_id)
-            except ValidationError as error:
-                raise _invalid("profile_id", error) from None
-        work = partial(_calibrate_photos, photos, spec, _device(device_text, await _profiles(services)), profile_id)
-    else:
+    if content_type not in (JSON, MULTIPART):
         raise ApiError(
             415,
             "unsupported_media_type",
@@ -208,7 +187,8 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
             f"send {JSON} (CalibrationRequest) or {MULTIPART} (photos)",
             field="Content-Type",
         )
-    async with services.calibration_slots.slot():
+    async with services.calibration_slots.slot():  # before the body is parsed: a refused one costs nothing more
+        work = await _work(request, services, body, content_type)
         try:
             answer = await run_in_threadpool(services.calibrator.run, _in_child, work)
         except WorkTimedOut:
@@ -219,3 +199,27 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
         field, message = answer
         raise ApiError(422, "invalid_request", message, field=field)
     return answer
+
+
+async def _work(request: Request, services: Services, body: bytes, content_type: str) -> Callable[[], Any]:
+    """The calibration the body asks for, checked, ready to run."""
+    if content_type == JSON:
+        try:
+            # up to 64 MB of views: parsed off the event loop
+            calibration = await run_in_threadpool(CalibrationRequest.model_validate_json, body)
+        except ValidationError as error:
+            raise _invalid("body", error) from None
+        spec, device = calibration.board, _device(calibration.device, await _profiles(services))
+        return partial(calibrate, calibration.views, spec, device, calibration.profile_id)
+    board, device_text, profile_id, photos = await _multipart(request, body)
+    spec = _board(board, "board")
+    if not device_text:
+        raise ApiError(422, "invalid_request", "device: a profile id or profile JSON is needed", field="device")
+    if not photos:
+        raise ApiError(422, "invalid_request", "photos: no photo was sent", field="photos")
+    if profile_id is not None:
+        try:
+            PROFILE_ID.validate_python(profile_id)
+        except ValidationError as error:
+            raise _invalid("profile_id", error) from None
+    return partial(_calibrate_photos, photos, spec, _device(device_text, await _profiles(services)), profile_id)
