@@ -98,6 +98,15 @@ def _add_serve(commands) -> None:
     )
     parser.add_argument("--pipeline-threads", type=int, help="frames located at once per worker (default: cores)")
     parser.add_argument(
+        "--calibration-timeout-s", type=float, help="a calibration running longer is stopped (default 120)"
+    )
+    parser.add_argument(
+        "--survey-timeout-s", type=float, help="a survey still reading samples after this long is stopped (default 300)"
+    )
+    parser.add_argument(
+        "--max-event-streams", type=int, help="live page event streams open at once per worker (default 32)"
+    )
+    parser.add_argument(
         "--cors-origins",
         nargs="+",
         help="origins browsers may call from (default: any, '*'; as a variable, a JSON list)",

@@ -9,8 +9,10 @@ of the frame around the panel, not the frame) per device, at most `max_frame_byt
 drawn only when the page asks for one.
 
 One owner, one lock: every change and every read holds the board's lock for a few microseconds.
-Event streams `listen` for changes: each gets an `asyncio.Event`, set from whatever thread records
-a change, and reads the devices changed since the version it last saw.
+Event streams `listen` for changes, at most `max_listeners` at once: each gets an `asyncio.Event`, set
+from whatever thread records a change, and reads the devices changed since the version it last saw.
+What they read is shared (`shared_json`): the JSON of the devices changed since a version is built once
+per board version, under a second lock, however many streams (and `GET /v1/live/devices`) ask for it.
 """
 
 from __future__ import annotations
@@ -34,7 +36,8 @@ class LiveRules:
     track_points: int = 200  # fixes drawn as a device's fading track
     window_s: float = 10.0  # of the fix rate and the refusal shares
     max_devices: int = 1000  # as many as the device sessions (`DeviceRules.max_devices`)
-    max_frame_bytes: int = 64 * 2**20  # all devices' kept pictures' sources together
+    max_frame_bytes: int = 64 * 2**20  # all devices' kept pictures' sources and results together
+    max_listeners: int = 32  # event streams at once (`--max-event-streams`)
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,6 +47,7 @@ class KeptFrame:
     map: str
     result: LocateResult
     seen: FrameSeen
+    nbytes: int  # what it keeps: the picture's sources and the result (as JSON)
 
     def info(self) -> KeptFrameInfo:
         return KeptFrameInfo(
@@ -68,7 +72,7 @@ class _DeviceLog:
     version: int = 0  # the board's version when it last changed
 
 
-class _Listener:
+class Listener:
     def __init__(self) -> None:
         self.loop = asyncio.get_running_loop()
         self.changed = asyncio.Event()
@@ -76,6 +80,10 @@ class _Listener:
     def wake(self) -> None:
         with suppress(RuntimeError):  # its loop has closed: the stream is gone with it
             self.loop.call_soon_threadsafe(self.changed.set)
+
+
+class BoardFull(Exception):
+    """As many event streams listen as the board takes."""
 
 
 class LiveBoard:
@@ -90,7 +98,9 @@ class LiveBoard:
         # a kept frame's number names its picture's URL, which browsers cache: unique across restarts and workers
         self._seq = time.time_ns() // 1000
         self._frame_bytes = 0
-        self._listeners: set[_Listener] = set()
+        self._listeners: set[Listener] = set()
+        self._building = threading.Lock()  # one build of the shared JSON at a time; `_shared` is this lock's
+        self._shared: dict[int, tuple[int, bytes | None]] = {}  # since-version -> (board version, JSON)
 
     @property
     def keeps_frames(self) -> bool:
@@ -106,6 +116,8 @@ class LiveBoard:
     ) -> None:
         """A frame of `device` was answered with `result` (`seen`: what its picture needs, if kept)."""
         now = self._clock()
+        # a kept result counts against the budget with its pictures' sources (its text is bounded by the contract)
+        kept_bytes = 0 if seen is None else seen.nbytes + len(result.model_dump_json())
         with self._lock:
             log = self._devices.get(device)
             if log is None:
@@ -117,7 +129,7 @@ class LiveBoard:
             if result.reason is FailureReason.id_frame:
                 log.id_frames += 1
             else:
-                self._add_pose_frame(log, now, result, latency_ms, seen)
+                self._add_pose_frame(log, now, result, latency_ms, seen, kept_bytes)
             listeners = list(self._listeners)
         for listener in listeners:
             listener.wake()
@@ -131,6 +143,23 @@ class LiveBoard:
             devices = [self._device_live(name, log, now, since_version) for name, log in changed]
             version = self._version
         return version, LiveDevices(time_s=now, window_s=self.rules.window_s, devices=devices)
+
+    def shared_json(self, since_version: int = 0) -> tuple[int, bytes | None]:
+        """`devices(since_version)` as JSON (None when no device changed after it, for a version above 0),
+        built once per board version and since-version: every caller asking at the same version gets the
+        same bytes. Blocks while another caller builds."""
+        with self._building:
+            with self._lock:
+                version = self._version
+            cached = self._shared.get(since_version)
+            if cached is not None and cached[0] == version:
+                return cached
+            version, live = self.devices(since_version)
+            data = live.model_dump_json(by_alias=True).encode() if live.devices or since_version == 0 else None
+            if any(built != version for built, _ in self._shared.values()):
+                self._shared = {}  # the board changed: what was built before is stale
+            self._shared[since_version] = (version, data)
+            return version, data
 
     def kept_frames(self, device: str) -> list[KeptFrame] | None:
         """The device's kept frames, newest first; None for a device not on the board."""
@@ -171,18 +200,36 @@ class LiveBoard:
 
     @contextmanager
     def listen(self) -> Iterator[asyncio.Event]:
-        """An event set whenever the board changes, for as long as the block runs (call on the event loop)."""
-        listener = _Listener()
-        with self._lock:
-            self._listeners.add(listener)
+        """An event set whenever the board changes, for as long as the block runs (call on the event loop);
+        `BoardFull` when `max_listeners` listen already."""
+        listener = self.add_listener()
         try:
             yield listener.changed
         finally:
-            with self._lock:
-                self._listeners.discard(listener)
+            self.remove_listener(listener)
+
+    def add_listener(self) -> Listener:
+        """A listener whose `changed` is set whenever the board changes, until `remove_listener` (call on the
+        event loop); `BoardFull` when `max_listeners` listen already."""
+        listener = Listener()
+        with self._lock:
+            if len(self._listeners) >= self.rules.max_listeners:
+                raise BoardFull(f"{len(self._listeners)} event streams are open, the most this worker takes")
+            self._listeners.add(listener)
+        return listener
+
+    def remove_listener(self, listener: Listener) -> None:
+        with self._lock:
+            self._listeners.discard(listener)
 
     def _add_pose_frame(
-        self, log: _DeviceLog, now: float, result: LocateResult, latency_ms: float | None, seen: FrameSeen | None
+        self,
+        log: _DeviceLog,
+        now: float,
+        result: LocateResult,
+        latency_ms: float | None,
+        seen: FrameSeen | None,
+        kept_bytes: int,
     ) -> None:
         """(The board's lock is held.)"""
         log.frames += 1
@@ -198,10 +245,10 @@ class LiveBoard:
                 log.track.popleft()
         if seen is not None and self.keeps_frames:
             self._seq += 1
-            log.kept.append(KeptFrame(self._seq, now, log.map, result, seen))
-            self._set_kept_bytes(log, log.kept_bytes + seen.nbytes)
+            log.kept.append(KeptFrame(self._seq, now, log.map, result, seen, kept_bytes))
+            self._set_kept_bytes(log, log.kept_bytes + kept_bytes)
             while len(log.kept) > self.rules.frames_kept:
-                self._set_kept_bytes(log, log.kept_bytes - log.kept.popleft().seen.nbytes)
+                self._set_kept_bytes(log, log.kept_bytes - log.kept.popleft().nbytes)
             self._within_budget(log)
 
     def _device_live(self, name: str, log: _DeviceLog, now: float, since_version: int) -> DeviceLive:
@@ -239,7 +286,7 @@ class LiveBoard:
             while log.kept and self._frame_bytes > self.rules.max_frame_bytes:
                 if log is keeping and len(log.kept) == 1:
                     return
-                self._set_kept_bytes(log, log.kept_bytes - log.kept.popleft().seen.nbytes)
+                self._set_kept_bytes(log, log.kept_bytes - log.kept.popleft().nbytes)
             if self._frame_bytes <= self.rules.max_frame_bytes:
                 return
 

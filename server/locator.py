@@ -30,7 +30,7 @@ import numpy as np
 from server.geometry import wrap_deg
 from server.ingest import LumaFrame
 from server.options import LocateOptions
-from server.outcomes import Refusal, located, refused
+from server.outcomes import Refusal, located, refused, with_camera
 from server.pipeline import locate_beacon
 from server.rooms import locate_in_room
 from server.tone import linearized
@@ -64,7 +64,7 @@ def locate(
         result = _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
         # every result says which intrinsics it rests on (a photo's may be a rough EXIF guess): a refused
         # photo's user needs it most, to see whether the camera was the trouble
-        return result.model_copy(update={"camera_used": frame.camera_used})
+        return with_camera(result, frame.camera_used)
     except NUMERICAL_ERRORS as error:
         where = _where(error)
         LOG.warning("numerical failure in %s on map '%s': %r", where, beacon_map.name, error, exc_info=True)
@@ -74,7 +74,7 @@ def locate(
             f"the frame's numbers (camera, distortion, gravity, times) or the map's broke the arithmetic "
             f"in {where}: {'cv2.error' if isinstance(error, cv2.error) else type(error).__name__}: {first_line}",
         )
-        return refused(failure).model_copy(update={"camera_used": frame.camera_used})
+        return with_camera(refused(failure), frame.camera_used)
 
 
 def _opencv_message(text: str) -> str:

@@ -17,7 +17,18 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from server.geometry import ypr_from_rotation
-from shared_schemas import BeaconIdSource, FailureReason, LocateResult, OrientationRule, TrackState, VlcReading
+from shared_schemas import (
+    BeaconIdSource,
+    CameraUsed,
+    FailureReason,
+    LocateResult,
+    OrientationRule,
+    TrackState,
+    VlcReading,
+)
+from shared_schemas.models import MAX_MESSAGE_CHARS, MAX_WARNING_CHARS, MAX_WARNINGS
+
+CUT = "..."  # ends a text cut to the contract's length
 
 
 class FrameError(ValueError):
@@ -81,6 +92,23 @@ class Fix:
         return replace(self, warnings=self.warnings + tuple(warnings))
 
 
+def bounded(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """`text` within `limit` characters: cut, ending in "...", when longer (a result's text quotes input such
+    as EXIF strings, which has no length of its own)."""
+    return text if len(text) <= limit else text[: limit - len(CUT)] + CUT
+
+
+def _warnings(warnings: Sequence[str]) -> list[str]:
+    return [bounded(text, MAX_WARNING_CHARS) for text in warnings[:MAX_WARNINGS]]
+
+
+def with_camera(result: LocateResult, camera: CameraUsed | None) -> LocateResult:
+    """`result` saying which intrinsics it rests on (`camera.detail` within the contract's length)."""
+    if camera is not None and len(camera.detail) > MAX_MESSAGE_CHARS:
+        camera = camera.model_copy(update={"detail": bounded(camera.detail)})
+    return result.model_copy(update={"camera_used": camera})
+
+
 def _list(array: np.ndarray | None) -> list | None:
     return None if array is None else np.asarray(array, dtype=float).tolist()
 
@@ -104,7 +132,7 @@ def located(
         gravity_used=fix.gravity_used,
         position_sigma_m=None if fix.covariance_m2 is None else np.sqrt(np.diag(fix.covariance_m2)).tolist(),
         position_covariance_m2=_list(fix.covariance_m2),
-        warnings=list(fix.warnings),
+        warnings=_warnings(fix.warnings),
         timing_ms=dict(fix.timing_ms),
         vlc=vlc,
         beacons_in_view=beacons_in_view,
@@ -123,8 +151,8 @@ def refused(
     return LocateResult(
         ok=False,
         reason=refusal.reason,
-        message=refusal.message,
-        warnings=list(refusal.warnings),
+        message=bounded(refusal.message),
+        warnings=_warnings(refusal.warnings),
         timing_ms=dict(refusal.timing_ms),
         vlc=vlc,
         beacons_in_view=beacons_in_view,

@@ -204,9 +204,16 @@ def _positive(value: object) -> float | None:
     return number if np.isfinite(number) and number > 0 else None
 
 
+# EXIF strings have no length limit of their own (a 20 MB Model was tried); real makes and models are
+# under 40 characters, and they are quoted in a result's camera_used.detail: cut to this many
+MAX_EXIF_TEXT = 64
+
+
 def _text(value: object) -> str | None:
+    if isinstance(value, bytes | str):
+        value = value[: 4 * MAX_EXIF_TEXT]  # before decoding: a long string is never copied whole
     text = value.decode("ascii", "replace") if isinstance(value, bytes) else value
-    return text.strip("\x00 ").strip() or None if isinstance(text, str) else None
+    return text.strip("\x00 ").strip()[:MAX_EXIF_TEXT] or None if isinstance(text, str) else None
 
 
 def _png_exif_chunk(data: bytes) -> bytes | None:

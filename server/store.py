@@ -529,6 +529,9 @@ class FolderMaps:
         self._files.readable()
 
 
+ACTIVE_READS = 8  # times `MapStore.active` reads the name again while activations and deletions race it
+
+
 @dataclass(frozen=True)
 class MapStore:
     """Bundled demo map, the startup map, and stored maps (in rising precedence), with the active map.
@@ -564,6 +567,22 @@ class MapStore:
         """The map named as active; the default map when none is, when the name cannot be read
         (reported in `damaged`) or names no map."""
         return self._active_in(self._stored)
+
+    def active(self) -> tuple[str, BeaconMap]:
+        """The active map's name and the map, as one: a stored map is deleted only when it is not active, so a
+        name whose map is gone by the time it is read was replaced by an activation meanwhile, and the name is
+        read again (folder and Redis alike). Before (2026-12-02), a locate naming no map that read the name,
+        then the map, got a 404 for a map another client had deactivated and deleted in between."""
+        name = self.active_name()
+        for _ in range(ACTIVE_READS):
+            try:
+                return name, self.get(name)
+            except StoreError as error:
+                again = self.active_name()
+                if error.code != "not_found" or again == name:
+                    raise
+                name = again
+        return name, self.get(name)
 
     def _active_in(self, view: MapView) -> str:
         place = self._stored.active_place

@@ -70,6 +70,11 @@ MIN_SIDE_M: Final = 0.005  # a panel of 5 mm is a single LED; smaller cannot be 
 MAX_SIDE_M: Final = 10.0  # a 10 m luminous ceiling
 MIN_REQUIRED_SIGMA_M: Final = 1e-4  # a map may ask for a tenth of a millimetre, not for nothing
 MAX_GRAVITY_SIGMA_DEG: Final = 90.0  # a tilt error beyond 90 degrees says nothing
+# A result's free text: sentences for people, cut (ending in "...") where longer; with them a result's JSON
+# stays within a few KB (the X-Lumipose-Result header of ?annotate=1 travels through proxies' 4-16 KB buffers)
+MAX_MESSAGE_CHARS: Final = 1000  # `message`, `camera_used.detail`; the longest the service writes is ~400
+MAX_WARNING_CHARS: Final = 300  # each of `warnings`
+MAX_WARNINGS: Final = 8  # the service writes at most 3
 
 Distortion = list[Annotated[float, Field(ge=-MAX_DISTORTION, le=MAX_DISTORTION)]]
 GreyLevel = Annotated[float, Field(ge=0, le=255)]  # DN of an 8-bit luma plane
@@ -546,11 +551,15 @@ class CameraUsed(Strict):
     cx: float = Field(ge=MIN_PRINCIPAL_PX, le=MAX_PRINCIPAL_PX, description="principal point x, pixels")
     cy: float = Field(ge=MIN_PRINCIPAL_PX, le=MAX_PRINCIPAL_PX, description="principal point y, pixels")
     source: CameraSource
-    profile: str | None = Field(default=None, description="the device profile's id, when one was used")
+    profile: str | None = Field(
+        default=None, max_length=64, description="the device profile's id (a profile's name), when one was used"
+    )
     focal_sigma_rel: float | None = Field(
         default=None, ge=0, le=1, description="relative 1-sigma error of fx, fy; null: unknown (given intrinsics)"
     )
-    detail: str = Field(description="for people: which profile, which EXIF values, any turn")
+    detail: str = Field(
+        max_length=MAX_MESSAGE_CHARS, description="for people: which profile, which EXIF values, any turn"
+    )
 
 
 class TrackState(Strict):
@@ -589,8 +598,10 @@ class LocateResult(Strict):
         default=None, description="covariance of position_m in the map frame (m^2); its XY block gives the 2D ellipse"
     )
     reason: FailureReason | None = None
-    message: str | None = None
-    warnings: list[str] = Field(default_factory=list)
+    message: str | None = Field(default=None, max_length=MAX_MESSAGE_CHARS)
+    warnings: list[Annotated[str, Field(max_length=MAX_WARNING_CHARS)]] = Field(
+        default_factory=list, max_length=MAX_WARNINGS
+    )
     timing_ms: dict[str, float] = Field(default_factory=dict)
     vlc: VlcReading | None = Field(default=None, description="the ID read by VLC for this fix, when one was read")
     camera_used: CameraUsed | None = Field(default=None, description="the intrinsics of this result and how sure")

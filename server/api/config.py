@@ -48,6 +48,15 @@ class Settings(BaseSettings):
     pipeline_threads: int = Field(
         default_factory=lambda: os.cpu_count() or 1, ge=1, description="frames located at once per worker"
     )
+    calibration_timeout_s: float = Field(
+        default=120.0, gt=0, description="a calibration running longer is stopped (503 timeout)"
+    )
+    survey_timeout_s: float = Field(
+        default=300.0, gt=0, description="a survey still reading its samples after this long is stopped (503 timeout)"
+    )
+    max_event_streams: int = Field(
+        default=32, ge=1, description="live page event streams open at once per worker; more are refused (503)"
+    )
     cors_origins: list[str] = Field(default_factory=lambda: ["*"])
     session_idle_s: float = Field(default=600.0, gt=0, description="a device silent for longer loses its session")
     max_devices: int = Field(default=1000, ge=1, description="device sessions kept per worker")
@@ -99,7 +108,9 @@ class Settings(BaseSettings):
         return DeviceRules(idle_s=self.session_idle_s, max_devices=self.max_devices)
 
     def live_rules(self) -> LiveRules:
-        return LiveRules(frames_kept=self.live_frames, max_devices=self.max_devices)
+        return LiveRules(
+            frames_kept=self.live_frames, max_devices=self.max_devices, max_listeners=self.max_event_streams
+        )
 
     @property
     def max_upload_bytes(self) -> int:

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import hmac
-from collections.abc import Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import asynccontextmanager
 from dataclasses import dataclass
 from typing import Annotated
 
@@ -11,6 +12,7 @@ import anyio
 from fastapi import Depends, Header, Request
 from starlette.responses import Response
 
+from server.api.child import TimedChild
 from server.api.config import Settings
 from server.api.errors import ApiError
 from server.api.metrics import Metrics, StatusWindow
@@ -37,6 +39,46 @@ class FrameSlots:
             self._semaphore.release()
 
 
+class WorkSlots:
+    """At most `running` jobs of one kind at once and `waiting` more in line for a slot; beyond, 503 `busy`
+    with Retry-After at once: a kind of slow work (calibrations, surveys, pictures) never holds the
+    pipeline's threads, and its queue cannot grow without bound.
+
+    Its counts are the event loop's alone (changed only between awaits, never from a worker thread).
+    """
+
+    def __init__(self, what: str, running: int, waiting: int, retry_after_s: int) -> None:
+        self.what, self.running, self.waiting, self.retry_after_s = what, running, waiting, retry_after_s
+        self._limiter = anyio.CapacityLimiter(running)
+        self._queued = 0
+
+    @property
+    def held(self) -> int:
+        """Jobs running or waiting now."""
+        return int(self._limiter.borrowed_tokens) + self._queued
+
+    @asynccontextmanager
+    async def slot(self) -> AsyncIterator[None]:
+        if self.held >= self.running + self.waiting:
+            error = ApiError(
+                503,
+                "busy",
+                f"{self.what}: {self.running} running and {self.waiting} waiting, the most this server takes at "
+                f"once; try again in {self.retry_after_s} s",
+            )
+            error.headers["Retry-After"] = str(self.retry_after_s)
+            raise error
+        self._queued += 1
+        try:
+            await self._limiter.acquire()
+        finally:
+            self._queued -= 1
+        try:
+            yield
+        finally:
+            self._limiter.release()
+
+
 @dataclass(frozen=True)
 class Services:
     """What the app holds for its lifetime; built once by `create_app`."""
@@ -49,7 +91,11 @@ class Services:
     options: LocateOptions  # from the settings; a request's query refines its pipeline part
     devices: DeviceSessions  # this process's, or Redis's with --redis: see docs/deployment.md
     pipeline_limiter: anyio.CapacityLimiter  # CPU-bound work: no more threads than cores
-    survey_limiter: anyio.CapacityLimiter  # surveys (seconds to a minute each): one at a time
+    survey_slots: WorkSlots  # surveys (seconds to a minute each): one at a time, apart from the pipeline
+    calibration_slots: WorkSlots  # calibrations (up to tens of seconds of fitting): apart from the pipeline
+    calibrator: TimedChild  # where calibrations run: a child process stopped at the time limit
+    picture_slots: WorkSlots  # the live page's pictures (tens of ms each): apart from the pipeline
+    live_limiter: anyio.CapacityLimiter  # the live board's shared JSON and status for the streams: one thread
     frame_slots: FrameSlots  # frame uploads held at once (server.api.guard)
     live: LiveBoard  # devices as the operator's page shows them (per worker, as `devices`)
     status_window: StatusWindow  # request rates and latencies of the last minute, for the page

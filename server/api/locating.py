@@ -63,8 +63,11 @@ async def locate_upload(
     session (tracking, ID frames combined) when the map has several beacons, and on the live board
     (`started`: the request's `time.perf_counter()`, for its latency); `annotated`: with a picture
     of what the pipeline saw."""
-    name = map_name if map_name else await run_in_threadpool(services.maps.active_name)
-    beacon_map = await run_in_threadpool(services.maps.get, name)  # reads the data folder: off the event loop
+    # reads the data folder (or Redis): off the event loop; the active map's name and map read as one
+    if map_name:
+        name, beacon_map = map_name, await run_in_threadpool(services.maps.get, map_name)
+    else:
+        name, beacon_map = await run_in_threadpool(services.maps.active)
     camera = upload.meta.camera
     # Only a frame naming a profile needs the table (bundled and stored); one naming a damaged stored
     # profile is refused by name (409) rather than as unknown.

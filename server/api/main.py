@@ -11,8 +11,9 @@ from fastapi.responses import FileResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 
 from server.api import VERSION, protocol
+from server.api.child import TimedChild
 from server.api.config import Settings
-from server.api.deps import FrameSlots, Services
+from server.api.deps import FrameSlots, Services, WorkSlots
 from server.api.errors import BugCatcher, install_error_handlers
 from server.api.metrics import Metrics, MetricsMiddleware, StatusWindow
 from server.api.routes import calibrations, health, live, locate, maps, profiles, samples, surveys
@@ -21,6 +22,8 @@ from server.live import LiveBoard
 from server.store import MapBackend, MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices, DeviceSessions
 from shared_schemas.api import RESULT_HEADER
+
+PICTURES_WAITING = 8  # the live page asks for a few at a time; a flood is refused rather than queued
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -41,7 +44,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         options=settings.locate_options(),
         devices=_device_sessions(settings),
         pipeline_limiter=anyio.CapacityLimiter(settings.pipeline_threads),
-        survey_limiter=anyio.CapacityLimiter(1),
+        survey_slots=WorkSlots("surveys", running=1, waiting=1, retry_after_s=30),
+        calibration_slots=WorkSlots("calibrations", running=1, waiting=1, retry_after_s=30),
+        calibrator=TimedChild(settings.calibration_timeout_s),
+        picture_slots=WorkSlots("pictures", running=1, waiting=PICTURES_WAITING, retry_after_s=1),
+        live_limiter=anyio.CapacityLimiter(1),
         frame_slots=FrameSlots(settings.max_frames_in_flight),
         live=LiveBoard(settings.live_rules()),
         status_window=StatusWindow(metrics),

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from server.annotate import FrameSeen
-from server.live import LiveBoard, LiveRules
+from server.live import BoardFull, LiveBoard, LiveRules
 from shared_schemas import FailureReason, LocateResult, TrackState
 
 
@@ -86,11 +86,16 @@ def test_tracks_and_kept_frames_are_bounded_per_device():
     kept = board.kept_frames("phone")
     seqs = [k.seq for k in kept]
     assert seqs[0] - seqs[2] == 2 and seqs == sorted(seqs, reverse=True) and device.frames_kept == seqs[::-1]
-    assert board.frame_bytes == sum(k.seen.nbytes for k in kept)
+    assert board.frame_bytes == sum(k.nbytes for k in kept)
+
+
+def kept_size(result: LocateResult) -> int:
+    """What a kept frame counts against the byte budget: its picture's sources and its result."""
+    return seen().nbytes + len(result.model_dump_json())
 
 
 def test_the_byte_budget_drops_the_least_recently_seen_devices_pictures_first():
-    one = seen().nbytes
+    one = kept_size(fix(0))
     board = LiveBoard(LiveRules(frames_kept=3, max_frame_bytes=4 * one))
     for device in ("old", "new"):
         for i in range(3):
@@ -111,7 +116,7 @@ def test_nothing_is_kept_with_frames_kept_zero_and_devices_are_bounded():
 
 
 def test_many_threads_record_at_once_and_every_count_adds_up():
-    one = seen().nbytes
+    one = kept_size(fix(100))
     board = LiveBoard(LiveRules(frames_kept=2, max_frame_bytes=10 * one, max_devices=50))
     devices, per_thread, threads = 12, 150, 8
     barrier = threading.Barrier(threads)
@@ -135,7 +140,7 @@ def test_many_threads_record_at_once_and_every_count_adds_up():
     assert sum(d.frames for d in live) == threads * per_thread
     assert sum(d.fixes for d in live) == threads * sum(1 for i in range(per_thread) if i % 3)
     kept = [k for d in live for k in board.kept_frames(d.device)]
-    assert board.frame_bytes == sum(k.seen.nbytes for k in kept) <= 10 * one
+    assert board.frame_bytes == sum(k.nbytes for k in kept) <= 10 * one
     assert len({k.seq for k in kept}) == len(kept)
 
 
@@ -171,3 +176,53 @@ def test_a_device_gone_quiet_is_sent_again_with_its_rate_going_to_zero():
     board.expire_windows()
     (device,) = board.devices(version)[1].devices
     assert device.fix_rate_hz == 0.0 and device.refused == {} and device.track == []
+
+
+def test_a_kept_results_text_counts_against_the_byte_budget():
+    one = kept_size(fix(0))
+    board = LiveBoard(LiveRules(frames_kept=3, max_frame_bytes=4 * one))
+    wordy = LocateResult(ok=False, reason=FailureReason.no_beacon, message="m" * 1000, warnings=["w" * 300] * 8)
+    board.record("wordy", "m", wordy, seen=seen())
+    assert board.frame_bytes == seen().nbytes + len(wordy.model_dump_json()) > one + 3000
+
+
+def test_the_shared_json_is_built_once_per_version_and_agrees_from_many_threads():
+    board = LiveBoard(LiveRules(max_devices=200))
+    for n in range(100):
+        board.record(f"phone-{n}", "m", fix(n))
+    answers: list[tuple[int, bytes | None]] = []
+    barrier = threading.Barrier(8)
+
+    def read(n: int) -> None:
+        barrier.wait()
+        for i in range(40):
+            if n == 0 and i % 4 == 0:
+                board.record(f"phone-{i}", "m", fix(i))  # the board changes while the others read
+            answers.append(board.shared_json(0))
+
+    workers = [threading.Thread(target=read, args=(n,)) for n in range(8)]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join()
+    by_version: dict[int, set[int]] = {}
+    for version, data in answers:
+        by_version.setdefault(version, set()).add(id(data))
+        assert data is not None and data.count(b'"device":') == 100
+    assert all(len(ids) == 1 for ids in by_version.values())  # one build per version, shared by every reader
+    version, _ = board.shared_json(0)
+    assert board.shared_json(version) == (version, None)  # nothing changed since: no event
+
+
+def test_listeners_are_bounded():
+    board = LiveBoard(LiveRules(max_listeners=2))
+
+    async def listen_three() -> str:
+        with board.listen(), board.listen():
+            try:
+                with board.listen():
+                    return "third opened"
+            except BoardFull as full:
+                return str(full)
+
+    assert "2 event streams are open" in asyncio.run(listen_three())

@@ -1,6 +1,9 @@
 """Camera calibration: find the board on one photo, or calibrate from views or photos (issue 14).
 
-HTTP only: the work is `server.calibration`'s, run in a worker thread under the pipeline limiter.
+HTTP only: the work is `server.calibration`'s. Finding a board on one photo runs in a worker thread under
+the pipeline limiter, as a locate; a calibration (up to tens of seconds of fitting) takes one of its own
+slots (`Services.calibration_slots`: one running, one waiting, 503 beyond) and runs in a child process
+stopped at `--calibration-timeout-s` (`server.api.child`), so locates never wait behind it.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 
+from server.api.child import WorkTimedOut
 from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
@@ -182,35 +186,25 @@ def _calibrate_photos(
     return report.model_copy(update={"views": report.views + skipped})
 
 
+def _in_child(work: Callable[[], CalibrationReport]) -> CalibrationReport | tuple[int, str, str, str]:
+    """(In the child process.) The report, or the refused input as (status, code, field, message): plain
+    values cross back."""
+    try:
+        return work()
+    except UnreadablePhotos as error:  # as /v1/calibrations/views answers one unreadable photo
+        return (400, "bad_frame", "photos", str(error))
+    except (CalibrationInputError, PhotoError) as error:
+        return (422, "invalid_request", "photos" if isinstance(error, PhotoError) else "views", str(error))
+
+
 @router.post("", response_model=CalibrationReport, openapi_extra=CALIBRATION_REQUEST_BODY)
 async def create_calibration(request: Request, services: ServicesDep, body: PhotosBodyDep) -> CalibrationReport:
     """Calibrate a camera: 200 with the report, `ok: true` and the calibrated `profile` when the set passes,
     `ok: false` with `advice` (what to shoot next) when it does not. 422 for bad input (views of
-    different sizes, a board spec the views do not fit, an unknown device, no readable photo)."""
+    different sizes, a board spec the views do not fit, an unknown device, no readable photo).
+    503 `busy` while one calibration runs and another waits; 503 `timeout` past `--calibration-timeout-s`."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    work: Callable[[], CalibrationReport]
-    if content_type == JSON:
-        try:
-            calibration = CalibrationRequest.model_validate_json(body)
-        except ValidationError as error:
-            raise _invalid_body(error) from None
-        spec, device = calibration.board, _device(calibration.device, await _profiles(services))
-        work = partial(calibrate, calibration.views, spec, device, calibration.profile_id)
-    elif content_type == MULTIPART:
-        board, device_text, profile_id, photos = await _multipart(request, body)
-        spec = _board(board, "board")
-        if not device_text:
-            raise ApiError(422, "invalid_request", "device: a profile id or profile JSON is needed", field="device")
-        if not photos:
-            raise ApiError(422, "invalid_request", "photos: no photo was sent", field="photos")
-        if profile_id is not None:
-            try:
-                PROFILE_ID.validate_python(profile_id)
-            except ValidationError as error:
-                raise _invalid("profile_id", error) from None
-        device = _device(device_text, await _profiles(services))
-        work = partial(_calibrate_photos, photos, spec, device, profile_id, photo_pixel_limit(services))
-    else:
+    if content_type not in (JSON, MULTIPART):
         raise ApiError(
             415,
             "unsupported_media_type",
@@ -218,12 +212,40 @@ async def create_calibration(request: Request, services: ServicesDep, body: Phot
             f"send {JSON} (CalibrationRequest) or {MULTIPART} (photos)",
             field="Content-Type",
         )
-    try:
-        async with services.pipeline_limiter:
-            return await run_in_threadpool(work)
-    except UnreadablePhotos as error:  # as /v1/calibrations/views answers one unreadable photo
-        raise ApiError(400, "bad_frame", str(error), field="photos") from None
-    except (CalibrationInputError, PhotoError) as error:
-        raise ApiError(
-            422, "invalid_request", str(error), field="photos" if isinstance(error, PhotoError) else "views"
-        ) from None
+    async with services.calibration_slots.slot():  # before the body is parsed: a refused one costs nothing more
+        work = await _work(request, services, body, content_type)
+        try:
+            answer = await run_in_threadpool(services.calibrator.run, _in_child, work)
+        except WorkTimedOut:
+            limit_s = services.calibrator.limit_s
+            message = f"the calibration took longer than {limit_s:g} s and was stopped: send fewer views or photos"
+            raise ApiError(503, "timeout", message, field="views") from None
+    if isinstance(answer, tuple):
+        status, code, field, message = answer
+        raise ApiError(status, code, message, field=field)
+    return answer
+
+
+async def _work(request: Request, services: Services, body: bytes, content_type: str) -> Callable[[], Any]:
+    """The calibration the body asks for, checked, ready to run."""
+    if content_type == JSON:
+        try:
+            # up to 64 MB of views: parsed off the event loop
+            calibration = await run_in_threadpool(CalibrationRequest.model_validate_json, body)
+        except ValidationError as error:
+            raise _invalid_body(error) from None
+        spec, device = calibration.board, _device(calibration.device, await _profiles(services))
+        return partial(calibrate, calibration.views, spec, device, calibration.profile_id)
+    board, device_text, profile_id, photos = await _multipart(request, body)
+    spec = _board(board, "board")
+    if not device_text:
+        raise ApiError(422, "invalid_request", "device: a profile id or profile JSON is needed", field="device")
+    if not photos:
+        raise ApiError(422, "invalid_request", "photos: no photo was sent", field="photos")
+    if profile_id is not None:
+        try:
+            PROFILE_ID.validate_python(profile_id)
+        except ValidationError as error:
+            raise _invalid("profile_id", error) from None
+    device = _device(device_text, await _profiles(services))
+    return partial(_calibrate_photos, photos, spec, device, profile_id, photo_pixel_limit(services))

@@ -72,7 +72,7 @@ async def evaluate_samples(
     Damaged samples are left out, and so is one deleted or damaged while this runs; one whose
     camera names a stored profile deleted or damaged since is a row without a fix (`bad_frame`,
     `damaged_profile`)."""
-    name: str = map if map else await run_in_threadpool(services.maps.active_name)
+    name: str = map if map else (await run_in_threadpool(services.maps.active))[0]  # name and map read as one
     await run_in_threadpool(services.maps.get, name)
     located: list[tuple[SampleInfo, LocateResult | str]] = []
     for sample in await run_in_threadpool(services.samples.all):

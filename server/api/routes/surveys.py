@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from typing import Annotated
 
@@ -35,11 +36,16 @@ def _sketch(services: Services, request: SurveyRequest) -> BeaconMap:
         raise
 
 
-def _frames(services: Services, request: SurveyRequest) -> Iterator[SurveyFrame]:
+def _frames(services: Services, request: SurveyRequest, deadline_s: float) -> Iterator[SurveyFrame]:
     """Each sample's frame, read from the store when the survey asks for it (one image held at a time); an
-    unknown or unreadable one names its place in the request."""
+    unknown or unreadable one names its place in the request. Past `deadline_s` (`time.monotonic()`) the
+    survey is stopped before its next frame."""
+    limit_s = services.settings.survey_timeout_s
     for k, sample in enumerate(request.samples):
         field = f"samples.{k}.sample_id"
+        if time.monotonic() > deadline_s:
+            message = f"the survey took longer than {limit_s:g} s and was stopped at sample {k}: send fewer samples"
+            raise ApiError(503, "timeout", message, "samples")
         try:
             info = services.samples.get(sample.sample_id)
             camera = info.meta.camera
@@ -62,13 +68,14 @@ def _frames(services: Services, request: SurveyRequest) -> Iterator[SurveyFrame]
 
 
 def _survey_now(services: Services, request: SurveyRequest) -> SurveyReport:
+    deadline_s = time.monotonic() + services.settings.survey_timeout_s
     check_new_map_name(request.name)  # the map is stored (or may be) under it
     sketch = _sketch(services, request)
     try:
         # what the request gets wrong is said before any frame is read
         check_request(sketch, request.anchor, [(s.sample_id, s.labels) for s in request.samples])
         profiles = services.profiles.table()  # a sample's camera may name a stored (calibrated) profile
-        report = survey(_frames(services, request), sketch, request.anchor, request.name, profiles=profiles)
+        report = survey(_frames(services, request, deadline_s), sketch, request.anchor, request.name, profiles=profiles)
     except SurveyInputError as error:
         raise ApiError(422, "invalid_request", error.message, error.field) from None
     except SurveyRefused as error:
@@ -93,6 +100,7 @@ async def post_survey(
         problem = api_key_problem(services.settings.api_key, x_api_key)
         if problem is not None:
             raise problem
-    # one survey at a time, apart from the locate pipeline's slots: a survey runs for seconds to a minute
-    async with services.survey_limiter:
+    # one survey at a time (one more waiting, 503 beyond), apart from the locate pipeline's threads: a survey
+    # runs for seconds to a minute
+    async with services.survey_slots.slot():
         return await run_in_threadpool(_survey_now, services, request)
