@@ -21,15 +21,12 @@ class UnreadablePhotos(PhotoError):
     sent to /v1/calibrations/views is."""
 
 
-def find_views(
-    photos: Sequence[tuple[str, bytes]], spec: BoardSpec, max_pixels: int = MAX_PHOTO_PIXELS
-) -> tuple[list[BoardView], list[ViewFit]]:
-    """The board's views on (name, bytes) photos, and the photos left out with why (unreadable, no board).
-
-    Each photo is read as every photo is (`server.photos`): its size from the header against `max_pixels`
-    first, then its EXIF, then its pixels; one that fails any of them is left out with why.
-    Raises PhotoError when no photo is readable or the photos differ in size (one camera mode only).
-    """
+def photo_sizes(
+    photos: Sequence[tuple[str, bytes]], max_pixels: int = MAX_PHOTO_PIXELS
+) -> tuple[dict[str, tuple[int, int]], list[ViewFit]]:
+    """Each photo's upright size from its header alone (nothing decoded), and the photos left out with why:
+    the check a server makes before any other work. Raises UnreadablePhotos when none is readable and
+    PhotoError when the photos differ in size (one camera mode only)."""
     sizes, skipped = {}, []
     for name, data in photos:
         try:
@@ -42,6 +39,19 @@ def find_views(
     if len(distinct) > 1:
         examples = ", ".join(f"{w}x{h} ('{next(n for n, s in sizes.items() if s == (w, h))}')" for w, h in distinct)
         raise PhotoError(f"the photos must all have one size; got {examples}")
+    return sizes, skipped
+
+
+def find_views(
+    photos: Sequence[tuple[str, bytes]], spec: BoardSpec, max_pixels: int = MAX_PHOTO_PIXELS
+) -> tuple[list[BoardView], list[ViewFit]]:
+    """The board's views on (name, bytes) photos, and the photos left out with why (unreadable, no board).
+
+    Each photo is read as every photo is (`server.photos`): its size from the header against `max_pixels`
+    first, then its EXIF, then its pixels; one that fails any of them is left out with why.
+    Raises PhotoError when no photo is readable or the photos differ in size (one camera mode only).
+    """
+    sizes, skipped = photo_sizes(photos, max_pixels)
     views, decoded = [], 0
     for name, data in photos:
         if name not in sizes:

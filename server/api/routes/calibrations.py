@@ -25,7 +25,7 @@ from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
 from server.api.params import FRAME_REQUEST_BODY, BoardPixelsDep, PhotosBodyDep, photo_pixel_limit
 from server.calibration.board import find_board
-from server.calibration.photos import PhotoError, UnreadablePhotos, find_views
+from server.calibration.photos import PhotoError, UnreadablePhotos, find_views, photo_sizes
 from server.calibration.report import CalibrationInputError, calibrate, no_board_report
 from shared_schemas import DeviceProfile
 from shared_schemas.calibration import (
@@ -248,4 +248,11 @@ async def _work(request: Request, services: Services, body: bytes, content_type:
         except ValidationError as error:
             raise _invalid("profile_id", error) from None
     device = _device(device_text, await _profiles(services))
-    return partial(_calibrate_photos, photos, spec, device, profile_id, photo_pixel_limit(services))
+    limit = photo_pixel_limit(services)
+    try:  # the headers first, here: a body of huge or broken photos costs no child process
+        await run_in_threadpool(photo_sizes, photos, limit)
+    except UnreadablePhotos as error:
+        raise ApiError(400, "bad_frame", str(error), field="photos") from None
+    except PhotoError as error:
+        raise ApiError(422, "invalid_request", str(error), field="photos") from None
+    return partial(_calibrate_photos, photos, spec, device, profile_id, limit)

@@ -86,7 +86,9 @@ def big_views(count: int, seed: int = 0) -> tuple[BoardSpec, list[BoardView]]:
         tvec = -rotation @ points.mean(axis=0) + shift
         px, _ = cv2.projectPoints(points, rvec, tvec, *lens)
         px = px.reshape(-1, 2) + rng.normal(0, 0.2, px.reshape(-1, 2).shape)
-        views.append(BoardView(name=f"v{k}", width=1920, height=1080, corner_ids=ids.tolist(), corners_px=px.tolist()))
+        seen = (px >= 0).all(axis=1) & (px[:, 0] <= 1919) & (px[:, 1] <= 1079)  # the contract: corners on the photo
+        views.append(BoardView(name=f"v{k}", width=1920, height=1080, corner_ids=ids[seen].tolist(),
+                               corners_px=px[seen].tolist()))
     return spec, views
 
 
