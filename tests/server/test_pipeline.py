@@ -79,8 +79,10 @@ def test_lens_distortion_is_undone():
     ignoring = locate(undistorted, MAP, unchecked)
     assert error_2d_mm(with_model, position) < 3.0
     assert error_2d_mm(ignoring, position) > 2 * error_2d_mm(with_model, position)
-    # the bent corners are no view of the square: the fix does not answer to its own evidence
-    refused = locate(undistorted, MAP, PipelineOptions(gravity_mode=GravityMode.never))
+    # the bent corners are no view of the square: beyond their noise (the chi-square alone refuses them),
+    # though within the 2 px the test leaves to what its noise model does not hold yet (a moving camera)
+    statistics_only = ConsistencyRules(min_rms_px=0.0)
+    refused = locate(undistorted, MAP, PipelineOptions(gravity_mode=GravityMode.never, consistency=statistics_only))
     assert not refused.ok and refused.reason is FailureReason.shape_mismatch
 
 
