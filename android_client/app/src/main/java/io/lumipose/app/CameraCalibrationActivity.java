@@ -187,9 +187,9 @@ public final class CameraCalibrationActivity extends StillActivity {
         synchronized (store.lock()) {
             session = null;
             firstPhoto = null;
-            coverage = null;
-            store.drop();
+            coverage = null; // no write of the session is queued from here on
         }
+        store.drop(); // outside the lock: it waits for the writes queued before, which take it
         boardField.setEnabled(true);
         calibrate.setEnabled(false);
         counts.setText(photoCounts());

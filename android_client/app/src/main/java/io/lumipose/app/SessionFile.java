@@ -85,6 +85,14 @@ final class SessionFile {
 
     /** The saved text, or null when there is none; after the writes queued so far have landed. */
     String read() throws IOException {
+        flush();
+        synchronized (lock) {
+            return readLocked();
+        }
+    }
+
+    /** Waits for the writes queued so far to land. */
+    private static void flush() throws IOException {
         try {
             WRITER.submit(new Runnable() {
                 @Override
@@ -96,9 +104,6 @@ final class SessionFile {
             throw new IOException("interrupted while the session's last change was written");
         } catch (ExecutionException | TimeoutException e) {
             throw new IOException("the session's last change was not written in time: " + e);
-        }
-        synchronized (lock) {
-            return readLocked();
         }
     }
 
@@ -139,16 +144,16 @@ final class SessionFile {
     }
 
     /** Drops the file (the session finished, or the user started over, or it could not be read). */
+    /** Call without holding {@link #lock}: the writes queued before take it. */
     void drop() {
-        // after the writes queued before it, or one of them would bring the file back
-        WRITER.execute(new Runnable() {
-            @Override
-            public void run() {
-                synchronized (lock) {
-                    file.delete();
-                    temporary.delete();
-                }
-            }
-        });
+        try {
+            flush(); // the writes queued before it first, or one of them would bring the file back
+        } catch (IOException e) {
+            // deleted all the same: a write still queued belongs to the session being dropped
+        }
+        synchronized (lock) {
+            file.delete();
+            temporary.delete();
+        }
     }
 }

@@ -161,9 +161,9 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     /** UI thread: forgets the session and its file (the photos stay on the server as samples). */
     private void dropSession() {
         synchronized (store.lock()) {
-            session = null;
-            store.drop();
+            session = null; // no write of it is queued from here on
         }
+        store.drop(); // outside the lock: it waits for the writes queued before, which take it
         held = -1;
         shutter.setText("Take photo");
         nameField.setEnabled(true);
