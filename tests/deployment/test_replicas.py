@@ -156,7 +156,11 @@ def test_a_walk_through_three_replicas_answers_as_one_server(office, one_server,
         _same_answers(answers[device], expected, device)
     served_by = {device: {upstream for d, upstream, _ in replicas.nginx.access_lines() if d == device}
                  for device in office[0]}
-    assert all(len(ports) >= 2 for ports in served_by.values()), f"a device stuck to one replica: {served_by}"
+    # least_conn with three walkers on three replicas: a walker whose every upload comes while the other two
+    # replicas each hold another walker's is sent to the free one each time (seen once in three CI runs); the
+    # answers equal one server's only because sessions are shared if devices do move between replicas
+    crossed = [device for device, ports in served_by.items() if len(ports) >= 2]
+    assert len(crossed) >= 2, f"devices stuck to one replica: {served_by}"
 
 
 def test_a_replica_killed_mid_walk_loses_no_track_and_no_pending_id(office, one_server, replicas):
