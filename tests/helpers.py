@@ -1,6 +1,7 @@
 """Frames and maps shared by several test modules (not tests themselves)."""
 
 import functools
+from pathlib import Path
 
 import numpy as np
 
@@ -158,3 +159,11 @@ def render_panel_frame(folder) -> str:
     args = ["--map", str(panel), "--position", "0.1", "0.2", "0", "--ypr", "5", "2", "-1", "--scale", "0.25"]
     assert main(["render", stem, *args]) == 0
     return f"{stem}.json"
+
+
+def process_status_kib(pid: int, field: str) -> float:
+    """A memory figure of a running process (`VmRSS`, `VmHWM`, ...) from /proc/<pid>/status, in KiB."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return float(line.split()[1])
+    raise KeyError(field)

@@ -25,19 +25,12 @@ import pytest
 from lumipose_client import Client
 from shared_schemas import FrameKind, FrameMeta
 from simulator.local_server import LocalServer
-from tests.helpers import ROOM
+from tests.helpers import ROOM, process_status_kib
 
 API_KEY = "hard-key"
 READ_TIMEOUT_S = 2.0
 PEAK_BOUND_MB = 200.0
 FIXTURE = Path(__file__).parents[2] / "fixtures" / "bench_1m.json"
-
-
-def _kib(pid: int, field: str) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return float(line.split()[1])
-    raise KeyError(field)
 
 
 @pytest.fixture(scope="module")
@@ -48,9 +41,9 @@ def server():
             meta = json.loads(FIXTURE.read_text())
             client.locate(FIXTURE.with_suffix(".y").read_bytes(), FrameMeta.model_validate(meta))
             client.put_map(ROOM)
-        running.baseline_kib = _kib(running.pid, "VmRSS")
+        running.baseline_kib = process_status_kib(running.pid, "VmRSS")
         yield running
-        peak_mb = (_kib(running.pid, "VmHWM") - running.baseline_kib) / 1024
+        peak_mb = (process_status_kib(running.pid, "VmHWM") - running.baseline_kib) / 1024
         assert peak_mb < PEAK_BOUND_MB, f"the server's peak grew by {peak_mb:.0f} MB"
     assert "Traceback" not in running.log(), running.log()
 

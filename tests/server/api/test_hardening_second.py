@@ -27,20 +27,13 @@ from shared_schemas.calibration import CalibrationRequest
 from simulator.board import PoseSet
 from simulator.local_server import LocalServer
 from tests.calibration_photos import BOARD, encoded, photo_set, view_set
-from tests.helpers import ROOM, dark_frame
+from tests.helpers import ROOM, dark_frame, process_status_kib
 
 pillow_heif = pytest.importorskip("pillow_heif")
 pillow_heif.register_heif_opener()
 
 EXIF_IFD, FOCAL_35MM, ORIENTATION = 0x8769, 0xA405, 0x0112
 MIB = 1 << 20
-
-
-def _kib(pid: int, field: str) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return float(line.split()[1])
-    raise KeyError(field)
 
 
 def _post(url: str, **kwargs) -> tuple[httpx.Response, float]:
@@ -275,17 +268,17 @@ def huge_rgba_png() -> bytes:
 def test_huge_calibration_pngs_are_refused_from_their_header_first(memory_server):
     data = huge_rgba_png()
     assert len(data) < 1_000_000
-    before = _kib(memory_server.pid, "VmHWM")
+    before = process_status_kib(memory_server.pid, "VmHWM")
     response, seconds = _multipart(memory_server.url, [(f"big{k}.png", data) for k in range(3)])
     body = _refused(response, 400, "photos", "no photo is readable", "'big0.png' has 13000x13000 pixels")
     assert body["error"] == "bad_frame" and seconds < 1.0
-    assert (_kib(memory_server.pid, "VmHWM") - before) / 1024 < 16
+    assert (process_status_kib(memory_server.pid, "VmHWM") - before) / 1024 < 16
 
 
 def test_concurrent_rgba_photos_stay_within_the_bound(memory_server):
     side = 4096  # 16 MiB of luma each; the full-size case (8192 x 8192) is in docs/reliability.md
     data = _rgba_png(side, side)
-    base_kib = _kib(memory_server.pid, "VmRSS")
+    base_kib = process_status_kib(memory_server.pid, "VmRSS")
     answers: list[tuple[int, float]] = []
 
     def upload() -> None:
@@ -301,8 +294,8 @@ def test_concurrent_rgba_photos_stay_within_the_bound(memory_server):
     time.sleep(0.3)
     assert [status for status, _ in answers] == [200] * FRAMES_IN_FLIGHT, answers
     assert max(seconds for _, seconds in answers) < 30.0
-    peak_mb = (_kib(memory_server.pid, "VmHWM") - base_kib) / 1024
-    kept_mb = (_kib(memory_server.pid, "VmRSS") - base_kib) / 1024
+    peak_mb = (process_status_kib(memory_server.pid, "VmHWM") - base_kib) / 1024
+    kept_mb = (process_status_kib(memory_server.pid, "VmRSS") - base_kib) / 1024
     luma_mb = side * side / MIB
     # frames in flight x (body + luma), and the colour decodes' budget beyond (measured: +242 MB, was +290 MB)
     assert peak_mb < FRAMES_IN_FLIGHT * (UPLOAD_MB + luma_mb) + COLOUR_BUDGET_MB, peak_mb

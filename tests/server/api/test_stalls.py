@@ -29,19 +29,12 @@ from shared_schemas.calibration import BoardSpec, BoardView, CalibrationRequest
 from shared_schemas.models import MAX_MESSAGE_CHARS
 from simulator.local_server import LocalServer
 from tests.calibration_photos import BOARD, PoseSet, view_set
-from tests.helpers import ROOM, dark_frame
+from tests.helpers import ROOM, dark_frame, process_status_kib
 
 API_KEY = "stall-key"
 CALIBRATION_TIMEOUT_S = 4.0
 EVENT_STREAMS = 8
 FIXTURE = Path(__file__).parents[2] / "fixtures" / "bench_1m.json"
-
-
-def _kib(pid: int, field: str) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return float(line.split()[1])
-    raise KeyError(field)
 
 
 @pytest.fixture(scope="module")
@@ -182,7 +175,7 @@ def test_many_devices_and_event_streams_leave_healthz_fast_and_streams_are_bound
                                        for n in range(start, start + 20)))
 
     asyncio.run(fill())
-    before_kib = _kib(server.pid, "VmHWM")
+    before_kib = process_status_kib(server.pid, "VmHWM")
 
     async def streams() -> tuple[list[int], list[float], int]:
         async with httpx.AsyncClient(timeout=httpx.Timeout(30, read=30),
@@ -212,7 +205,7 @@ def test_many_devices_and_event_streams_leave_healthz_fast_and_streams_are_bound
     assert statuses.count(200) == EVENT_STREAMS and statuses.count(503) == 4, statuses
     assert first_size > devices * 300  # every device in the first event
     assert statistics.median(probes) < 0.1 and max(probes) < 1.0, probes  # was 7-15 s
-    grown_mb = (_kib(server.pid, "VmHWM") - before_kib) / 1024
+    grown_mb = (process_status_kib(server.pid, "VmHWM") - before_kib) / 1024
     assert grown_mb < 100, grown_mb  # was +400 MB
     print(f"\ncase 10: /healthz median {statistics.median(probes) * 1000:.0f} ms, max {max(probes) * 1000:.0f} ms "
           f"with {EVENT_STREAMS} streams of {devices} devices (first event {first_size / 1e3:.0f} KB); "
@@ -256,7 +249,7 @@ def _photo_with_long_make(chars: int) -> bytes:
 def test_a_long_exif_string_is_cut_and_the_board_and_the_result_header_stay_small(server):
     photo = _photo_with_long_make(4 * 2**20)
     device = f"exif-{uuid.uuid4().hex[:6]}"
-    before_kib = _kib(server.pid, "VmHWM")
+    before_kib = process_status_kib(server.pid, "VmHWM")
     for _ in range(4):
         response = httpx.post(f"{server.url}/v1/locate", content=photo, timeout=60,
                               headers={"Content-Type": "image/png", "X-Lumipose-Device": device})
@@ -273,7 +266,7 @@ def test_a_long_exif_string_is_cut_and_the_board_and_the_result_header_stay_smal
                            headers={"Content-Type": "image/png"})
     header = annotated.headers[RESULT_HEADER]
     assert annotated.status_code == 200 and len(header) < 4096, len(header)  # was 60 KB; nginx's buffer 16 KB
-    grown_mb = (_kib(server.pid, "VmHWM") - before_kib) / 1024
+    grown_mb = (process_status_kib(server.pid, "VmHWM") - before_kib) / 1024
     print(f"\ncase 11/15: detail {len(detail)} chars, GET /v1/live/devices {len(board.content) / 1e3:.0f} KB, "
           f"{RESULT_HEADER} {len(header)} bytes, peak +{grown_mb:.0f} MB")
 

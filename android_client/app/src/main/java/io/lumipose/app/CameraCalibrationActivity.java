@@ -5,7 +5,6 @@ import android.graphics.Color;
 import android.graphics.Paint;
 import android.os.Build;
 import android.os.Bundle;
-import android.view.View;
 import android.widget.Button;
 import android.widget.EditText;
 import android.widget.LinearLayout;
@@ -49,9 +48,9 @@ public final class CameraCalibrationActivity extends StillActivity {
     private TextView counts;
     private TextView report;
     private Button calibrate;
-    /** Written on the UI thread under the store's lock (made, restored, finished, started over). */
-    private volatile CalibrationSession session;
-    private SessionFile store;
+    /** The calibration and its file: made on the first photo, restored, finished, started over on the UI thread. */
+    private ScreenSession<CalibrationSession> sessions;
+    /** Kept beside the session: changed with it (under {@link ScreenSession#ifCurrent}) or cleared after it. */
     private volatile FrameMeta firstPhoto;
     private volatile BoardCoverage coverage;
 
@@ -85,15 +84,12 @@ public final class CameraCalibrationActivity extends StillActivity {
                 calibrate();
             }
         });
-        Button startOver = new Button(this);
-        startOver.setText("Start over");
-        startOver.setOnClickListener(new View.OnClickListener() {
+        Forms.button(this, root, "Start over", new Runnable() {
             @Override
-            public void onClick(View v) {
+            public void run() {
                 startOver();
             }
         });
-        root.addView(startOver);
         root.addView(counts);
         root.addView(report);
         root.addView(status);
@@ -103,19 +99,24 @@ public final class CameraCalibrationActivity extends StillActivity {
     @Override
     protected void onCreate(Bundle savedInstanceState) {
         super.onCreate(savedInstanceState);
-        store = new SessionFile(this, SESSION_FILE);
+        sessions = new ScreenSession<CalibrationSession>(this, SESSION_FILE,
+                new ScreenSession.Encoder<CalibrationSession>() {
+                    @Override
+                    public String json(CalibrationSession s) {
+                        return screenJson(s);
+                    }
+                }, new SessionFile.Failure() {
+                    @Override
+                    public void failed(IOException e) {
+                        showStatus("The calibration could not be saved on the phone: " + e.getMessage());
+                    }
+                });
         restore();
     }
 
-    /**
-     * The file is the next instance's from here on: an upload of this one that ends later (its
-     * connection outlives the executor's shutdown) must not write its older session over it.
-     */
     @Override
     protected void onDestroy() {
-        synchronized (store.lock()) {
-            session = null;
-        }
+        sessions.leave();
         super.onDestroy();
     }
 
@@ -127,7 +128,7 @@ public final class CameraCalibrationActivity extends StillActivity {
         CalibrationSession s;
         FrameMeta first = null;
         try {
-            String text = store.read();
+            String text = sessions.saved();
             if (text == null) {
                 return;
             }
@@ -144,13 +145,13 @@ public final class CameraCalibrationActivity extends StillActivity {
                 throw new IllegalArgumentException("first_photo: " + (first == null ? "missing" : "without a view"));
             }
         } catch (IOException | IllegalArgumentException e) {
-            store.drop();
+            sessions.discardSaved();
             report.setText("The calibration saved on the phone could not be restored (" + e.getMessage()
                     + "): a new one starts.");
             return;
         }
-        session = s;
         firstPhoto = first;
+        sessions.adopt(s, false);
         coverage = s.coverage();
         boardField.setText(s.board().toJson().toString());
         boardField.setEnabled(false);
@@ -160,36 +161,23 @@ public final class CameraCalibrationActivity extends StillActivity {
                 + "Calibrate.");
     }
 
-    /** Any thread: writes the session to its file, unless the screen has left it (started over, finished). */
-    private void save(CalibrationSession s) {
-        synchronized (store.lock()) {
-            if (s != session) {
-                return;
-            }
-            JSONObject o = new JSONObject();
-            Json.put(o, "schema", SCHEMA);
-            Json.put(o, "session", s.toJson());
-            FrameMeta first = firstPhoto;
-            if (first != null) {
-                Json.put(o, "first_photo", first.toJson());
-            }
-            store.writeSoon(o.toString(), new SessionFile.Failure() {
-                @Override
-                public void failed(IOException e) {
-                    showStatus("The calibration could not be saved on the phone: " + e.getMessage());
-                }
-            });
+    /** The session's file: the session and the first photo's description (whose camera the profile takes). */
+    private String screenJson(CalibrationSession s) {
+        JSONObject o = new JSONObject();
+        Json.put(o, "schema", SCHEMA);
+        Json.put(o, "session", s.toJson());
+        FrameMeta first = firstPhoto;
+        if (first != null) {
+            Json.put(o, "first_photo", first.toJson());
         }
+        return o.toString();
     }
 
     /** UI thread: forgets the session and its file. */
     private void dropSession() {
-        synchronized (store.lock()) {
-            session = null;
-            firstPhoto = null;
-            coverage = null; // no write of the session is queued from here on
-        }
-        store.drop(); // outside the lock: it waits for the writes queued before, which take it
+        sessions.forget();
+        firstPhoto = null; // after: no upload of the forgotten session sets them again
+        coverage = null;
         boardField.setEnabled(true);
         calibrate.setEnabled(false);
         counts.setText(photoCounts());
@@ -215,15 +203,12 @@ public final class CameraCalibrationActivity extends StillActivity {
 
     @Override
     protected void onShutter() {
-        if (session == null) {
+        if (sessions.current() == null) {
             try {
                 BoardSpec board = prefs.saveBoardSpec(boardField.getText().toString());
                 CalibrationSession s = new CalibrationSession(client, board);
-                synchronized (store.lock()) {
-                    session = s;
-                }
                 boardField.setEnabled(false);
-                save(s);
+                sessions.adopt(s, true);
             } catch (IllegalArgumentException e) {
                 report.setText("Board spec: " + e.getMessage());
                 return;
@@ -240,7 +225,7 @@ public final class CameraCalibrationActivity extends StillActivity {
     }
 
     private String photoCounts() {
-        CalibrationSession s = session;
+        CalibrationSession s = sessions.current();
         BoardCoverage c = coverage;
         if (s == null) {
             return "No photo yet.";
@@ -250,8 +235,8 @@ public final class CameraCalibrationActivity extends StillActivity {
     }
 
     @Override
-    protected void handlePhoto(byte[] luma, FrameMeta meta) {
-        final CalibrationSession s = session;
+    protected void handlePhoto(byte[] luma, final FrameMeta meta) {
+        final CalibrationSession s = sessions.current();
         if (s == null) {
             shutterBack(null);
             return;
@@ -260,19 +245,20 @@ public final class CameraCalibrationActivity extends StillActivity {
         try {
             CalibrationSession.Photo photo = s.addPhoto(luma, meta);
             if (photo.found()) {
-                synchronized (store.lock()) {
-                    if (s == session) {
+                sessions.ifCurrent(s, new Runnable() {
+                    @Override
+                    public void run() {
                         if (firstPhoto == null) {
                             firstPhoto = meta;
                         }
                         coverage = s.coverage();
                     }
-                }
+                });
                 outcome = photo.name + ": " + photo.view.corners() + " corners";
             } else {
                 outcome = photo.name + " not used: " + photo.refusal; // the server's reason (no board, ...)
             }
-            save(s); // the photo count moved either way
+            sessions.save(s); // the photo count moved either way
         } catch (InterruptedException e) {
             // the screen was left during the upload (its executor shut down): the shutter works on return
             Thread.currentThread().interrupt();
@@ -286,7 +272,7 @@ public final class CameraCalibrationActivity extends StillActivity {
             @Override
             public void run() {
                 shutter.setEnabled(true);
-                if (s != session) {
+                if (s != sessions.current()) {
                     return; // started over meanwhile
                 }
                 report.setText(shown);
@@ -298,7 +284,7 @@ public final class CameraCalibrationActivity extends StillActivity {
     }
 
     private void calibrate() {
-        final CalibrationSession s = session;
+        final CalibrationSession s = sessions.current();
         final FrameMeta first = firstPhoto;
         final CameraFacts f = facts;
         if (s == null || first == null || f == null) {
@@ -321,7 +307,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                         kept = true;
                     } else {
                         coverage = s.coverage(); // the report's grid from now on
-                        save(s);
+                        sessions.save(s);
                     }
                     text = describe(o);
                 } catch (InterruptedException e) {
@@ -335,7 +321,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                 runOnUiThread(new Runnable() {
                     @Override
                     public void run() {
-                        if (done && s == session) {
+                        if (done && s == sessions.current()) {
                             dropSession(); // the profile is kept: the next calibration starts afresh
                         } else {
                             calibrate.setEnabled(firstPhoto != null);

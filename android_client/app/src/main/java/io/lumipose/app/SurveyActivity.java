@@ -5,7 +5,6 @@ import android.graphics.Color;
 import android.graphics.Paint;
 import android.os.Bundle;
 import android.text.InputType;
-import android.view.View;
 import android.widget.Button;
 import android.widget.EditText;
 import android.widget.LinearLayout;
@@ -47,9 +46,8 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     private TextView photosView;
     private TextView reportView;
     private Button surveyButton;
-    /** Written on the UI thread under the store's lock (made, restored, finished, started over). */
-    private volatile SurveySession session;
-    private SessionFile store;
+    /** The survey and its file: made on the first photo, restored, finished, started over on the UI thread. */
+    private ScreenSession<SurveySession> sessions;
     /** The photo on screen for labelling (its index in the session), or -1 while the camera is shown. */
     private volatile int held = -1;
 
@@ -78,15 +76,12 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             }
         });
         preview.setTapListener(this);
-        Button startOver = new Button(this);
-        startOver.setText("Start over");
-        startOver.setOnClickListener(new View.OnClickListener() {
+        Forms.button(this, root, "Start over", new Runnable() {
             @Override
-            public void onClick(View v) {
+            public void run() {
                 startOver();
             }
         });
-        root.addView(startOver);
         photosView = new TextView(this);
         reportView = new TextView(this);
         root.addView(photosView);
@@ -98,19 +93,23 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     @Override
     protected void onCreate(Bundle savedInstanceState) {
         super.onCreate(savedInstanceState);
-        store = new SessionFile(this, SESSION_FILE);
+        sessions = new ScreenSession<SurveySession>(this, SESSION_FILE, new ScreenSession.Encoder<SurveySession>() {
+            @Override
+            public String json(SurveySession s) {
+                return s.toJson().toString();
+            }
+        }, new SessionFile.Failure() {
+            @Override
+            public void failed(IOException e) {
+                showStatus("The survey could not be saved on the phone: " + e.getMessage());
+            }
+        });
         restore();
     }
 
-    /**
-     * The file is the next instance's from here on: an upload of this one that ends later (its
-     * connection outlives the executor's shutdown) must not write its older session over it.
-     */
     @Override
     protected void onDestroy() {
-        synchronized (store.lock()) {
-            session = null;
-        }
+        sessions.leave();
         super.onDestroy();
     }
 
@@ -122,18 +121,18 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     private void restore() {
         SurveySession s;
         try {
-            String text = store.read();
+            String text = sessions.saved();
             if (text == null) {
                 return;
             }
             s = SurveySession.fromJson(client, text);
         } catch (IOException | IllegalArgumentException e) {
-            store.drop();
+            sessions.discardSaved();
             reportView.setText("The survey saved on the phone could not be restored (" + e.getMessage()
                     + "): a new survey starts.");
             return;
         }
-        session = s;
+        sessions.adopt(s, false);
         nameField.setText(s.name());
         nameField.setEnabled(false);
         int n = s.shots().size();
@@ -143,27 +142,9 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         showPhotos();
     }
 
-    /** Any thread: writes the session to its file, unless the screen has left it (started over, finished). */
-    private void save(SurveySession s) {
-        synchronized (store.lock()) {
-            if (s != session) {
-                return;
-            }
-            store.writeSoon(s.toJson().toString(), new SessionFile.Failure() {
-                @Override
-                public void failed(IOException e) {
-                    showStatus("The survey could not be saved on the phone: " + e.getMessage());
-                }
-            });
-        }
-    }
-
     /** UI thread: forgets the session and its file (the photos stay on the server as samples). */
     private void dropSession() {
-        synchronized (store.lock()) {
-            session = null; // no write of it is queued from here on
-        }
-        store.drop(); // outside the lock: it waits for the writes queued before, which take it
+        sessions.forget();
         held = -1;
         shutter.setText("Take photo");
         nameField.setEnabled(true);
@@ -199,7 +180,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             shutter.setText("Take photo");
             return;
         }
-        if (session == null) {
+        if (sessions.current() == null) {
             SurveySession s;
             try {
                 s = new SurveySession(client, nameField.getText().toString().trim());
@@ -208,10 +189,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
                 reportView.setText("Map name: " + e.getMessage());
                 return;
             }
-            synchronized (store.lock()) {
-                session = s;
-            }
-            save(s);
+            sessions.adopt(s, true);
         }
         takePhoto();
     }
@@ -227,7 +205,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     protected void handlePhoto(byte[] luma, FrameMeta meta) {
         final GreyPreview still = GreyPreview.of(ByteBuffer.wrap(luma), meta.width, meta.height, meta.width, 1,
                 StillCapture.PREVIEW_SIDE);
-        final SurveySession s = session;
+        final SurveySession s = sessions.current();
         if (s == null) {
             shutterBack(null);
             return;
@@ -237,7 +215,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
         try {
             SurveySession.Shot shot = s.addPhoto(luma, meta);
             index = s.shots().indexOf(shot); // not the last: the screen's other photo may be in flight
-            save(s);
+            sessions.save(s);
             outcome = "Photo " + (index + 1) + " stored as " + shot.sampleId + ": tap each panel with its ID."
                     + (meta.compassBearingDeg == null ? " (no compass reading)" : "");
         } catch (InterruptedException e) {
@@ -254,7 +232,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             @Override
             public void run() {
                 shutter.setEnabled(true);
-                if (s != session) {
+                if (s != sessions.current()) {
                     return; // started over meanwhile: the photo belongs to the abandoned survey
                 }
                 reportView.setText(shown);
@@ -271,7 +249,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
 
     @Override
     public void onTap(double frameX, double frameY) {
-        SurveySession s = session;
+        SurveySession s = sessions.current();
         int index = held;
         if (s == null || index < 0) {
             return;
@@ -285,13 +263,13 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
             reportView.setText(e.getMessage());
             return;
         }
-        save(s);
+        sessions.save(s);
         preview.invalidate();
         showPhotos();
     }
 
     private void showPhotos() {
-        SurveySession s = session;
+        SurveySession s = sessions.current();
         if (s == null) {
             return;
         }
@@ -309,7 +287,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
 
     /** The held photo's labels: a dot and the ID where the user tapped. */
     private void drawLabels(Canvas canvas, GreyPreview p) {
-        SurveySession s = session;
+        SurveySession s = sessions.current();
         int index = held;
         if (s == null || index < 0) {
             return;
@@ -323,7 +301,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
     }
 
     private void survey() {
-        final SurveySession s = session;
+        final SurveySession s = sessions.current();
         final String sketch = prefs.mapName();
         final int anchor;
         try {
@@ -368,7 +346,7 @@ public final class SurveyActivity extends StillActivity implements PreviewView.T
                 runOnUiThread(new Runnable() {
                     @Override
                     public void run() {
-                        if (done && s == session) {
+                        if (done && s == sessions.current()) {
                             dropSession(); // stored and active: the next survey starts afresh
                         } else {
                             surveyButton.setEnabled(true);

@@ -108,15 +108,13 @@ public class SessionTest {
         ActivityController<SurveyActivity> c = Robolectric.buildActivity(SurveyActivity.class).setup();
         SurveyActivity old = c.get();
         shoot(old);
-        Object oldSession = Screens.get(old, "session");
+        ScreenSession<io.lumipose.client.survey.SurveySession> oldSessions = Screens.get(old, "sessions");
+        io.lumipose.client.survey.SurveySession oldSession = oldSessions.current();
         c.recreate();
         SurveyActivity now = c.get();
         shoot(now);
         label(now, 17, 10, 20);
-        java.lang.reflect.Method save = SurveyActivity.class.getDeclaredMethod("save",
-                io.lumipose.client.survey.SurveySession.class);
-        save.setAccessible(true);
-        save.invoke(old, oldSession); // the old upload's save, late
+        oldSessions.save(oldSession); // the old upload's save, late
         c.pause().stop().destroy();
         SurveyActivity restored = Robolectric.buildActivity(SurveyActivity.class).setup().get();
         assertEquals("the new instance's photo and label are kept", "photo 1: panels\nphoto 2: panels 17",
@@ -205,7 +203,7 @@ public class SessionTest {
         damage(new File(app.getFilesDir(), SURVEY_FILE));
         SurveyActivity a = Robolectric.buildActivity(SurveyActivity.class).setup().get();
         assertTrue(Screens.text(a, "reportView"), Screens.text(a, "reportView").contains("could not be restored"));
-        assertNull(Screens.get(a, "session"));
+        assertNull(session(a));
         shoot(a);
         assertEquals("photo 1: panels", photos(a));
     }
@@ -215,7 +213,7 @@ public class SessionTest {
         damage(new File(app.getFilesDir(), CALIBRATION_FILE));
         CameraCalibrationActivity a = Robolectric.buildActivity(CameraCalibrationActivity.class).setup().get();
         assertTrue(Screens.text(a, "report"), Screens.text(a, "report").contains("could not be restored"));
-        assertNull(Screens.get(a, "session"));
+        assertNull(session(a));
     }
 
     private static String okReport(int w, int h) throws Exception {
@@ -297,7 +295,13 @@ public class SessionTest {
         assertTrue(Screens.<EditText>get(a, "boardField").isEnabled());
         assertFalse(new File(a.getFilesDir(), CALIBRATION_FILE).exists());
         c.recreate();
-        assertNull("nothing restored", Screens.get(c.get(), "session"));
+        assertNull("nothing restored", session(c.get()));
         assertTrue(Screens.<EditText>get(c.get(), "boardField").isEnabled());
+    }
+
+    /** The screen's session (null: none). */
+    private static Object session(Object screen) {
+        ScreenSession<?> sessions = Screens.get(screen, "sessions");
+        return sessions.current();
     }
 }
