@@ -93,14 +93,19 @@ def corner_points_m(spec: BoardSpec, corner_ids: list[int] | np.ndarray) -> np.n
 
 
 def describe_board(spec: BoardSpec) -> str:
-    """A spec in words: "10 x 7 squares of 25.000 mm, chessboard (9 x 6 inner corners)"."""
-    words = [f"{spec.squares_x} x {spec.squares_y} squares of {spec.square_m * 1000:.3f} mm"]
+    """A spec in words: "7 x 5 DICT_4X4_50 board (squares 40.000 mm, markers 28.000 mm)",
+    "10 x 7 chessboard (9 x 6 inner corners, squares 25.000 mm)"."""
+    square = f"squares {spec.square_m * 1000:.3f} mm"
     if spec.kind == BoardKind.chessboard or spec.marker_m is None:
-        words.append(f"chessboard ({spec.squares_x - 1} x {spec.squares_y - 1} inner corners)")
+        name = f"{spec.squares_x} x {spec.squares_y} chessboard"
+        details = [f"{spec.squares_x - 1} x {spec.squares_y - 1} inner corners", square]
     else:
-        words += [f"markers {spec.marker_m * 1000:.3f} mm", spec.dictionary.value]
-        words += ["legacy layout"] * spec.legacy + [f"first marker {spec.first_marker_id}"] * bool(spec.first_marker_id)
-    return ", ".join(words + ["inverted"] * spec.inverted)
+        name = f"{spec.squares_x} x {spec.squares_y} {spec.dictionary.value} board"
+        details = [square, f"markers {spec.marker_m * 1000:.3f} mm"]
+        details += ["legacy layout"] * spec.legacy + [f"first marker {spec.first_marker_id}"] * bool(
+            spec.first_marker_id
+        )
+    return f"{name} ({', '.join(details + ['inverted'] * spec.inverted)})"
 
 
 def _grey(image: np.ndarray) -> np.ndarray:

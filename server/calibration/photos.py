@@ -65,7 +65,13 @@ def find_views(
         decoded += 1
         view = find_board(pixels, spec, name, first=first)
         if view is None:
-            skipped.append(ViewFit(name=name, corners=0, note="no board found, as it is, inverted or mirrored (does the board spec match it?)"))
+            skipped.append(
+                ViewFit(
+                    name=name,
+                    corners=0,
+                    note="no board found, as it is, inverted or mirrored (does the board spec match it?)",
+                )
+            )
         else:
             views.append(view)
             first = (view.inverted, view.mirrored)

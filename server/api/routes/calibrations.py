@@ -140,7 +140,7 @@ async def find_view(
         raise ApiError(
             422,
             "no_board",
-            f"no board ({describe_board(spec)}) found on the photo, as it is, inverted or mirrored "
+            f"no {describe_board(spec)} found on the photo, as it is, inverted or mirrored "
             "(or too few of its corners): does the board spec match the printed board?",
             field="frame",
         )
