@@ -3,25 +3,25 @@ OpenCV's published calibration of it, and caliscope's webcam frames of an invert
 camera mirrored. Sources, commits and licences: tests/fixtures/calibration/*/README.md."""
 
 from functools import cache
-from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
-from server.calibration.board import corner_points_m, detect_corners, find_board, refine_corners
+from server.calibration.board import find_board
 from server.calibration.photos import find_views
 from server.calibration.report import calibrate
 from shared_schemas import device_profiles
-from shared_schemas.calibration import BoardSpec, CalibrationReport
-
-FIXTURES = Path(__file__).parents[2] / "fixtures" / "calibration"
-# OpenCV's samples/data left01..14: 9 x 6 inner corners; the square's size does not change the intrinsics
-CHESSBOARD = BoardSpec(kind="chessboard", squares_x=10, squares_y=7, square_m=0.025)
-# OpenCV's samples/data/left_intrinsics.yml (tests/fixtures/calibration/opencv_left/README.md)
-PUBLISHED = {"fx": 535.9157, "fy": 535.9157, "cx": 342.2832, "cy": 235.5708, "k1": -0.266373}
-# caliscope's tests/sessions/prerecorded_calibration/charuco.toml
-CALISCOPE = BoardSpec(squares_x=4, squares_y=5, square_m=0.054, marker_m=0.0405, dictionary="DICT_4X4_1000")
+from shared_schemas.calibration import CalibrationReport
+from simulator.bench_boards import (
+    CALISCOPE,
+    CHESSBOARD,
+    FIXTURES,
+    PUBLISHED,
+    calibration_rms_px,
+    charuco_corners,
+    chessboard_corners,
+)
 
 
 def _photos(folder: str, pattern: str = "*.jpg") -> list[tuple[str, bytes]]:
@@ -40,12 +40,6 @@ def _caliscope_report() -> CalibrationReport:
     views, skipped = find_views(_photos("caliscope_charuco", "cam_1_*.jpg"), CALISCOPE)
     assert len(views) == 10 and not skipped, skipped
     return calibrate(views, CALISCOPE, device_profiles()["xiaomi-mi8-front"])
-
-
-def _calibration_rms_px(spec: BoardSpec, corners: list[tuple[np.ndarray, np.ndarray]], size: tuple[int, int]) -> float:
-    """OpenCV's calibration RMS of (ids, points) per view: the corners' noise, for one detector against another."""
-    objects = [corner_points_m(spec, ids).astype(np.float32) for ids, _ in corners]
-    return cv2.calibrateCamera(objects, [p.astype(np.float32) for _, p in corners], size, None, None)[0]
 
 
 def test_opencvs_chessboards_calibrate_to_opencvs_published_result():
@@ -75,21 +69,16 @@ def test_a_refused_set_keeps_its_fit_marked_untrusted_with_the_reasons():
 
 def test_the_saddle_refinement_beats_opencvs_chessboard_corners():
     greys = [cv2.imread(str(path), cv2.IMREAD_GRAYSCALE) for path in sorted((FIXTURES / "opencv_left").glob("*.jpg"))]
-    found = [detect_corners(grey, CHESSBOARD) for grey in greys]
-    assert all(corners is not None for corners in found)
-    ours = [refine_corners(grey, CHESSBOARD, *corners) for grey, corners in zip(greys, found, strict=True)]
-    assert all(corners is not None and len(corners[0]) == 54 for corners in ours)
-    subpix = []
-    for grey in greys:  # OpenCV's tutorial: findChessboardCorners, then cornerSubPix over 11 x 11
-        _, points = cv2.findChessboardCorners(grey, (9, 6))
-        criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
-        points = cv2.cornerSubPix(grey, points, (11, 11), (-1, -1), criteria)
-        subpix.append((np.arange(54), points.reshape(-1, 2)))
-    rms = {
-        name: _calibration_rms_px(CHESSBOARD, corners, (640, 480))  # type: ignore[arg-type]
-        for name, corners in (("ours", ours), ("sb", found), ("subpix", subpix))
-    }
-    assert rms["ours"] < 0.8 * min(rms["sb"], rms["subpix"]), rms
+    per_photo = [chessboard_corners(grey) for grey in greys]
+    rms = {}
+    for finder in per_photo[0]:
+        found = [corners[finder] for corners in per_photo]
+        assert all(corners is not None and len(corners[0]) == 54 for corners in found), finder
+        rms[finder] = calibration_rms_px(CHESSBOARD, found, (640, 480))
+    # OpenCV's two finders (the tutorial's cornerSubPix over 11 x 11), each refined by the saddle fit
+    opencv = min(rms["findChessboardCornersSB"], rms["findChessboardCorners + cornerSubPix"])
+    ours = max(rms["findChessboardCornersSB + saddle"], rms["findChessboardCorners + saddle"])
+    assert ours < 0.8 * opencv, rms
 
 
 def test_an_inverted_board_on_mirrored_frames_is_found_and_said():
@@ -121,13 +110,11 @@ def test_webcam_frames_that_do_not_cover_the_frame_are_refused_with_their_fit():
 
 @pytest.mark.parametrize("camera", ["cam_0", "cam_1"])
 def test_the_refined_charuco_corners_are_no_worse_than_opencvs(camera):
-    corners = []
+    pairs = []
     for _, data in _photos("caliscope_charuco", f"{camera}_*.jpg"):
-        grey = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
-        grey = cv2.bitwise_not(cv2.flip(grey, 1) if camera == "cam_1" else grey)
-        detected = detect_corners(grey, CALISCOPE)
-        assert detected is not None
-        corners.append((detected, refine_corners(grey, CALISCOPE, *detected)))
-    opencv = _calibration_rms_px(CALISCOPE, [found for found, _ in corners], (1280, 720))
-    ours = _calibration_rms_px(CALISCOPE, [refined for _, refined in corners], (1280, 720))  # type: ignore[misc]
+        pair = charuco_corners(cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE))
+        assert pair is not None
+        pairs.append(pair)
+    opencv = calibration_rms_px(CALISCOPE, [found for found, _ in pairs], (1280, 720))
+    ours = calibration_rms_px(CALISCOPE, [refined for _, refined in pairs], (1280, 720))
     assert ours <= opencv, (ours, opencv)
