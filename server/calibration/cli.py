@@ -30,7 +30,7 @@ def add_commands(commands) -> None:
     )
     board.add_argument("--out", type=Path, required=True, help="board.pdf (to print) or board.png (for a screen)")
     board.add_argument(
-        "--kind", default="charuco", choices=("charuco", "chessboard"), help="ChArUco (default) or a plain chessboard"
+        "--kind", default="charuco", choices=("charuco", "chessboard"), help="a ChArUco board or a plain chessboard"
     )
     board.add_argument(
         "--squares",
@@ -46,7 +46,7 @@ def add_commands(commands) -> None:
     board.add_argument(
         "--legacy", action="store_true", help="OpenCV's ChArUco layout before 4.6 (differs for an even number of rows)"
     )
-    board.add_argument("--first-marker", type=int, default=0, help="id of the top-left marker (default: 0)")
+    board.add_argument("--first-marker", type=int, default=0, help="id of the top-left marker")
     board.add_argument("--inverted", action="store_true", help="printed inverted: white markers on black")
     board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
     board.set_defaults(run=_run_board)
