@@ -31,6 +31,14 @@ def printed_spec(spec: BoardSpec, dpi: float) -> BoardSpec:
     return spec.model_copy(update={"square_m": square_px * metres_per_px, "marker_m": marker_px * metres_per_px})
 
 
+def spec_json(spec: BoardSpec) -> str:
+    """The spec as board.json: the fields added for other boards (issue 29) only when not at their default, so
+    the project's own board is written as before and readers of that format (the Android app) still take it."""
+    added = {"kind": BoardKind.charuco, "marker_m": None, "legacy": False, "first_marker_id": 0, "inverted": False}
+    at_default = {name for name, default in added.items() if getattr(spec, name) == default}
+    return spec.model_dump_json(by_alias=True, indent=2, exclude=at_default)
+
+
 def board_image(spec: BoardSpec, dpi: float) -> np.ndarray:
     """The board with a white margin (rows, cols) uint8 at `dpi`; `spec` should be `printed_spec`'s."""
     metres_per_px = MM_PER_INCH / 1000 / dpi
@@ -64,5 +72,5 @@ def write_board(spec: BoardSpec, path: Path, dpi: float) -> BoardSpec:
         image.save(path, "PDF", resolution=dpi)
     else:
         image.save(path, "PNG", dpi=(dpi, dpi))
-    path.with_suffix(".json").write_text(printed.model_dump_json(by_alias=True, indent=2) + "\n")
+    path.with_suffix(".json").write_text(spec_json(printed) + "\n")
     return printed

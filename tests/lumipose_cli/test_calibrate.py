@@ -177,3 +177,11 @@ def test_camera_prints_a_refused_sets_fit_as_not_trusted(capsys):
     text = capsys.readouterr().out
     assert "fitted   at 640x480, NOT TRUSTED: the set was refused" in text and "pinhole  fx 5" in text, text
     assert "refused: " in text and "advice: more photos: 5 with the board found" in text
+
+
+def test_the_default_boards_json_keeps_its_fields(tmp_path):
+    # the Android app (BoardSpec.fromJson) refuses fields it does not know: the fields added for other boards
+    # are written only when a board needs them
+    assert main(["calibrate", "board", "--out", str(tmp_path / "b.png"), "--dpi", "60"]) == 0
+    written = json.loads((tmp_path / "b.json").read_text())
+    assert set(written) == {"schema", "squares_x", "squares_y", "square_m", "marker_m", "dictionary"}
