@@ -25,54 +25,123 @@ MAX_SQUARE_M: Final = 1.0
 
 
 class ArucoDictionary(StrEnum):
-    """OpenCV's predefined ArUco dictionaries a board may use (cv2.aruco.DICT_*)."""
+    """OpenCV's predefined ArUco dictionaries a board may use (cv2.aruco.DICT_*, every one of OpenCV 4.6 and later)."""
 
     dict_4x4_50 = "DICT_4X4_50"
     dict_4x4_100 = "DICT_4X4_100"
     dict_4x4_250 = "DICT_4X4_250"
     dict_4x4_1000 = "DICT_4X4_1000"
+    dict_5x5_50 = "DICT_5X5_50"
     dict_5x5_100 = "DICT_5X5_100"
     dict_5x5_250 = "DICT_5X5_250"
     dict_5x5_1000 = "DICT_5X5_1000"
+    dict_6x6_50 = "DICT_6X6_50"
+    dict_6x6_100 = "DICT_6X6_100"
     dict_6x6_250 = "DICT_6X6_250"
     dict_6x6_1000 = "DICT_6X6_1000"
+    dict_7x7_50 = "DICT_7X7_50"
+    dict_7x7_100 = "DICT_7X7_100"
+    dict_7x7_250 = "DICT_7X7_250"
+    dict_7x7_1000 = "DICT_7X7_1000"
+    dict_aruco_original = "DICT_ARUCO_ORIGINAL"
+    dict_apriltag_16h5 = "DICT_APRILTAG_16h5"
+    dict_apriltag_25h9 = "DICT_APRILTAG_25h9"
+    dict_apriltag_36h10 = "DICT_APRILTAG_36h10"
+    dict_apriltag_36h11 = "DICT_APRILTAG_36h11"
+    dict_aruco_mip_36h12 = "DICT_ARUCO_MIP_36h12"
 
     @property
     def size(self) -> int:
         """Markers in the dictionary."""
-        return int(self.value.rsplit("_", 1)[1])
+        return _DICTIONARY_SIZES[self.value]
+
+
+# the AprilTag and original ArUco families' sizes are not in their names
+_DICTIONARY_SIZES: Final = {
+    "DICT_4X4_50": 50,
+    "DICT_4X4_100": 100,
+    "DICT_4X4_250": 250,
+    "DICT_4X4_1000": 1000,
+    "DICT_5X5_50": 50,
+    "DICT_5X5_100": 100,
+    "DICT_5X5_250": 250,
+    "DICT_5X5_1000": 1000,
+    "DICT_6X6_50": 50,
+    "DICT_6X6_100": 100,
+    "DICT_6X6_250": 250,
+    "DICT_6X6_1000": 1000,
+    "DICT_7X7_50": 50,
+    "DICT_7X7_100": 100,
+    "DICT_7X7_250": 250,
+    "DICT_7X7_1000": 1000,
+    "DICT_ARUCO_ORIGINAL": 1024,
+    "DICT_APRILTAG_16h5": 30,
+    "DICT_APRILTAG_25h9": 35,
+    "DICT_APRILTAG_36h10": 2320,
+    "DICT_APRILTAG_36h11": 587,
+    "DICT_ARUCO_MIP_36h12": 250,
+}
+
+
+class BoardKind(StrEnum):
+    """What is printed: OpenCV's ChArUco board (markers in the white squares) or a plain chessboard."""
+
+    charuco = "charuco"
+    chessboard = "chessboard"
 
 
 class BoardSpec(Strict):
-    """A ChArUco board: a chessboard of `squares_x` x `squares_y` squares with an ArUco marker in each white one.
+    """A calibration board: a chessboard of `squares_x` x `squares_y` squares, with an ArUco marker in each
+    white square (`kind` charuco, the default) or none (`kind` chessboard).
 
-    Sizes are as printed (measure them: a printer may scale). The top-left square is black (OpenCV >= 4.6).
+    Sizes are as printed (measure them: a printer may scale). A ChArUco board's top-left square is black
+    (OpenCV >= 4.6) unless `legacy`; its markers are `first_marker_id`, `first_marker_id` + 1, ... row by
+    row. A chessboard of OpenCV's "9 x 6" (inner corners) pattern has 10 x 7 squares.
     """
 
     schema_: Literal["lumipose.board/1"] = Field(default=BOARD_SCHEMA, alias="schema")
+    kind: BoardKind = BoardKind.charuco
     squares_x: int = Field(ge=3, le=MAX_BOARD_SQUARES, description="squares along the board's width")
     squares_y: int = Field(ge=3, le=MAX_BOARD_SQUARES, description="squares along the board's height")
     square_m: float = Field(ge=MIN_SQUARE_M, le=MAX_SQUARE_M, description="side of one square, metres")
-    marker_m: float = Field(ge=MIN_SQUARE_M / 2, le=MAX_SQUARE_M, description="side of one marker, metres")
-    dictionary: ArucoDictionary = ArucoDictionary.dict_5x5_100
+    marker_m: float | None = Field(
+        default=None,
+        ge=MIN_SQUARE_M / 2,
+        le=MAX_SQUARE_M,
+        description="side of one marker, metres (a ChArUco board's; a chessboard has none)",
+    )
+    dictionary: ArucoDictionary = Field(
+        default=ArucoDictionary.dict_5x5_100, description="the markers' dictionary (a chessboard's is not used)"
+    )
+    # OpenCV before 4.6 drew boards of an even number of rows with the top-left square white
+    legacy: bool = Field(default=False, description="OpenCV's layout before 4.6 (CharucoBoard.setLegacyPattern)")
+    first_marker_id: int = Field(default=0, ge=0, description="the id of the top-left marker")
+    inverted: bool = Field(default=False, description="printed inverted: white markers on black squares")
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _fits(self) -> BoardSpec:
+        if self.kind == BoardKind.chessboard:
+            if self.marker_m is not None or self.legacy or self.first_marker_id:
+                raise ValueError("a chessboard has no markers: marker_m, legacy and first_marker_id are ChArUco's")
+            return self
+        if self.marker_m is None:
+            raise ValueError("a ChArUco board needs marker_m (the side of one marker)")
         if self.marker_m >= self.square_m:
             raise ValueError(f"marker_m ({self.marker_m}) must be smaller than square_m ({self.square_m})")
-        markers = self.squares_x * self.squares_y // 2
-        if markers > self.dictionary.size:
+        markers, size = self.squares_x * self.squares_y // 2, self.dictionary.size
+        if self.first_marker_id + markers > size:
             raise ValueError(
-                f"a {self.squares_x} x {self.squares_y} board needs {markers} markers; "
-                f"{self.dictionary.value} has {self.dictionary.size}"
+                f"a {self.squares_x} x {self.squares_y} board needs {markers} markers"
+                + (f" from id {self.first_marker_id}" if self.first_marker_id else "")
+                + f"; {self.dictionary.value} has {size} (ids 0 to {size - 1})"
             )
         return self
 
     @property
     def inner_corners(self) -> int:
-        """ChArUco corners (where four squares meet)."""
+        """Corners where four squares meet (a ChArUco board's corners, a chessboard's inner corners)."""
         return (self.squares_x - 1) * (self.squares_y - 1)
 
 
@@ -92,6 +161,12 @@ class BoardView(Strict):
     corners_px: list[CornerPoint] = Field(
         max_length=MAX_BOARD_SQUARES * MAX_BOARD_SQUARES,
         description="image points, finite and within the photo: x in [-0.5, width - 0.5], y in [-0.5, height - 0.5]",
+    )
+    inverted: bool = Field(default=False, description="the board was found inverted: white markers on black")
+    mirrored: bool = Field(
+        default=False,
+        description="the photo was mirrored (a front camera's): the corners are those of the photo flipped "
+        "left-right back, the image the lens made",
     )
 
     @model_validator(mode="after")
@@ -142,6 +217,24 @@ class ViewFit(Strict):
     tilt_deg: float | None = Field(default=None, ge=0, description="angle between the board's normal and the axis")
     distance_m: float | None = Field(default=None, description="board centre to camera")
     note: str | None = Field(default=None, description="why the photo was left out, if it was")
+    inverted: bool = Field(default=False, description="the board was found inverted (white markers on black)")
+    mirrored: bool = Field(default=False, description="the photo was mirrored: un-mirrored before fitting")
+
+
+class FittedCamera(Strict):
+    """The fitted pinhole and distortion at the photos' size, given also when the set is refused."""
+
+    trusted: bool = Field(
+        description="the set passed every check (these are the profile's values); false: fitted, but the set was "
+        "refused (`advice` says why): for a look, not for positioning"
+    )
+    width: int = Field(ge=1, le=MAX_SIDE_PX)
+    height: int = Field(ge=1, le=MAX_SIDE_PX)
+    fx: float = Field(description="px")
+    fy: float = Field(description="px")
+    cx: float = Field(description="px")
+    cy: float = Field(description="px")
+    distortion: list[float] = Field(min_length=5, max_length=5, description="k1, k2, p1, p2, k3 (OpenCV's)")
 
 
 class CalibrationReport(Strict):
@@ -150,6 +243,9 @@ class CalibrationReport(Strict):
     schema_: Literal["lumipose.calibration/1"] = Field(default=CALIBRATION_SCHEMA, alias="schema")
     ok: bool = Field(description="the set passed every check; only then is `profile` given")
     profile: DeviceProfile | None = None
+    fitted: FittedCamera | None = Field(
+        default=None, description="what the fit gave, trusted or not; null when nothing could be fitted"
+    )
     rms_px: float | None = Field(default=None, ge=0, description="reprojection RMS over all corners")
     sigmas: dict[str, float] = Field(
         default_factory=dict, description="1-sigma of each parameter (fx, fy, cx, cy px; k1, k2, p1, p2, k3)"

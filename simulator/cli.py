@@ -212,6 +212,11 @@ def add_commands(commands) -> None:
     calibration.add_argument("--out", type=Path, default=None, help="write the calibrated profile here")
     add_bench_flags(calibration, workers=False)
     calibration.set_defaults(run=_run_calibration_bench)
+    boards = benches.add_parser("boards", help="boards users already own, on real public photos (issue 29)")
+    boards.add_argument("--videos", type=Path, default=None,
+                        help="a folder with caliscope's cam_*.mp4: every frame instead of the shipped ones")
+    add_bench_flags(boards, seed=False, workers=False)
+    boards.set_defaults(run=_run_boards_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
     fidelity.add_argument("--distances", type=float, nargs="+", default=None,
                           help="metres (default: 1.0 to 3.0 by 0.1)")
@@ -467,6 +472,14 @@ def _run_calibration_bench(args) -> int:
             result["profile_written"] = str(args.out)
     print(json.dumps(result, indent=2) if args.json else format_calibration(result))
     return 0 if profile is not None else 1
+
+
+def _run_boards_bench(args) -> int:
+    from simulator.bench_boards import bench_boards, format_boards
+
+    result = bench_boards(args.videos)
+    print(json.dumps(result, indent=2) if args.json else format_boards(result))
+    return 0
 
 
 def _run_sweep(args) -> int:

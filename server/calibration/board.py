@@ -1,8 +1,14 @@
-"""The ChArUco board of a `BoardSpec`, and its corners found on one photo (a `BoardView`).
+"""The board of a `BoardSpec` (ChArUco or plain chessboard), and its corners found on one photo (a `BoardView`).
 
 Board frame: x along the board's width, y down its height, origin at its top-left corner,
-metres; corner id i sits at ((i mod (squares_x - 1)) + 1, (i div (squares_x - 1)) + 1) squares.
-Image points are pixels with pixel centres at integers (OpenCV's convention).
+metres; corner id i sits at ((i mod (squares_x - 1)) + 1, (i div (squares_x - 1)) + 1) squares,
+on either kind. Image points are pixels with pixel centres at integers (OpenCV's convention).
+
+Boards users already own are found as they come: printed inverted (white markers on black) or
+photographed by a front camera that mirrors its photos. When the board is not found on the photo
+as it is, `find_board` tries it inverted, mirrored, and both, and says which one worked; the corners
+of a mirrored photo are those of the photo un-mirrored (flipped left-right back), the image the lens
+really made, so a calibration of them is the real camera's.
 """
 
 from __future__ import annotations
@@ -13,7 +19,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from shared_schemas.calibration import BoardSpec, BoardView
+from shared_schemas.calibration import BoardKind, BoardSpec, BoardView
 
 
 @dataclass(frozen=True)
@@ -48,25 +54,58 @@ class BoardRules:
 
 
 def charuco_board(spec: BoardSpec) -> cv2.aruco.CharucoBoard:
-    """OpenCV's board for the spec (the top-left square black, OpenCV >= 4.6)."""
-    return _board(spec.squares_x, spec.squares_y, spec.square_m, spec.marker_m, spec.dictionary.value)
+    """OpenCV's ChArUco board for the spec (its layout, dictionary and marker ids); raises ValueError for a
+    chessboard spec."""
+    if spec.kind != BoardKind.charuco or spec.marker_m is None:
+        raise ValueError("a chessboard has no ChArUco board")
+    return _board(
+        spec.squares_x,
+        spec.squares_y,
+        spec.square_m,
+        spec.marker_m,
+        spec.dictionary.value,
+        spec.legacy,
+        spec.first_marker_id,
+    )
 
 
 @functools.cache  # the models are not hashable; their values are
-def _board(squares_x: int, squares_y: int, square_m: float, marker_m: float, dictionary: str) -> cv2.aruco.CharucoBoard:
+def _board(
+    squares_x: int, squares_y: int, square_m: float, marker_m: float, dictionary: str, legacy: bool, first_id: int
+) -> cv2.aruco.CharucoBoard:
     aruco = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
-    return cv2.aruco.CharucoBoard((squares_x, squares_y), square_m, marker_m, aruco)
+    ids = np.arange(first_id, first_id + squares_x * squares_y // 2, dtype=np.int32)
+    board = cv2.aruco.CharucoBoard((squares_x, squares_y), square_m, marker_m, aruco, ids)
+    board.setLegacyPattern(legacy)
+    return board
 
 
 def corner_points_m(spec: BoardSpec, corner_ids: list[int] | np.ndarray) -> np.ndarray:
-    """Board-frame points (N, 3) of ChArUco corner ids; raises ValueError for an id the board lacks."""
+    """Board-frame points (N, 3) of corner ids; raises ValueError for an id the board lacks."""
     ids = np.asarray(corner_ids, dtype=int)
     if ids.size and (ids.min() < 0 or ids.max() >= spec.inner_corners):
         raise ValueError(
             f"corner id {int(ids.max())} is not on a {spec.squares_x} x {spec.squares_y} board "
             f"({spec.inner_corners} corners)"
         )
-    return np.asarray(charuco_board(spec).getChessboardCorners(), float)[ids]
+    # OpenCV's CharucoBoard.getChessboardCorners, for either kind of board
+    return np.column_stack([(_grid_cells(spec, ids) + 1) * spec.square_m, np.zeros(len(ids))])
+
+
+def describe_board(spec: BoardSpec) -> str:
+    """A spec in words: "7 x 5 DICT_4X4_50 board (squares 40.000 mm, markers 28.000 mm)",
+    "10 x 7 chessboard (9 x 6 inner corners, squares 25.000 mm)"."""
+    square = f"squares {spec.square_m * 1000:.3f} mm"
+    if spec.kind == BoardKind.chessboard or spec.marker_m is None:
+        name = f"{spec.squares_x} x {spec.squares_y} chessboard"
+        details = [f"{spec.squares_x - 1} x {spec.squares_y - 1} inner corners", square]
+    else:
+        name = f"{spec.squares_x} x {spec.squares_y} {spec.dictionary.value} board"
+        details = [square, f"markers {spec.marker_m * 1000:.3f} mm"]
+        details += ["legacy layout"] * spec.legacy + [f"first marker {spec.first_marker_id}"] * bool(
+            spec.first_marker_id
+        )
+    return f"{name} ({', '.join(details + ['inverted'] * spec.inverted)})"
 
 
 def _grey(image: np.ndarray) -> np.ndarray:
@@ -217,25 +256,45 @@ def _misfits(spec: BoardSpec, ids: np.ndarray, points: np.ndarray, rules: BoardR
         dropped[worst] = True
 
 
-def find_board(image: np.ndarray, spec: BoardSpec, name: str, rules: BoardRules = BoardRules()) -> BoardView | None:
-    """The board's corners (sub-pixel) on a grey or colour photo (uint8); None when no board is found.
-
-    Corners their neighbours misplace are left out (`_misfits`). None also when fewer than
-    `rules.min_corners` corners are left, or when too many are misplaced: markers of the same
-    dictionary read on a board of another layout (a spec that does not match the photo).
-    """
-    grey = _grey(np.asarray(image))
-    if grey.dtype != np.uint8:
-        raise ValueError(f"an image must be 8-bit; got {grey.dtype}")
-    detector = cv2.aruco.CharucoDetector(charuco_board(spec))
-    corners, ids, _, _ = detector.detectBoard(grey)
-    if ids is None or len(ids) < rules.min_corners:
+def _charuco_corners(grey: np.ndarray, spec: BoardSpec) -> tuple[np.ndarray, np.ndarray] | None:
+    """OpenCV's ChArUco corners (ids, (N, 2) px) on a photo of a board printed as OpenCV draws it."""
+    corners, ids, _, _ = cv2.aruco.CharucoDetector(charuco_board(spec)).detectBoard(grey)
+    if ids is None:
         return None
-    ids = ids.ravel().astype(int)
+    return ids.ravel().astype(int), corners.reshape(-1, 2).astype(float)
+
+
+def _chessboard_corners(grey: np.ndarray, spec: BoardSpec) -> tuple[np.ndarray, np.ndarray] | None:
+    """OpenCV's corners of a whole chessboard (every inner corner, row by row) on a photo, or None.
+
+    findChessboardCornersSB (Duda and Frese's localized radon transform) finds boards that
+    findChessboardCorners misses (docs/calibration.md); a chessboard must be seen whole, as
+    nothing tells its corners apart.
+    """
+    pattern = (spec.squares_x - 1, spec.squares_y - 1)
+    found, corners = cv2.findChessboardCornersSB(grey, pattern, flags=cv2.CALIB_CB_NORMALIZE_IMAGE)
+    if not found:
+        return None
+    return np.arange(spec.inner_corners), corners.reshape(-1, 2).astype(float)
+
+
+def _gap_share(spec: BoardSpec) -> float:
+    """The white gap around a corner as a share of a square: to the nearest marker, or half a square on a
+    chessboard (beyond it the next corner's edges enter)."""
+    if spec.kind == BoardKind.chessboard or spec.marker_m is None:
+        return 0.5
+    return (spec.square_m - spec.marker_m) / (2 * spec.square_m)
+
+
+def refine_corners(
+    grey: np.ndarray, spec: BoardSpec, ids: np.ndarray, detected: np.ndarray, rules: BoardRules = BoardRules()
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """A detector's corners refined to the smoothed photo's saddle points, the missed ones next to them grown
+    in and the misplaced ones left out: (ids, (N, 2) px), or None when too few are left or too many misfit
+    (markers read on a board of another layout: a spec that does not match the photo)."""
     # the detector's corners (its own cornerSubPix) are off by 0.05 px typically and 0.2 px on tilted
     # views; the saddle fit halves the first and removes most of the second (rendered boards, docs/calibration.md)
-    detected = corners.reshape(-1, 2).astype(float)
-    gap_px = _square_px(spec, ids, detected) * (spec.square_m - spec.marker_m) / (2 * spec.square_m)
+    gap_px = _square_px(spec, ids, detected) * _gap_share(spec)
     radius, sigma = _saddle_window(gap_px, rules)
     smooth = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), sigma)
     refined, converged = _saddle_points(smooth, detected, radius, rules)
@@ -247,11 +306,58 @@ def find_board(image: np.ndarray, spec: BoardSpec, name: str, rules: BoardRules 
     misfits = _misfits(spec, ids, refined, rules)
     if misfits.mean() > rules.max_misfit_share or np.sum(~misfits) < rules.min_corners:
         return None
+    return ids[~misfits], refined[~misfits]
+
+
+def detect_corners(grey: np.ndarray, spec: BoardSpec) -> tuple[np.ndarray, np.ndarray] | None:
+    """OpenCV's own corners of the board (ids, (N, 2) px) on a grey photo as it is, before any refinement."""
+    return (_chessboard_corners if spec.kind == BoardKind.chessboard else _charuco_corners)(grey, spec)
+
+
+def attempts(spec: BoardSpec, first: tuple[bool, bool] | None = None) -> list[tuple[bool, bool]]:
+    """The (inverted, mirrored) ways a photo is tried, in order: `first` (what worked on the photo before),
+    then the photo as printed per the spec, inverted, mirrored, both. A chessboard is the same inverted
+    (a shift by one square) and mirrored (a board seen from another side): tried as it is only."""
+    if spec.kind == BoardKind.chessboard:
+        return [(False, False)]
+    ways = [(spec.inverted, False), (not spec.inverted, False), (spec.inverted, True), (not spec.inverted, True)]
+    return sorted(ways, key=lambda way: way != first)
+
+
+def find_board(
+    image: np.ndarray,
+    spec: BoardSpec,
+    name: str,
+    rules: BoardRules = BoardRules(),
+    first: tuple[bool, bool] | None = None,
+) -> BoardView | None:
+    """The board's corners (sub-pixel) on a grey or colour photo (uint8); None when no board is found.
+
+    Tried as `attempts` says; the view says whether the board was found `inverted` and on the photo
+    `mirrored` (then its corners are those of the photo flipped left-right: the un-mirrored image).
+    Corners their neighbours misplace are left out (`refine_corners`).
+    """
+    grey = _grey(np.asarray(image))
+    if grey.dtype != np.uint8:
+        raise ValueError(f"an image must be 8-bit; got {grey.dtype}")
     height, width = grey.shape
-    return BoardView(
-        name=name,
-        width=width,
-        height=height,
-        corner_ids=ids[~misfits].tolist(),
-        corners_px=[[float(x), float(y)] for x, y in refined[~misfits]],
-    )
+    for inverted, mirrored in attempts(spec, first):
+        seen = cv2.flip(grey, 1) if mirrored else grey
+        seen = cv2.bitwise_not(seen) if inverted else seen
+        detected = detect_corners(seen, spec)
+        if detected is None or len(detected[0]) < rules.min_corners:
+            continue
+        corners = refine_corners(seen, spec, *detected, rules)
+        if corners is None:
+            continue
+        ids, points = corners
+        return BoardView(
+            name=name,
+            width=width,
+            height=height,
+            corner_ids=ids.tolist(),
+            corners_px=[[float(x), float(y)] for x, y in points],
+            inverted=inverted,
+            mirrored=mirrored,
+        )
+    return None

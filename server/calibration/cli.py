@@ -11,37 +11,54 @@ from shared_schemas.cli import BadInput, describe_file_error, describe_validatio
 
 EXIT_OK, EXIT_REFUSED = 0, 1
 DICTIONARIES = (
-    "DICT_4X4_50",
-    "DICT_4X4_100",
-    "DICT_4X4_250",
-    "DICT_4X4_1000",
-    "DICT_5X5_100",
-    "DICT_5X5_250",
-    "DICT_5X5_1000",
-    "DICT_6X6_250",
-    "DICT_6X6_1000",
+    *(f"DICT_{bits}X{bits}_{n}" for bits in (4, 5, 6, 7) for n in (50, 100, 250, 1000)),
+    "DICT_ARUCO_ORIGINAL",
+    "DICT_APRILTAG_16h5",
+    "DICT_APRILTAG_25h9",
+    "DICT_APRILTAG_36h10",
+    "DICT_APRILTAG_36h11",
+    "DICT_ARUCO_MIP_36h12",
 )  # shared_schemas.calibration.ArucoDictionary, without importing it for every `lumipose --help`
 
 
 def add_commands(commands) -> None:
     """Add `calibrate board` and `calibrate camera` to an argparse subparsers object."""
-    calibrate = commands.add_parser("calibrate", help="camera calibration with a ChArUco board")
+    calibrate = commands.add_parser("calibrate", help="camera calibration with a ChArUco board or a chessboard")
     steps = calibrate.add_subparsers(dest="step", required=True)
-    board = steps.add_parser("board", help="write a printable ChArUco board and its spec (board.json)")
+    board = steps.add_parser(
+        "board", help="write a printable board and its spec (board.json): also the spec of a board you already own"
+    )
     board.add_argument("--out", type=Path, required=True, help="board.pdf (to print) or board.png (for a screen)")
-    board.add_argument("--squares", default="11x8", help="squares across x down (default: 11x8, A4 landscape)")
+    board.add_argument(
+        "--kind", default="charuco", choices=("charuco", "chessboard"), help="a ChArUco board or a plain chessboard"
+    )
+    board.add_argument(
+        "--squares",
+        default="11x8",
+        help="squares across x down (default: 11x8, A4 landscape); OpenCV's '9x6' chessboard pattern (inner "
+        "corners) has 10x7 squares",
+    )
     board.add_argument("--square-mm", type=float, default=24.0, help="side of a square")
     board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default: 0.6 of a square)")
     board.add_argument(
         "--dictionary", default="DICT_5X5_100", choices=DICTIONARIES, help="ArUco dictionary of the markers"
     )
+    board.add_argument(
+        "--legacy", action="store_true", help="OpenCV's ChArUco layout before 4.6 (differs for an even number of rows)"
+    )
+    board.add_argument("--first-marker", type=int, default=0, help="id of the top-left marker")
+    board.add_argument("--inverted", action="store_true", help="printed inverted: white markers on black")
     board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
     board.set_defaults(run=_run_board)
     camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
     camera.add_argument(
         "photos", type=Path, nargs="+", help="PNG, JPEG or HEIC photos of the board, grey or colour (turned upright)"
     )
-    camera.add_argument("--board", type=Path, required=True, help="the board's spec (board.json)")
+    camera.add_argument(
+        "--board",
+        required=True,
+        help="the board's spec: board.json (as `calibrate board` writes it) or that JSON itself",
+    )
     camera.add_argument("--device", required=True, help="the phone's profile: a bundled id or a profile JSON file")
     camera.add_argument("--id", dest="profile_id", default=None, help="id of the calibrated profile")
     camera.add_argument("--out", type=Path, default=None, help="write the calibrated profile here (profile.json)")
@@ -57,6 +74,7 @@ def _fail(message: str, as_json: bool = False, field: str | None = None) -> int:
 def _run_board(args) -> int:
     from pydantic import ValidationError
 
+    from server.calibration.board import describe_board
     from server.calibration.printing import write_board
     from shared_schemas.calibration import BoardSpec
 
@@ -64,29 +82,53 @@ def _run_board(args) -> int:
         squares_x, squares_y = (int(n) for n in args.squares.lower().split("x"))
     except ValueError:
         return _fail(f"--squares must be like 11x8, got '{args.squares}'")
-    marker_mm = args.marker_mm if args.marker_mm is not None else 0.6 * args.square_mm
+    charuco = args.kind == "charuco"
+    marker_mm = args.marker_mm if args.marker_mm is not None or not charuco else 0.6 * args.square_mm
+    # a chessboard's spec carries no ChArUco fields, so a ChArUco option given with it is refused by the spec
+    given = {"dictionary": args.dictionary} if charuco or args.dictionary != "DICT_5X5_100" else {}
     try:
         spec = BoardSpec(
+            kind=args.kind,
             squares_x=squares_x,
             squares_y=squares_y,
             square_m=args.square_mm / 1000,
-            marker_m=marker_mm / 1000,
-            dictionary=args.dictionary,
+            marker_m=marker_mm / 1000 if marker_mm is not None else None,
+            legacy=args.legacy,
+            first_marker_id=args.first_marker,
+            inverted=args.inverted,
+            **given,
         )
         printed = write_board(spec, args.out, args.dpi)
     except ValidationError as error:
         return _fail(describe_validation_error(error, "board"))
     except (ValueError, OSError) as error:
         return _fail(str(error))
-    print(
-        f"wrote {args.out} and {args.out.with_suffix('.json')}: {printed.squares_x} x {printed.squares_y} squares "
-        f"of {printed.square_m * 1000:.3f} mm, markers {printed.marker_m * 1000:.3f} mm, {printed.dictionary.value}"
-    )
+    print(f"wrote {args.out} and {args.out.with_suffix('.json')}: {describe_board(printed)}")
     print(
         "print at 100 % (no 'fit to page'), glue it flat, and measure a square: if it is not "
         f"{printed.square_m * 1000:.2f} mm, write the measured sizes into {args.out.with_suffix('.json')}"
     )
     return EXIT_OK
+
+
+def _spec(text: str):
+    """The board spec of --board: a spec file, or the spec's JSON itself; raises ValueError saying what is wrong."""
+    from pydantic import ValidationError
+
+    from shared_schemas.calibration import BoardSpec
+
+    if text.lstrip().startswith("{"):
+        try:
+            return BoardSpec.model_validate_json(text)
+        except ValidationError as error:
+            raise ValueError(f"--board is not a board spec: {describe_validation_error(error, 'board')}") from None
+    path = Path(text)
+    try:
+        return BoardSpec.model_validate_json(path.read_text())
+    except (OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"cannot read --board {path}: {error}") from None
+    except ValidationError as error:
+        raise ValueError(f"--board is not a board spec: {describe_file_error(path, error)}") from None
 
 
 def _device(text: str):
@@ -109,18 +151,14 @@ def _device(text: str):
 
 
 def _run_camera(args) -> int:
-    from pydantic import ValidationError
 
     from server.calibration.photos import PhotoError, find_views
     from server.calibration.report import CalibrationInputError, calibrate, no_board_report
-    from shared_schemas.calibration import BoardSpec
 
     try:
-        spec = BoardSpec.model_validate_json(args.board.read_text())
-    except (OSError, UnicodeDecodeError) as error:
-        return _fail(f"cannot read --board {args.board}: {error}", args.json, "board")
-    except ValidationError as error:
-        return _fail(f"--board is not a board spec: {describe_file_error(args.board, error)}", args.json, "board")
+        spec = _spec(args.board)
+    except ValueError as error:
+        return _fail(str(error), args.json, "board")
     try:
         device = _device(args.device)
     except ValueError as error:
@@ -153,20 +191,22 @@ def _run_camera(args) -> int:
 def format_report(report, out: Path | None = None) -> str:
     """The report as text: the fit, each parameter's sigma, coverage as a grid, each view."""
     lines = []
-    profile = report.profile
+    profile, fitted = report.profile, report.fitted
     if profile is not None and profile.intrinsics is not None:
-        p = profile.intrinsics
         lines.append(
             f"profile  {profile.id} at {profile.width}x{profile.height}"
             + (f", written to {out}" if out is not None else "")
         )
-        lines.append(f"pinhole  fx {p.fx:.2f}  fy {p.fy:.2f}  cx {p.cx:.2f}  cy {p.cy:.2f} px")
-        lines.append(
-            "distort  "
-            + "  ".join(
-                f"{n} {v:+.5f}" for n, v in zip(("k1", "k2", "p1", "p2", "k3"), profile.distortion, strict=False)
-            )
-        )
+        p = profile.intrinsics
+        camera = (p.fx, p.fy, p.cx, p.cy, profile.distortion)
+    elif fitted is not None:  # a refused set's fit: shown, marked, never written
+        lines.append(f"fitted   at {fitted.width}x{fitted.height}, NOT TRUSTED: the set was refused (below)")
+        camera = (fitted.fx, fitted.fy, fitted.cx, fitted.cy, fitted.distortion)
+    if profile is not None and profile.intrinsics is not None or fitted is not None:
+        fx, fy, cx, cy, distortion = camera
+        lines.append(f"pinhole  fx {fx:.2f}  fy {fy:.2f}  cx {cx:.2f}  cy {cy:.2f} px")
+        names = ("k1", "k2", "p1", "p2", "k3")
+        lines.append("distort  " + "  ".join(f"{n} {v:+.5f}" for n, v in zip(names, distortion, strict=False)))
     if report.rms_px is not None:
         lines.append(
             f"fit      RMS {report.rms_px:.3f} px, distortion 1-sigma up to {report.distortion_sigma_px:.3f} px"
@@ -183,7 +223,9 @@ def format_report(report, out: Path | None = None) -> str:
             if view.rms_px is not None
             else f"{'-':>7} {'-':>6} {'-':>6}"
         )
-        lines.append(f"{view.name[-24:]:>24} {view.corners:7d} {numbers}" + (f"  {view.note}" if view.note else ""))
+        seen = [word for word, said in (("inverted", view.inverted), ("un-mirrored", view.mirrored)) if said]
+        notes = ([view.note] if view.note else []) + seen
+        lines.append(f"{view.name[-24:]:>24} {view.corners:7d} {numbers}" + (f"  {'; '.join(notes)}" if notes else ""))
     lines.append(("ok: " if report.ok else "refused: ") + (report.message or ""))
     lines += [f"  advice: {advice}" for advice in report.advice]
     return "\n".join(lines)

@@ -53,6 +53,7 @@ def find_views(
     """
     sizes, skipped = photo_sizes(photos, max_pixels)
     views, decoded = [], 0
+    first = None  # a set is shot of one print with one camera: what worked on a photo is tried first on the next
     for name, data in photos:
         if name not in sizes:
             continue
@@ -62,11 +63,18 @@ def find_views(
             skipped.append(ViewFit(name=name, corners=0, note=f"unreadable: {error}"))
             continue
         decoded += 1
-        view = find_board(pixels, spec, name)
+        view = find_board(pixels, spec, name, first=first)
         if view is None:
-            skipped.append(ViewFit(name=name, corners=0, note="no board found (does the board spec match it?)"))
+            skipped.append(
+                ViewFit(
+                    name=name,
+                    corners=0,
+                    note="no board found, as it is, inverted or mirrored (does the board spec match it?)",
+                )
+            )
         else:
             views.append(view)
+            first = (view.inverted, view.mirrored)
     if not decoded:  # every header read, no pixels: as unreadable as no header
         raise UnreadablePhotos("no photo is readable: " + "; ".join(view.note or "" for view in skipped))
     return views, skipped

@@ -2,9 +2,9 @@
 
 A set passes when it has enough views, its corners cover the image (the four corner cells
 included), enough views are tilted, the corners fit well and the fitted distortion is certain
-over the whole frame; otherwise `ok` is false, there is no profile, and `advice` says what to
-shoot next. Bad input (views of different sizes, corner ids the board lacks) raises
-`CalibrationInputError`.
+over the whole frame; otherwise `ok` is false, there is no profile, `advice` says what to
+shoot next, and `fitted` still carries what the fit gave, marked `trusted: false`. Bad input
+(views of different sizes, corner ids the board lacks) raises `CalibrationInputError`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from server.calibration.fit import Fit, FitRules, fit_views
 from server.calibration.lens import DISTORTION_NAMES, PINHOLE_NAMES
 from server.calibration.quality import CORNER_CELLS, coverage_grid, distortion_sigma_px, image_part, tilt_deg
 from shared_schemas import DeviceProfile
-from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, ViewFit
+from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, FittedCamera, ViewFit
 
 
 class CalibrationInputError(ValueError):
@@ -141,6 +141,31 @@ def _message(rules: CalibrationRules, used: int, fit: Fit, advice: list[str], si
     return "; ".join(parts)
 
 
+def _found_as(views: list[BoardView]) -> list[str]:
+    """How the board was found, when not as printed: inverted prints and mirrored photos, said."""
+    said = []
+    inverted, mirrored = sum(v.inverted for v in views), sum(v.mirrored for v in views)
+    if inverted:
+        said.append(f"board found inverted (white markers on black) on {inverted} of {len(views)} photos")
+    if mirrored:
+        said.append(f"photos were mirrored: un-mirrored before fitting ({mirrored} of {len(views)})")
+    return said
+
+
+def _fitted(fit: Fit, size: tuple[int, int], trusted: bool) -> FittedCamera:
+    lens = fit.lens
+    return FittedCamera(
+        trusted=trusted,
+        width=size[0],
+        height=size[1],
+        fx=lens.fx,
+        fy=lens.fy,
+        cx=lens.cx,
+        cy=lens.cy,
+        distortion=list(lens.distortion),
+    )
+
+
 def no_board_report(skipped: list[ViewFit]) -> CalibrationReport:
     """The refusal when no photo shows the board: most likely a board spec that does not match the print."""
     message = "no photo shows the board: does the board spec match the printed board (dictionary, squares)?"
@@ -178,6 +203,7 @@ def calibrate(
 
     def refused(message: str, advice: str) -> CalibrationReport:
         coverage = float((cells >= rules.min_cell_corners).mean())
+        message = "; ".join([message, *_found_as(usable)])
         return CalibrationReport(
             ok=False, coverage=coverage, coverage_cells=cells.tolist(), views=skipped, advice=[advice], message=message
         )
@@ -226,6 +252,8 @@ def _judged(
                 tilt_deg=tilt_deg(pose.rotation),
                 distance_m=float(np.linalg.norm(pose.rotation @ centre + pose.translation)),
                 note=f"{dropped} corners left out as outliers" if dropped else None,
+                inverted=view.inverted,
+                mirrored=view.mirrored,
             )
         )
     sigma, worst_px = distortion_sigma_px(fit.lens, fit.covariance[4:, 4:], width, height)
@@ -244,10 +272,11 @@ def _judged(
         zip(PINHOLE_NAMES + DISTORTION_NAMES, np.sqrt(np.clip(np.diag(fit.covariance), 0, None)).tolist(), strict=True)
     )
     ok = not advice
-    message = _message(rules, len(usable), fit, advice, sigma, where)
+    message = "; ".join([_message(rules, len(usable), fit, advice, sigma, where), *_found_as(usable)])
     return CalibrationReport(
         ok=ok,
         profile=profile,
+        fitted=_fitted(fit, (width, height), trusted=ok),
         rms_px=fit.rms_px,
         sigmas=sigmas,
         distortion_sigma_px=sigma,

@@ -1,6 +1,7 @@
 """`lumipose calibrate board` and `lumipose calibrate camera`: files, exit codes, bad input named."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -139,3 +140,48 @@ def test_an_unknown_device_is_bad_input(shots, capsys):
     assert main(["calibrate", "camera", str(good[0]), "--board", str(folder / "board.json"),
                  "--device", "nokia-3310"]) == 2
     assert "neither a bundled profile" in capsys.readouterr().err
+
+
+def test_board_prints_a_chessboard_and_its_spec(tmp_path, capsys):
+    out = tmp_path / "chess.png"
+    args = ["--kind", "chessboard", "--squares", "10x7", "--square-mm", "25", "--dpi", "60"]
+    assert main(["calibrate", "board", "--out", str(out), *args]) == 0
+    assert "10 x 7 chessboard (9 x 6 inner corners" in capsys.readouterr().out
+    spec = BoardSpec.model_validate_json((tmp_path / "chess.json").read_text())
+    assert (spec.kind.value, spec.marker_m) == ("chessboard", None)
+    view = find_board(np.asarray(Image.open(out)), spec, "chess")
+    assert view is not None and len(view.corner_ids) == 54
+
+
+def test_board_prints_a_charuco_board_of_any_layout(tmp_path):
+    out = tmp_path / "tag.png"
+    args = ["--squares", "6x4", "--dictionary", "DICT_APRILTAG_36h11", "--legacy", "--first-marker", "7", "--inverted"]
+    assert main(["calibrate", "board", "--out", str(out), "--dpi", "60", *args]) == 0
+    spec = BoardSpec.model_validate_json((tmp_path / "tag.json").read_text())
+    assert (spec.dictionary.value, spec.legacy, spec.first_marker_id, spec.inverted) == ("DICT_APRILTAG_36h11", True, 7,
+                                                                                         True)
+    view = find_board(np.asarray(Image.open(out)), spec, "tag")
+    assert view is not None and view.inverted and len(view.corner_ids) == spec.inner_corners
+
+
+def test_a_chessboard_with_a_charuco_option_is_bad_input(tmp_path, capsys):
+    assert main(["calibrate", "board", "--out", str(tmp_path / "c.png"), "--kind", "chessboard", "--legacy"]) == 2
+    assert "a chessboard has no markers" in capsys.readouterr().err
+
+
+def test_camera_prints_a_refused_sets_fit_as_not_trusted(capsys):
+    # five of OpenCV's own chessboard photos (tests/fixtures/calibration/opencv_left): too few to trust
+    photos = sorted((Path(__file__).parents[1] / "fixtures" / "calibration" / "opencv_left").glob("*.jpg"))[:5]
+    board = '{"kind": "chessboard", "squares_x": 10, "squares_y": 7, "square_m": 0.025}'  # the spec itself
+    assert main(["calibrate", "camera", *map(str, photos), "--board", board, "--device", "xiaomi-mi8-front"]) == 1
+    text = capsys.readouterr().out
+    assert "fitted   at 640x480, NOT TRUSTED: the set was refused" in text and "pinhole  fx 5" in text, text
+    assert "refused: " in text and "advice: more photos: 5 with the board found" in text
+
+
+def test_the_default_boards_json_keeps_its_fields(tmp_path):
+    # the Android app (BoardSpec.fromJson) refuses fields it does not know: the fields added for other boards
+    # are written only when a board needs them
+    assert main(["calibrate", "board", "--out", str(tmp_path / "b.png"), "--dpi", "60"]) == 0
+    written = json.loads((tmp_path / "b.json").read_text())
+    assert set(written) == {"schema", "squares_x", "squares_y", "square_m", "marker_m", "dictionary"}

@@ -24,7 +24,7 @@ from server.api.deps import Services, ServicesDep
 from server.api.errors import ERROR_RESPONSES, ApiError
 from server.api.guard import GuardedRoute
 from server.api.params import FRAME_REQUEST_BODY, BoardPixelsDep, PhotosBodyDep, photo_pixel_limit
-from server.calibration.board import find_board
+from server.calibration.board import describe_board, find_board
 from server.calibration.photos import PhotoError, UnreadablePhotos, find_views, photo_sizes
 from server.calibration.report import CalibrationInputError, calibrate, no_board_report
 from shared_schemas import DeviceProfile
@@ -140,8 +140,8 @@ async def find_view(
         raise ApiError(
             422,
             "no_board",
-            f"no {spec.squares_x} x {spec.squares_y} {spec.dictionary.value} board found on the "
-            "photo (or too few of its corners): does the board spec match the printed board?",
+            f"no {describe_board(spec)} found on the photo, as it is, inverted or mirrored "
+            "(or too few of its corners): does the board spec match the printed board?",
             field="frame",
         )
     return view

@@ -1,11 +1,15 @@
 """POST /v1/calibrations/views and POST /v1/calibrations against a real server: views, JSON and
 multipart calibrations, and bad input answered with a clear 4xx."""
 
+from pathlib import Path
+
 import httpx
 import numpy as np
 import pytest
+from PIL import Image
 
 from lumipose_client import LumiposeError
+from server.calibration.board import find_board
 from shared_schemas import CameraIntrinsics, FrameMeta
 from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, CalibrationRequest
 from simulator.board import PoseSet
@@ -171,3 +175,26 @@ def test_a_board_photo_needs_no_camera_and_is_turned_upright(server_url):
         view = BoardView.model_validate(response.json())
         assert (view.width, view.height) == (WIDTH, HEIGHT)
         assert view.corner_ids == local.corner_ids and np.allclose(view.corners_px, local.corners_px, atol=1e-3)
+
+
+@pytest.mark.parametrize("board, message", [
+    ({"kind": "chessboard", "squares_x": 10, "squares_y": 7, "square_m": 0.025, "marker_m": 0.01},
+     "board: Value error, a chessboard has no markers"),
+    ({"squares_x": 7, "squares_y": 5, "square_m": 0.04, "marker_m": 0.028, "dictionary": "DICT_4X4_50",
+      "first_marker_id": 40}, "needs 17 markers from id 40; DICT_4X4_50 has 50"),
+    ({"kind": "hexagons", "squares_x": 7, "squares_y": 5, "square_m": 0.04}, "board.kind: Input should be"),
+])
+def test_a_board_spec_that_cannot_be_is_422_in_a_calibration_request(server_url, board, message):
+    view = view_set(PoseSet.good)[0].model_dump()
+    body = {"board": board, "views": [view], "device": "xiaomi-mi8-front"}
+    response = httpx.post(f"{server_url}/v1/calibrations", json=body, timeout=60)
+    assert response.status_code == 422 and message in response.json()["message"], response.text
+
+
+def test_json_views_of_a_chessboard_calibrate_and_a_refused_fit_is_untrusted(client):
+    board = BoardSpec(kind="chessboard", squares_x=10, squares_y=7, square_m=0.025)
+    photos = sorted((Path(__file__).parents[2] / "fixtures" / "calibration" / "opencv_left").glob("*.jpg"))[:5]
+    views = [find_board(np.asarray(Image.open(path)), board, path.name) for path in photos]
+    report = client.calibrate(CalibrationRequest(board=board, views=views, device="xiaomi-mi8-front"))
+    assert not report.ok and report.profile is None and report.fitted is not None and not report.fitted.trusted
+    assert 500 < report.fitted.fx < 570 and report.advice
