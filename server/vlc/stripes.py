@@ -300,8 +300,8 @@ class StripeAxis:
 @dataclass(frozen=True)
 class TurnedRules:
     # rendered ID frames (squares, rectangles both ways, circles at 0.8-3 m, 1/8000 and 1/2500 s) read
-    # at most 0.97 (a panel inside one chip run, no stripes) and turned mostly 3-150; the real frame
-    # (docs/vlc.md, "A real frame") 0.002, turned 400
+    # at most 0.97 (a panel inside one chip run, no stripes) and turned mostly 3-150 (docs/vlc.md, "A real
+    # frame"); the real frame as one region 0.00002, turned 60 000
     max_ratio: float = 3.0
     # and the columns must step like stripes: their RMS central difference at least this of the level
     # (a turned frame's stripes of depth 0.3 give about 0.15), not a plain panel's faint texture

@@ -90,6 +90,8 @@ def test_real_frame_gives_no_confident_id(real_pixels):
     frame = as_uploaded(real_pixels)
     reading = read_id_frame(frame)
     assert reading.problem is None
+    # the LED is keyed fully off: each bright stripe is a blob of its own, too few rows to read
+    assert len(reading.panels) >= 15
     observations = [p.observation for p in reading.panels if p.observation is not None]
     # also the whole diffuser as one panel, as a reader that joins bars across dark rows would give it
     row_time = row_time_s(SKEW_S, 1080)
@@ -101,6 +103,12 @@ def test_real_frame_gives_no_confident_id(real_pixels):
             evidence.add(observation)
             decision = evidence.decide()
             assert not decision.confident, decision.message
+    # a 1 kHz square wave is no code at any phase: no ID at all, not the prior's favourite as a posterior
+    for map_ids in ((), (1, 2, 3, 42)):
+        evidence = IdEvidence(map_ids=map_ids)
+        evidence.add(whole)
+        decision = evidence.decide()
+        assert decision.beacon_id is None and "no code fits the stripes" in decision.message, decision.message
 
 
 def test_real_frame_turned_is_said_to_look_turned(real_pixels):
@@ -153,3 +161,18 @@ def test_plain_rows_are_no_stripes():
     rng = np.random.default_rng(0)
     values = 150 + rng.normal(0, 2, 200)
     assert isinstance(measure_stripes(np.arange(200), values, 2e-5, 1e-4), NoStripes)
+
+
+def test_vlc_stripes_command_measures_the_real_frame(capsys):
+    import json
+
+    from lumipose_cli.main import main
+
+    args = ["vlc", "stripes", str(FRAME), "--skew-s", str(SKEW_S), "--exposure-s", str(EXPOSURE_S), "--json"]
+    assert main(args) == 0
+    body = json.loads(capsys.readouterr().out)
+    assert abs(body["frequency_hz"] / BLINK_HZ - 1) < 0.002 and abs(body["duty"] - 0.5) < 0.03
+    assert body["predicted_width_rows"] == pytest.approx(3.43, abs=0.01)
+    # undoing an sRGB curve puts the half level at half the light: the duty comes to the LED's 50 %
+    assert main([*args, "--tone-curve", "srgb"]) == 0
+    assert abs(json.loads(capsys.readouterr().out)["duty"] - 0.5) < 0.005
