@@ -14,11 +14,20 @@ import pytest
 from server.camera import intrinsics_from_profile
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
+from server.locator import locate
 from server.vlc.codec import LedWaveform
 from server.vlc.decoder import IdEvidence, read_stripes, row_time_s
 from server.vlc.reader import read_id_frame
 from server.vlc.stripes import NoStripes, StripeMeasurement, measure_stripes, row_signal
-from shared_schemas import Beacon, CameraIntrinsics, FrameFormat, FrameKind, FrameMeta, device_profiles
+from shared_schemas import (
+    Beacon,
+    BeaconMap,
+    CameraIntrinsics,
+    FrameFormat,
+    FrameKind,
+    FrameMeta,
+    device_profiles,
+)
 from simulator.led import row_gains
 from simulator.render import CameraPose, SensorModel, render_frame
 
@@ -97,17 +106,17 @@ def test_real_frame_gives_no_confident_id(real_pixels):
     row_time = row_time_s(SKEW_S, 1080)
     whole = read_stripes(frame.pixels, np.ones((1080, 1920), bool), (0, 0), 0.0, row_time, EXPOSURE_S)
     assert whole is not None and whole.chips_seen > 21
-    for observation in [*observations, whole]:
+    for observation in observations:  # none while each bar is a blob of its own (too few rows)
         for map_ids in ((), (1, 2, 3, 42)):
             evidence = IdEvidence(map_ids=map_ids)
             evidence.add(observation)
-            decision = evidence.decide()
-            assert not decision.confident, decision.message
+            assert not evidence.decide().confident
     # a 1 kHz square wave is no code at any phase: no ID at all, not the prior's favourite as a posterior
     for map_ids in ((), (1, 2, 3, 42)):
         evidence = IdEvidence(map_ids=map_ids)
         evidence.add(whole)
         decision = evidence.decide()
+        assert not decision.confident
         assert decision.beacon_id is None and "no code fits the stripes" in decision.message, decision.message
 
 
@@ -119,6 +128,15 @@ def test_real_frame_turned_is_said_to_look_turned(real_pixels):
     assert "turned 90 degrees" in reading.problem
     # the frame as taken is not
     assert read_id_frame(as_uploaded(real_pixels)).problem is None
+
+
+def test_real_frame_through_locate_names_no_panel_and_says_turned(real_pixels):
+    room = BeaconMap(name="room", beacons=[Beacon(id=i, center_m=[2.0 * i, 0.0, 2.5], side_m=0.6) for i in (17, 42)])
+    taken = locate(as_uploaded(real_pixels), room)
+    assert not taken.ok and "no panel with a confidently read ID" in taken.message
+    assert taken.vlc is None or not taken.vlc.confident
+    turned = locate(as_uploaded(real_pixels.T), room)
+    assert not turned.ok and "is the frame turned 90 degrees?" in turned.message
 
 
 # rendered: a panel filling a small frame, lit by a square wave of known frequency and duty
