@@ -185,11 +185,13 @@ def _startup_map_name(settings) -> str:
 
 
 def add_commands(commands) -> None:
-    """Add `locate`, `fov`, `serve` and `survey` to an argparse subparsers object."""
+    """Add `locate`, `fov`, `serve`, `survey` and `vlc` to an argparse subparsers object."""
     from server.locate_cli import add_locate_command
     from server.survey.cli import add_survey_command
+    from server.vlc.cli import add_vlc_command
 
     add_locate_command(commands)
     _add_fov(commands)
     _add_serve(commands)
     add_survey_command(commands)
+    add_vlc_command(commands)

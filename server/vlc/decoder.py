@@ -282,6 +282,10 @@ class IdEvidence:
         evidence = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))  # each ID's, over phase and clock
         chips = float(sum(o.chips_seen for o in usable))
         seen = f"from {len(usable)} frame(s), {chips:.1f} chips seen of a {MESSAGE_CHIPS}-chip message"
+        if not np.ptp(flat) > 0:
+            # no code at any phase explains stripes as deep as it makes them: the posterior would be the prior
+            message = f"no code fits the stripes {seen} (none as deep as the code makes them)"
+            return IdDecision(None, 0.0, False, len(usable), chips, message)
         if not self.map_ids:
             posterior = _normalised(evidence)
             best = int(np.argmax(posterior))

@@ -9,6 +9,7 @@ from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_m
 from server.vision.roi import FrameView
 from server.vlc.capture import id_frame_problem
 from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
+from server.vlc.stripes import TurnedRules, turned_frame_problem
 
 
 @dataclass(frozen=True)
@@ -42,9 +43,16 @@ def read_id_frame(
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
     found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(meta)) if found is None else found
     panels = []
+    regions = []
     for blob in found.blobs:
         y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
+        regions.append(((y0, x0), mask))
         observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time, exposure_s, rules)
         centroid = meta.fraction_of_full_frame(*blob.centroid_px)
         panels.append(PanelStripes(blob, centroid, observation))
+    # stripes along the columns read as nonsense along the rows: say so instead
+    boxes = [blob.bounding_box for blob in found.blobs]
+    turned = turned_frame_problem(frame.pixels, regions, boxes, TurnedRules(edge_margin_px=rules.edge_margin_px))
+    if turned is not None:
+        return IdFrameReading((), turned)
     return IdFrameReading(tuple(panels), None)
