@@ -246,15 +246,20 @@ PILLOW_BLOCK_BYTES = 64 << 20
 Image.core.set_block_size(PILLOW_BLOCK_BYTES)
 
 
-def _colour_luma(image: Image.Image) -> np.ndarray:
-    """The luma of a decoded colour image, converted a strip at a time into one array: the decoded image and
-    the luma are all it holds (no full-size L image and copy of it). Pillow's L conversion is ITU-R BT.601
+def _strip_luma(image: Image.Image) -> np.ndarray:
+    """The luma of a decoded image, copied (and for colour converted) a strip at a time into one array: the decoded
+    image and the luma are all it holds (no full-size L image, nor the full-size bytes and their chunks that
+    `np.asarray(image)` makes: three times the luma at once). Pillow's L conversion is ITU-R BT.601
     (299, 587, 114) on the encoded values, from RGB, RGBA (alpha dropped), palette or CMYK."""
     width, height = image.size
     luma = np.empty((height, width), np.uint8)
     for row in range(0, height, _STRIP_ROWS):
-        with image.crop((0, row, width, min(height, row + _STRIP_ROWS))) as strip, strip.convert("L") as grey:
-            luma[row : row + grey.height] = np.asarray(grey)
+        with image.crop((0, row, width, min(height, row + _STRIP_ROWS))) as strip:
+            if strip.mode == "L":
+                luma[row : row + strip.height] = np.asarray(strip)
+                continue
+            with strip.convert("L") as grey:
+                luma[row : row + grey.height] = np.asarray(grey)
     return luma
 
 
@@ -268,9 +273,7 @@ def _luma(image: Image.Image, reduction: int = 1) -> np.ndarray:
     width, height = image.size
     with _COLOUR.holding(0 if image.mode == "L" else 4 * width * height):
         image.load()
-        if image.mode != "L":
-            return _colour_luma(image)
-        return np.asarray(image, dtype=np.uint8)
+        return _strip_luma(image)
 
 
 def _positive(value: object) -> float | None:
