@@ -52,6 +52,24 @@ def intrinsics_from_profile(profile: DeviceProfile, width: int, height: int) -> 
     )
 
 
+def reduced_intrinsics(camera: CameraIntrinsics, reduction: int) -> CameraIntrinsics:
+    """`camera` of a photo for the photo decoded at 1/`reduction` (libjpeg's scaled IDCT: an output pixel covers
+    r x r input pixels, so a pixel centre u lands at (u + 1/2) / r - 1/2); distortion is in normalised
+    coordinates and does not change."""
+    if reduction == 1:
+        return camera
+    pixel = None if camera.pixel_size_m is None else camera.pixel_size_m * reduction
+    return camera.model_copy(
+        update={
+            "fx": camera.fx / reduction,
+            "fy": camera.fy / reduction,
+            "cx": (camera.cx + 0.5) / reduction - 0.5,
+            "cy": (camera.cy + 0.5) / reduction - 0.5,
+            "pixel_size_m": pixel,
+        }
+    )
+
+
 ProfileTable = Mapping[str, DeviceProfile]  # the device profiles a frame's `camera.profile` may name, by id
 
 
@@ -130,6 +148,37 @@ PORTRAIT_ORIENTATION = 6  # a phone's stored landscape image shown upright (rear
 MIN_FOCAL_35MM_MM = 4.0
 MAX_FOCAL_35MM_MM = 2400.0
 EXIF_FOCAL_35MM_FIELD = "exif.FocalLengthIn35mmFilm"
+EXIF_PIXEL_SIZE_FIELD = "exif.PixelXDimension"
+# A photo scaled as a whole keeps the camera's aspect to within rounding: its sides may differ from the EXIF size
+# times one scale by this share of a side (and 2 px), else the photo is a crop of what the camera wrote.
+UNIFORM_SCALE_TOLERANCE = 0.002
+
+
+def exif_scale(exif: PhotoExif, size: tuple[int, int]) -> float | None:
+    """The photo's size (upright width, height) over the size its EXIF says the camera wrote (PixelXDimension,
+    PixelYDimension, in either orientation: editors turn a photo upright and keep the camera's numbers); 1.0 when
+    the EXIF says nothing; None when no one scale gives both sides, a crop (or a pad) of the camera's image."""
+    if exif.pixel_size is None:
+        return 1.0
+    width, height = size
+    for exif_w, exif_h in (exif.pixel_size, exif.pixel_size[::-1]):
+        scale = width / exif_w
+        if abs(exif_h * scale - height) <= max(2.0, UNIFORM_SCALE_TOLERANCE * height):
+            return scale
+    return None
+
+
+def _refuse_crop(exif: PhotoExif, size: tuple[int, int], guess: str, ask: str) -> None:
+    """A guess from EXIF (a profile the make names, the 35 mm rule) assumes the camera's whole image, centred on
+    the optical axis: a crop's principal point is anywhere in the part cut away, so it is refused, not guessed."""
+    if exif_scale(exif, size) is None:
+        assert exif.pixel_size is not None
+        raise FrameError(
+            f"the photo is {size[0]}x{size[1]} pixels but its EXIF says the camera wrote "
+            f"{exif.pixel_size[0]}x{exif.pixel_size[1]} (PixelXDimension, PixelYDimension): a crop, whose "
+            f"principal point is unknown, so {guess} cannot be used: pass {ask}, or the photo as the camera wrote it",
+            field=EXIF_PIXEL_SIZE_FIELD,
+        )
 
 
 @dataclass(frozen=True)
@@ -280,19 +329,34 @@ def photo_camera(
         return _profile_photo_camera(profile, size, exif, CameraSource.profile)
     matched = profile_for_exif(exif, profiles)
     if matched is not None:
+        _refuse_crop(exif, size, f"the profile its EXIF names ('{matched.id}')", f"{ask[1]}")
         chosen = _profile_photo_camera(matched, size, exif, CameraSource.exif_profile)
-        return replace(chosen, detail=f"EXIF '{exif.make} {exif.model}' -> {chosen.detail}")
+        return replace(chosen, detail=f"EXIF '{exif.make} {exif.model}' -> {chosen.detail}{_scaled(exif, size)}")
     if exif.focal_35mm_mm is not None:
-        detail = f"EXIF 35 mm equivalent focal length {exif.focal_35mm_mm:g} mm, principal point at the centre"
+        _refuse_crop(exif, size, "its EXIF 35 mm equivalent focal length", ask[1])
+        detail = (
+            f"EXIF 35 mm equivalent focal length {exif.focal_35mm_mm:g} mm, principal point at the centre"
+            f"{_scaled(exif, size)}"
+        )
         return PhotoCamera(
             _exif_35mm_camera(exif.focal_35mm_mm, size, ask), CameraSource.exif_35mm, detail, FOCAL_SIGMA_EXIF_35MM
         )
     seen = f"EXIF make/model '{exif.make} {exif.model}' matches no profile" if exif.model else "no EXIF camera"
+    fields = exif.fields()
+    has = f"its EXIF has {', '.join(fields)}" if fields else "its EXIF has none of Make, Model, FocalLength"
     raise FrameError(
-        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length): pass {ask[0]} "
+        f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length; {has}): pass {ask[0]} "
         f"(known: {', '.join(sorted(profiles))}) or {ask[1]}",
         field="camera",
     )
+
+
+def _scaled(exif: PhotoExif, size: tuple[int, int]) -> str:
+    """The detail's note of a photo scaled as a whole from the size its EXIF gives (the guess scales with it)."""
+    scale = exif_scale(exif, size)
+    if exif.pixel_size is None or scale is None or abs(scale - 1) < 1e-3:
+        return ""
+    return f" (photo scaled {scale:.4g} x from the EXIF size {exif.pixel_size[0]}x{exif.pixel_size[1]})"
 
 
 def _exif_35mm_camera(focal_35mm_mm: float, size: tuple[int, int], ask: tuple[str, str]) -> CameraIntrinsics:

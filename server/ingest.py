@@ -15,7 +15,14 @@ import numpy as np
 import pydantic_core
 from pydantic import ValidationError
 
-from server.camera import PhotoCamera, ProfileTable, frame_camera_used, photo_camera, resolve_camera
+from server.camera import (
+    PhotoCamera,
+    ProfileTable,
+    frame_camera_used,
+    photo_camera,
+    reduced_intrinsics,
+    resolve_camera,
+)
 from server.outcomes import FrameError
 from server.photos import PhotoError, read_photo
 from shared_schemas import CameraIntrinsics, CameraUsed, DeviceProfile, FrameFormat, FrameMeta, device_profiles
@@ -154,11 +161,17 @@ def decode_photo(
     pixels = photo.pixels  # upright (server.photos: one orientation rule on every path)
     height, width = pixels.shape
     table = device_profiles() if profiles is None else profiles
+    if camera is not None:  # given for the photo's own pixels; a large JPEG's are decoded at 1/reduction
+        camera = reduced_intrinsics(camera, photo.reduction)
     chosen = photo_camera(photo.exif, (width, height), table, camera, profile, *([ask] if ask else []))
     if photo.exif.orientation != 1:
         chosen = replace(
             chosen, detail=f"{chosen.detail} (photo turned upright: EXIF orientation {photo.exif.orientation})"
         )
+    if photo.reduction != 1:
+        full = f"{photo.stored_size[0]}x{photo.stored_size[1]}"
+        note = f" (decoded at 1/{photo.reduction}, {width}x{height} of {full}: intrinsics in the decoded pixels)"
+        chosen = replace(chosen, detail=chosen.detail + note)
     try:
         meta = FrameMeta(
             width=width,

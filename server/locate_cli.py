@@ -6,6 +6,9 @@ the app sends them (`shared_schemas.captures`). One line (or JSON line) per fram
 
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
 Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
+Several frames: a frame that cannot be read (a damaged photo, a missing file) is its own line, its error as
+the API's error body (`ErrorBody`), and the others are located; the exit code is the worst of them (2 over
+1 over 0). A bad option (map, profile, --camera) is still one error for the whole call.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from pathlib import Path
 from shared_schemas import DEMO_MAP_NAME
 from shared_schemas.captures import add_frame_series_arguments, annotation_paths
 from shared_schemas.cli import (
+    EXIT_BAD_INPUT,
     EXIT_NO_FIX,
     EXIT_OK,
     BadInput,
@@ -89,13 +93,21 @@ def run_locate(args) -> int:
         beacon_map = read_map(args.map, args.data_dir)
         check_beacon_id(args.beacon_id, beacon_map)
         pictures = annotation_paths(args.annotate, args.frames)
-        frames = [read_frame(path, profiles, profile, args.camera) for path in args.frames]
+        if args.camera is not None:  # the option's own fault is the whole call's, not each frame's
+            read_camera(args.camera)
+        if len(args.frames) == 1:
+            frames = {0: read_frame(args.frames[0], profiles, profile, args.camera)}
+            unreadable: dict[int, BadInput] = {}
+        else:
+            frames, unreadable = read_frames(args.frames, profiles, profile, args.camera)
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
     options = LocateOptions(pipeline=pipeline_options(args))
     devices = Devices() if args.device is not None else None
     results: dict[int, LocateResult] = {}
-    for capture in bursts_in_upload_order([frame.meta.frame_kind for frame in frames]):
+    readable = sorted(frames)
+    for capture in bursts_in_upload_order([frames[index].meta.frame_kind for index in readable]):
+        capture = [readable[position] for position in capture]
         for index in capture:
             picture = pictures[index]
             diagnostics = Diagnostics() if picture is not None else None
@@ -113,12 +125,38 @@ def run_locate(args) -> int:
                     write_annotation(picture, frames[index], diagnostics, results[index], in_session)
                 except BadInput as problem:
                     return report_bad_input(problem, as_json=args.json)
-        for index in sorted(capture):
-            if len(frames) == 1:
-                print_result(results[index], frames[index], as_json=args.json, beacon_map=beacon_map)
+        if len(args.frames) == 1:
+            print_result(results[0], frames[0], as_json=args.json, beacon_map=beacon_map)
+    if len(args.frames) > 1:
+        for index, path in enumerate(args.frames):
+            if index in unreadable:
+                print_error_line(path, unreadable[index], as_json=args.json)
             else:
-                print_line(args.frames[index], results[index], frames[index], as_json=args.json)
+                print_line(path, results[index], frames[index], as_json=args.json)
+    if unreadable:
+        return EXIT_BAD_INPUT
     return EXIT_OK if all_located(list(results.values())) else EXIT_NO_FIX
+
+
+def read_frames(paths: list[Path], profiles, profile=None, camera_text: str | None = None):
+    """Each frame of several read on its own: (the readable ones, the others' BadInput), by index."""
+    frames, unreadable = {}, {}
+    for index, path in enumerate(paths):
+        try:
+            frames[index] = read_frame(path, profiles, profile, camera_text)
+        except BadInput as problem:
+            unreadable[index] = problem
+    return frames, unreadable
+
+
+def read_camera(camera_text: str):
+    """`--camera`'s intrinsics, or BadInput naming the fault."""
+    from server.camera import parse_camera_arg
+
+    try:
+        return parse_camera_arg(camera_text)
+    except ValueError as error:
+        raise BadInput(str(error), field="camera") from None
 
 
 def read_profiles(values: list[str]):
@@ -138,14 +176,10 @@ def read_map(value: str, data_dir: Path | None = None):
 
 def read_frame(path: Path, profiles, profile=None, camera_text: str | None = None):
     """A recorded frame (its JSON names its camera) or a photo (`--camera` > `profile` > EXIF)."""
-    from server.camera import parse_camera_arg
     from server.ingest import is_photo, read_fixture, read_photo_file
     from server.outcomes import FrameError
 
-    try:
-        camera = None if camera_text is None else parse_camera_arg(camera_text)
-    except ValueError as error:
-        raise BadInput(str(error), field="camera") from None
+    camera = None if camera_text is None else read_camera(camera_text)
     try:
         if is_photo(path):
             return read_photo_file(path, profiles, camera, profile)[0]
@@ -238,6 +272,14 @@ def print_line(path: Path, result, frame, as_json: bool) -> None:
     errors = truth_errors_mm(result.position_m, frame)
     error = "" if errors is None else f"  truth error 2D {errors[0]:.1f} mm"
     print(f"{path.name}  x={x:+.4f} y={y:+.4f} z={z:+.4f} m  beacon {result.beacon_id}{error}")
+
+
+def print_error_line(path: Path, problem: BadInput, as_json: bool) -> None:
+    """One frame of several that cannot be read: its error body as one JSON line, or its name and the error."""
+    if as_json:
+        print(problem.body.model_dump_json())
+        return
+    print(f"{path.name}  error: {problem.body.message}")
 
 
 def truth_errors_mm(position_m, frame) -> tuple[float, float] | None:

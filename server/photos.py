@@ -1,4 +1,4 @@
-"""Phone photos (JPEG, PNG, HEIC) to an 8-bit luma plane and the EXIF facts the camera model needs.
+"""Phone photos (JPEG, MPO, PNG, HEIC) to an 8-bit luma plane and the EXIF facts the camera model needs.
 
 Luma is taken as the camera made it: a JPEG's own stored Y channel (libjpeg decodes straight to
 grey, no RGB round trip), and for RGB sources the BT.601 luma of the encoded (gamma) values, as
@@ -6,13 +6,21 @@ JPEG and Camera2 compute it. Sizes are checked from the header before anything i
 small file may declare 20000 x 20000 pixels). One orientation rule on every path: the pixels are turned
 upright by the EXIF orientation's rotation (1, 3, 6, 8) as they are decoded; mirrored orientations (2, 4,
 5, 7) are refused, as no phone camera writes them. The size of a photo is its upright size.
+
+A JPEG (or MPO: a JPEG with an MPF extension, read as its first, primary image) larger than the luma bound
+(`max_pixels`) is decoded at 1/2, 1/4 or 1/8 by libjpeg's DCT scaling (`Image.draft`): a 108 MP phone photo
+becomes 27 MP of luma without the full-size image ever existing. `Photo.reduction` says by how much, so the
+camera matrix is scaled with it. A HEIC whose boxes run past the end of the file (cut short) is refused
+before decoding: libheif decodes the tiles it has and fills the rest with grey.
 """
 
 from __future__ import annotations
 
 import io
+import math
 import struct
 import threading
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -23,7 +31,16 @@ from PIL import Image, UnidentifiedImageError
 from shared_schemas.fixture_files import PNG_SIGNATURE
 
 MAX_PHOTO_PIXELS = 100_000_000  # as a frame (server.ingest.MAX_PIXELS): a 50 MP phone photo fits twice
-PHOTO_KINDS = ("JPEG", "PNG", "HEIF")
+# A JPEG's header may declare up to this many pixels (the largest phone mode is 200 MP, 16320 x 12240): it is
+# decoded at a reduction that fits `max_pixels`; its entropy-coded data is still read whole (~1 s at 108 MP).
+MAX_JPEG_PIXELS = 210_000_000
+JPEG_REDUCTIONS = (1, 2, 4, 8)  # libjpeg's DCT scalings (scale_denom), as Pillow's draft offers them
+PHOTO_KINDS = ("JPEG", "MPO", "PNG", "HEIF")
+REDUCIBLE_KINDS = ("JPEG", "MPO")  # an MPO's primary image is a baseline JPEG
+# Pillow warns above its MAX_IMAGE_PIXELS (89 MP) and refuses above twice that, from the header: our own size
+# checks are the guard (MAX_JPEG_PIXELS, `max_pixels`), so Pillow's refusal sits above the largest JPEG we take,
+# and its warning (a site-packages path on the user's terminal) is silenced where photos are opened.
+Image.MAX_IMAGE_PIXELS = MAX_JPEG_PIXELS
 MIRRORED_ORIENTATIONS = (2, 4, 5, 7)
 
 try:  # HEIC is optional: without pillow-heif it is refused by name
@@ -37,6 +54,7 @@ except ImportError:  # pragma: no cover - the project depends on it
 # EXIF tags (the TIFF/EXIF 2.3 numbers); the Exif sub-IFD holds the shot's settings.
 _MAKE, _MODEL, _ORIENTATION, _EXIF_IFD = 0x010F, 0x0110, 0x0112, 0x8769
 _EXPOSURE_TIME, _ISO, _FOCAL_LENGTH, _FOCAL_35MM = 0x829A, 0x8827, 0x920A, 0xA405
+_PIXEL_X, _PIXEL_Y = 0xA002, 0xA003  # PixelXDimension, PixelYDimension (exiftool: ExifImageWidth, -Height)
 
 
 class PhotoError(ValueError):
@@ -58,13 +76,28 @@ class PhotoExif:
     orientation: int = 1  # EXIF 1-8; 6 and 8 mean the stored image is turned a quarter against the display
     exposure_s: float | None = None
     iso: float | None = None
+    # the image size the camera wrote, (PixelXDimension, PixelYDimension); editors keep it when they crop
+    pixel_size: tuple[int, int] | None = None
+
+    def fields(self) -> list[str]:
+        """The EXIF fields this photo has of those the camera model reads (for a message when none suffices)."""
+        named = {
+            "Make": self.make,
+            "Model": self.model,
+            "FocalLength": self.focal_length_mm,
+            "FocalLengthIn35mmFilm": self.focal_35mm_mm,
+            "PixelXDimension/PixelYDimension": self.pixel_size,
+        }
+        return [name for name, value in named.items() if value is not None]
 
 
 @dataclass(frozen=True)
 class Photo:
     pixels: np.ndarray  # (height, width) uint8 luma, upright (the EXIF orientation applied), read-only
     exif: PhotoExif
-    kind: str  # "JPEG", "PNG" or "HEIF"
+    kind: str  # "JPEG", "MPO", "PNG" or "HEIF"
+    reduction: int = 1  # the photo's upright size is `reduction` x the pixels' (a JPEG decoded at 1/2, 1/4, 1/8)
+    stored_size: tuple[int, int] = (0, 0)  # (width, height) in the file, before the EXIF orientation
 
 
 # What Pillow and pillow-heif raise on a damaged file: truncated data, a bad EXIF offset or value (a
@@ -88,7 +121,9 @@ def _reading(name: str) -> Iterator[None]:
 
 def _open(data: bytes, name: str) -> Image.Image:
     try:
-        image = Image.open(io.BytesIO(data))
+        with warnings.catch_warnings():  # only between MAX_JPEG_PIXELS and twice it: our size check refuses those
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(io.BytesIO(data))
     except Image.DecompressionBombError as error:  # Pillow's own limit, far above ours, refused from the header
         raise PhotoError(f"'{name}' has more than {MAX_PHOTO_PIXELS // 1_000_000} megapixels ({error})") from None
     except UnidentifiedImageError:  # its message names the in-memory buffer, not the photo
@@ -101,38 +136,79 @@ def _open(data: bytes, name: str) -> Image.Image:
     return image
 
 
+def _iso_boxes_end(data: bytes) -> int:
+    """Where the top-level ISO-BMFF boxes of a HEIF file (ftyp, meta, mdat, ...) say the file ends: each box's
+    32-bit size, or its 64-bit size after the type when that is 1; a size of 0 runs to the end of the file."""
+    at = 0
+    while at + 8 <= len(data):
+        size = struct.unpack(">I", data[at : at + 4])[0]
+        if size == 1 and at + 16 <= len(data):
+            size = struct.unpack(">Q", data[at + 8 : at + 16])[0]
+        if size < 8:  # 0: to the end of the file; below 8 no box (libheif refuses it)
+            return len(data)
+        at += size
+    return at
+
+
+def _refuse_cut_heif(data: bytes, name: str) -> None:
+    """A HEIC cut short decodes (libheif fills the tiles it lacks with grey): refused from its box sizes."""
+    end = _iso_boxes_end(data)
+    if end > len(data):
+        raise PhotoError(
+            f"'{name}' is truncated: its HEIF boxes declare {end} bytes, the file has {len(data)} "
+            f"({100 * len(data) / end:.0f} % of it)"
+        )
+
+
+def jpeg_reduction(size: tuple[int, int], max_pixels: int) -> int | None:
+    """The smallest of libjpeg's reductions (1, 2, 4, 8) whose decoded image (each side ceil(side / r)) has at
+    most `max_pixels`; None when even 1/8 has more."""
+    width, height = size
+    return next((r for r in JPEG_REDUCTIONS if math.ceil(width / r) * math.ceil(height / r) <= max_pixels), None)
+
+
 def _refuse_heic_unreadable(data: bytes, name: str) -> None:
     if not HEIC_READABLE and data[4:12] in (b"ftypheic", b"ftypheix", b"ftypmif1", b"ftyphevc"):
         raise PhotoError(f"'{name}' is HEIC, which needs the pillow-heif package (pip install pillow-heif)")
 
 
 @contextmanager
-def _header(data: bytes, name: str, max_pixels: int) -> Iterator[tuple[Image.Image, PhotoExif]]:
-    """The opened photo and its EXIF, in this order: its size from the header checked against `max_pixels`
-    first (before any EXIF or pixel is read: Pillow decodes a whole PNG to find an EXIF chunk after its
-    pixels), then its EXIF, then its orientation; every path (`photo_size`, `read_photo`) reads a photo so."""
+def _header(data: bytes, name: str, max_pixels: int) -> Iterator[tuple[Image.Image, PhotoExif, int]]:
+    """The opened photo, its EXIF and the reduction it is decoded at, in this order: its size from the header
+    checked first (before any EXIF or pixel is read: Pillow decodes a whole PNG to find an EXIF chunk after its
+    pixels): at most `max_pixels`, or for a JPEG at most MAX_JPEG_PIXELS and a reduction within `max_pixels`;
+    then its EXIF, then its orientation; every path (`photo_size`, `read_photo`) reads a photo so."""
     _refuse_heic_unreadable(data, name)
     with _open(data, name) as image:
-        _check_size(image.size, name, max_pixels)
+        reduction = _check_size(image, name, max_pixels)
+        if image.format == "HEIF":
+            _refuse_cut_heif(data, name)
         with _reading(name):
             exif = _exif(image, data)
         _upright_orientation(exif, name)
-        yield image, exif
+        yield image, exif, reduction
 
 
 def photo_size(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> tuple[int, int]:
-    """The upright (width, height) from the photo's header, without decoding it; PhotoError when it is no photo,
-    has more than `max_pixels`, a damaged EXIF, or is mirrored (as `read_photo` would refuse it)."""
-    with _header(data, name, max_pixels) as (image, exif):
-        width, height = image.size
+    """The upright (width, height) of the luma `read_photo` gives (a large JPEG's reduced), from the header without
+    decoding; PhotoError when it is no photo, too large, has a damaged EXIF, or is mirrored (as `read_photo`)."""
+    with _header(data, name, max_pixels) as (image, exif, reduction):
+        width, height = (math.ceil(side / reduction) for side in image.size)
         return (height, width) if exif.orientation in (6, 8) else (width, height)
 
 
-def _check_size(size: tuple[int, int], name: str, max_pixels: int) -> None:
-    width, height = size
-    if width * height > max_pixels:
-        allowed = f"{max_pixels / 1e6:.4g} megapixels allowed"
+def _check_size(image: Image.Image, name: str, max_pixels: int) -> int:
+    """The reduction the photo is decoded at (1 but for a large JPEG), or PhotoError when it is too large."""
+    width, height = image.size
+    reducible = image.format in REDUCIBLE_KINDS
+    reduction = jpeg_reduction(image.size, max_pixels) if reducible and width * height <= MAX_JPEG_PIXELS else None
+    if reduction is None and (width * height > max_pixels or reducible):
+        if reducible and width * height <= MAX_JPEG_PIXELS:
+            allowed = f"{max_pixels / 1e6:.4g} megapixels allowed, even decoded at 1/{JPEG_REDUCTIONS[-1]}"
+        else:
+            allowed = f"{(MAX_JPEG_PIXELS if reducible else max_pixels) / 1e6:.4g} megapixels allowed"
         raise PhotoError(f"'{name}' has {width}x{height} pixels, more than the {allowed}")
+    return reduction or 1
 
 
 _STRIP_ROWS = 256  # rows of a colour photo turned to luma at a time: a few MB
@@ -170,30 +246,34 @@ PILLOW_BLOCK_BYTES = 64 << 20
 Image.core.set_block_size(PILLOW_BLOCK_BYTES)
 
 
-def _colour_luma(image: Image.Image) -> np.ndarray:
-    """The luma of a decoded colour image, converted a strip at a time into one array: the decoded image and
-    the luma are all it holds (no full-size L image and copy of it). Pillow's L conversion is ITU-R BT.601
+def _strip_luma(image: Image.Image) -> np.ndarray:
+    """The luma of a decoded image, copied (and for colour converted) a strip at a time into one array: the decoded
+    image and the luma are all it holds (no full-size L image, nor the full-size bytes and their chunks that
+    `np.asarray(image)` makes: three times the luma at once). Pillow's L conversion is ITU-R BT.601
     (299, 587, 114) on the encoded values, from RGB, RGBA (alpha dropped), palette or CMYK."""
     width, height = image.size
     luma = np.empty((height, width), np.uint8)
     for row in range(0, height, _STRIP_ROWS):
-        with image.crop((0, row, width, min(height, row + _STRIP_ROWS))) as strip, strip.convert("L") as grey:
-            luma[row : row + grey.height] = np.asarray(grey)
+        with image.crop((0, row, width, min(height, row + _STRIP_ROWS))) as strip:
+            if strip.mode == "L":
+                luma[row : row + strip.height] = np.asarray(strip)
+                continue
+            with strip.convert("L") as grey:
+                luma[row : row + grey.height] = np.asarray(grey)
     return luma
 
 
-def _luma(image: Image.Image) -> np.ndarray:
-    """The photo's luma plane as stored (not yet turned upright); a colour decode within the process's budget."""
-    if image.format == "JPEG":
-        image.draft("L", image.size)  # libjpeg hands out the stored Y channel itself
+def _luma(image: Image.Image, reduction: int = 1) -> np.ndarray:
+    """The photo's luma plane as stored (not yet turned upright); a colour decode within the process's budget.
+    A JPEG's at 1/`reduction` of its size, by libjpeg's scaled IDCT (an output pixel is the mean of r x r)."""
+    if image.format in REDUCIBLE_KINDS:  # libjpeg hands out the stored Y channel itself
+        image.draft("L", (max(1, image.width // reduction), max(1, image.height // reduction)))
     if image.mode in ("I;16", "I;16B", "I", "F"):
         raise PhotoError(f"{image.mode} images are not 8-bit; give an 8-bit photo")
     width, height = image.size
     with _COLOUR.holding(0 if image.mode == "L" else 4 * width * height):
         image.load()
-        if image.mode != "L":
-            return _colour_luma(image)
-        return np.asarray(image, dtype=np.uint8)
+        return _strip_luma(image)
 
 
 def _positive(value: object) -> float | None:
@@ -241,6 +321,7 @@ def _exif(image: Image.Image, data: bytes) -> PhotoExif:
     shot = tags.get_ifd(_EXIF_IFD)
     orientation = tags.get(_ORIENTATION, 1)
     iso = shot.get(_ISO)
+    pixel_x, pixel_y = _positive(shot.get(_PIXEL_X)), _positive(shot.get(_PIXEL_Y))
     return PhotoExif(
         make=_text(tags.get(_MAKE)),
         model=_text(tags.get(_MODEL)),
@@ -249,6 +330,7 @@ def _exif(image: Image.Image, data: bytes) -> PhotoExif:
         orientation=orientation if isinstance(orientation, int) and 1 <= orientation <= 8 else 1,
         exposure_s=_positive(shot.get(_EXPOSURE_TIME)),
         iso=_positive(iso[0] if isinstance(iso, tuple) and iso else iso),
+        pixel_size=(int(pixel_x), int(pixel_y)) if pixel_x and pixel_y and max(pixel_x, pixel_y) < 2**31 else None,
     )
 
 
@@ -272,17 +354,18 @@ def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Ph
     Too many pixels are refused from the header before anything else is read, a damaged EXIF and mirrored
     orientations before decoding (`_header`, as `photo_size`).
     """
-    with _header(data, name, max_pixels) as (image, exif):
+    with _header(data, name, max_pixels) as (image, exif, reduction):
         kind, size = image.format or "", image.size
         with _reading(name):
-            pixels = _luma(image)
-    if pixels.shape != (size[1], size[0]):
+            pixels = _luma(image, reduction)
+    expected = tuple(math.ceil(side / reduction) for side in size)
+    if pixels.shape != (expected[1], expected[0]):
         raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
     turns = _UPRIGHT_TURNS.get(exif.orientation, 0)
     if turns:
         pixels = np.ascontiguousarray(np.rot90(pixels, turns))
     pixels.flags.writeable = False
-    return Photo(pixels=pixels, exif=exif, kind=kind)
+    return Photo(pixels=pixels, exif=exif, kind=kind, reduction=reduction, stored_size=size)
 
 
 def read_grey(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> np.ndarray:

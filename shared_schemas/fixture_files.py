@@ -18,19 +18,52 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PHOTO_TYPES = {
     ".jpg": "image/jpeg",
     ".jpeg": "image/jpeg",
+    ".jpe": "image/jpeg",
+    ".jfif": "image/jpeg",
+    ".mpo": "image/jpeg",  # a JPEG with an MPF extension (several images, the first the photo)
     ".png": "image/png",
     ".heic": "image/heic",
     ".heif": "image/heif",
 }
+# ISO-BMFF brands (ftyp) of HEIF still images, HEVC-coded ones first
+HEIF_BRANDS = {
+    b"heic": "image/heic",
+    b"heix": "image/heic",
+    b"heim": "image/heic",
+    b"heis": "image/heic",
+    b"mif1": "image/heif",
+    b"msf1": "image/heif",
+}
+SNIFF_BYTES = 16
+
+
+def sniffed_photo_type(head: bytes) -> str | None:
+    """The Content-Type a photo's first bytes say (JPEG's SOI marker, PNG's signature, a HEIF ftyp box), or None."""
+    if head[:3] == b"\xff\xd8\xff":
+        return "image/jpeg"
+    if head[: len(PNG_SIGNATURE)] == PNG_SIGNATURE:
+        return "image/png"
+    if head[4:8] == b"ftyp":
+        return HEIF_BRANDS.get(head[8:12])
+    return None
 
 
 def photo_type(path: Path) -> str | None:
-    """The Content-Type of a photo file: a JPEG or HEIC/HEIF, or a PNG with no frame JSON beside it (a recorded
-    PNG frame has one); None for anything else."""
+    """The Content-Type of a photo file, by its content (any suffix or none), else its suffix: a JPEG (MPO too) or
+    HEIC/HEIF, or a PNG with no frame JSON beside it (a recorded PNG frame has one); None for anything else,
+    recorded frames' raw planes (.y, .yuv) and JSON included."""
     suffix = path.suffix.lower()
-    if suffix == ".png" and path.with_suffix(".json").exists():
+    kind = None
+    if suffix not in (*RAW_SUFFIXES, ".json") or suffix == ".png":
+        try:
+            with path.open("rb") as file:
+                kind = sniffed_photo_type(file.read(SNIFF_BYTES))
+        except OSError:  # not there (a fixture's stem) or unreadable: its reader says which
+            kind = None
+    kind = kind or PHOTO_TYPES.get(suffix)
+    if kind == "image/png" and path.with_suffix(".json").exists():
         return None
-    return PHOTO_TYPES.get(suffix)
+    return kind
 
 
 def fixture_paths(path: Path | str) -> tuple[Path, Path]:

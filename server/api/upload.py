@@ -19,11 +19,35 @@ from server.api.errors import ApiError
 from server.ingest import parse_meta
 from shared_schemas import CameraUsed, FrameFormat, FrameMeta
 from shared_schemas.fixture_files import PHOTO_TYPES as PHOTO_SUFFIX_TYPES
+from shared_schemas.fixture_files import sniffed_photo_type
 
 FRAME_HEADER = "X-Lumipose-Frame"
 RAW_TYPES = ("application/octet-stream", "image/png")
 # A phone photo: no frame JSON, the camera from a profile or intrinsics in the query, or the photo's EXIF.
 PHOTO_TYPES = tuple(sorted(set(PHOTO_SUFFIX_TYPES.values())))
+# What browsers, old Windows and some apps send for the same formats (the photo reader looks at the bytes anyway)
+PHOTO_TYPE_ALIASES = {
+    "image/jpg": "image/jpeg",
+    "image/pjpeg": "image/jpeg",
+    "image/jfif": "image/jpeg",
+    "image/mpo": "image/jpeg",
+    "image/x-png": "image/png",
+    "image/x-heic": "image/heic",
+}
+UNTYPED = ("", "application/octet-stream")  # a part or body whose sender did not say: its bytes say
+
+
+def media_type(header: str | None) -> str:
+    """A Content-Type header's media type, lower case, with the aliases of photo types made the type itself."""
+    media = (header or "").split(";")[0].strip().lower()
+    return PHOTO_TYPE_ALIASES.get(media, media)
+
+
+def _is_photo(media: str, data: bytes | bytearray) -> bool:
+    """A photo by its type, or by its bytes (JPEG, PNG, HEIF) when it comes untyped."""
+    return media in PHOTO_TYPES or (media in UNTYPED and sniffed_photo_type(bytes(data[:16])) is not None)
+
+
 MULTIPART = "multipart/form-data"
 ZSTD_PIECE = 4096
 
@@ -136,12 +160,13 @@ async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[s
             400, "bad_multipart", f"the multipart body cannot be read: {error.message}", field="body"
         ) from None
     meta, frame = form.get("meta"), form.get("frame")
-    photo = isinstance(frame, UploadFile) and (frame.content_type or "").lower() in PHOTO_TYPES
-    if meta is None and photo:
-        assert isinstance(frame, UploadFile)
-        data = await frame.read()
-        await form.close()
-        return None, data
+    if meta is None and isinstance(frame, UploadFile):
+        head = await frame.read(16)
+        await frame.seek(0)
+        if _is_photo(media_type(frame.content_type), head):
+            data = await frame.read()
+            await form.close()
+            return None, data
     if meta is None or frame is None:
         raise ApiError(
             400,
@@ -161,7 +186,7 @@ async def receive_frame(
 ) -> FrameUpload | PhotoUpload:
     """The frame of a locate or sample request, or a photo without frame JSON; raises `ApiError` or
     `FrameError` on bad input."""
-    content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    content_type = media_type(request.headers.get("content-type"))
     if content_type not in (*RAW_TYPES, *PHOTO_TYPES, MULTIPART):
         raise ApiError(
             415,
@@ -177,7 +202,7 @@ async def receive_frame(
         meta_text, data = await _multipart_parts(request, body)
         if meta_text is None:
             return PhotoUpload(data)
-    elif content_type in PHOTO_TYPES and not frame_header:
+    elif not frame_header and _is_photo(content_type, body):
         return PhotoUpload(body)
     elif frame_header:
         meta_text, data = frame_header, body

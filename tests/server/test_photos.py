@@ -160,7 +160,7 @@ def test_bad_photos_exit_2_with_the_contract_error(tmp_path, capsys, room):
     huge.write_bytes(png_claiming(12_000, 9_000))
     code, error = locate(capsys, huge, room, "--profile", "xiaomi-mi8-rear")
     assert code == 2 and "12000x9000 pixels, more than the 100 megapixels allowed" in error["message"]
-    huge.write_bytes(png_claiming(20_000, 20_000))  # beyond Pillow's own bomb limit too
+    huge.write_bytes(png_claiming(30_000, 30_000))  # beyond Pillow's own bomb limit too (2 x MAX_JPEG_PIXELS)
     code, error = locate(capsys, huge, room, "--profile", "xiaomi-mi8-rear")
     assert code == 2 and "more than 100 megapixels" in error["message"]
     code, error = locate(capsys, bare, room, "--profile", "no-such-phone")
