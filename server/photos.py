@@ -39,8 +39,10 @@ PHOTO_KINDS = ("JPEG", "MPO", "PNG", "HEIF")
 REDUCIBLE_KINDS = ("JPEG", "MPO")  # an MPO's primary image is a baseline JPEG
 # Pillow warns above its MAX_IMAGE_PIXELS (89 MP) and refuses above twice that, from the header: our own size
 # checks are the guard (MAX_JPEG_PIXELS, `max_pixels`), so Pillow's refusal sits above the largest JPEG we take,
-# and its warning (a site-packages path on the user's terminal) is silenced where photos are opened.
+# and its warning (a site-packages path on the user's terminal) is silenced: once here, since
+# warnings.catch_warnings around each open is not thread-safe (the API opens photos on many threads).
 Image.MAX_IMAGE_PIXELS = MAX_JPEG_PIXELS
+warnings.filterwarnings("ignore", category=Image.DecompressionBombWarning, module=r"PIL\.Image")
 MIRRORED_ORIENTATIONS = (2, 4, 5, 7)
 
 try:  # HEIC is optional: without pillow-heif it is refused by name
@@ -121,9 +123,7 @@ def _reading(name: str) -> Iterator[None]:
 
 def _open(data: bytes, name: str) -> Image.Image:
     try:
-        with warnings.catch_warnings():  # only between MAX_JPEG_PIXELS and twice it: our size check refuses those
-            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
-            image = Image.open(io.BytesIO(data))
+        image = Image.open(io.BytesIO(data))
     except Image.DecompressionBombError as error:  # Pillow's own limit, far above ours, refused from the header
         raise PhotoError(f"'{name}' has more than {MAX_PHOTO_PIXELS // 1_000_000} megapixels ({error})") from None
     except UnidentifiedImageError:  # its message names the in-memory buffer, not the photo
