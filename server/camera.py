@@ -141,6 +141,9 @@ def scaled_profile(profile: DeviceProfile, width: int, height: int, what: str, f
 FOCAL_SIGMA_CALIBRATED = 0.0005
 FOCAL_SIGMA_DATASHEET = 0.015
 FOCAL_SIGMA_EXIF_35MM = 0.04
+# EXIF FocalLength is the module's nominal focal length, rounded (4.216 mm written 4.22 or 4.2): 10 % takes
+# that and a datasheet's error, while a phone's lenses differ by 30 % or more (ultra-wide 1.8, wide 4.3, tele 6)
+EXIF_LENS_MATCH = 0.10
 FULL_FRAME_DIAGONAL_MM = 43.2666  # of a 36 x 24 mm frame: the 35 mm equivalent's diagonal rule
 PORTRAIT_ORIENTATION = 6  # a phone's stored landscape image shown upright (rear camera, held upright)
 # EXIF's FocalLengthIn35mmFilm is a SHORT (0-65535 mm): a pinhole within 4-2400 mm, from a 9 mm fisheye-like
@@ -241,7 +244,8 @@ def _profile_device(profile: DeviceProfile) -> list[str]:
 def profile_for_exif(exif: PhotoExif, profiles: ProfileTable) -> DeviceProfile | None:
     """The profile whose device is the photo's make and model, word for word (for example 'Xiaomi' 'MI 8' ->
     'Xiaomi Mi 8 rear camera', not 'Xiaomi Mi 8 Lite ...'); of a phone's several cameras, the one whose focal
-    length is nearest the EXIF one, else the rear; a calibrated profile before a datasheet one of the same camera."""
+    length is nearest the EXIF one (and within EXIF_LENS_MATCH of it: none when the photo's lens is not in the
+    table), else the rear; a calibrated profile before a datasheet one of the same camera."""
     if not exif.model:
         return None
     make, model = _words(exif.make or ""), _words(exif.model)
@@ -250,6 +254,12 @@ def profile_for_exif(exif: PhotoExif, profiles: ProfileTable) -> DeviceProfile |
     if not matches:
         return None
     focal_mm = exif.focal_length_mm
+    if focal_mm is not None:
+        # a lens of the phone that the table lacks (a telephoto, an ultra-wide) is no profile's: the nearest
+        # profile would be another lens, a pinhole tens of per cent off with a profile's small uncertainty
+        matches = [p for p in matches if abs(p.focal_length_m * 1000 / focal_mm - 1) <= EXIF_LENS_MATCH]
+        if not matches:
+            return None
     return min(
         matches,
         key=lambda p: (

@@ -85,6 +85,21 @@ def test_exif_matches_whole_words_and_prefers_a_calibrated_profile():
     assert profile_for_exif(PhotoExif(make="Apple", model="iPhone 1"), table) is None
 
 
+def test_a_lens_the_table_lacks_gets_no_profile_of_the_phone():
+    """A telephoto photo of a phone whose table knows only the wide camera: no profile (the nearest, another
+    lens, would be a pinhole 40 % off with a profile's 1.5 % uncertainty); the 35 mm rule then takes it."""
+    from server.camera import photo_camera, profile_for_exif
+    from server.photos import PhotoExif
+    from shared_schemas.models import CameraSource
+
+    rear = device_profiles()["xiaomi-mi8-rear"]  # 4.216 mm
+    table = {rear.id: rear}
+    assert profile_for_exif(PhotoExif(make="Xiaomi", model="MI 8", focal_length_mm=4.22), table).id == rear.id
+    assert profile_for_exif(PhotoExif(make="Xiaomi", model="MI 8", focal_length_mm=6.0), table) is None
+    tele = PhotoExif(make="Xiaomi", model="MI 8", focal_length_mm=6.0, focal_35mm_mm=52.0)
+    assert photo_camera(tele, (4032, 3024), table).source == CameraSource.exif_35mm
+
+
 def test_a_bad_profile_file_is_named_by_field_not_dumped(tmp_path, capsys):
     from lumipose_cli.main import main
 
