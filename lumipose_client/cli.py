@@ -1,6 +1,7 @@
 """`lumipose client ...`: the service from the command line, through the Python client.
 
-Exit codes as `lumipose locate`: 0 success (a fix), 1 no fix, 2 a refused request or bad input.
+Exit codes as `lumipose locate`: 0 success (a fix), 1 no fix, 2 a refused request or bad input. Several
+photos: one the service refuses (or that cannot be read) is its own line, its error body, and the others go on.
 Only the client and the contract are imported here; the figures of `samples evaluate --figures`
 come from whoever builds the command line (`lumipose_cli.main` hands in the simulator's).
 """
@@ -19,7 +20,7 @@ import httpx
 from pydantic import BaseModel
 
 from lumipose_client.client import AnnotatedResult, Client, LumiposeError, read_fixture_files
-from shared_schemas import BeaconMap, DeviceProfile, LocateResult
+from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, LocateResult
 from shared_schemas.api import Evaluation
 from shared_schemas.captures import (
     add_frame_series_arguments,
@@ -28,6 +29,7 @@ from shared_schemas.captures import (
     bursts_in_upload_order,
 )
 from shared_schemas.cli import (
+    EXIT_BAD_INPUT,
     BadInput,
     check_beacon_id,
     describe_file_error,
@@ -42,6 +44,9 @@ DEFAULT_URL = "http://127.0.0.1:8000"
 # `client samples store --label -8,11`: argparse reads an argument that starts with '-' as a flag unless it
 # looks like a negative number; a grid cell 'i,j' with a negative i is the common label, so it counts as one.
 NEGATIVE_NUMBER_OR_CELL = re.compile(r"^-\d+$|^-\d*\.\d+$|^-\d+,-?\d+$")
+
+# a photo of several that the service refuses for itself (damaged, too large, not a photo): its own line
+PHOTO_FAULT_STATUSES = frozenset({400, 413, 415})
 
 MAP_HELP = "a map's name, or a map file (its name is sent: the service must hold that map, see `maps put`)"
 
@@ -213,26 +218,45 @@ def _locate_photos(
     if not all(photo_types):
         raise BadInput("give either photos or recorded frames, not both in one call", field="frames")
     profile = _photo_profile(args.profile)
-    results = []
+    results, unreadable = [], 0
     for content_type, path, picture in zip(photo_types, args.frames, pictures, strict=True):
         assert content_type is not None  # all() above
-        answer = client.locate_photo(
-            path.read_bytes(),
-            content_type,
-            map=map_name,
-            profile=profile,
-            camera=args.camera,
-            beacon_id=args.beacon_id,
-            device=args.device,
-            annotate=picture is not None,
-        )
+        try:
+            answer = client.locate_photo(
+                path.read_bytes(),
+                content_type,
+                map=map_name,
+                profile=profile,
+                camera=args.camera,
+                beacon_id=args.beacon_id,
+                device=args.device,
+                annotate=picture is not None,
+            )
+        except (LumiposeError, OSError) as error:
+            body = _photo_fault(error, path)
+            if body is None or len(args.frames) == 1:
+                raise  # the call's fault (a key, a map, the service), or the one photo's: `_run` reports it
+            named = body.model_copy(update={"message": f"{path.name}: {body.message}"})  # the service saw no name
+            print(named.model_dump_json() if args.json else f"{path.name}  error: {body.message}")
+            unreadable += 1
+            continue
         if isinstance(answer, AnnotatedResult):
             assert picture is not None  # asked for with --annotate
             picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
             answer = answer.result
         print(answer.model_dump_json(by_alias=True, indent=2 if len(args.frames) == 1 else None))
         results.append(answer)
+    if unreadable:
+        return EXIT_BAD_INPUT
     return 0 if all(result.ok for result in results) else 1
+
+
+def _photo_fault(error: LumiposeError | OSError, path: Path) -> ErrorBody | None:
+    """The error body of a photo of several that the service could not take (as `lumipose locate` prints a
+    frame it cannot read: its line, and the others go on), or None when the fault is the whole call's."""
+    if isinstance(error, OSError):
+        return BadInput(f"cannot read {path}: {error}", field="frames").body
+    return error.body if error.status in PHOTO_FAULT_STATUSES else None
 
 
 def _print_json(value: list[BaseModel] | dict) -> None:

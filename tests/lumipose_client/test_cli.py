@@ -2,6 +2,7 @@
 
 import json
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -146,3 +147,20 @@ def test_map_names_or_files_and_maps_delete(server_url, capsys, tmp_path):
     assert "deleted map cli-room" in capsys.readouterr().out
     assert main(["client", "maps", "delete", "test-bench", *url]) == 2
     assert "active_map" in capsys.readouterr().err
+
+
+def test_one_photo_the_service_refuses_is_its_own_line_in_a_batch(server_url, capsys, tmp_path):
+    """As `lumipose locate`: a damaged photo among good ones is its own line (the service's error body), the
+    others are located, and the exit code says the worst (2)."""
+    real = Path(__file__).parents[1] / "fixtures" / "real_photos" / "exif-jpg_hdr_canon_hdr_NO.jpg"
+    good, bad = tmp_path / "a.jpg", tmp_path / "b.jpg"
+    shutil.copy(real, good)
+    bad.write_bytes(real.read_bytes()[:3000])  # a transfer cut short
+    args = ["client", "--url", server_url, "locate", str(good), str(bad), str(good), "--camera", "3000,3000,511,383"]
+    assert main([*args, "--json"]) == 2
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(lines) == 3 and "ok" in lines[0] and "ok" in lines[2]
+    assert lines[1]["error"] == "bad_frame" and "b.jpg" in lines[1]["message"], lines[1]
+    assert main(args) == 2
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 3 and out[1].startswith("b.jpg  error: "), out
