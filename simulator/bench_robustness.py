@@ -53,6 +53,14 @@ def _isp(**update) -> ChainSpec:
     return ChainSpec(isp=IspSpec(**update))
 
 
+def phone_chain(distance_m: float, motion: MotionSpec | None = None) -> ChainSpec:
+    """The stages an outside check put together (issue 29 item 4): focused 25 % too near, `motion`, unsharp-mask
+    sharpening 0.8 (`IspSpec.phone`'s) and JPEG 90 on top of "ISP off" (still without `motion`); each alone
+    is a cell of its own group."""
+    return ChainSpec(optics=OpticsSpec(focus_distance_m=0.75 * distance_m), motion=motion or MotionSpec(),
+                     isp=IspSpec(sharpen_amount=0.8), jpeg_quality=90)
+
+
 def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
     """name -> (effect group, chain) at `distance_m`; the groups are what --effects filters."""
     glare = OpticsSpec()
@@ -79,11 +87,14 @@ def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
         "tremor": ("motion", ChainSpec(motion=MotionSpec.tremor())),
         "walking": ("motion", ChainSpec(motion=MotionSpec.walking())),
         **dict.fromkeys(panel_effects(distance_m), ("panel", ISP_OFF)),
+        "focus+sharpen+JPEG": ("phone", phone_chain(distance_m)),
+        "focus+tremor+sharpen+JPEG": ("phone", phone_chain(distance_m, MotionSpec.tremor())),
         "ISP on": ("reference", ChainSpec(isp=IspSpec.phone())),
     }
 
 
-GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "motion", "panel")
+GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "motion", "panel",
+          "phone")
 
 
 def panel_effects(distance_m: float) -> dict[str, dict]:
