@@ -83,7 +83,7 @@ def add_commands(commands) -> None:
                                "from each, and the ratio of their mean errors")
     accuracy.add_argument("--chain", choices=["none", "phone"], default="none",
                           help="phone: the frames through a phone's chain, focused 25 %% too near, sharpened (0.8) and "
-                               "JPEG 90 (bench robustness's 'focus+sharpen+JPEG'; either renderer)")
+                               "JPEG 90 (bench robustness's 'phone still'; either renderer)")
     accuracy.add_argument("--shape", action="store_true",
                           help="instead of the distance table, the panel-shape table (issue 11: 600 x 600 mm, "
                                "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)")
