@@ -8,7 +8,8 @@ the app asks for: bilinear demosaicing, no noise reduction or sharpening, a line
 scale. The chain's noise comes from its own generator, so every chain cell of a frame draws
 the same noise where the frames have the same size. The "panel" group draws a real panel
 (`simulator.panels`: a bezel, edge fall-off, a glossy ceiling) or puts a second lamp or a window
-near it, through "ISP off" (`panel_effects`). "no chain" is the renderer's own 8-bit
+near it, through "ISP off" (`panel_effects`). The "phone" group puts defocus, sharpening and JPEG
+together (`phone_chain`), still and with tremor, as an outside check did (issue 29 item 4). "no chain" is the renderer's own 8-bit
 noise model, as `lumipose bench accuracy` has it (its gravity draw differs: it follows the noise).
 
 Each cell: coverage, mean, p95 and max 2-D error (mm), wrong fixes (> 50 mm) and the
@@ -53,6 +54,14 @@ def _isp(**update) -> ChainSpec:
     return ChainSpec(isp=IspSpec(**update))
 
 
+def phone_chain(distance_m: float, motion: MotionSpec | None = None) -> ChainSpec:
+    """The stages an outside check put together (issue 29 item 4): focused 25 % too near, `motion`, unsharp-mask
+    sharpening 0.8 (`IspSpec.phone`'s) and JPEG 90 on top of "ISP off" (still without `motion`); each alone
+    is a cell of its own group."""
+    return ChainSpec(optics=OpticsSpec(focus_distance_m=0.75 * distance_m), motion=motion or MotionSpec(),
+                     isp=IspSpec(sharpen_amount=0.8), jpeg_quality=90)
+
+
 def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
     """name -> (effect group, chain) at `distance_m`; the groups are what --effects filters."""
     glare = OpticsSpec()
@@ -79,11 +88,14 @@ def effects(distance_m: float) -> dict[str, tuple[str, ChainSpec | None]]:
         "tremor": ("motion", ChainSpec(motion=MotionSpec.tremor())),
         "walking": ("motion", ChainSpec(motion=MotionSpec.walking())),
         **dict.fromkeys(panel_effects(distance_m), ("panel", ISP_OFF)),
+        "phone still": ("phone", phone_chain(distance_m)),
+        "phone tremor": ("phone", phone_chain(distance_m, MotionSpec.tremor())),
         "ISP on": ("reference", ChainSpec(isp=IspSpec.phone())),
     }
 
 
-GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "motion", "panel")
+GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg", "motion", "panel",
+          "phone")
 
 
 def panel_effects(distance_m: float) -> dict[str, dict]:

@@ -64,7 +64,7 @@ class AccuracyConfig:
     gravity_sigma_deg: float = 0.1
     seed: int = 1
     renderer: str = "ours"  # or "blender": Cycles' radiance through the same sensor (simulator.blender)
-    # a phone's image chain (simulator.chain) instead of the renderer's 8-bit noise; ours only
+    # a phone's image chain (simulator.chain) instead of the renderer's 8-bit noise; with blender, a still one
     chain: ChainSpec | None = None
     black_level_dn: float = 4.0  # the chain's black level (SensorSpec's default; the background stays 8 DN)
     panel: PanelSpec | None = None  # bezel, edge fall-off, glossy ceiling (simulator.panels); ours only
@@ -116,19 +116,19 @@ def accuracy_frame(config: AccuracyConfig, index: int) -> tuple[LumaFrame, Beaco
         plateau_dn=255.0 * rng.uniform(*config.overexposure),
     )
     motion = bench_motion(config, index, height)
-    if config.chain is not None:
-        if config.renderer != "ours":
-            raise ValueError("a chain goes with renderer 'ours' only")
-        # the chain's noise from its own generator: every chain sees the same pose, PSF, level and gravity draws
-        chain_rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 13])
+    if config.renderer == "blender" and (config.panel is not None or config.light_sources):
+        raise ValueError("a panel spec or light sources go with renderer 'ours' only")
+    # the chain's noise from its own generator: every chain sees the same pose, PSF, level and gravity draws
+    chain_rng = np.random.default_rng([config.seed, index, int(config.distance_m * 1000), 13])
+    if config.chain is not None and config.renderer == "ours":
         pixels = chain_frame(config.chain, beacon, camera, pose, width, height, sensor, config.black_level_dn,
                              chain_rng, motion, config.panel, config.light_sources)
     elif config.renderer == "blender":
-        if config.panel is not None or config.light_sources:
-            raise ValueError("a panel spec or light sources go with renderer 'ours' only")
-        from simulator.blender import render_blender_frame  # bpy is an optional extra
+        from simulator.blender import render_blender_chain_frame, render_blender_frame  # bpy is an optional extra
 
-        pixels = render_blender_frame(beacon, camera, pose, width, height, sensor, rng)
+        pixels = (render_blender_frame(beacon, camera, pose, width, height, sensor, rng) if config.chain is None
+                  else render_blender_chain_frame(beacon, camera, pose, width, height, sensor, config.chain,
+                                                  config.black_level_dn, chain_rng))
     elif config.renderer == "ours":
         pixels = render_emitters(bench_emitters(beacon, camera, pose, (width, height), sensor, None, config.panel,
                                                 config.light_sources), width, height, sensor, rng)

@@ -29,7 +29,9 @@ import numpy as np
 
 from server.geometry import beacon_outline_m, beacon_to_world
 from shared_schemas import Beacon, CameraIntrinsics
+from simulator.chain import ChainSpec, defocus
 from simulator.render import CameraPose, SensorModel, _noisy_u8, beacon_outline_px, vignetting_map
+from simulator.scene import defocus_px, develop_signal
 
 
 @dataclass(frozen=True)
@@ -194,6 +196,29 @@ def render_blender_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraP
     the lens PSF (its pixel filter, `sensor_pixel_filter`), at the panel's level over the
     background, vignetting, then shot and read noise, rounding and clipping (the same noise
     model, `render._noisy_u8`)."""
+    return _noisy_u8(_blender_signal(beacon, camera, pose, width, height, sensor, settings), sensor, rng)
+
+
+def render_blender_chain_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                               sensor: SensorModel, chain: ChainSpec, black_level_dn: float, rng: np.random.Generator,
+                               settings: BlenderSettings | None = None) -> np.ndarray:
+    """The luma frame (height, width) `chain`'s phone makes of Cycles' noiseless light (`render_blender_frame`'s,
+    before its noise): the panel defocused by the thin lens's disc for its depth, as `simulator.render` draws
+    it, then `simulator.chain.develop`. A still camera on the frame's own pixels: motion during the exposure
+    and 2x2 binning are drawn by `simulator.render` only, and refused here. `settings`: FRAME_SETTINGS."""
+    if not chain.motion.still:
+        raise ValueError("chain.motion: the Blender renderer draws a still camera only")
+    if chain.pixels.binning != 1:
+        raise ValueError("chain.pixels.binning: the Blender renderer draws the frame's own pixels only")
+    signal = _blender_signal(beacon, camera, pose, width, height, sensor, settings or FRAME_SETTINGS)
+    signal = defocus(signal, defocus_px(chain, camera, pose, beacon.center_m))
+    return develop_signal(chain, signal, camera, sensor, black_level_dn, rng)
+
+
+def _blender_signal(beacon: Beacon, camera: CameraIntrinsics, pose: CameraPose, width: int, height: int,
+                    sensor: SensorModel, settings: BlenderSettings) -> np.ndarray:
+    """The noiseless light (DN, float32) of the frame: Cycles' panel at the sensor's level over its background,
+    through the sensor's pixel response (`sensor_pixel_filter`), vignetted."""
     crop = render_blender(beacon, camera, pose, width, height, sensor_pixel_filter(sensor, settings))
     light = crop.radiance.astype(np.float32)
     x0, y0 = crop.origin_px
@@ -201,7 +226,7 @@ def render_blender_frame(beacon: Beacon, camera: CameraIntrinsics, pose: CameraP
     signal[y0 : y0 + light.shape[0], x0 : x0 + light.shape[1]] += sensor.plateau_dn * light
     if sensor.vignetting:
         signal *= vignetting_map(width, height, sensor.vignetting)
-    return _noisy_u8(signal, sensor, rng)
+    return signal
 
 
 class _redirect_stdout:

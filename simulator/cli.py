@@ -15,7 +15,7 @@ from shared_schemas.cli import BadInput, describe_file_error, plural, read_map_a
 FIGURES_HELP = "write {pngs} into this folder, with {data} beside them (default: no figures, nothing written)"
 
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
-                     "motion", "panel")
+                     "motion", "panel", "phone")
 
 
 def add_bench_flags(parser, *, seed: int | None | bool = 1, workers: bool = True, figures: str | None = None) -> None:
@@ -81,6 +81,9 @@ def add_commands(commands) -> None:
     accuracy.add_argument("--renderer", choices=["ours", "blender", "both"], default="ours",
                           help="blender: Cycles' radiance through the same sensor (needs bpy); both: the same frames "
                                "from each, and the ratio of their mean errors")
+    accuracy.add_argument("--chain", choices=["none", "phone"], default="none",
+                          help="phone: the frames through a phone's chain, focused 25 %% too near, sharpened (0.8) and "
+                               "JPEG 90 (bench robustness's 'phone still'; either renderer)")
     accuracy.add_argument("--shape", action="store_true",
                           help="instead of the distance table, the panel-shape table (issue 11: 600 x 600 mm, "
                                "1200 x 300 mm, a 0.2 m circle with heading and the paper's square, all 1.4 m up)")
@@ -347,6 +350,7 @@ def _run_accuracy(args) -> int:
         from simulator.bench_shapes import run_shapes_command
 
         return run_shapes_command(args)
+    from simulator.bench_robustness import phone_chain
     from simulator.benchmarks import AccuracyConfig, renderer_ratios, run_accuracy
 
     reports = []
@@ -355,7 +359,8 @@ def _run_accuracy(args) -> int:
     for distance in args.distances:
         for renderer in renderers:
             config = AccuracyConfig(distance_m=distance, frames=frames, scale=args.scale, max_tilt_deg=args.max_tilt,
-                                    gravity_sigma_deg=args.gravity_sigma, seed=args.seed, renderer=renderer)
+                                    gravity_sigma_deg=args.gravity_sigma, seed=args.seed, renderer=renderer,
+                                    chain=phone_chain(distance) if args.chain == "phone" else None)
             reports.append(run_accuracy(config, args.workers))
     ratios = renderer_ratios(reports) if args.renderer == "both" else []
     if args.json:

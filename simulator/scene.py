@@ -534,7 +534,14 @@ def develop_emitters(chain: ChainSpec, emitters_for, camera: CameraIntrinsics, w
         width, height = 2 * width, 2 * height
         model = dataclasses.replace(model, psf_sigma_px=2 * model.psf_sigma_px)
     signal = render_signal(emitters_for(camera, (width, height)), width, height, model)
+    return develop_signal(chain, signal, camera, model, black_level_dn, rng)
+
+
+def develop_signal(chain: ChainSpec, signal_dn: np.ndarray, camera: CameraIntrinsics, model: SensorModel,
+                   black_level_dn: float, rng: np.random.Generator) -> np.ndarray:
+    """`simulator.chain.develop` of the noiseless light `signal_dn` in the pixels of `camera`, at the sensor
+    `model`'s gain, read noise and saturation (the halo's width from the camera's focal length)."""
     halo_sigma_px = camera.fx * math.tan(math.radians(chain.optics.halo_sigma_deg))
-    return develop(signal, chain, electrons_per_dn=model.electrons_per_dn, read_noise_dn=model.read_noise_dn,
+    return develop(signal_dn, chain, electrons_per_dn=model.electrons_per_dn, read_noise_dn=model.read_noise_dn,
                    black_level_dn=black_level_dn, halo_sigma_px=halo_sigma_px, rng=rng,
                    saturation_dn=model.saturation_dn)

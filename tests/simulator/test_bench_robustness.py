@@ -38,3 +38,15 @@ def test_the_bench_reports_every_field_and_an_effect_differs_from_the_baseline()
     assert [t["met"] is None for t in report["targets"]] == [True, True, True, False, False, False]
     text = format_robustness(report)
     assert "tone S-curve" in text and "targets" in text
+
+
+def test_the_phone_group_puts_the_stages_an_outside_check_used_together():
+    """Issue 29 item 4: defocus, hand motion, sharpening and JPEG in one cell (each alone was a cell of its own),
+    so that the bench sees what a phone does to an edge when they meet."""
+    config = RobustnessConfig(distances_m=(1.0,), scales=(0.1,), frames=2, effects=("phone",))
+    cells = {c["effect"]: c for c in run_robustness(config, workers=1)["cells"]}
+    assert set(cells) == {"no chain", "ISP off", "ISP on", "phone still", "phone tremor"}
+    chain = cells["phone tremor"]["chain"]
+    assert chain["optics"]["focus_distance_m"] == 0.75 and chain["isp"]["sharpen_amount"] == 0.8
+    assert chain["jpeg_quality"] == 90 and not ChainSpec.model_validate(chain).motion.still
+    assert cells["phone still"]["coverage_pct"] == 100.0
