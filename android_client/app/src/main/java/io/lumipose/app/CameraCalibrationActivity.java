@@ -17,7 +17,6 @@ import org.json.JSONObject;
 
 import io.lumipose.client.calibration.BoardCoverage;
 import io.lumipose.client.calibration.BoardSpec;
-import io.lumipose.client.calibration.CalibrationReport;
 import io.lumipose.client.calibration.CalibrationSession;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.DeviceProfile;
@@ -254,7 +253,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                         coverage = s.coverage();
                     }
                 });
-                outcome = photo.name + ": " + photo.view.corners() + " corners";
+                outcome = photo.name + ": " + photo.view.corners() + " corners" + photo.view.foundAs();
             } else {
                 outcome = photo.name + " not used: " + photo.refusal; // the server's reason (no board, ...)
             }
@@ -309,7 +308,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                         coverage = s.coverage(); // the report's grid from now on
                         sessions.save(s);
                     }
-                    text = describe(o);
+                    text = o.describe();
                 } catch (InterruptedException e) {
                     Thread.currentThread().interrupt();
                     text = "Calibration interrupted: the screen was left. Tap Calibrate again.";
@@ -335,30 +334,6 @@ public final class CameraCalibrationActivity extends StillActivity {
         if (!queued) {
             calibrate.setEnabled(true);
         }
-    }
-
-    private static String describe(CalibrationSession.Outcome o) {
-        CalibrationReport r = o.report;
-        StringBuilder b = new StringBuilder();
-        b.append(r.ok ? "Calibrated" : "Not calibrated: " + r.message).append(String.format(Locale.US,
-                "%nRMS %s px, coverage %.0f %%, most tilted view %s deg", r.rmsPx == null ? "?"
-                        : String.format(Locale.US, "%.3f", r.rmsPx), 100 * r.coverage,
-                r.maxTiltDeg == null ? "?" : String.format(Locale.US, "%.0f", r.maxTiltDeg)));
-        if (r.ok) {
-            DeviceProfile.MeasuredPinhole k = r.profile.intrinsics;
-            if (k != null) {
-                b.append(String.format(Locale.US, "%nfx %.1f  fy %.1f  cx %.1f  cy %.1f px", k.fx, k.fy, k.cx, k.cy));
-            }
-            b.append("\nProfile ").append(r.profile.id).append(o.stored ? " stored on the server"
-                    : " kept on the phone only (" + o.storeError + ")").append("; frames use it from now on.");
-        }
-        for (String a : r.advice) {
-            b.append("\n- ").append(a);
-        }
-        for (String left : r.leftOut) {
-            b.append("\nleft out: ").append(left);
-        }
-        return b.toString();
     }
 
     /** The coverage grid over the picture: red cells still to fill, green ones with enough corners. */
