@@ -28,9 +28,9 @@ import io.lumipose.client.frame.GreyPreview;
 import io.lumipose.client.json.Json;
 
 /**
- * "Calibrate camera": photographs the printed ChArUco board with the positioning frames' geometry
- * (output size, crop, focus, processing) at the board's exposure, sends each photo once to
- * POST /v1/calibrations/views, shows which cells of the image the corners have covered, then posts
+ * "Calibrate camera": photographs the calibration board (ChArUco or chessboard, {@code BoardSpec}) with
+ * the positioning frames' geometry (output size, crop, focus, processing) at the board's exposure,
+ * sends each photo once to POST /v1/calibrations/views, shows which cells of the image the corners have covered, then posts
  * the views (POST /v1/calibrations) and shows the report. An accepted profile is stored on the
  * server (PUT /v1/profiles/{id}) and on the phone: from then on every frame of this camera carries
  * its intrinsics (docs/android.md, "Calibrate camera"). The core's CalibrationSession does the work.
@@ -64,7 +64,8 @@ public final class CameraCalibrationActivity extends StillActivity {
         root.setPadding(16, 16, 16, 16);
         TextView intro = new TextView(this);
         intro.setText("Photograph the printed board at the distance of the ceiling, tilted, filling every cell of "
-                + "the grid (red: too few corners yet). Board spec (the board.json printed with it):");
+                + "the grid (red: too few corners yet). Board spec (the board.json printed with it, or the spec of a "
+                + "board you own):");
         boardField = new EditText(this);
         boardField.setId(ID_BOARD);
         boardField.setText(prefs.boardSpecJson());

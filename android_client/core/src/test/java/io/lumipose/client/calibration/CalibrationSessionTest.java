@@ -171,7 +171,8 @@ class CalibrationSessionTest {
         String found = new JSONObject(view("photo-1", new double[] {5, 5}, new double[] {60, 40}))
                 .put("inverted", true).put("mirrored", true).toString();
         JSONObject fitted = new JSONObject().put("trusted", false).put("width", W).put("height", H).put("fx", 59.2)
-                .put("fy", 59.0).put("cx", 30.1).put("cy", 24.2).put("distortion", new JSONArray("[-0.2, 0.1, 0, 0, 0]"));
+                .put("fy", 59.0).put("cx", 30.1).put("cy", 24.2)
+                .put("distortion", new JSONArray("[-0.2, 0.1, 0, 0, 0]"));
         String refused = new JSONObject().put("ok", false).put("coverage", 0.1).put("fitted", fitted)
                 .put("message", "coverage 10 %; photos were mirrored: un-mirrored before fitting (1 of 1)")
                 .put("advice", new JSONArray().put("cover the corners")).toString();
