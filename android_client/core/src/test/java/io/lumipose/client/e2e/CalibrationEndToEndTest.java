@@ -63,14 +63,22 @@ class CalibrationEndToEndTest {
                 .gravityCamera(new double[] {0, 0.3, 9.8}).build();
     }
 
+    /** board_photos.py's truth.json in {@code dir}. */
+    private static JSONObject truth(Path dir) throws Exception {
+        return new JSONObject(new String(Files.readAllBytes(dir.resolve("truth.json")), StandardCharsets.UTF_8));
+    }
+
+    private static LumiposeClient client(String deviceId) {
+        return LumiposeClient.create(new ClientConfig(serve.baseUrl, Lumipose.Serve.KEY, deviceId, false,
+                new RetryPolicy(2, 200, 2.0, 1000)));
+    }
+
     @Test
     void theRenderedPinholeIsFoundAndItsProfileStored() throws Exception {
-        JSONObject truth = new JSONObject(new String(Files.readAllBytes(photos.resolve("truth.json")),
-                StandardCharsets.UTF_8));
+        JSONObject truth = truth(photos);
         int w = truth.getInt("width");
         int h = truth.getInt("height");
-        LumiposeClient client = LumiposeClient.create(new ClientConfig(serve.baseUrl, Lumipose.Serve.KEY, "e2e-phone",
-                false, new RetryPolicy(2, 200, 2.0, 1000)));
+        LumiposeClient client = client("e2e-phone");
         CalibrationSession session = new CalibrationSession(client, BOARD);
 
         CalibrationSession.Photo blank = session.addPhoto(Files.readAllBytes(photos.resolve("blank.y")), meta(w, h));
@@ -122,13 +130,10 @@ class CalibrationEndToEndTest {
         BoardSpec owned = new BoardSpec(BoardSpec.CHARUCO, 7, 5, 0.03, 0.022, "DICT_4X4_1000", false, 10, false);
         Path dir = Files.createTempDirectory("lumipose-mirrored");
         Python.run("calibration/board_photos.py", dir.toString(), owned.toJson().toString(), "32", "mirrored");
-        JSONObject truth = new JSONObject(new String(Files.readAllBytes(dir.resolve("truth.json")),
-                StandardCharsets.UTF_8));
+        JSONObject truth = truth(dir);
         int w = truth.getInt("width");
         int h = truth.getInt("height");
-        LumiposeClient client = LumiposeClient.create(new ClientConfig(serve.baseUrl, Lumipose.Serve.KEY, "e2e-front",
-                false, new RetryPolicy(2, 200, 2.0, 1000)));
-        CalibrationSession session = new CalibrationSession(client, owned);
+        CalibrationSession session = new CalibrationSession(client("e2e-front"), owned);
         JSONArray names = truth.getJSONArray("photos");
         for (int i = 0; i < names.length(); i++) {
             CalibrationSession.Photo p = session.addPhoto(Files.readAllBytes(dir.resolve(names.getString(i) + ".y")),
