@@ -17,7 +17,6 @@ import org.json.JSONObject;
 
 import io.lumipose.client.calibration.BoardCoverage;
 import io.lumipose.client.calibration.BoardSpec;
-import io.lumipose.client.calibration.CalibrationReport;
 import io.lumipose.client.calibration.CalibrationSession;
 import io.lumipose.client.camera.CameraFacts;
 import io.lumipose.client.camera.DeviceProfile;
@@ -29,9 +28,9 @@ import io.lumipose.client.frame.GreyPreview;
 import io.lumipose.client.json.Json;
 
 /**
- * "Calibrate camera": photographs the printed ChArUco board with the positioning frames' geometry
- * (output size, crop, focus, processing) at the board's exposure, sends each photo once to
- * POST /v1/calibrations/views, shows which cells of the image the corners have covered, then posts
+ * "Calibrate camera": photographs the calibration board (ChArUco or chessboard, {@code BoardSpec}) with
+ * the positioning frames' geometry (output size, crop, focus, processing) at the board's exposure,
+ * sends each photo once to POST /v1/calibrations/views, shows which cells of the image the corners have covered, then posts
  * the views (POST /v1/calibrations) and shows the report. An accepted profile is stored on the
  * server (PUT /v1/profiles/{id}) and on the phone: from then on every frame of this camera carries
  * its intrinsics (docs/android.md, "Calibrate camera"). The core's CalibrationSession does the work.
@@ -65,7 +64,8 @@ public final class CameraCalibrationActivity extends StillActivity {
         root.setPadding(16, 16, 16, 16);
         TextView intro = new TextView(this);
         intro.setText("Photograph the printed board at the distance of the ceiling, tilted, filling every cell of "
-                + "the grid (red: too few corners yet). Board spec (the board.json printed with it):");
+                + "the grid (red: too few corners yet). Board spec (the board.json printed with it, or the spec of a "
+                + "board you own):");
         boardField = new EditText(this);
         boardField.setId(ID_BOARD);
         boardField.setText(prefs.boardSpecJson());
@@ -254,7 +254,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                         coverage = s.coverage();
                     }
                 });
-                outcome = photo.name + ": " + photo.view.corners() + " corners";
+                outcome = photo.name + ": " + photo.view.corners() + " corners" + photo.view.foundAs();
             } else {
                 outcome = photo.name + " not used: " + photo.refusal; // the server's reason (no board, ...)
             }
@@ -309,7 +309,7 @@ public final class CameraCalibrationActivity extends StillActivity {
                         coverage = s.coverage(); // the report's grid from now on
                         sessions.save(s);
                     }
-                    text = describe(o);
+                    text = o.describe();
                 } catch (InterruptedException e) {
                     Thread.currentThread().interrupt();
                     text = "Calibration interrupted: the screen was left. Tap Calibrate again.";
@@ -335,30 +335,6 @@ public final class CameraCalibrationActivity extends StillActivity {
         if (!queued) {
             calibrate.setEnabled(true);
         }
-    }
-
-    private static String describe(CalibrationSession.Outcome o) {
-        CalibrationReport r = o.report;
-        StringBuilder b = new StringBuilder();
-        b.append(r.ok ? "Calibrated" : "Not calibrated: " + r.message).append(String.format(Locale.US,
-                "%nRMS %s px, coverage %.0f %%, most tilted view %s deg", r.rmsPx == null ? "?"
-                        : String.format(Locale.US, "%.3f", r.rmsPx), 100 * r.coverage,
-                r.maxTiltDeg == null ? "?" : String.format(Locale.US, "%.0f", r.maxTiltDeg)));
-        if (r.ok) {
-            DeviceProfile.MeasuredPinhole k = r.profile.intrinsics;
-            if (k != null) {
-                b.append(String.format(Locale.US, "%nfx %.1f  fy %.1f  cx %.1f  cy %.1f px", k.fx, k.fy, k.cx, k.cy));
-            }
-            b.append("\nProfile ").append(r.profile.id).append(o.stored ? " stored on the server"
-                    : " kept on the phone only (" + o.storeError + ")").append("; frames use it from now on.");
-        }
-        for (String a : r.advice) {
-            b.append("\n- ").append(a);
-        }
-        for (String left : r.leftOut) {
-            b.append("\nleft out: ").append(left);
-        }
-        return b.toString();
     }
 
     /** The coverage grid over the picture: red cells still to fill, green ones with enough corners. */

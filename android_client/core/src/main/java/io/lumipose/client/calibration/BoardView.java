@@ -12,10 +12,12 @@ import io.lumipose.client.json.ContractException;
 import io.lumipose.client.json.Json;
 
 /**
- * The contract's {@code BoardView}: the board's ChArUco corners found on one photo (corner ids and
+ * The contract's {@code BoardView}: the board's corners found on one photo (corner ids and
  * their sub-pixel image points, OpenCV pixel coordinates), as {@code POST /v1/calibrations/views}
- * returns it. The app keeps these small records and sends them back in the calibration request,
- * never the photos again.
+ * returns it, with whether the board was found {@code inverted} and the photo {@code mirrored} (a
+ * front camera's: its corners are then those of the photo flipped left-right back). The app keeps
+ * these small records and sends them back in the calibration request, never the photos again; the
+ * two flags go back too, so the report can say how the board was found.
  */
 public final class BoardView {
     /** Corner ids are below squares_x x squares_y of the largest board (64 x 64). */
@@ -25,8 +27,17 @@ public final class BoardView {
     public final int height;
     private final int[] cornerIds;
     private final double[][] cornersPx;
+    /** The board was found inverted (white markers on black). */
+    public final boolean inverted;
+    /** The photo was mirrored: the corners are those of the un-mirrored photo. */
+    public final boolean mirrored;
 
     public BoardView(String name, int width, int height, int[] cornerIds, double[][] cornersPx) {
+        this(name, width, height, cornerIds, cornersPx, false, false);
+    }
+
+    public BoardView(String name, int width, int height, int[] cornerIds, double[][] cornersPx, boolean inverted,
+                     boolean mirrored) {
         if (name == null || name.length() > 256) {
             throw new ContractException("name", "must be a string of at most 256 characters");
         }
@@ -54,6 +65,8 @@ public final class BoardView {
         for (int i = 0; i < cornersPx.length; i++) {
             this.cornersPx[i] = cornersPx[i].clone();
         }
+        this.inverted = inverted;
+        this.mirrored = mirrored;
     }
 
     public int corners() {
@@ -69,6 +82,15 @@ public final class BoardView {
         return cornersPx[i].clone();
     }
 
+    /** How the server found the board when not as printed, as the photo's line says it ("" when as printed). */
+    public String foundAs() {
+        if (!inverted && !mirrored) {
+            return "";
+        }
+        return " (" + (inverted ? "board found inverted" : "") + (inverted && mirrored ? ", " : "")
+                + (mirrored ? "photo mirrored: un-mirrored" : "") + ")";
+    }
+
     public JSONObject toJson() {
         JSONObject o = new JSONObject();
         Json.put(o, "name", name);
@@ -80,6 +102,13 @@ public final class BoardView {
         }
         Json.put(o, "corner_ids", ids);
         Json.put(o, "corners_px", Json.matrix(cornersPx));
+        // only when said: the server of before this field refuses fields it does not know
+        if (inverted) {
+            Json.put(o, "inverted", true);
+        }
+        if (mirrored) {
+            Json.put(o, "mirrored", true);
+        }
         return o;
     }
 
@@ -98,8 +127,11 @@ public final class BoardView {
             intIds[i] = (int) ids[i];
         }
         String name = Json.optString(o, "name", "name");
+        Boolean inverted = Json.optBoolean(o, "inverted", "inverted");
+        Boolean mirrored = Json.optBoolean(o, "mirrored", "mirrored");
         return new BoardView(name == null ? "" : name, Json.requireInt(o, "width", "width"),
-                Json.requireInt(o, "height", "height"), intIds, corners);
+                Json.requireInt(o, "height", "height"), intIds, corners, inverted != null && inverted,
+                mirrored != null && mirrored);
     }
 
     static JSONArray toJson(List<BoardView> views) {

@@ -5,6 +5,7 @@ import java.util.ArrayList;
 import java.util.Collections;
 import java.util.LinkedHashMap;
 import java.util.List;
+import java.util.Locale;
 import java.util.Map;
 
 import org.json.JSONObject;
@@ -94,6 +95,41 @@ public final class CalibrationSession {
             this.report = report;
             this.stored = stored;
             this.storeError = storeError;
+        }
+
+        /**
+         * The outcome as the screen shows it: passed or not and why, the RMS, coverage and tilt, the
+         * calibrated pinhole and where the profile went, or a refused set's fit said as not trusted (for a
+         * look at how far it is from the datasheet, never used for frames), the advice, the photos left out.
+         */
+        public String describe() {
+            CalibrationReport r = report;
+            StringBuilder b = new StringBuilder();
+            b.append(r.ok ? "Calibrated" : "Not calibrated: " + r.message).append(String.format(Locale.US,
+                    "%nRMS %s px, coverage %.0f %%, most tilted view %s deg", r.rmsPx == null ? "?"
+                            : String.format(Locale.US, "%.3f", r.rmsPx), 100 * r.coverage,
+                    r.maxTiltDeg == null ? "?" : String.format(Locale.US, "%.0f", r.maxTiltDeg)));
+            if (r.ok) {
+                DeviceProfile.MeasuredPinhole k = r.profile.intrinsics;
+                if (k != null) {
+                    b.append(String.format(Locale.US, "%nfx %.1f  fy %.1f  cx %.1f  cy %.1f px", k.fx, k.fy, k.cx,
+                            k.cy));
+                }
+                b.append("\nProfile ").append(r.profile.id).append(stored ? " stored on the server"
+                        : " kept on the phone only (" + storeError + ")").append("; frames use it from now on.");
+            } else if (r.fitted != null) {
+                CalibrationReport.Fitted k = r.fitted;
+                b.append(String.format(Locale.US, "%nFitted, NOT TRUSTED (not used): fx %.1f  fy %.1f  cx %.1f  "
+                        + "cy %.1f px at %dx%d, k1 %.3f", k.fx, k.fy, k.cx, k.cy, k.width, k.height,
+                        k.distortion()[0]));
+            }
+            for (String a : r.advice) {
+                b.append("\n- ").append(a);
+            }
+            for (String left : r.leftOut) {
+                b.append("\nleft out: ").append(left);
+            }
+            return b.toString();
         }
     }
 

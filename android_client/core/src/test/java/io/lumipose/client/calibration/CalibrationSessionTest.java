@@ -157,6 +157,74 @@ class CalibrationSessionTest {
         assertEquals(2, transport.calls.size(), "nothing stored");
     }
 
+    /**
+     * Issue 29: a board the user owns (OpenCV's chessboard, printed inverted) goes up as the contract
+     * says; the server's word on how it found the board (inverted, a mirrored front-camera photo) is
+     * kept and sent back, so its report can say it; a refused set's fit is read, marked not trusted.
+     */
+    @Test
+    void aBoardTheUserOwnsAndHowItWasFoundGoBackToTheServer() throws Exception {
+        BoardSpec chessboard = BoardSpec.chessboard(10, 7, 0.025, true);
+        FakeTransport t = new FakeTransport();
+        CalibrationSession s = new CalibrationSession(new LumiposeClient(new ClientConfig("http://server:8000", "key",
+                "phone-1", false, new RetryPolicy(1, 0, 1.0, 0)), t, ms -> { }), chessboard);
+        String found = new JSONObject(view("photo-1", new double[] {5, 5}, new double[] {60, 40}))
+                .put("inverted", true).put("mirrored", true).toString();
+        JSONObject fitted = new JSONObject().put("trusted", false).put("width", W).put("height", H).put("fx", 59.2)
+                .put("fy", 59.0).put("cx", 30.1).put("cy", 24.2)
+                .put("distortion", new JSONArray("[-0.2, 0.1, 0, 0, 0]"));
+        String refused = new JSONObject().put("ok", false).put("coverage", 0.1).put("fitted", fitted)
+                .put("message", "coverage 10 %; photos were mirrored: un-mirrored before fitting (1 of 1)")
+                .put("advice", new JSONArray().put("cover the corners")).toString();
+        t.reply(200, found).reply(200, refused);
+        CalibrationSession.Photo photo = s.addPhoto(new byte[W * H], photo());
+        assertTrue(photo.view.inverted && photo.view.mirrored);
+        assertEquals(" (board found inverted, photo mirrored: un-mirrored)", photo.view.foundAs(), "the photo's line");
+        String header = t.calls.get(0).headers.get("X-Lumipose-Board");
+        assertTrue(new JSONObject("{\"schema\": \"lumipose.board/1\", \"kind\": \"chessboard\", \"squares_x\": 10, "
+                + "\"squares_y\": 7, \"square_m\": 0.025, \"dictionary\": \"DICT_5X5_100\", \"inverted\": true}")
+                .similar(new JSONObject(header)), header);
+
+        // the session's file keeps them (the screen's restore after process death)
+        CalibrationSession back = CalibrationSession.fromJson(new LumiposeClient(new ClientConfig(
+                "http://server:8000", "key", "phone-1", false, new RetryPolicy(1, 0, 1.0, 0)), t, ms -> { }),
+                s.toJson().toString());
+        assertTrue(back.board().isChessboard() && back.board().inverted);
+        assertTrue(back.views().get(0).mirrored && back.views().get(0).inverted);
+
+        CalibrationSession.Outcome o = back.calibrate("xiaomi-mi8-rear", null);
+        JSONObject request = body(t.calls.get(1));
+        assertTrue(new JSONObject(found).similar(request.getJSONArray("views").getJSONObject(0)),
+                "the view as the server gave it: " + request.getJSONArray("views"));
+        assertEquals(chessboard.toJson().toString(), request.getJSONObject("board").toString());
+        assertFalse(o.report.ok);
+        assertFalse(o.report.fitted.trusted);
+        assertEquals(59.2, o.report.fitted.fx, 0.0);
+        assertEquals(24.2, o.report.fitted.cy, 0.0);
+        assertEquals(-0.2, o.report.fitted.distortion()[0], 0.0);
+        assertNull(o.report.profile, "a refused set's fit is no profile");
+        String shown = o.describe();
+        assertTrue(shown.contains("\nFitted, NOT TRUSTED (not used): fx 59.2  fy 59.0  cx 30.1  cy 24.2 px at 64x48, "
+                + "k1 -0.200"), shown);
+        assertTrue(shown.startsWith("Not calibrated: coverage 10 %; photos were mirrored"), shown);
+        assertEquals(2, t.calls.size(), "nothing stored");
+    }
+
+    @Test
+    void aReportsFitIsCheckedAsTheContractSaysIt() {
+        String fit = "\"fitted\": {\"trusted\": %s, \"width\": 64, \"height\": 48, \"fx\": 60, \"fy\": 60, "
+                + "\"cx\": 32, \"cy\": 24, \"distortion\": %s}";
+        String report = "{\"ok\": false, \"coverage\": 0.2, " + fit + "}";
+        assertFalse(CalibrationReport.fromJson(String.format(report, "false", "[0, 0, 0, 0, 0]")).fitted.trusted);
+        assertNull(CalibrationReport.fromJson("{\"ok\": false, \"coverage\": 0.2, \"fitted\": null}").fitted,
+                "null when nothing could be fitted");
+        assertEquals("fitted.distortion", assertThrows(ContractException.class,
+                () -> CalibrationReport.fromJson(String.format(report, "false", "[0, 0, 0]"))).field);
+        assertEquals("fitted.trusted", assertThrows(ContractException.class,
+                () -> CalibrationReport.fromJson(String.format(report, "true", "[0, 0, 0, 0, 0]"))).field,
+                "a refused set's fit is not trusted");
+    }
+
     @Test
     void aProfileTheServerWouldNotStoreIsStillReported() throws Exception {
         transport.reply(200, view("photo-1", new double[] {5, 5})).reply(200, okReport(calibrated()))

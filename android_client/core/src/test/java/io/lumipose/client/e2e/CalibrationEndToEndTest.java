@@ -63,14 +63,22 @@ class CalibrationEndToEndTest {
                 .gravityCamera(new double[] {0, 0.3, 9.8}).build();
     }
 
+    /** board_photos.py's truth.json in {@code dir}. */
+    private static JSONObject truth(Path dir) throws Exception {
+        return new JSONObject(new String(Files.readAllBytes(dir.resolve("truth.json")), StandardCharsets.UTF_8));
+    }
+
+    private static LumiposeClient client(String deviceId) {
+        return LumiposeClient.create(new ClientConfig(serve.baseUrl, Lumipose.Serve.KEY, deviceId, false,
+                new RetryPolicy(2, 200, 2.0, 1000)));
+    }
+
     @Test
     void theRenderedPinholeIsFoundAndItsProfileStored() throws Exception {
-        JSONObject truth = new JSONObject(new String(Files.readAllBytes(photos.resolve("truth.json")),
-                StandardCharsets.UTF_8));
+        JSONObject truth = truth(photos);
         int w = truth.getInt("width");
         int h = truth.getInt("height");
-        LumiposeClient client = LumiposeClient.create(new ClientConfig(serve.baseUrl, Lumipose.Serve.KEY, "e2e-phone",
-                false, new RetryPolicy(2, 200, 2.0, 1000)));
+        LumiposeClient client = client("e2e-phone");
         CalibrationSession session = new CalibrationSession(client, BOARD);
 
         CalibrationSession.Photo blank = session.addPhoto(Files.readAllBytes(photos.resolve("blank.y")), meta(w, h));
@@ -108,5 +116,46 @@ class CalibrationEndToEndTest {
         assertEquals(k.fx, served.intrinsics.fx, 0.0);
         // The frames of this camera carry the calibration: at the photos' size, exactly its pinhole.
         assertEquals(k.cx, served.forFrame(w, h).cx, 1e-9);
+    }
+
+    /**
+     * Issue 29: a board the user owns (DICT_4X4_1000, markers from id 10) seen by a front camera whose
+     * photos are mirrored. The real server finds each view mirrored, the app keeps that and sends it
+     * back, and the report says the photos were un-mirrored: the fit is of the lens, whose cx (322 px)
+     * a fit of the mirrored photos would put at 317 px.
+     */
+
+    @Test
+    void aFrontCamerasMirroredPhotosOfAnotherBoardCalibrateTheLens() throws Exception {
+        BoardSpec owned = new BoardSpec(BoardSpec.CHARUCO, 7, 5, 0.03, 0.022, "DICT_4X4_1000", false, 10, false);
+        Path dir = Files.createTempDirectory("lumipose-mirrored");
+        Python.run("calibration/board_photos.py", dir.toString(), owned.toJson().toString(), "32", "mirrored");
+        JSONObject truth = truth(dir);
+        int w = truth.getInt("width");
+        int h = truth.getInt("height");
+        CalibrationSession session = new CalibrationSession(client("e2e-front"), owned);
+        JSONArray names = truth.getJSONArray("photos");
+        for (int i = 0; i < names.length(); i++) {
+            CalibrationSession.Photo p = session.addPhoto(Files.readAllBytes(dir.resolve(names.getString(i) + ".y")),
+                    meta(w, h));
+            assertTrue(!p.found() || p.view.mirrored && !p.view.inverted, p.name + " found as it is");
+        }
+        int found = session.views().size();
+        assertTrue(found >= 12, found + " of " + names.length() + " photos with the board found");
+
+        DeviceProfile phone = DeviceProfile.ofPhone("e2e-front", "e2e front camera", LensFacing.FRONT, DATASHEET, w, h);
+        CalibrationSession.Outcome o = session.calibrate(phone, null);
+        assertTrue(o.report.ok, "refused: " + o.report.message + " " + o.report.advice);
+        assertTrue(o.report.message.contains("photos were mirrored: un-mirrored before fitting (" + found + " of "
+                + found + ")"), o.report.message);
+        assertTrue(o.report.fitted.trusted);
+        DeviceProfile.MeasuredPinhole k = o.report.profile.intrinsics;
+        System.out.printf(java.util.Locale.US, "mirrored calibration e2e: %d views, fx %.3f cx %.3f cy %.3f px "
+                + "(truth %.1f %.1f %.1f)%n", found, k.fx, k.cx, k.cy, truth.getDouble("fx"), truth.getDouble("cx"),
+                truth.getDouble("cy"));
+        assertEquals(truth.getDouble("fx"), k.fx, 0.005 * truth.getDouble("fx"));
+        assertEquals(truth.getDouble("cx"), k.cx, 2.0, "the lens's cx, not the mirrored photo's");
+        assertEquals(truth.getDouble("cy"), k.cy, 2.0);
+        assertEquals(k.fx, o.report.fitted.fx, 0.0);
     }
 }
