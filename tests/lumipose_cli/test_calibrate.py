@@ -180,7 +180,7 @@ def test_camera_prints_a_refused_sets_fit_as_not_trusted(capsys):
 
 
 def test_the_default_boards_json_keeps_its_fields(tmp_path):
-    # the Android app (BoardSpec.fromJson) refuses fields it does not know: the fields added for other boards
+    # app builds before issue 29 (BoardSpec.fromJson) refuse fields they do not know: the fields added for other boards
     # are written only when a board needs them
     assert main(["calibrate", "board", "--out", str(tmp_path / "b.png"), "--dpi", "60"]) == 0
     written = json.loads((tmp_path / "b.json").read_text())
