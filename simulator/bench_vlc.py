@@ -39,7 +39,7 @@ from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
 from server.vision.beacons import CandidateRules
 from server.vlc.capture import ID_EXPOSURE_S, stepped_interval_s
-from server.vlc.codec import LedWaveform
+from server.vlc.codec import DEFAULT_DEPTH, LedWaveform
 from server.vlc.decoder import IdEvidence
 from server.vlc.reader import read_id_frame
 from shared_schemas import Beacon, FrameKind, device_profiles
@@ -69,7 +69,7 @@ class VlcConfig:
     plateau_dn: float = 200.0  # LED high level in an ID frame (ISO raised for the short exposure)
     electrons_per_dn: float = 4.0  # high gain: fewer electrons per DN, more shot noise
     read_noise_dn: float = 2.0
-    low_level: float = 0.3
+    depth: float = DEFAULT_DEPTH  # modulation depth: the LED low level is 1 - depth of its high (1.0: off)
     seed: int = 1
     map_ids: int = 0  # 0: no map, all 256 IDs as candidates; K: a map of K IDs
     foreign_share: float = 0.5  # with a map: trials whose panel is not of the map
@@ -139,7 +139,7 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
     beacon_id = int(rng.integers(0, 256))
     beacon = bench_beacon(config, beacon_id)
     candidates = CandidateRules().for_beacons([beacon])
-    wave = LedWaveform.for_beacon(beacon_id, low_level=config.low_level, phase_s=rng.uniform(0, 1),
+    wave = LedWaveform.for_beacon(beacon_id, depth=config.depth, phase_s=rng.uniform(0, 1),
                                   clock_error_ppm=rng.uniform(-1, 1) * config.clock_error_ppm)
     pose = _draw_pose(config, beacon, camera, width, height, rng)
     row_time = config.skew_s / (height - 1)
