@@ -119,13 +119,14 @@ class LedWaveform:
     """The periodic light of one beacon: `chips` repeated at `chip_rate_hz`.
 
     Levels are relative radiance: `high_level` for a 1 chip, `low_level` for a 0 chip
-    (`depth` = 1 - low / high: 0.7 by default, 1.0 fully off between chips). The message starts at t = `phase_s` on the LED's own clock, which runs `clock_error_ppm`
-    fast against the camera's clock.
+    (`depth` = 1 - low / high: 0.7 by default, 1.0 fully off between chips). The message starts
+    at t = `phase_s` on the LED's own clock, which runs `clock_error_ppm` fast against the
+    camera's clock.
     """
 
     chips: tuple[int, ...]
     chip_rate_hz: float = CHIP_RATE_HZ
-    low_level: float = round(1.0 - DEFAULT_DEPTH, 12)  # 0.3
+    low_level: float = 0.3  # 1 - DEFAULT_DEPTH
     high_level: float = 1.0
     phase_s: float = 0.0
     clock_error_ppm: float = 0.0
@@ -144,7 +145,8 @@ class LedWaveform:
         if depth is not None:
             if not 0.0 <= depth <= 1.0:
                 raise ValueError(f"depth must be in 0..1, got {depth}")
-            kwargs["low_level"] = (1.0 - depth) * kwargs.get("high_level", 1.0)
+            # rounded: depth 0.7 is the low level 0.3 itself, not 0.30000000000000004 (figures stay bit-identical)
+            kwargs["low_level"] = round((1.0 - depth) * kwargs.get("high_level", 1.0), 12)
         return cls(chips=tuple(int(c) for c in encode(beacon_id)), **kwargs)
 
     @property

@@ -107,7 +107,7 @@ def flatten_stripes(
     for end, beyond in ((panel_rows[0], panel_rows[0] - 1), (panel_rows[-1], panel_rows[-1] + 1)):
         if 0 <= beyond < h and not lit[beyond]:  # the panel may go on in the dark rows past its first or last stripe
             side = "top" if end == panel_rows[0] else "bottom"
-            return f"its {side} lies in a dark stripe of its code (the LED off between chips): the outline there is unseen"
+            return f"its {side} lies in a dark stripe of its code (the LED off between chips): its outline is unseen"
     scale = np.where(lit, full / np.maximum(gain, 1e-6), 1.0).astype(np.float32)
     grown = mask
     if rules.grow_px > 0:

@@ -27,7 +27,8 @@ def id_frames(beacon_id: int, distance_m: float, exposure_s: float, count: int, 
     rng = np.random.default_rng(seed)
     shape = shape or {"side_m": 0.174, "corner_radius_m": 0.02}
     beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, distance_m], **shape)
-    wave = LedWaveform.for_beacon(beacon_id, depth=depth, phase_s=rng.uniform(0, 1), clock_error_ppm=rng.uniform(-50, 50))
+    wave = LedWaveform.for_beacon(beacon_id, depth=depth, phase_s=rng.uniform(0, 1),
+                                  clock_error_ppm=rng.uniform(-50, 50))
     pose = CameraPose(np.array([*offset_m, 0.0]), rotation_from_ypr(*ypr))
     sensor = SensorModel(background_dn=3.0, plateau_dn=200.0, psf_sigma_px=1.2, electrons_per_dn=4.0,
                          read_noise_dn=2.0)
