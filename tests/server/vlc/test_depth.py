@@ -113,53 +113,38 @@ def test_two_full_depth_panels_further_apart_than_the_dark_run_stay_two():
     assert len(reading.panels) == 2 and all(p.observation is not None for p in reading.panels)
 
 
-def test_a_full_depth_panel_is_flattened_and_measured_its_dark_rows_from_their_neighbours():
-    beacon_id = 0xA5
-    (frame,) = id_frames(beacon_id, 1.5, 1 / 8000, 1, seed=15, shape=SQUARE_600, depth=1.0)
-    candidates = id_frame_candidates(
-        frame, CandidateRules().for_beacons([Beacon(id=0, center_m=[0, 0, 2], **SQUARE_600)])
-    )
+def _flattened_600_mm_panel(seed: int):
+    """A 600 mm panel at 1.5 m at depth 1.0, ID 0xA5: (frame, mask origin, mask, flattened pixels, problem)."""
+    (frame,) = id_frames(0xA5, 1.5, 1 / 8000, 1, seed=seed, shape=SQUARE_600, depth=1.0)
+    looks = CandidateRules().for_beacons([Beacon(id=0, center_m=[0, 0, 2], **SQUARE_600)])
+    candidates = id_frame_candidates(frame, looks)
     found = find_beacon_blobs(frame.pixels, candidates)
     (blob,) = found.blobs
     y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates, margin_px=10)
     meta = frame.meta
-    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.height)
     pixels = np.array(frame.pixels)
-    assert (
-        flatten_stripes(pixels, mask, (y0, x0), found.levels.background, beacon_id, row_time, meta.exposure_s) is None
-    )
+    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.height)
+    problem = flatten_stripes(pixels, mask, (y0, x0), found.levels.background, 0xA5, row_time, meta.exposure_s)
+    return frame, (y0, x0), mask, pixels, problem
+
+
+def test_a_full_depth_panel_is_flattened_and_measured_its_dark_rows_from_their_neighbours():
+    frame, (y0, x0), mask, pixels, problem = _flattened_600_mm_panel(seed=15)
+    assert problem is None
     window = pixels[y0 : y0 + mask.shape[0], x0 : x0 + mask.shape[1]]
     inner = [window[r, mask[r]].mean() for r in range(10, mask.shape[0] - 10) if mask[r].sum() > 40]
     assert min(inner) > 0.6 * max(inner)  # no dark row is left inside the panel (they were at the background)
     # the room path names it by its stripes and measures it on the flattened frame (a corner in a dark
     # stripe is bridged by a chord: the pose stage's consistency test refuses such an outline, not here)
-    beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, 1.5], **SQUARE_600)
+    beacon = Beacon(id=0xA5, center_m=[0.0, 0.0, 1.5], **SQUARE_600)
     far = Beacon(id=3, center_m=[30.0, 0.0, 1.5], **SQUARE_600)
     (panel,) = read_room(frame, BeaconMap(name="one", beacons=[beacon, far])).panels
-    assert panel.beacon is not None and panel.beacon.id == beacon_id
+    assert panel.beacon is not None and panel.beacon.id == 0xA5
     assert hasattr(panel.fix, "position_m"), panel.fix
-    truth = np.array(meta.ground_truth.position_m)
+    truth = np.array(frame.meta.ground_truth.position_m)
     assert np.linalg.norm(panel.fix.position_m[:2] - truth[:2]) < 0.005
 
 
 def test_a_full_depth_panel_whose_end_lies_in_a_dark_stripe_is_not_flattened():
-    beacon_id = 0xA5
-    (frame,) = id_frames(beacon_id, 1.5, 1 / 8000, 1, seed=7, shape=SQUARE_600, depth=1.0)
-    candidates = id_frame_candidates(
-        frame, CandidateRules().for_beacons([Beacon(id=0, center_m=[0, 0, 2], **SQUARE_600)])
-    )
-    found = find_beacon_blobs(frame.pixels, candidates)
-    (blob,) = found.blobs
-    y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates, margin_px=10)
-    meta = frame.meta
-    pixels = np.array(frame.pixels)
-    problem = flatten_stripes(
-        pixels,
-        mask,
-        (y0, x0),
-        found.levels.background,
-        beacon_id,
-        row_time_s(meta.rolling_shutter_skew_s, meta.height),
-        meta.exposure_s,
-    )
+    frame, _, _, pixels, problem = _flattened_600_mm_panel(seed=7)
     assert problem is not None and "dark stripe" in problem and np.array_equal(pixels, frame.pixels)
