@@ -31,6 +31,7 @@ from server.pipeline import PipelineOptions, locate_beacon
 from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
 from server.vision.binarize import Levels
 from server.vision.roi import FrameView
+from server.vlc.capture import id_frame_candidates
 from server.vlc.codec import DATA_BITS, MESSAGE_CHIPS
 from server.vlc.decoder import IdEvidence, StripeRules, row_time_s
 from server.vlc.flatten import FlattenRules, flatten_stripes
@@ -249,7 +250,7 @@ def read_room(
     frame whose stripes are flattened by their codes (`server.vlc.flatten`): the pipeline's
     threshold would cut a striped panel into bars.
     """
-    candidates = rules.candidates.for_beacons(beacon_map.beacons)
+    candidates = id_frame_candidates(frame, rules.candidates.for_beacons(beacon_map.beacons), rules.stripes)
     found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta)) if found is None else found
     reading = read_id_frame(frame, candidates, rules.stripes, found)
     if reading.problem is not None:

@@ -60,6 +60,7 @@ class OfficeConfig:
     max_captures: int | None = None
     seed: int = 1
     panel_yaws_deg: tuple[float, ...] | None = None  # each scene panel's yaw (a surveyed room's); None: the scene's
+    depth: float | None = None  # the LEDs' modulation depth (1.0: off between chips); None: the scene's
 
 
 def office_scenes(config: OfficeConfig) -> tuple[Scene, Scene]:
@@ -68,6 +69,8 @@ def office_scenes(config: OfficeConfig) -> tuple[Scene, Scene]:
     scene = find_scene(config.scene)
     rng = np.random.default_rng([config.seed, 99])
     beacons = [b.model_copy(update={"vlc_phase_s": float(rng.uniform(0, 1))}) for b in scene.beacons]
+    if config.depth is not None:
+        beacons = [b.model_copy(update={"vlc_depth": config.depth}) for b in beacons]
     if config.panel_yaws_deg is not None:
         if len(config.panel_yaws_deg) != len(beacons):
             raise ValueError(f"panel_yaws_deg: {len(config.panel_yaws_deg)} yaws for {len(beacons)} panels")

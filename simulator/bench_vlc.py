@@ -21,6 +21,10 @@ and the map holds an ID one bit from the panel's (the hardest foreign panel: its
 from a map code in 2 to 4 chips), otherwise the panel's ID and K - 1 random others. Then
 "read" = a confident, correct ID among the map panels' trials, "named wrong" = a confident map
 ID that is not the panel's (any trial), "foreign confident" = a confident ID outside the map.
+
+`depth`: the LED's modulation depth (a 0 chip is 1 - depth of a 1 chip; 0.7 by default, 1.0 an
+LED keyed fully off between chips, as OOK or full-depth PWM drivers do). "captures" = the ID frames
+used counted in the app's bursts of `ID_BURST_FRAMES` (4) per capture.
 """
 
 from __future__ import annotations
@@ -38,8 +42,8 @@ from server.fov import fov_grid
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame
 from server.vision.beacons import CandidateRules
-from server.vlc.capture import ID_EXPOSURE_S, stepped_interval_s
-from server.vlc.codec import LedWaveform
+from server.vlc.capture import ID_BURST_FRAMES, ID_EXPOSURE_S, stepped_interval_s
+from server.vlc.codec import DEFAULT_DEPTH, LedWaveform
 from server.vlc.decoder import IdEvidence
 from server.vlc.reader import read_id_frame
 from shared_schemas import Beacon, FrameKind, device_profiles
@@ -69,7 +73,7 @@ class VlcConfig:
     plateau_dn: float = 200.0  # LED high level in an ID frame (ISO raised for the short exposure)
     electrons_per_dn: float = 4.0  # high gain: fewer electrons per DN, more shot noise
     read_noise_dn: float = 2.0
-    low_level: float = 0.3
+    depth: float = DEFAULT_DEPTH  # modulation depth: the LED low level is 1 - depth of its high (1.0: off)
     seed: int = 1
     map_ids: int = 0  # 0: no map, all 256 IDs as candidates; K: a map of K IDs
     foreign_share: float = 0.5  # with a map: trials whose panel is not of the map
@@ -139,7 +143,7 @@ def _trial(args: tuple[VlcConfig, int]) -> dict:
     beacon_id = int(rng.integers(0, 256))
     beacon = bench_beacon(config, beacon_id)
     candidates = CandidateRules().for_beacons([beacon])
-    wave = LedWaveform.for_beacon(beacon_id, low_level=config.low_level, phase_s=rng.uniform(0, 1),
+    wave = LedWaveform.for_beacon(beacon_id, depth=config.depth, phase_s=rng.uniform(0, 1),
                                   clock_error_ppm=rng.uniform(-1, 1) * config.clock_error_ppm)
     pose = _draw_pose(config, beacon, camera, width, height, rng)
     row_time = config.skew_s / (height - 1)
@@ -202,13 +206,15 @@ def run_vlc(config: VlcConfig, workers: int | None = None) -> dict:
     combined = _rates([t["combined"] for t in trials], truth)
     frames = [t["combined"][2] for t in trials if t["combined"][1]]
     combined["mean_frames"] = float(np.mean(frames)) if frames else math.nan
+    combined["mean_captures"] = float(np.mean(np.ceil(np.array(frames) / ID_BURST_FRAMES))) if frames else math.nan
     combined["max_frames_used"] = int(max(frames)) if frames else 0
     if config.map_ids > 0:
         single["map"], combined["map"] = _map_rates(trials, "single"), _map_rates(trials, "combined")
-    print(f"vlc, {config.shape} {config.side_m} m, at {config.distance_m:.2f} m, exposure {config.exposure_s:.2g} s: "
+    print(f"vlc, {config.shape} {config.side_m} m, at {config.distance_m:.2f} m, exposure {config.exposure_s:.2g} s, "
+          f"depth {config.depth:g}: "
           f"single {single['success_pct']:.0f} %, combined {combined['success_pct']:.0f} %", file=sys.stderr)
     extent = bench_beacon(config, 0).extent_m
-    return {"distance_m": config.distance_m, "exposure_s": config.exposure_s, "side_m": config.side_m,
+    return {"distance_m": config.distance_m, "exposure_s": config.exposure_s, "depth": config.depth, "side_m": config.side_m,
             "shape": config.shape, "extent_m": list(extent), "trials": config.trials, "max_frames": config.max_frames,
             "map_ids": config.map_ids, "foreign_share": config.foreign_share if config.map_ids else None,
             "single": single, "combined": combined}
@@ -230,12 +236,15 @@ def plot_vlc(reports: list[dict], path, title: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    panels = sorted({(r.get("shape", "square"), r["side_m"]) for r in reports})
-    for shape, side in panels:
-        rows = sorted((r for r in reports if (r.get("shape", "square"), r["side_m"]) == (shape, side)),
-                      key=lambda r: r["distance_m"])
+    def key(r: dict) -> tuple:
+        return r.get("shape", "square"), r["side_m"], r.get("depth", DEFAULT_DEPTH)
+
+    panels = sorted({key(r) for r in reports})
+    depths = {depth for *_, depth in panels}
+    for panel in panels:
+        rows = sorted((r for r in reports if key(r) == panel), key=lambda r: r["distance_m"])
         d = [r["distance_m"] for r in rows]
-        name = panel_name(rows[0])
+        name = panel_name(rows[0]) + (f", depth {panel[2]:g}" if len(depths) > 1 else "")
         ax.plot(d, [r["single"]["success_pct"] for r in rows], "o--", label=f"single frame, {name}")
         ax.plot(d, [r["combined"]["success_pct"] for r in rows], "s-",
                 label=f"combined (<= {rows[0]['max_frames']} frames), {name}")
@@ -270,6 +279,7 @@ class CutConfig:
     trials: int = 20
     max_yaw_deg: float = 30.0  # a square's corner order needs the phone's yaw within 45 degrees of the panel's
     max_tilt_deg: float = 5.0
+    depth: float = DEFAULT_DEPTH  # the LED's modulation depth (1.0: off between chips)
     seed: int = 1
 
 
@@ -324,7 +334,8 @@ def _cut_trial(args: tuple[CutConfig, int]) -> dict:
     pose = _cut_pose(config, beacon, camera, width, height, rng)
     if pose is None:
         raise RuntimeError(f"no pose shows {config.share} of the panel at its {config.edge}")
-    wave = LedWaveform.for_beacon(beacon_id, phase_s=rng.uniform(0, 1), clock_error_ppm=rng.uniform(-50, 50))
+    wave = LedWaveform.for_beacon(beacon_id, depth=config.depth, phase_s=rng.uniform(0, 1),
+                                  clock_error_ppm=rng.uniform(-50, 50))
     t_s = float(rng.uniform(0, 10))
     skew_s, exposure_s = 0.03, ID_EXPOSURE_S
     gains = row_gains(wave, height, skew_s / (height - 1), exposure_s, t_s)
@@ -365,7 +376,8 @@ def run_cut(config: CutConfig, workers: int | None = None) -> dict:
         if r["refusal"]:
             refusals[r["refusal"]] = refusals.get(r["refusal"], 0) + 1
     summary = {
-        "edge": config.edge, "share": config.share, "distance_m": config.distance_m, "side_m": config.side_m,
+        "edge": config.edge, "share": config.share, "distance_m": config.distance_m, "depth": config.depth,
+        "side_m": config.side_m,
         "trials": config.trials, "found": sum(r["found"] for r in records),
         "rows": float(np.mean(rows)) if rows else math.nan,
         "chips": float(np.mean(chips)) if chips else math.nan,

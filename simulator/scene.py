@@ -25,6 +25,7 @@ from pydantic import Field, field_validator, model_validator
 from server.camera import intrinsics_from_profile
 from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr, world_to_camera
 from server.vlc.capture import ID_EXPOSURE_S
+from server.vlc.codec import DEFAULT_DEPTH
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, FrameMeta, GroundTruth, PanelShape, device_profiles
 from shared_schemas.cli import describe_file_error
 from shared_schemas.models import Facing, Strict, Vec3
@@ -86,6 +87,8 @@ class BeaconSpec(Strict):
     vlc_code: int | None = Field(default=None, ge=0, le=255,
                                  description="the code the panel blinks (normally its id); none = steady light")
     vlc_phase_s: float = Field(default=0.0, description="the message start on the LED's clock")
+    vlc_depth: float = Field(default=DEFAULT_DEPTH, ge=0.0, le=1.0,
+                             description="modulation depth: a 0 chip is 1 - depth of a 1 chip (1.0: the LED off)")
     panel: PanelSpec | None = Field(
         default=None, description="bezel, edge fall-off, glossy ceiling (simulator.panels); none: the bare panel")
 
@@ -384,7 +387,7 @@ def _row_gain(spec: BeaconSpec, sensor: SensorSpec, height: int, t_s: float) -> 
     from server.vlc.codec import LedWaveform
     from simulator.led import row_gains
 
-    waveform = LedWaveform.for_beacon(spec.vlc_code, phase_s=spec.vlc_phase_s)
+    waveform = LedWaveform.for_beacon(spec.vlc_code, depth=spec.vlc_depth, phase_s=spec.vlc_phase_s)
     row_time_s = sensor.rolling_shutter_skew_s / max(height - 1, 1)
     return row_gains(waveform, height, row_time_s, sensor.exposure_s, t_s)
 

@@ -6,6 +6,7 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+from server.vlc.codec import DEFAULT_DEPTH
 from simulator.cli import add_bench_flags
 
 DEFAULT_DISTANCES = [1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0]
@@ -30,6 +31,7 @@ def add_vlc_benches(benches) -> None:
     vlc.add_argument("--cut", nargs="+", choices=["bottom", "side"], default=None,
                      help="instead: one ID frame of a 0.6 m panel cut by the bottom border or a side, read by the "
                           "room path (named, located), per --shares; at the first of --distances (default 1.2 m)")
+    add_depth_flag(vlc)
     vlc.add_argument("--shares", type=float, nargs="+", default=None,
                      help="--cut: shares of the panel's rows (bottom) or columns (side) in view")
     add_bench_flags(vlc, figures="write the success against distance (vlc-distance.png, vlc-rect.png, "
@@ -44,9 +46,31 @@ def add_vlc_benches(benches) -> None:
     office.add_argument("--id-frames", type=int, default=4, help="ID frames beside each pose frame")
     office.add_argument("--inset", type=float, default=0.0, help="walk this far inside the area, metres")
     office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")
+    add_depth_flag(office, several=False, default=None)
     add_bench_flags(office, figures="write one PNG per walk (office-zigzag.png, office-spiral.png) into this "
                                     "folder (default: no figures)")
     office.set_defaults(run=_run_office)
+
+
+def add_depth_flag(parser, several: bool = True, default: float | None = DEFAULT_DEPTH) -> None:
+    """`--depth`: the LEDs' modulation depth, a 0 chip at 1 - depth of a 1 chip (0.7, the codec's default:
+    never off; 1.0: off between chips, as OOK or full-depth PWM drivers do); several values: one run each;
+    `default` None: the scene's."""
+    text = ("LED modulation depth: a 0 chip is 1 - DEPTH of a 1 chip (0.7: never off, the default"
+            + ("" if default is not None else " of the scenes") + "; 1.0: fully off between chips)")
+    if several:
+        parser.add_argument("--depth", type=_depth, nargs="+", default=[default], help=text + "; one run each")
+    else:
+        parser.add_argument("--depth", type=_depth, default=default, help=text)
+
+
+def _depth(text: str) -> float:
+    import argparse
+
+    value = float(text)
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"a depth is between 0 and 1, got {text}")
+    return value
 
 
 def _run_vlc(args) -> int:
@@ -59,15 +83,16 @@ def _run_vlc(args) -> int:
     reports = []
     base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed, shape=args.shape,
                      aspect=args.aspect, map_ids=args.map_ids, foreign_share=args.foreign_share)
-    if args.exposures:
-        for side in args.sides:
-            for exposure in args.exposures:
-                config = replace(base, distance_m=args.distances[0], side_m=side, exposure_s=exposure)
-                reports.append(run_vlc(config, args.workers))
-    else:
-        for side in args.sides:
-            for distance in args.distances:
-                reports.append(run_vlc(replace(base, distance_m=distance, side_m=side), args.workers))
+    for depth in args.depth:
+        if args.exposures:
+            for side in args.sides:
+                for exposure in args.exposures:
+                    config = replace(base, distance_m=args.distances[0], side_m=side, exposure_s=exposure, depth=depth)
+                    reports.append(run_vlc(config, args.workers))
+        else:
+            for side in args.sides:
+                for distance in args.distances:
+                    reports.append(run_vlc(replace(base, distance_m=distance, side_m=side, depth=depth), args.workers))
     figures = []
     if args.figures and not args.exposures:
         title = "ID success, 1/8000 s ID frames, 256 candidate IDs"
@@ -77,13 +102,13 @@ def _run_vlc(args) -> int:
         print(json.dumps({"vlc": reports, "figures": [str(f) for f in figures]}, indent=2, default=float))
         print_figures(figures, args.json)
         return 0
-    print(f"{'shape':>6} {'side':>6} {'dist':>5} {'exposure':>9} {'chips/fr':>8} {'single':>7} {'combined':>8} "
-          f"{'frames':>6} {'max':>4} {'wrong':>5}")
+    print(f"{'shape':>6} {'side':>6} {'depth':>5} {'dist':>5} {'exposure':>9} {'chips/fr':>8} {'single':>7} "
+          f"{'combined':>8} {'frames':>6} {'captures':>8} {'max':>4} {'wrong':>5}")
     for r in reports:
         s, c = r["single"], r["combined"]
-        print(f"{r['shape']:>6} {r['side_m']:6.3f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} "
+        print(f"{r['shape']:>6} {r['side_m']:6.3f} {r['depth']:5.2f} {r['distance_m']:5.2f} {r['exposure_s']:9.2e} "
               f"{s['chips_per_frame']:8.1f} {s['success_pct']:6.1f}% {c['success_pct']:7.1f}% {c['mean_frames']:6.2f} "
-              f"{c['max_frames_used']:4d} {s['confident_wrong'] + c['confident_wrong']:5d}")
+              f"{c['mean_captures']:8.2f} {c['max_frames_used']:4d} {s['confident_wrong'] + c['confident_wrong']:5d}")
         if "map" in c:
             m = c["map"]
             print(f"{'':>6} map of {r['map_ids']} IDs, combined: read {m['read_pct']:.1f}% of {m['map_trials']}, "
@@ -114,8 +139,10 @@ def _run_cut(args) -> int:
     for edge in args.cut:
         shares = args.shares or ([0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9] if edge == "bottom" else [0.2, 0.4, 0.6])
         for share in shares:
-            config = CutConfig(share=share, edge=edge, distance_m=distance, trials=args.trials, seed=args.seed)
-            reports.append(run_cut(config, args.workers))
+            for depth in args.depth:
+                config = CutConfig(share=share, edge=edge, distance_m=distance, trials=args.trials, seed=args.seed,
+                                   depth=depth)
+                reports.append(run_cut(config, args.workers))
     figures = []
     if args.figures:
         figures.append(_figure_path(args.figures, "vlc-cut.png"))
@@ -142,7 +169,7 @@ def _run_office(args) -> int:
     from simulator.reports import print_figures
 
     config = OfficeConfig(pose_scale=args.pose_scale, id_frames=args.id_frames, inset_m=args.inset,
-                          max_captures=args.limit, seed=args.seed)
+                          max_captures=args.limit, seed=args.seed, depth=args.depth)
     reports = run_office(config, tuple(args.walks), args.workers)
     figures = []
     for report in reports if args.figures else []:

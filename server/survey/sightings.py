@@ -37,6 +37,7 @@ from server.rooms import locate_panel, read_room
 from server.survey.rules import SurveyInputError, SurveyRules
 from server.vision.beacons import BeaconBlob, find_beacon_blobs
 from server.vision.roi import FrameView
+from server.vlc.capture import id_frame_candidates
 from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FrameKind, ProfileRef, device_profiles
 from shared_schemas.survey import PanelLabel, SkippedFrame
 
@@ -170,7 +171,7 @@ def frame_sightings(
     check_labels(labels, sketch, name)
     notes: list[str] = []
     measured: list[tuple[BeaconBlob, Beacon, Fix | Refusal]] = []
-    candidates = rules.room.candidates.for_beacons(sketch.beacons)
+    candidates = id_frame_candidates(frame, rules.room.candidates.for_beacons(sketch.beacons), rules.room.stripes)
     found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
     blobs = found.blobs
     if frame.meta.frame_kind is FrameKind.id:

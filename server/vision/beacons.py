@@ -3,7 +3,11 @@
 Works on the same subsampled view as `roi.py` (`roi.coarse_view`, which keeps the frame's last
 row and column, and the same step rule, `CoarseRules`), thresholded lower (at `level_fraction`
 of the way from background to plateau) so that a short-exposure ID frame, whose panel is
-striped between the LED's low and high levels, stays one blob. Every blob goes through the
+striped between the LED's low and high levels, stays one blob. An LED that switches fully off
+between chips leaves dark rows between the stripes: in an ID frame the mask is closed along the
+columns over the longest dark run its code allows (`stripe_gap_rows`, set from the frame by
+`server.vlc.capture.id_frame_candidates`) before any shape is judged, so a comb of bars is one
+blob again while two panels further apart than that run stay two. Every blob goes through the
 shape rules of `contour.find_beacon_blob` on its own padded mask, judged against the look of
 each panel the map has (`CandidateRules.looks`, `panel_looks`: a blob is a candidate when it
 looks like any of them; none given: the paper's rounded square); blobs that touch the frame
@@ -21,7 +25,7 @@ import numpy as np
 
 from server.outcomes import Refusal
 from server.vision.binarize import Levels
-from server.vision.contour import Blob, BlobRules, PanelLook, find_beacon_blob
+from server.vision.contour import Blob, BlobRules, PanelLook, convexity, find_beacon_blob
 from server.vision.roi import CoarseRules, FrameView, coarse_levels, coarse_to_frame, coarse_view
 from shared_schemas import Beacon
 
@@ -30,6 +34,10 @@ from shared_schemas import Beacon
 class CandidateRules(CoarseRules):  # coarse_short_side_px, min_contrast_dn: shared with roi.RoiRules
     level_fraction: float = 0.2  # of plateau - background; below the LED's low level of 0.3
     close_px: int = 3  # bridges dark stripes and noise holes in the small view
+    # ID frames: frame rows of the longest dark run between a panel's stripes (the code's longest low run
+    # plus the exposure, `server.vlc.capture.stripe_gap_rows`), bridged along the columns; 0: not striped
+    stripe_gap_rows: int = 0
+    stripe_end_width: float = 0.5  # of a blob's widest row: its end cut by a dark stripe (`hidden_outline`)
     blobs: BlobRules = BlobRules()
     # how the map's panels look (`panel_looks`); a blob is a candidate if it looks like any of them.
     # Empty: the paper's rounded square (`PanelLook()`), which rejects round lamps and long strips.
@@ -60,6 +68,10 @@ class BeaconBlob:
     centroid_px: tuple[float, float]
     area_px: float
     cut_off: bool
+    # ID frames of an LED that switches (almost) off between chips: the outline runs partly through dark
+    # rows (a corner between two stripes, or the panel beyond its first or last stripe), unseen there; its
+    # shape was judged only by its convexity, as a cut panel's
+    hidden_outline: bool = False
 
 
 @dataclass(frozen=True)
@@ -80,21 +92,64 @@ def _centroid_px(
     return float(centre[0]), float(centre[1])
 
 
-def candidate_mask(image: np.ndarray, levels: Levels, rules: CandidateRules) -> np.ndarray:
-    """Binary mask (uint8 0 / 255) of pixels above the candidate level, small gaps closed.
+def _closed(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """`mask` closed by `kernel`, seeing dark beyond the image's border (OpenCV's default border
+    counts the outside as lit in the erosion: a blob near the border would be joined to it)."""
+    pad_y, pad_x = kernel.shape[0] // 2, kernel.shape[1] // 2
+    padded = cv2.copyMakeBorder(mask, pad_y, pad_y, pad_x, pad_x, cv2.BORDER_CONSTANT, value=0)
+    closed = cv2.morphologyEx(padded, cv2.MORPH_CLOSE, kernel)
+    return np.ascontiguousarray(closed[pad_y : closed.shape[0] - pad_y, pad_x : closed.shape[1] - pad_x])
 
-    The closing sees dark beyond the image's border (padded by `close_px`): with OpenCV's
-    default border its erosion counts the outside as lit, so a panel within `close_px` of
-    the border would be joined to it and flagged cut off (`close_px` * step frame pixels).
+
+def candidate_level(levels: Levels, rules: CandidateRules) -> float:
+    """The candidate threshold: `level_fraction` of the way from the background to the plateau."""
+    return levels.background + rules.level_fraction * levels.contrast
+
+
+def candidate_mask(image: np.ndarray, levels: Levels, rules: CandidateRules, step: int = 1) -> np.ndarray:
+    """Binary mask (uint8 0 / 255) of pixels above the candidate level, small gaps closed; `image`
+    holds every `step`-th frame row and column.
+
+    The closings see dark beyond the image's border, so a panel within `close_px` of the border
+    is not joined to it and flagged cut off (`close_px` * step frame pixels). With
+    `rules.stripe_gap_rows` = g, dark rows between stripes are bridged along the columns
+    (`_bridged`) over gaps up to ceil(g / step) view rows (a gap of g frame rows holds at most that
+    many sampled rows), one view row more when that is odd; wider gaps stay open.
     """
-    level = levels.background + rules.level_fraction * levels.contrast
-    _, mask = cv2.threshold(image, level, 255, cv2.THRESH_BINARY)
+    _, mask = cv2.threshold(image, candidate_level(levels, rules), 255, cv2.THRESH_BINARY)
+    if rules.stripe_gap_rows > 0:  # first: the closing below could join two stripes by a thread of noise
+        mask = _bridged(mask, int(np.ceil(rules.stripe_gap_rows / step)))
     if rules.close_px > 0:
-        pad = rules.close_px
-        kernel = np.ones((2 * pad + 1, 2 * pad + 1), np.uint8)
-        padded = cv2.copyMakeBorder(mask, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
-        mask = np.ascontiguousarray(cv2.morphologyEx(padded, cv2.MORPH_CLOSE, kernel)[pad:-pad, pad:-pad])
+        mask = _closed(mask, np.ones((2 * rules.close_px + 1, 2 * rules.close_px + 1), np.uint8))
     return mask
+
+
+def _bridged(mask: np.ndarray, gap_rows: int) -> np.ndarray:
+    """`mask` (uint8 0 / 255) with the dark rows between stripes filled where they span at most
+    `gap_rows` rows: blobs joined by a vertical closing are one panel, and each run of dark rows
+    inside one is filled by the quadrilateral between the lit rows above and below it. A dark row
+    carries no edge: the panel's width there is the neighbouring lit rows' (a closing alone would
+    keep the narrower of the two and notch a panel turned to the rows at every dark stripe)."""
+    half = (gap_rows + 1) // 2  # a vertical line of 2 * half + 1 rows closes gaps up to 2 * half rows
+    joined = _closed(mask, np.ones((2 * half + 1, 1), np.uint8))
+    # a stripe's blurred end (an exposure's smear, shorter than a chip) lies within a quarter of the run:
+    # its widest row there, not the first row above the threshold, gives the panel's width
+    reach = max(1, gap_rows // 4)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
+    for label in range(1, count):
+        x, y, w, h, _ = stats[label]
+        own = (labels[y : y + h, x : x + w] == label) & (mask[y : y + h, x : x + w] > 0)
+        lit = own.any(axis=1)
+        first = np.where(lit, np.argmax(own, axis=1), w)
+        last = np.where(lit, w - 1 - np.argmax(own[:, ::-1], axis=1), -1)
+        rows = np.flatnonzero(lit)
+        for gap in np.flatnonzero(np.diff(rows) > 1):  # the component joins them: a gap of <= 2 * half rows
+            above = rows[(rows <= rows[gap]) & (rows > rows[gap] - reach)]
+            below = rows[(rows >= rows[gap + 1]) & (rows < rows[gap + 1] + reach)]
+            a, b = above[np.argmax(last[above] - first[above])], below[np.argmax(last[below] - first[below])]
+            corners = [[first[a], a], [last[a], a], [last[b], b], [first[b], b]]
+            cv2.fillConvexPoly(joined, np.array(corners, np.int32) + [x, y], 255)
+    return joined
 
 
 def find_beacon_blobs(
@@ -108,7 +163,8 @@ def find_beacon_blobs(
     levels = view.levels or coarse_levels(small)
     if levels.contrast < rules.min_contrast_dn:
         return Candidates((), levels, step, ("nothing stands out of the background",), origin)
-    mask = candidate_mask(small, levels, rules)
+    mask = candidate_mask(small, levels, rules, step)
+    level = candidate_level(levels, rules)
     shape_rules = replace(rules.blobs, min_area_px=rules.blobs.min_area_px / step**2)
     looks = rules.looks or (PanelLook(),)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
@@ -123,11 +179,15 @@ def find_beacon_blobs(
         alone[2:-2, 2:-2] = np.where(labels[y : y + h, x : x + w] == label, 255, 0)
         found = _judged(alone, shape_rules, looks)
         cut_off = x <= 0 or y <= 0 or x + w >= small.shape[1] or y + h >= small.shape[0]
+        hidden_outline = False
         if isinstance(found, Refusal):
-            if not cut_off:  # a cut-off panel's shape cannot be judged; keep it, flagged
+            contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
+            # a striped panel whose outline runs through dark rows is cut there as by a border
+            lit = (small[y : y + h, x : x + w] > level) & (labels[y : y + h, x : x + w] == label)
+            hidden_outline = not cut_off and _striped_cut(lit, contour, rules, step)
+            if not (cut_off or hidden_outline):  # a cut panel's shape cannot be judged; keep it, flagged
                 rejected.append(found.message)
                 continue
-            contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
         else:
             contour = found.contour
         # back to frame pixels: the view's last column and row are the frame's, closer than `step`
@@ -141,10 +201,32 @@ def find_beacon_blobs(
                 centroid_px=_centroid_px(labels[y : y + h, x : x + w] == label, x, y, step, pixels.shape, origin),
                 area_px=float(area * step**2),
                 cut_off=bool(cut_off),
+                hidden_outline=hidden_outline,
             )
         )
     blobs.sort(key=lambda b: b.area_px, reverse=True)
     return Candidates(tuple(blobs), levels, step, tuple(rejected), origin)
+
+
+def _striped_cut(lit: np.ndarray, contour: np.ndarray, rules: CandidateRules, step: int) -> bool:
+    """Whether a blob refused by its shape may be a striped panel whose outline runs partly through dark
+    rows (`BeaconBlob.hidden_outline`): an ID frame's (`stripe_gap_rows`), convex, and either dark rows
+    inside it (`lit`: its pixels above the level before any closing; the LED's low level is below it, so a
+    corner of the panel between two stripes is unseen) or its top or bottom end flat, at least
+    `stripe_end_width` of its widest row within a quarter of the dark run (the rest of the panel beyond a
+    stripe's end: a whole panel ends in a corner or a rounded edge unless it is level with the rows, and
+    then it passes the shape rules)."""
+    if rules.stripe_gap_rows <= 0 or convexity(contour, cv2.contourArea(contour)) < rules.blobs.min_convexity:
+        return False
+    rows = np.flatnonzero(lit.any(axis=1))
+    if len(rows) == 0:
+        return False
+    if np.any(np.diff(rows) > 1):
+        return True
+    first = np.argmax(lit[rows], axis=1)
+    width = lit.shape[1] - np.argmax(lit[rows, ::-1], axis=1) - first
+    reach = max(1, int(np.ceil(rules.stripe_gap_rows / step / 4)))
+    return bool(max(width[:reach].max(), width[-reach:].max()) >= rules.stripe_end_width * width.max())
 
 
 _PREFIX = "the brightest blob is not the beacon: "  # contour.find_beacon_blob's, said once
@@ -177,7 +259,7 @@ def blob_mask(
     height, width = pixels.shape
     x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
     x1, y1 = min(width, x + w + margin_px + 1), min(height, y + h + margin_px + 1)
-    fine_rules = CandidateRules(level_fraction=rules.level_fraction, close_px=1)
+    fine_rules = CandidateRules(level_fraction=rules.level_fraction, close_px=1, stripe_gap_rows=rules.stripe_gap_rows)
     mask = candidate_mask(np.ascontiguousarray(pixels[y0:y1, x0:x1]), levels, fine_rules)
     count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if count <= 1:

@@ -68,16 +68,17 @@ def _touches_border(box: tuple[int, int, int, int], shape: tuple[int, int]) -> b
     return x <= 0 or y <= 0 or x + w >= shape[1] or y + h >= shape[0]
 
 
-def _convexity(contour: np.ndarray, area: float) -> float:
+def convexity(contour: np.ndarray, area: float) -> float:
+    """The contour's `area` over its convex hull's (1 for a convex outline)."""
     hull_area = cv2.contourArea(cv2.convexHull(contour))
     return area / hull_area if hull_area > 0 else 0.0
 
 
 def _shape_problem(contour: np.ndarray, area: float, rules: BlobRules, look: PanelLook) -> str | None:
     """None when the contour looks like the panel, else a sentence saying why not."""
-    convexity = _convexity(contour, area)
-    if convexity < rules.min_convexity:
-        return f"its outline is not convex ({convexity:.2f} of its hull; two merged lights?)"
+    solidity = convexity(contour, area)
+    if solidity < rules.min_convexity:
+        return f"its outline is not convex ({solidity:.2f} of its hull; two merged lights?)"
     (_, _), (rw, rh), _ = cv2.minAreaRect(contour)
     fill = area / (rw * rh) if rw * rh > 0 else 0.0
     min_fill = rules.min_rectangle_fill - (PanelLook().fill - look.fill)
@@ -108,7 +109,7 @@ def find_beacon_blob(mask: np.ndarray, rules: BlobRules = BlobRules(), look: Pan
         box = (x, y, w, h)
         if _touches_border(box, mask.shape):
             # A cut-off panel is not the panel's shape either: only its convexity can be judged.
-            if cut is None and _convexity(contour, area) >= rules.min_convexity:
+            if cut is None and convexity(contour, area) >= rules.min_convexity:
                 cut = Blob(contour=contour.reshape(-1, 2), area_px=area, bounding_box=box, cut=True)
             refusal = refusal or Refusal(FailureReason.beacon_cut_off, "the beacon touches the frame border")
             continue

@@ -25,10 +25,12 @@ general case.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from server.ingest import LumaFrame
-from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS
-from server.vlc.decoder import StripeRules
+from server.vision.beacons import CandidateRules
+from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS, longest_low_run_chips
+from server.vlc.decoder import StripeRules, row_time_s
 from shared_schemas import FrameKind
 
 # the paper's pose exposure (Section III-B) and the app's: 1.19 messages, a +-4 % ripple (8.4 ms would leave none)
@@ -88,3 +90,29 @@ def id_frame_problem(frame: LumaFrame, rules: StripeRules = StripeRules()) -> st
 
 def is_id_frame(frame: LumaFrame) -> bool:
     return getattr(frame.meta, "frame_kind", FrameKind.pose) is FrameKind.id
+
+
+def longest_dark_run_s(exposure_s: float, chip_rate_hz: float = CHIP_RATE_HZ) -> float:
+    """The longest time a panel's rows can stay dark in an ID frame: the code's longest run of 0 chips
+    (`longest_low_run_chips`, 2) plus one exposure (a row whose window touches a 1 chip gets its light),
+    whatever the LED's modulation depth (a physical bound of the line code, nothing fitted)."""
+    return longest_low_run_chips() / chip_rate_hz + exposure_s
+
+
+def stripe_gap_rows(frame: LumaFrame, rules: StripeRules = StripeRules()) -> int:
+    """Rows of `frame` the longest dark run between a panel's stripes spans (0 when `frame` carries no
+    stripes): at 1/8000 s and 23.2 us per row (the Mi 8 front camera at a quarter), 40 rows."""
+    meta = frame.meta
+    if id_frame_problem(frame, rules) is not None:
+        return 0
+    assert meta.rolling_shutter_skew_s is not None and meta.exposure_s is not None  # id_frame_problem checked
+    row_time = row_time_s(meta.rolling_shutter_skew_s, meta.full_size[1])
+    return math.ceil(longest_dark_run_s(meta.exposure_s, rules.chip_rate_hz) / row_time)
+
+
+def id_frame_candidates(
+    frame: LumaFrame, candidates: CandidateRules = CandidateRules(), rules: StripeRules = StripeRules()
+) -> CandidateRules:
+    """`candidates` bridging the dark rows between the stripes of `frame` (an LED fully off between
+    chips shows a comb of bars), before any blob's shape is judged (`server.vision.beacons`)."""
+    return replace(candidates, stripe_gap_rows=stripe_gap_rows(frame, rules))

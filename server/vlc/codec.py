@@ -17,8 +17,13 @@ DC balance and flicker: a 1 bit is balanced (one chip high, one low); a 0 bit is
 chips, and because every bit starts with a transition the 0 bits alternate between high and
 low pairs. Every message has 11 or 12 high chips of 21 (checked for all 256 ids in the
 tests), so all panels are equally bright to within 1/21 in a long exposure. The pattern
-repeats at 119 Hz, above flicker fusion, and the LED never switches fully off (`low_level`),
-so the panel stays one blob even in a short exposure.
+repeats at 119 Hz, above flicker fusion.
+
+Modulation depth d: a 0 chip is `1 - d` of a 1 chip (`LedWaveform.depth`). The default,
+`DEFAULT_DEPTH` = 0.7, keeps the LED at 0.3 between chips; a real driver keyed on and off (OOK,
+PWM at full depth) has d = 1.0, and a short exposure then shows separate bars with fully dark
+rows between them, never longer than `longest_low_run_chips()` (2: the header's `0 0`, BMC's
+at most 2 equal chips).
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ HEADER = (1, 1, 1, 0, 0)
 DATA_BITS = 8
 MESSAGE_CHIPS = len(HEADER) + 2 * DATA_BITS  # 21
 MAX_ID = 2**DATA_BITS - 1
+DEFAULT_DEPTH = 0.7  # the LED's low level 0.3 of its high: never off (a depth of 1.0 is fully off)
 
 
 def _check_id(beacon_id: int) -> None:
@@ -98,18 +104,29 @@ def decode(chips: np.ndarray) -> int | None:
     return int(sum(bit << (DATA_BITS - 1 - k) for k, bit in enumerate(bits)))
 
 
+def longest_low_run_chips() -> int:
+    """The longest run of 0 chips in any message repeated without gaps, over all IDs (cyclic)."""
+    longest = 0
+    for beacon_id in range(MAX_ID + 1):
+        chips = np.tile(encode(beacon_id), 2)  # two periods: runs across the message boundary count
+        runs = np.diff(np.flatnonzero(np.diff(np.concatenate([[1], chips, [1]])) != 0))[::2]
+        longest = max(longest, int(runs.max(initial=0)))
+    return longest
+
+
 @dataclass(frozen=True)
 class LedWaveform:
     """The periodic light of one beacon: `chips` repeated at `chip_rate_hz`.
 
-    Levels are relative radiance: `high_level` for a 1 chip, `low_level` for a 0 chip. The
-    message starts at t = `phase_s` on the LED's own clock, which runs `clock_error_ppm`
-    fast against the camera's clock.
+    Levels are relative radiance: `high_level` for a 1 chip, `low_level` for a 0 chip
+    (`depth` = 1 - low / high: 0.7 by default, 1.0 fully off between chips). The message starts
+    at t = `phase_s` on the LED's own clock, which runs `clock_error_ppm` fast against the
+    camera's clock.
     """
 
     chips: tuple[int, ...]
     chip_rate_hz: float = CHIP_RATE_HZ
-    low_level: float = 0.3
+    low_level: float = 0.3  # 1 - DEFAULT_DEPTH
     high_level: float = 1.0
     phase_s: float = 0.0
     clock_error_ppm: float = 0.0
@@ -123,8 +140,19 @@ class LedWaveform:
             raise ValueError("chips must be a non-empty sequence of 0 and 1")
 
     @classmethod
-    def for_beacon(cls, beacon_id: int, **kwargs) -> LedWaveform:
+    def for_beacon(cls, beacon_id: int, depth: float | None = None, **kwargs) -> LedWaveform:
+        """The waveform of `beacon_id`'s code; `depth` (0-1) sets `low_level` to (1 - depth) x `high_level`."""
+        if depth is not None:
+            if not 0.0 <= depth <= 1.0:
+                raise ValueError(f"depth must be in 0..1, got {depth}")
+            # rounded: depth 0.7 is the low level 0.3 itself, not 0.30000000000000004 (figures stay bit-identical)
+            kwargs["low_level"] = round((1.0 - depth) * kwargs.get("high_level", 1.0), 12)
         return cls(chips=tuple(int(c) for c in encode(beacon_id)), **kwargs)
+
+    @property
+    def depth(self) -> float:
+        """Modulation depth: 1 - low / high (0.7 by default, 1.0 when the LED is off between chips)."""
+        return 1.0 - self.low_level / self.high_level if self.high_level > 0 else 0.0
 
     @property
     def chip_s(self) -> float:

@@ -49,7 +49,9 @@ class StripeRules:
     max_clock_error_ppm: float = 100.0  # LED crystal against the phone's clock
     clock_steps_per_chip: int = 4  # clock-error grid: phase slip per step over the frames' span
     confident_posterior: float = 0.99
-    min_relative_depth: float = 0.35  # fitted chip gain / mean panel level; the code's is 0.7 to 2.3
+    # the fitted modulation depth, gain / (the fitted level of a 1 chip): an LED's is 0.3 to 1.0 (0.7 by default,
+    # 1.0 off between chips); a ripple of a few per cent (a long exposure, flicker, banding) is no reading
+    min_depth: float = 0.2
     min_samples: int = 6
     chip_rate_hz: float = CHIP_RATE_HZ
     # longer ID exposures are refused before decoding (server.vlc.capture.id_frame_problem): beyond one
@@ -202,14 +204,17 @@ def _frame_log_likelihood(
         rate = 1.0 + ppm * 1e-6
         times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
         index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
-        templates = lut[:, index].mean(axis=-1) * weights  # (C, P, n)
+        raw = lut[:, index].mean(axis=-1)  # (C, P, n): each bin's share of a 1 chip
+        templates = raw * weights
         t_p = templates - (templates @ q) @ q.T
         norm = np.einsum("cpn,cpn->cp", t_p, t_p)
         along = t_p @ y_p
-        # a hypothesis must explain stripes as deep as the LED's code makes them: a ripple of a few
-        # per cent (a long exposure, flicker, banding) fitted with a tiny gain is no reading
+        # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
+        # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
+        # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
         gain = along / np.maximum(norm, 1e-12)
-        plausible = (gain >= rules.min_relative_depth * level) & (norm > 1e-12)
+        bright = level + gain * (1.0 - raw.mean(axis=-1))
+        plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
         explained = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
         result[:, :, e] = float(y_p @ y_p) - explained
     dof = max(1, obs.samples - rules.trend_degree - 2)

@@ -5,7 +5,11 @@ waveform averaged over that row's exposure (docs/vlc.md): the panel is a stack o
 dark stripes (0.3 to 1.0 of its level), and the pipeline's half-level threshold cuts it into
 bars. The gain is the same for every pixel of one row of one panel, its edges included (an
 edge pixel's partial cover is lit by the same LED in the same window), so dividing each
-row's pixels (above the background) by that row's gain restores the plain panel.
+row's pixels (above the background) by that row's gain restores the plain panel. An LED that
+switches (almost) off between chips leaves rows with no light to divide: those rows carry no
+edge, and the panel's pixels there are blended from the lit rows above and below them (its
+outline between two stripes is its neighbours'); a panel whose top or bottom lies in such dark
+rows is not flattened (its outline there is unseen, no fix should come from it).
 
 The gains come from the panel's own code, once its ID is read: the message's phase in this
 frame is fitted to the interior rows' means (the mask shrunk by `edge_margin_px`, as the stripe
@@ -37,7 +41,9 @@ class FlattenRules:
     grow_px: int = 6  # the mask grown by this is rescaled: the panel and its blurred edge
     phase_steps_per_chip: int = 64  # the phase grid: 1/64 chip = 6 us, a quarter of a row at 23 us
     max_residual: float = 0.15  # RMS of the fit's residuals over the fitted chip depth: beyond it, no flattening
-    min_gain: float = 0.1  # of the full level: rows predicted darker are left as they are
+    # of the full level: rows predicted darker carry too little light to rescale (their noise grows as 1 / gain,
+    # 4x here) and are bridged from the lit rows around them; the LED's default low level, 0.3, is above it
+    min_gain: float = 0.25
 
 
 def flatten_stripes(
@@ -96,11 +102,36 @@ def flatten_stripes(
     full = offset + depth[best]
     if not full > 0:
         return "the fitted panel level is not positive"
-    scale = np.where(gain >= rules.min_gain * full, full / np.maximum(gain, 1e-6), 1.0).astype(np.float32)
+    lit = gain >= rules.min_gain * full
+    panel_rows = np.flatnonzero(mask.any(axis=1))
+    for end, beyond in ((panel_rows[0], panel_rows[0] - 1), (panel_rows[-1], panel_rows[-1] + 1)):
+        if 0 <= beyond < h and not lit[beyond]:  # the panel may go on in the dark rows past its first or last stripe
+            side = "top" if end == panel_rows[0] else "bottom"
+            return f"its {side} lies in a dark stripe of its code (the LED off between chips): its outline is unseen"
+    scale = np.where(lit, full / np.maximum(gain, 1e-6), 1.0).astype(np.float32)
     grown = mask
     if rules.grow_px > 0:
         size = 2 * rules.grow_px + 1
         grown = cv2.dilate(mask_u8, np.ones((size, size), np.uint8)).astype(bool)
     rescaled = np.float32(background_dn) + values * scale[:, None]
+    rescaled = _dark_rows_bridged(rescaled, lit)
     window[...] = np.where(grown, np.clip(np.rint(rescaled), 0, 255), window).astype(np.uint8)
     return None
+
+
+def _dark_rows_bridged(rescaled: np.ndarray, lit: np.ndarray) -> np.ndarray:
+    """`rescaled` (rows, columns) with every row that is not `lit` but lies between lit rows replaced by
+    the linear blend of the nearest lit rows above and below: a dark row of an LED off between chips
+    carries no edge, the panel's outline there is its neighbours'. Rows beyond the first or last lit
+    row are left as they are."""
+    rows = np.flatnonzero(lit)
+    dark = np.flatnonzero(~lit)
+    dark = dark[(dark > rows[0]) & (dark < rows[-1])] if len(rows) else dark[:0]
+    if len(dark) == 0:
+        return rescaled
+    after = rows[np.searchsorted(rows, dark)]
+    before = rows[np.searchsorted(rows, dark) - 1]
+    share = ((dark - before) / (after - before)).astype(np.float32)[:, None]
+    out = rescaled.copy()
+    out[dark] = (1 - share) * rescaled[before] + share * rescaled[after]
+    return out

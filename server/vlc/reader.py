@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from server.ingest import LumaFrame
 from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
 from server.vision.roi import FrameView
-from server.vlc.capture import id_frame_problem
+from server.vlc.capture import id_frame_candidates, id_frame_problem
 from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
 from server.vlc.stripes import TurnedRules, turned_frame_problem
 
@@ -32,7 +32,7 @@ def read_id_frame(
     found: Candidates | None = None,
 ) -> IdFrameReading:
     """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included); `found`: the
-    frame's blobs when the caller has them already."""
+    frame's blobs when the caller has them already (found with `id_frame_candidates`)."""
     problem = id_frame_problem(frame, rules)
     if problem is not None:
         return IdFrameReading((), problem)
@@ -41,6 +41,7 @@ def read_id_frame(
     assert skew_s is not None and timestamp_ns is not None and exposure_s is not None  # id_frame_problem checked
     row_time = row_time_s(skew_s, meta.full_size[1])  # the sensor's rows, crop or not
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
+    candidates = id_frame_candidates(frame, candidates, rules)  # dark rows between stripes bridged
     found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(meta)) if found is None else found
     panels = []
     regions = []

@@ -19,13 +19,21 @@ def test_vlc_bench_reports_single_and_combined_rates(tmp_path):
     assert path.stat().st_size > 1000
 
 
+def test_vlc_bench_reads_an_led_that_switches_fully_off():
+    # depth 1.0: separate bars with dark rows between them (before issue 29: no blob, no ID in any frame)
+    report = run_vlc(VlcConfig(distance_m=1.0, trials=2, max_frames=6, seed=3, depth=1.0), workers=1)
+    assert report["depth"] == 1.0
+    assert report["combined"]["success_pct"] == 100.0 and report["combined"]["confident_wrong"] == 0
+    assert report["combined"]["mean_captures"] == 1.0  # within one burst of 4 ID frames
+
+
 def test_vlc_bench_command_prints_json(tmp_path):
     out = subprocess.run([sys.executable, "-m", "lumipose_cli", "bench", "vlc", "--distances", "2.0", "--trials", "1",
-                          "--max-frames", "10", "--workers", "1", "--json", "--figures", str(tmp_path)],
-                         capture_output=True, text=True, check=True, timeout=300)
+                          "--max-frames", "10", "--workers", "1", "--json", "--figures", str(tmp_path),
+                          "--depth", "1.0"], capture_output=True, text=True, check=True, timeout=300)
     printed = json.loads(out.stdout)
     report = printed["vlc"][0]
-    assert report["distance_m"] == 2.0 and report["trials"] == 1
+    assert report["distance_m"] == 2.0 and report["trials"] == 1 and report["depth"] == 1.0
     # --figures DIR: the figure's path in the JSON and on stderr (stdout stays the JSON)
     assert printed["figures"] == [str(tmp_path / "vlc-distance.png")] and (tmp_path / "vlc-distance.png").exists()
     assert f"figure {tmp_path / 'vlc-distance.png'}" in out.stderr

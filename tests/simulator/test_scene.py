@@ -104,3 +104,18 @@ def test_vlc_code_stripes_a_short_exposure_only():
     steady = scene(beacons=[{**coded[0], "vlc_code": None}], sensor={"exposure_s": 1 / 8000, "iso": 400})
     image, _ = render_sample(steady, UP, np.random.default_rng(0))
     assert image[230:290, 194].min() == 255
+
+
+def test_a_beacon_s_vlc_depth_sets_how_dark_its_led_goes_between_chips():
+    # depth 1.0: an LED keyed fully off (OOK, full-depth PWM); the default 0.7 keeps it at 0.3 of its level
+    coded = {"id": 3, "center_m": [0.0, 0.0, 1.0], "vlc_code": 3, "luminance_nits": 3000.0}
+    darkest = {}
+    for depth in (None, 1.0):
+        spec = coded if depth is None else {**coded, "vlc_depth": depth}
+        image, _ = render_sample(scene(beacons=[spec], sensor={"exposure_s": 1 / 8000, "iso": 400}), UP,
+                                 np.random.default_rng(0))
+        column = image[230:290, 194].astype(float)  # the panel's middle rows
+        darkest[depth] = column.min() / column.max()
+    assert darkest[None] > 0.2 and darkest[1.0] < 0.1
+    with pytest.raises(ValidationError):
+        scene(beacons=[{**coded, "vlc_depth": 1.5}])

@@ -19,13 +19,16 @@ SKEW_S = 0.03
 
 
 def id_frames(beacon_id: int, distance_m: float, exposure_s: float, count: int, seed: int,
-              ypr=(20.0, 4.0, -3.0), offset_m=(0.05, -0.08), shape: dict | None = None) -> list[LumaFrame]:
+              ypr=(20.0, 4.0, -3.0), offset_m=(0.05, -0.08), shape: dict | None = None,
+              depth: float | None = None) -> list[LumaFrame]:
     """`count` ID frames of one panel, `stepped_interval_s(1/30)` apart, LED at a random phase;
-    `shape`: the panel's shape fields (default: the paper's 0.174 m rounded square)."""
+    `shape`: the panel's shape fields (default: the paper's 0.174 m rounded square); `depth`: the
+    LED's modulation depth (default the codec's, 0.7; 1.0: off between chips)."""
     rng = np.random.default_rng(seed)
     shape = shape or {"side_m": 0.174, "corner_radius_m": 0.02}
     beacon = Beacon(id=beacon_id, center_m=[0.0, 0.0, distance_m], **shape)
-    wave = LedWaveform.for_beacon(beacon_id, phase_s=rng.uniform(0, 1), clock_error_ppm=rng.uniform(-50, 50))
+    wave = LedWaveform.for_beacon(beacon_id, depth=depth, phase_s=rng.uniform(0, 1),
+                                  clock_error_ppm=rng.uniform(-50, 50))
     pose = CameraPose(np.array([*offset_m, 0.0]), rotation_from_ypr(*ypr))
     sensor = SensorModel(background_dn=3.0, plateau_dn=200.0, psf_sigma_px=1.2, electrons_per_dn=4.0,
                          read_noise_dn=2.0)
