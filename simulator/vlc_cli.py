@@ -6,7 +6,6 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
-from server.vlc.codec import DEFAULT_DEPTH
 from simulator.cli import add_bench_flags
 
 DEFAULT_DISTANCES = [1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0]
@@ -46,22 +45,30 @@ def add_vlc_benches(benches) -> None:
     office.add_argument("--id-frames", type=int, default=4, help="ID frames beside each pose frame")
     office.add_argument("--inset", type=float, default=0.0, help="walk this far inside the area, metres")
     office.add_argument("--limit", type=int, default=None, help="only the first N captures of each walk")
-    add_depth_flag(office, several=False, default=None)
+    add_depth_flag(office, several=False)
     add_bench_flags(office, figures="write one PNG per walk (office-zigzag.png, office-spiral.png) into this "
                                     "folder (default: no figures)")
     office.set_defaults(run=_run_office)
 
 
-def add_depth_flag(parser, several: bool = True, default: float | None = DEFAULT_DEPTH) -> None:
+def add_depth_flag(parser, several: bool = True) -> None:
     """`--depth`: the LEDs' modulation depth, a 0 chip at 1 - depth of a 1 chip (0.7, the codec's default:
-    never off; 1.0: off between chips, as OOK or full-depth PWM drivers do); several values: one run each;
-    `default` None: the scene's."""
+    never off; 1.0: off between chips, as OOK or full-depth PWM drivers do); several values: one run each
+    (`depths`); one value: None when not given (the scene's). The default is read when the bench runs:
+    building the command line imports no numpy."""
     text = ("LED modulation depth: a 0 chip is 1 - DEPTH of a 1 chip (0.7: never off, the default"
-            + ("" if default is not None else " of the scenes") + "; 1.0: fully off between chips)")
+            + ("" if several else " of the scenes") + "; 1.0: fully off between chips)")
     if several:
-        parser.add_argument("--depth", type=_depth, nargs="+", default=[default], help=text + "; one run each")
+        parser.add_argument("--depth", type=_depth, nargs="+", help=text + "; one run each")
     else:
-        parser.add_argument("--depth", type=_depth, default=default, help=text)
+        parser.add_argument("--depth", type=_depth, help=text)
+
+
+def depths(args) -> list[float]:
+    """The depths `--depth` asked for, one run each: the codec's default when none."""
+    from server.vlc.codec import DEFAULT_DEPTH
+
+    return args.depth or [DEFAULT_DEPTH]
 
 
 def _depth(text: str) -> float:
@@ -83,7 +90,7 @@ def _run_vlc(args) -> int:
     reports = []
     base = VlcConfig(trials=args.trials, max_frames=args.max_frames, seed=args.seed, shape=args.shape,
                      aspect=args.aspect, map_ids=args.map_ids, foreign_share=args.foreign_share)
-    for depth in args.depth:
+    for depth in depths(args):
         if args.exposures:
             for side in args.sides:
                 for exposure in args.exposures:
@@ -139,7 +146,7 @@ def _run_cut(args) -> int:
     for edge in args.cut:
         shares = args.shares or ([0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9] if edge == "bottom" else [0.2, 0.4, 0.6])
         for share in shares:
-            for depth in args.depth:
+            for depth in depths(args):
                 config = CutConfig(share=share, edge=edge, distance_m=distance, trials=args.trials, seed=args.seed,
                                    depth=depth)
                 reports.append(run_cut(config, args.workers))
