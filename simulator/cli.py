@@ -220,6 +220,12 @@ def add_commands(commands) -> None:
                         help="a folder with caliscope's cam_*.mp4: every frame instead of the shipped ones")
     add_bench_flags(boards, seed=False, workers=False)
     boards.set_defaults(run=_run_boards_bench)
+    real_leds = benches.add_parser("real-leds", help="Luxapose's phone photos of LEDs keyed fully off, fetched "
+                                                     "from lab11/vlc-localization (issue 29)")
+    real_leds.add_argument("--cache", type=Path, default=Path("~/.cache/lumipose/lab11"),
+                           help="where the fetched photos are kept (default ~/.cache/lumipose/lab11)")
+    add_bench_flags(real_leds, seed=False, workers=False)
+    real_leds.set_defaults(run=_run_real_leds_bench)
     fidelity = benches.add_parser("fidelity", help="top-side ratio, our renderer / exact projection (Fig. 10)")
     fidelity.add_argument("--distances", type=float, nargs="+", default=None,
                           help="metres (default: 1.0 to 3.0 by 0.1)")
@@ -484,6 +490,14 @@ def _run_boards_bench(args) -> int:
 
     result = bench_boards(args.videos)
     print(json.dumps(result, indent=2) if args.json else format_boards(result))
+    return 0
+
+
+def _run_real_leds_bench(args) -> int:
+    from simulator.bench_real_leds import bench_real_leds, format_real_leds
+
+    result = bench_real_leds(args.cache)
+    print(json.dumps(result, indent=2) if args.json else format_real_leds(result))
     return 0
 
 

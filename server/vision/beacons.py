@@ -180,23 +180,29 @@ def find_beacon_blobs(
         found = _judged(alone, shape_rules, looks)
         cut_off = x <= 0 or y <= 0 or x + w >= small.shape[1] or y + h >= small.shape[0]
         hidden_outline = False
+        # back to frame pixels: the view's last column and row are the frame's, closer than `step`
+        x0, y0 = coarse_to_frame(np.array([x, y]), step, pixels.shape, origin).astype(int)
+        x1 = min(pixels.shape[1], origin[0] + (x + w) * step)
+        y1 = min(pixels.shape[0], origin[1] + (y + h) * step)
+        contour_px: np.ndarray | None = None
         if isinstance(found, Refusal):
             contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
             # a striped panel whose outline runs through dark rows is cut there as by a border
             lit = (small[y : y + h, x : x + w] > level) & (labels[y : y + h, x : x + w] == label)
             hidden_outline = not cut_off and _striped_cut(lit, contour, rules, step)
+            if not (cut_off or hidden_outline) and step > 1 and rules.stripe_gap_rows > 0:
+                contour_px = _fine_striped_outline(pixels, (x0, y0, x1, y1), levels, rules, step)
+                hidden_outline = contour_px is not None
             if not (cut_off or hidden_outline):  # a cut panel's shape cannot be judged; keep it, flagged
                 rejected.append(found.message)
                 continue
         else:
             contour = found.contour
-        # back to frame pixels: the view's last column and row are the frame's, closer than `step`
-        x0, y0 = coarse_to_frame(np.array([x, y]), step, pixels.shape, origin).astype(int)
-        x1 = min(pixels.shape[1], origin[0] + (x + w) * step)
-        y1 = min(pixels.shape[0], origin[1] + (y + h) * step)
+        if contour_px is None:
+            contour_px = coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape, origin)
         blobs.append(
             BeaconBlob(
-                contour_px=coarse_to_frame(contour.astype(float) - 2 + [x, y], step, pixels.shape, origin),
+                contour_px=contour_px,
                 bounding_box=(int(x0), int(y0), int(x1 - x0), int(y1 - y0)),
                 centroid_px=_centroid_px(labels[y : y + h, x : x + w] == label, x, y, step, pixels.shape, origin),
                 area_px=float(area * step**2),
@@ -229,6 +235,43 @@ def _striped_cut(lit: np.ndarray, contour: np.ndarray, rules: CandidateRules, st
     return bool(max(width[:reach].max(), width[-reach:].max()) >= rules.stripe_end_width * width.max())
 
 
+def _fine_striped_outline(
+    pixels: np.ndarray, box: tuple[int, int, int, int], levels: Levels, rules: CandidateRules, step: int
+) -> np.ndarray | None:
+    """The outline (N, 2, frame pixels) of a striped blob refused in the coarse view, when on the frame's
+    own rows over its box (`box`: x0, y0, x1, y1) it is a striped panel cut by its dark rows (`_striped_cut`),
+    else None. The view keeps every `step`-th row: where the stripes' period is a few steps (a 1-4 kHz LED
+    at ~21 us a row: 12-48 rows, at step 9) each kept row falls somewhere on a bar's exposure-smeared
+    edge or on its middle, so the blob's rows are as wide as their phase in the bar, not as the panel,
+    and a small blob's outline steps by a view pixel a row (lab11's photos: 0.75-0.91 of its hull)."""
+    height, width = pixels.shape
+    margin = rules.stripe_gap_rows + 2 * step  # the bridge may reach that far beyond the view's box
+    x0, y0 = max(0, box[0] - margin), max(0, box[1] - margin)
+    x1, y1 = min(width, box[2] + margin), min(height, box[3] + margin)
+    crop = np.ascontiguousarray(pixels[y0:y1, x0:x1])
+    fine_rules = _fine_rules(rules)
+    mask = candidate_mask(crop, levels, fine_rules)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if count <= 1:
+        return None
+    label = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    x, y, w, h, _ = stats[label]
+    if x <= 0 or y <= 0 or x + w >= crop.shape[1] or y + h >= crop.shape[0]:
+        return None  # it reaches beyond the box's margin: not the blob judged in the view
+    alone = np.zeros((h + 4, w + 4), np.uint8)
+    alone[2:-2, 2:-2] = np.where(labels[y : y + h, x : x + w] == label, 255, 0)
+    contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
+    lit = (crop[y : y + h, x : x + w] > candidate_level(levels, rules)) & (labels[y : y + h, x : x + w] == label)
+    if not _striped_cut(lit, contour, fine_rules, 1):
+        return None
+    return contour.astype(float) - 2 + [x + x0, y + y0]
+
+
+def _fine_rules(rules: CandidateRules) -> CandidateRules:
+    """`rules` for a mask on the frame's own pixels (`blob_mask`): its level and stripe bridge, a 1-pixel closing."""
+    return replace(rules, close_px=1)
+
+
 _PREFIX = "the brightest blob is not the beacon: "  # contour.find_beacon_blob's, said once
 
 
@@ -259,8 +302,7 @@ def blob_mask(
     height, width = pixels.shape
     x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
     x1, y1 = min(width, x + w + margin_px + 1), min(height, y + h + margin_px + 1)
-    fine_rules = CandidateRules(level_fraction=rules.level_fraction, close_px=1, stripe_gap_rows=rules.stripe_gap_rows)
-    mask = candidate_mask(np.ascontiguousarray(pixels[y0:y1, x0:x1]), levels, fine_rules)
+    mask = candidate_mask(np.ascontiguousarray(pixels[y0:y1, x0:x1]), levels, _fine_rules(rules))
     count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if count <= 1:
         return y0, x0, np.zeros(mask.shape, bool)

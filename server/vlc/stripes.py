@@ -366,6 +366,19 @@ def side_by_side_bars(boxes: list[tuple[int, int, int, int]], rules: TurnedRules
     return max((sum(top <= (a + b) / 2 < bottom for top, bottom in bars) for a, b in bars), default=0)
 
 
+def _comb_region(
+    region: tuple[tuple[int, int], np.ndarray], box: tuple[int, int, int, int]
+) -> tuple[tuple[int, int], np.ndarray]:
+    """`region` ((y0, x0), mask), or its blob's whole `box` (x, y, w, h) when the mask spans under half the
+    box's columns: a turned LED keyed fully off, whose mask is one upright bar of the comb the box holds
+    (its own columns smooth, the box's stepping from bar to bar)."""
+    (_, _), mask = region
+    x, y, w, h = box
+    if 2 * np.count_nonzero(mask.any(axis=0)) >= w:
+        return region
+    return (y, x), np.ones((h, w), bool)
+
+
 TURNED = "is the frame turned 90 degrees? Send it as the sensor reads it, rows in readout order"
 
 
@@ -381,7 +394,7 @@ def turned_frame_problem(
     Either the panels' columns step like stripes and their rows do not (`stripe_axis`), or the panels'
     rows are plain and `side_by_side_bars` finds at least `rules.min_bars`: an LED keyed fully off,
     its stripes along the columns, each a blob of its own."""
-    axis = stripe_axis(pixels, regions, rules)
+    axis = stripe_axis(pixels, [_comb_region(region, box) for region, box in zip(regions, boxes, strict=True)], rules)
     step_dn = rules.min_relative_step * axis.level_dn
     if axis.ratio >= rules.max_ratio and np.sqrt(axis.along_columns_dn2) >= step_dn:
         return (
