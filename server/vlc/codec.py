@@ -29,6 +29,7 @@ at most 2 equal chips).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -104,6 +105,7 @@ def decode(chips: np.ndarray) -> int | None:
     return int(sum(bit << (DATA_BITS - 1 - k) for k, bit in enumerate(bits)))
 
 
+@cache  # a property of the code: derived from it once (256 encodings), not on every ID frame
 def longest_low_run_chips() -> int:
     """The longest run of 0 chips in any message repeated without gaps, over all IDs (cyclic)."""
     longest = 0
