@@ -128,7 +128,7 @@ class LedWaveform:
 
     chips: tuple[int, ...]
     chip_rate_hz: float = CHIP_RATE_HZ
-    low_level: float = 0.3  # 1 - DEFAULT_DEPTH
+    low_level: float = round(1.0 - DEFAULT_DEPTH, 12)  # 0.3 (rounded as in `for_beacon`)
     high_level: float = 1.0
     phase_s: float = 0.0
     clock_error_ppm: float = 0.0
@@ -143,8 +143,11 @@ class LedWaveform:
 
     @classmethod
     def for_beacon(cls, beacon_id: int, depth: float | None = None, **kwargs) -> LedWaveform:
-        """The waveform of `beacon_id`'s code; `depth` (0-1) sets `low_level` to (1 - depth) x `high_level`."""
+        """The waveform of `beacon_id`'s code; `depth` (0-1) sets `low_level` to (1 - depth) x `high_level`
+        (so not both: a ValueError)."""
         if depth is not None:
+            if "low_level" in kwargs:
+                raise ValueError(f"give depth or low_level, not both (got {depth}, {kwargs['low_level']})")
             if not 0.0 <= depth <= 1.0:
                 raise ValueError(f"depth must be in 0..1, got {depth}")
             # rounded: depth 0.7 is the low level 0.3 itself, not 0.30000000000000004 (figures stay bit-identical)

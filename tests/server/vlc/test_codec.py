@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from server.vlc.codec import HEADER, MESSAGE_CHIPS, LedWaveform, decode, encode, header_starts
+from server.vlc.codec import DEFAULT_DEPTH, HEADER, MESSAGE_CHIPS, LedWaveform, decode, encode, header_starts
 
 
 def _longest_run(chips) -> int:
@@ -61,3 +61,14 @@ def test_window_means_average_the_code_over_long_windows():
     assert set(np.round(short, 6)) <= {wave.low_level, wave.high_level}
     whole = wave.window_means(starts, 10 * wave.period_s)
     np.testing.assert_allclose(whole, wave.mean_level, atol=1e-9)
+
+
+def test_the_default_low_level_is_the_default_depth_s():
+    assert LedWaveform.for_beacon(77).depth == pytest.approx(DEFAULT_DEPTH, abs=1e-12)
+    assert LedWaveform.for_beacon(77) == LedWaveform.for_beacon(77, depth=DEFAULT_DEPTH)
+
+
+def test_a_depth_and_a_low_level_together_are_refused_not_one_silently_kept():
+    with pytest.raises(ValueError, match="depth or low_level"):
+        LedWaveform.for_beacon(77, depth=1.0, low_level=0.2)
+
