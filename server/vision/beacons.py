@@ -186,16 +186,22 @@ def find_beacon_blobs(
         y1 = min(pixels.shape[0], origin[1] + (y + h) * step)
         contour_px: np.ndarray | None = None
         if isinstance(found, Refusal):
-            contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
-            # a striped panel whose outline runs through dark rows is cut there as by a border
-            lit = (small[y : y + h, x : x + w] > level) & (labels[y : y + h, x : x + w] == label)
-            hidden_outline = not cut_off and _striped_cut(lit, contour, rules, step)
-            if not (cut_off or hidden_outline) and step > 1 and rules.stripe_gap_rows > 0:
-                contour_px = _fine_striped_outline(pixels, (x0, y0, x1, y1), levels, rules, step)
-                hidden_outline = contour_px is not None
-            if not (cut_off or hidden_outline):  # a cut panel's shape cannot be judged; keep it, flagged
+            # a cut panel's shape cannot be judged: keep it, flagged; only an ID frame's (`stripe_gap_rows`)
+            # may be a striped panel whose outline runs through dark rows, cut there as by a border
+            striped = rules.stripe_gap_rows > 0 and not cut_off
+            if not (cut_off or striped):
                 rejected.append(found.message)
                 continue
+            contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
+            if striped:
+                lit = (small[y : y + h, x : x + w] > level) & (labels[y : y + h, x : x + w] == label)
+                hidden_outline = _striped_cut(lit, contour, rules, step)
+                if not hidden_outline and step > 1:
+                    contour_px = _fine_striped_outline(pixels, (x0, y0, x1, y1), levels, rules, step)
+                    hidden_outline = contour_px is not None
+                if not hidden_outline:
+                    rejected.append(found.message)
+                    continue
         else:
             contour = found.contour
         if contour_px is None:
