@@ -28,10 +28,9 @@ import numpy as np
 from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal, located, refused
 from server.pipeline import PipelineOptions, locate_beacon
-from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
+from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask
 from server.vision.binarize import Levels
-from server.vision.roi import FrameView
-from server.vlc.capture import id_frame_candidates
+from server.vlc.capture import frame_blobs
 from server.vlc.codec import DATA_BITS, MESSAGE_CHIPS
 from server.vlc.decoder import IdEvidence, StripeRules, row_time_s
 from server.vlc.flatten import FlattenRules, flatten_stripes
@@ -239,7 +238,7 @@ def read_room(
     found: Candidates | None = None,
 ) -> RoomReading:
     """Every panel of an ID frame of a multi-beacon map: named by its own stripes, and located; `found`: the
-    frame's blobs (by `rules.candidates.for_beacons(beacon_map.beacons)`) when the caller has them already.
+    frame's blobs (`frame_blobs` by `rules.candidates.for_beacons(beacon_map.beacons)`) when the caller has them.
 
     Blobs are judged by the looks of the map's panels (`CandidateRules.for_beacons`). A panel
     cut by the frame border is named like a whole one, from the rows still in view (the stripes
@@ -250,8 +249,8 @@ def read_room(
     frame whose stripes are flattened by their codes (`server.vlc.flatten`): the pipeline's
     threshold would cut a striped panel into bars.
     """
-    candidates = id_frame_candidates(frame, rules.candidates.for_beacons(beacon_map.beacons), rules.stripes)
-    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta)) if found is None else found
+    candidates = rules.candidates.for_beacons(beacon_map.beacons)
+    found = frame_blobs(frame, candidates, rules.stripes) if found is None else found
     reading = read_id_frame(frame, candidates, rules.stripes, found)
     if reading.problem is not None:
         return RoomReading((), len(found.blobs), reading.problem)
@@ -306,7 +305,7 @@ def flattened(
     for blob, beacon in named:
         if beacon is None:
             continue
-        y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates, margin_px=rules.flatten.grow_px + 4)
+        y0, x0, mask = blob_mask(frame.pixels, blob, found, candidates, margin_px=rules.flatten.grow_px + 4)
         problem = flatten_stripes(
             pixels,
             mask,

@@ -22,9 +22,8 @@ import cv2
 import numpy as np
 
 from server.ingest import LumaFrame
-from server.vision.beacons import blob_mask, find_beacon_blobs
-from server.vision.roi import FrameView
-from server.vlc.capture import id_frame_candidates
+from server.vision.beacons import blob_mask
+from server.vlc.capture import frame_blobs
 from server.vlc.decoder import row_time_s
 from server.vlc.reader import read_id_frame
 from server.vlc.stripes import NoStripes, measure_stripes, row_signal
@@ -97,12 +96,11 @@ def id_frame(pixels: np.ndarray) -> LumaFrame:
 
 
 def _read(frame: LumaFrame) -> dict:
-    candidates = id_frame_candidates(frame)
-    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
+    found = frame_blobs(frame)
     row_time = row_time_s(frame.meta.rolling_shutter_skew_s or 0.0, frame.meta.height)
     blobs = []
     for blob in found.blobs:
-        y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
+        y0, x0, mask = blob_mask(frame.pixels, blob, found)
         signal = row_signal(frame.pixels, mask, (y0, x0), row_time, EXPOSURE_S)
         stripes = measure_stripes(*signal, row_time, EXPOSURE_S) if signal is not None else NoStripes("too few rows")
         entry: dict = {"box": list(blob.bounding_box), "hidden_outline": blob.hidden_outline, "cut_off": blob.cut_off}
@@ -120,7 +118,7 @@ def _read(frame: LumaFrame) -> dict:
         blobs.append(entry)
     reading = read_id_frame(frame)
     return {
-        "stripe_gap_rows": candidates.stripe_gap_rows,
+        "stripe_gap_rows": found.stripe_gap_rows,
         "blobs": blobs,
         "refused": [reason.removeprefix("the brightest blob is not the beacon: ") for reason in found.rejected],
         "panels_read": len(reading.panels),

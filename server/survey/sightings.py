@@ -2,7 +2,7 @@
 
 A panel is named by its own stripes on an ID frame (`server.rooms.read_room`, which also
 measures it on the frame with its stripes flattened), else by a `PanelLabel`, a pixel inside its
-image, on the beacon-shaped blobs of `server.vision.beacons.find_beacon_blobs`. Each named panel
+image, on the beacon-shaped blobs of `server.vlc.capture.frame_blobs`. Each named panel
 is measured by the one-panel pipeline on its own crop (`server.rooms.locate_panel`):
 
 - a square wholly in view takes the corner path; its points are the sub-pixel corners where the
@@ -35,9 +35,8 @@ from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.rooms import locate_panel, read_room
 from server.survey.rules import SurveyInputError, SurveyRules
-from server.vision.beacons import BeaconBlob, find_beacon_blobs
-from server.vision.roi import FrameView
-from server.vlc.capture import id_frame_candidates
+from server.vision.beacons import BeaconBlob
+from server.vlc.capture import frame_blobs
 from shared_schemas import Beacon, BeaconIdSource, BeaconMap, FrameKind, ProfileRef, device_profiles
 from shared_schemas.survey import PanelLabel, SkippedFrame
 
@@ -171,8 +170,7 @@ def frame_sightings(
     check_labels(labels, sketch, name)
     notes: list[str] = []
     measured: list[tuple[BeaconBlob, Beacon, Fix | Refusal]] = []
-    candidates = id_frame_candidates(frame, rules.room.candidates.for_beacons(sketch.beacons), rules.room.stripes)
-    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta))
+    found = frame_blobs(frame, rules.room.candidates.for_beacons(sketch.beacons), rules.room.stripes)
     blobs = found.blobs
     if frame.meta.frame_kind is FrameKind.id:
         # the same blobs as the survey's own: a labelled panel's blob is then left out of its `others`

@@ -5,8 +5,8 @@ row and column, and the same step rule, `CoarseRules`), thresholded lower (at `l
 of the way from background to plateau) so that a short-exposure ID frame, whose panel is
 striped between the LED's low and high levels, stays one blob. An LED that switches fully off
 between chips leaves dark rows between the stripes: in an ID frame the mask is closed along the
-columns over the longest dark run its code allows (`stripe_gap_rows`, set from the frame by
-`server.vlc.capture.id_frame_candidates`) before any shape is judged, so a comb of bars is one
+columns over the longest dark run its code allows (`FrameView.stripe_gap_rows`, worked out from the
+frame's metadata once, by `server.vlc.capture.frame_blobs`) before any shape is judged, so a comb of bars is one
 blob again while two panels further apart than that run stay two. Every blob goes through the
 shape rules of `contour.find_beacon_blob` on its own padded mask, judged against the look of
 each panel the map has (`CandidateRules.looks`, `panel_looks`: a blob is a candidate when it
@@ -34,9 +34,6 @@ from shared_schemas import Beacon
 class CandidateRules(CoarseRules):  # coarse_short_side_px, min_contrast_dn: shared with roi.RoiRules
     level_fraction: float = 0.2  # of plateau - background; below the LED's low level of 0.3
     close_px: int = 3  # bridges dark stripes and noise holes in the small view
-    # ID frames: frame rows of the longest dark run between a panel's stripes (the code's longest low run
-    # plus the exposure, `server.vlc.capture.stripe_gap_rows`), bridged along the columns; 0: not striped
-    stripe_gap_rows: int = 0
     stripe_end_width: float = 0.5  # of a blob's widest row: its end cut by a dark stripe (`hidden_outline`)
     blobs: BlobRules = BlobRules()
     # how the map's panels look (`panel_looks`); a blob is a candidate if it looks like any of them.
@@ -81,6 +78,7 @@ class Candidates:
     step: int
     rejected: tuple[str, ...]  # why other bright blobs are not beacons
     origin: tuple[int, int] = (0, 0)  # the coarse view's first (column, row) in the frame (`roi.FrameView.grid`)
+    stripe_gap_rows: int = 0  # the frame's dark rows bridged (`FrameView.stripe_gap_rows`): `blob_mask` bridges alike
 
 
 def _centroid_px(
@@ -106,19 +104,21 @@ def candidate_level(levels: Levels, rules: CandidateRules) -> float:
     return levels.background + rules.level_fraction * levels.contrast
 
 
-def candidate_mask(image: np.ndarray, levels: Levels, rules: CandidateRules, step: int = 1) -> np.ndarray:
+def candidate_mask(
+    image: np.ndarray, levels: Levels, rules: CandidateRules, step: int = 1, stripe_gap_rows: int = 0
+) -> np.ndarray:
     """Binary mask (uint8 0 / 255) of pixels above the candidate level, small gaps closed; `image`
     holds every `step`-th frame row and column.
 
     The closings see dark beyond the image's border, so a panel within `close_px` of the border
     is not joined to it and flagged cut off (`close_px` * step frame pixels). With
-    `rules.stripe_gap_rows` = g, dark rows between stripes are bridged along the columns
+    `stripe_gap_rows` = g (`FrameView.stripe_gap_rows`), dark rows between stripes are bridged along the columns
     (`_bridged`) over gaps up to ceil(g / step) view rows (a gap of g frame rows holds at most that
     many sampled rows), one view row more when that is odd; wider gaps stay open.
     """
     _, mask = cv2.threshold(image, candidate_level(levels, rules), 255, cv2.THRESH_BINARY)
-    if rules.stripe_gap_rows > 0:  # first: the closing below could join two stripes by a thread of noise
-        mask = _bridged(mask, int(np.ceil(rules.stripe_gap_rows / step)))
+    if stripe_gap_rows > 0:  # first: the closing below could join two stripes by a thread of noise
+        mask = _bridged(mask, int(np.ceil(stripe_gap_rows / step)))
     if rules.close_px > 0:
         mask = _closed(mask, np.ones((2 * rules.close_px + 1, 2 * rules.close_px + 1), np.uint8))
     return mask
@@ -155,15 +155,17 @@ def _bridged(mask: np.ndarray, gap_rows: int) -> np.ndarray:
 def find_beacon_blobs(
     pixels: np.ndarray, rules: CandidateRules = CandidateRules(), view: FrameView = FrameView()
 ) -> Candidates:
-    """Every beacon-shaped blob of a frame (height, width) uint8, largest first; `view` places a window."""
+    """Every beacon-shaped blob of a frame (height, width) uint8, largest first; `view` places a window and
+    says how many dark rows an ID frame's stripes may leave between them (`FrameView.stripe_gap_rows`)."""
     if pixels.ndim != 2 or pixels.dtype != np.uint8:
         raise ValueError(f"pixels must be a 2-D uint8 luma image, got {pixels.dtype} {pixels.shape}")
     step, origin = view.grid(pixels.shape, rules)
+    gap = view.stripe_gap_rows
     small = coarse_view(pixels, step, origin)  # to the frame's last row and column: `cut_off` is tested on it
     levels = view.levels or coarse_levels(small)
     if levels.contrast < rules.min_contrast_dn:
-        return Candidates((), levels, step, ("nothing stands out of the background",), origin)
-    mask = candidate_mask(small, levels, rules, step)
+        return Candidates((), levels, step, ("nothing stands out of the background",), origin, gap)
+    mask = candidate_mask(small, levels, rules, step, gap)
     level = candidate_level(levels, rules)
     shape_rules = replace(rules.blobs, min_area_px=rules.blobs.min_area_px / step**2)
     looks = rules.looks or (PanelLook(),)
@@ -188,16 +190,16 @@ def find_beacon_blobs(
         if isinstance(found, Refusal):
             # a cut panel's shape cannot be judged: keep it, flagged; only an ID frame's (`stripe_gap_rows`)
             # may be a striped panel whose outline runs through dark rows, cut there as by a border
-            striped = rules.stripe_gap_rows > 0 and not cut_off
+            striped = gap > 0 and not cut_off
             if not (cut_off or striped):
                 rejected.append(found.message)
                 continue
             contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
             if striped:
                 lit = (small[y : y + h, x : x + w] > level) & (labels[y : y + h, x : x + w] == label)
-                hidden_outline = _striped_cut(lit, contour, rules, step)
+                hidden_outline = _striped_cut(lit, contour, rules, step, gap)
                 if not hidden_outline and step > 1:
-                    contour_px = _fine_striped_outline(pixels, (x0, y0, x1, y1), levels, rules, step)
+                    contour_px = _fine_striped_outline(pixels, (x0, y0, x1, y1), levels, rules, step, gap)
                     hidden_outline = contour_px is not None
                 if not hidden_outline:
                     rejected.append(found.message)
@@ -217,10 +219,10 @@ def find_beacon_blobs(
             )
         )
     blobs.sort(key=lambda b: b.area_px, reverse=True)
-    return Candidates(tuple(blobs), levels, step, tuple(rejected), origin)
+    return Candidates(tuple(blobs), levels, step, tuple(rejected), origin, gap)
 
 
-def _striped_cut(lit: np.ndarray, contour: np.ndarray, rules: CandidateRules, step: int) -> bool:
+def _striped_cut(lit: np.ndarray, contour: np.ndarray, rules: CandidateRules, step: int, stripe_gap_rows: int) -> bool:
     """Whether a blob refused by its shape may be a striped panel whose outline runs partly through dark
     rows (`BeaconBlob.hidden_outline`): an ID frame's (`stripe_gap_rows`), convex, and either dark rows
     inside it (`lit`: its pixels above the level before any closing; the LED's low level is below it, so a
@@ -228,7 +230,7 @@ def _striped_cut(lit: np.ndarray, contour: np.ndarray, rules: CandidateRules, st
     `stripe_end_width` of its widest row within a quarter of the dark run (the rest of the panel beyond a
     stripe's end: a whole panel ends in a corner or a rounded edge unless it is level with the rows, and
     then it passes the shape rules)."""
-    if rules.stripe_gap_rows <= 0 or convexity(contour, cv2.contourArea(contour)) < rules.blobs.min_convexity:
+    if stripe_gap_rows <= 0 or convexity(contour, cv2.contourArea(contour)) < rules.blobs.min_convexity:
         return False
     rows = np.flatnonzero(lit.any(axis=1))
     if len(rows) == 0:
@@ -237,12 +239,17 @@ def _striped_cut(lit: np.ndarray, contour: np.ndarray, rules: CandidateRules, st
         return True
     first = np.argmax(lit[rows], axis=1)
     width = lit.shape[1] - np.argmax(lit[rows, ::-1], axis=1) - first
-    reach = max(1, int(np.ceil(rules.stripe_gap_rows / step / 4)))
+    reach = max(1, int(np.ceil(stripe_gap_rows / step / 4)))
     return bool(max(width[:reach].max(), width[-reach:].max()) >= rules.stripe_end_width * width.max())
 
 
 def _fine_striped_outline(
-    pixels: np.ndarray, box: tuple[int, int, int, int], levels: Levels, rules: CandidateRules, step: int
+    pixels: np.ndarray,
+    box: tuple[int, int, int, int],
+    levels: Levels,
+    rules: CandidateRules,
+    step: int,
+    stripe_gap_rows: int,
 ) -> np.ndarray | None:
     """The outline (N, 2, frame pixels) of a striped blob refused in the coarse view, when on the frame's
     own rows over its box (`box`: x0, y0, x1, y1) it is a striped panel cut by its dark rows (`_striped_cut`),
@@ -251,12 +258,12 @@ def _fine_striped_outline(
     edge or on its middle, so the blob's rows are as wide as their phase in the bar, not as the panel,
     and a small blob's outline steps by a view pixel a row (lab11's photos: 0.75-0.91 of its hull)."""
     height, width = pixels.shape
-    margin = rules.stripe_gap_rows + 2 * step  # the bridge may reach that far beyond the view's box
+    margin = stripe_gap_rows + 2 * step  # the bridge may reach that far beyond the view's box
     x0, y0 = max(0, box[0] - margin), max(0, box[1] - margin)
     x1, y1 = min(width, box[2] + margin), min(height, box[3] + margin)
     crop = np.ascontiguousarray(pixels[y0:y1, x0:x1])
     fine_rules = _fine_rules(rules)
-    mask = candidate_mask(crop, levels, fine_rules)
+    mask = candidate_mask(crop, levels, fine_rules, 1, stripe_gap_rows)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if count <= 1:
         return None
@@ -268,13 +275,13 @@ def _fine_striped_outline(
     alone[2:-2, 2:-2] = np.where(labels[y : y + h, x : x + w] == label, 255, 0)
     contour = cv2.findContours(alone, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0].reshape(-1, 2)
     lit = (crop[y : y + h, x : x + w] > candidate_level(levels, rules)) & (labels[y : y + h, x : x + w] == label)
-    if not _striped_cut(lit, contour, fine_rules, 1):
+    if not _striped_cut(lit, contour, fine_rules, 1, stripe_gap_rows):
         return None
     return contour.astype(float) - 2 + [x + x0, y + y0]
 
 
 def _fine_rules(rules: CandidateRules) -> CandidateRules:
-    """`rules` for a mask on the frame's own pixels (`blob_mask`): its level and stripe bridge, a 1-pixel closing."""
+    """`rules` for a mask on the frame's own pixels (`blob_mask`): its level, a 1-pixel closing."""
     return replace(rules, close_px=1)
 
 
@@ -297,9 +304,14 @@ def _judged(alone: np.ndarray, rules: BlobRules, looks: tuple[PanelLook, ...]) -
 
 
 def blob_mask(
-    pixels: np.ndarray, blob: BeaconBlob, levels: Levels, rules: CandidateRules = CandidateRules(), margin_px: int = 4
+    pixels: np.ndarray,
+    blob: BeaconBlob,
+    found: Candidates,
+    rules: CandidateRules = CandidateRules(),
+    margin_px: int = 4,
 ) -> tuple[int, int, np.ndarray]:
-    """(y0, x0, mask): the blob's full-resolution mask (bool) over its box plus `margin_px`.
+    """(y0, x0, mask): the full-resolution mask (bool) of `blob`, one of `found`, over its box plus `margin_px`,
+    at `found`'s levels and bridging the dark rows its blobs were found with (`Candidates.stripe_gap_rows`).
 
     Only the connected component nearest the blob's centroid is kept, so a neighbouring
     panel inside the box does not leak in.
@@ -308,7 +320,8 @@ def blob_mask(
     height, width = pixels.shape
     x0, y0 = max(0, x - margin_px), max(0, y - margin_px)
     x1, y1 = min(width, x + w + margin_px + 1), min(height, y + h + margin_px + 1)
-    mask = candidate_mask(np.ascontiguousarray(pixels[y0:y1, x0:x1]), levels, _fine_rules(rules))
+    window = np.ascontiguousarray(pixels[y0:y1, x0:x1])
+    mask = candidate_mask(window, found.levels, _fine_rules(rules), 1, found.stripe_gap_rows)
     count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if count <= 1:
         return y0, x0, np.zeros(mask.shape, bool)

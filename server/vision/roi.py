@@ -45,14 +45,18 @@ class FrameView:
     full_size: tuple[int, int] = (0, 0)  # (width, height); (0, 0): the pixels are the whole frame
     offset: tuple[int, int] = (0, 0)  # (column, row) of the pixels' first pixel in the full frame
     levels: Levels | None = None
+    # ID frames: frame rows of the longest dark run between a panel's stripes (the code's longest low run
+    # plus the exposure: `server.vlc.capture.stripe_gap_rows`, which knows the code), bridged along the
+    # columns by `server.vision.beacons`; 0: the frame carries no stripes
+    stripe_gap_rows: int = 0
 
     @classmethod
-    def of(cls, meta: FrameMeta) -> FrameView:
+    def of(cls, meta: FrameMeta, stripe_gap_rows: int = 0) -> FrameView:
         crop = meta.crop
         if crop is None:
-            return cls()
+            return cls(stripe_gap_rows=stripe_gap_rows)
         levels = Levels(*crop.levels_dn) if crop.levels_dn else None
-        return cls((crop.full_width, crop.full_height), (crop.x, crop.y), levels)
+        return cls((crop.full_width, crop.full_height), (crop.x, crop.y), levels, stripe_gap_rows)
 
     def grid(self, shape: tuple[int, ...], rules: CoarseRules) -> tuple[int, tuple[int, int]]:
         """The coarse view's step and its first (column, row) in pixels of `shape` (height, width):

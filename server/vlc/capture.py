@@ -25,10 +25,10 @@ general case.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 from server.ingest import LumaFrame
-from server.vision.beacons import CandidateRules
+from server.vision.beacons import CandidateRules, Candidates, find_beacon_blobs
+from server.vision.roi import FrameView
 from server.vlc.codec import CHIP_RATE_HZ, MESSAGE_CHIPS, longest_low_run_chips
 from server.vlc.decoder import StripeRules, row_time_s
 from shared_schemas import FrameKind
@@ -110,9 +110,11 @@ def stripe_gap_rows(frame: LumaFrame, rules: StripeRules = StripeRules()) -> int
     return math.ceil(longest_dark_run_s(meta.exposure_s, rules.chip_rate_hz) / row_time)
 
 
-def id_frame_candidates(
+def frame_blobs(
     frame: LumaFrame, candidates: CandidateRules = CandidateRules(), rules: StripeRules = StripeRules()
-) -> CandidateRules:
-    """`candidates` bridging the dark rows between the stripes of `frame` (an LED fully off between
-    chips shows a comb of bars), before any blob's shape is judged (`server.vision.beacons`)."""
-    return replace(candidates, stripe_gap_rows=stripe_gap_rows(frame, rules))
+) -> Candidates:
+    """The beacon candidates of `frame` (`server.vision.beacons.find_beacon_blobs`), bridging the dark rows
+    between its stripes (an LED fully off between chips shows a comb of bars; none in a pose frame): the one
+    place that works the stripe gap out from the frame (`FrameView.stripe_gap_rows`), so every caller's
+    blobs, and their masks (`blob_mask`), are bridged alike."""
+    return find_beacon_blobs(frame.pixels, candidates, FrameView.of(frame.meta, stripe_gap_rows(frame, rules)))

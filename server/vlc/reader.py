@@ -5,9 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from server.ingest import LumaFrame
-from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask, find_beacon_blobs
-from server.vision.roi import FrameView
-from server.vlc.capture import id_frame_candidates, id_frame_problem
+from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask
+from server.vlc.capture import frame_blobs, id_frame_problem
 from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
 from server.vlc.stripes import TurnedRules, turned_frame_problem
 
@@ -32,7 +31,7 @@ def read_id_frame(
     found: Candidates | None = None,
 ) -> IdFrameReading:
     """The stripe signal of each beacon-shaped blob of `frame` (cut-off ones included); `found`: the
-    frame's blobs when the caller has them already (found with `id_frame_candidates`)."""
+    frame's blobs when the caller has them already (`frame_blobs`: their dark rows bridged)."""
     problem = id_frame_problem(frame, rules)
     if problem is not None:
         return IdFrameReading((), problem)
@@ -41,12 +40,11 @@ def read_id_frame(
     assert skew_s is not None and timestamp_ns is not None and exposure_s is not None  # id_frame_problem checked
     row_time = row_time_s(skew_s, meta.full_size[1])  # the sensor's rows, crop or not
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
-    candidates = id_frame_candidates(frame, candidates, rules)  # dark rows between stripes bridged
-    found = find_beacon_blobs(frame.pixels, candidates, FrameView.of(meta)) if found is None else found
+    found = frame_blobs(frame, candidates, rules) if found is None else found  # dark rows between stripes bridged
     panels = []
     regions = []
     for blob in found.blobs:
-        y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
+        y0, x0, mask = blob_mask(frame.pixels, blob, found, candidates)
         regions.append(((y0, x0), mask))
         observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time, exposure_s, rules)
         centroid = meta.fraction_of_full_frame(*blob.centroid_px)

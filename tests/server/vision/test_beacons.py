@@ -24,7 +24,7 @@ def test_striped_panels_stay_one_blob():
     image[100:220, 100:220] = panel[:, None]
     found = find_beacon_blobs(image)
     assert len(found.blobs) == 1
-    y0, x0, mask = blob_mask(image, found.blobs[0], found.levels)
+    y0, x0, mask = blob_mask(image, found.blobs[0], found)
     assert abs(int(mask.sum()) - 120 * 120) < 600
 
 

@@ -9,7 +9,7 @@ import pytest
 from server.ingest import LumaFrame
 from server.rooms import read_room
 from server.vision.beacons import CandidateRules, blob_mask, find_beacon_blobs
-from server.vlc.capture import id_frame_candidates, stripe_gap_rows
+from server.vlc.capture import frame_blobs, stripe_gap_rows
 from server.vlc.codec import longest_low_run_chips
 from server.vlc.decoder import IdEvidence, row_time_s
 from server.vlc.flatten import flatten_stripes
@@ -28,7 +28,7 @@ def test_id_frames_at_any_depth_are_one_blob_each_and_read_right(depth):
     decisions = []
     for frame in frames:
         reading = read_id_frame(frame)
-        assert len(reading.panels) == 1, find_beacon_blobs(frame.pixels, id_frame_candidates(frame)).rejected
+        assert len(reading.panels) == 1, frame_blobs(frame).rejected
         (panel,) = reading.panels
         assert panel.observation is not None
         evidence.add(panel.observation)
@@ -40,14 +40,13 @@ def test_id_frames_at_any_depth_are_one_blob_each_and_read_right(depth):
 
 def test_a_full_depth_frame_shows_dark_rows_that_the_blob_bridges():
     (frame,) = id_frames(0x5A, 1.0, 1 / 8000, 1, seed=12, depth=1.0)
-    candidates = id_frame_candidates(frame)
-    found = find_beacon_blobs(frame.pixels, candidates)
+    found = frame_blobs(frame)
     (blob,) = found.blobs
     x, y, w, h = blob.bounding_box
     rows = frame.pixels[y : y + h, x : x + w].max(axis=1)
     assert np.sum(rows < 20) > 20  # fully dark rows inside the panel: the LED off
     assert not find_beacon_blobs(frame.pixels).blobs  # unbridged, the comb of bars is refused
-    _, _, mask = blob_mask(frame.pixels, blob, found.levels, candidates)
+    _, _, mask = blob_mask(frame.pixels, blob, found)
     inside = np.flatnonzero(mask.any(axis=1))
     assert np.all(np.diff(inside) == 1)  # the full-resolution mask too: one run of rows, dark ones included
 
@@ -105,8 +104,7 @@ def _two_panel_frame(gap_rows_wanted: float, seed: int):
 def test_two_full_depth_panels_further_apart_than_the_dark_run_stay_two():
     frame, gap = _two_panel_frame(60.0, seed=3)
     assert stripe_gap_rows(frame) < gap < 80  # close together, but further apart than any dark run of the code
-    candidates = id_frame_candidates(frame)
-    found = find_beacon_blobs(frame.pixels, candidates)
+    found = frame_blobs(frame)
     assert len(found.blobs) == 2, found.rejected
     assert all(not b.cut_off for b in found.blobs)
     reading = read_id_frame(frame)
@@ -117,10 +115,9 @@ def _flattened_600_mm_panel(seed: int):
     """A 600 mm panel at 1.5 m at depth 1.0, ID 0xA5: (frame, mask origin, mask, flattened pixels, problem)."""
     (frame,) = id_frames(0xA5, 1.5, 1 / 8000, 1, seed=seed, shape=SQUARE_600, depth=1.0)
     looks = CandidateRules().for_beacons([Beacon(id=0, center_m=[0, 0, 2], **SQUARE_600)])
-    candidates = id_frame_candidates(frame, looks)
-    found = find_beacon_blobs(frame.pixels, candidates)
+    found = frame_blobs(frame, looks)
     (blob,) = found.blobs
-    y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates, margin_px=10)
+    y0, x0, mask = blob_mask(frame.pixels, blob, found, looks, margin_px=10)
     meta = frame.meta
     pixels = np.array(frame.pixels)
     row_time = row_time_s(meta.rolling_shutter_skew_s, meta.height)

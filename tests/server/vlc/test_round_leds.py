@@ -5,6 +5,8 @@ wide dim halo (the bloom of a small bright source), each row lit by the share of
 on, thresholded at the photos' own levels (background 0, plateau 56 DN: the 0.02 % quantile of a 33 MP
 frame with five small LEDs falls in their halos, so the blobs' edges lie on the halos' shallow slopes)."""
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 
@@ -12,7 +14,7 @@ from server.ingest import LumaFrame
 from server.vision.beacons import CandidateRules, Candidates, find_beacon_blobs
 from server.vision.binarize import Levels
 from server.vision.roi import FrameView
-from server.vlc.capture import id_frame_candidates
+from server.vlc.capture import stripe_gap_rows
 from server.vlc.reader import read_id_frame
 from simulator.bench_real_leds import EXPOSURE_S, ROW_RATE_HZ, id_frame
 
@@ -41,7 +43,8 @@ def _frame(centres: list[tuple[float, float]], frequency_hz: float, seed: int, t
 
 
 def _blobs(frame: LumaFrame) -> Candidates:
-    return find_beacon_blobs(frame.pixels, id_frame_candidates(frame, COARSE), PHOTO_LEVELS)
+    """The frame's blobs at the photos' levels, its dark rows bridged (as `server.vlc.capture.frame_blobs`)."""
+    return find_beacon_blobs(frame.pixels, COARSE, replace(PHOTO_LEVELS, stripe_gap_rows=stripe_gap_rows(frame)))
 
 
 def test_a_small_round_led_s_comb_is_one_blob_though_the_coarse_view_steps_its_rows():
@@ -62,9 +65,7 @@ def test_a_turned_round_led_keyed_fully_off_says_it_looks_turned():
     # judged instead (1289590: read with no problem or not found, as lab11's portrait photos as stored)
     for frequency_hz in (2000.0, 3000.0):
         frame = _frame([(270.0, 360.0)], frequency_hz, seed=int(frequency_hz), turned=True)
-        candidates = id_frame_candidates(frame, COARSE)
-        reading = read_id_frame(frame, COARSE, found=find_beacon_blobs(frame.pixels, candidates, PHOTO_LEVELS))
+        reading = read_id_frame(frame, COARSE, found=_blobs(frame))
         assert reading.problem is not None and "turned" in reading.problem, (frequency_hz, reading)
     upright = _frame([(360.0, 270.0)], 3000.0, seed=3)
-    found = find_beacon_blobs(upright.pixels, id_frame_candidates(upright, COARSE), PHOTO_LEVELS)
-    assert read_id_frame(upright, COARSE, found=found).problem is None
+    assert read_id_frame(upright, COARSE, found=_blobs(upright)).problem is None

@@ -74,7 +74,7 @@ def test_a_striped_panel_flattened_by_its_code_is_plain_and_measured():
     candidates = looks_of(SQUARE_600)
     found = find_beacon_blobs(frame.pixels, candidates)
     (blob,) = found.blobs
-    y0, x0, mask = blob_mask(frame.pixels, blob, found.levels, candidates, margin_px=10)
+    y0, x0, mask = blob_mask(frame.pixels, blob, found, candidates, margin_px=10)
     inside = mask[:, :].copy()
     inside[:8], inside[-8:] = False, False
 
