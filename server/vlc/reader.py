@@ -41,17 +41,16 @@ def read_id_frame(
     row_time = row_time_s(skew_s, meta.full_size[1])  # the sensor's rows, crop or not
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
     found = frame_blobs(frame, candidates, rules) if found is None else found  # dark rows between stripes bridged
-    panels = []
-    regions = []
-    for blob in found.blobs:
-        y0, x0, mask = blob_mask(frame.pixels, blob, found, candidates)
-        regions.append(((y0, x0), mask))
-        observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time, exposure_s, rules)
-        centroid = meta.fraction_of_full_frame(*blob.centroid_px)
-        panels.append(PanelStripes(blob, centroid, observation))
-    # stripes along the columns read as nonsense along the rows: say so instead
+    masks = [blob_mask(frame.pixels, blob, found, candidates) for blob in found.blobs]
+    # stripes along the columns read as nonsense along the rows: say so instead, before reading them
+    regions = [((y0, x0), mask) for y0, x0, mask in masks]
     boxes = [blob.bounding_box for blob in found.blobs]
     turned = turned_frame_problem(frame.pixels, regions, boxes, TurnedRules(edge_margin_px=rules.edge_margin_px))
     if turned is not None:
         return IdFrameReading((), turned)
+    panels = []
+    for blob, (y0, x0, mask) in zip(found.blobs, masks, strict=True):
+        observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time, exposure_s, rules)
+        centroid = meta.fraction_of_full_frame(*blob.centroid_px)
+        panels.append(PanelStripes(blob, centroid, observation))
     return IdFrameReading(tuple(panels), None)
