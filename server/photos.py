@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-from shared_schemas.fixture_files import PNG_SIGNATURE
+from shared_schemas.fixture_files import PNG_SIGNATURE, SNIFF_BYTES, sniffed_photo_type
 
 MAX_PHOTO_PIXELS = 100_000_000  # as a frame (server.ingest.MAX_PIXELS): a 50 MP phone photo fits twice
 # A JPEG's header may declare up to this many pixels (the largest phone mode is 200 MP, 16320 x 12240): it is
@@ -168,7 +168,7 @@ def jpeg_reduction(size: tuple[int, int], max_pixels: int) -> int | None:
 
 
 def _refuse_heic_unreadable(data: bytes, name: str) -> None:
-    if not HEIC_READABLE and data[4:12] in (b"ftypheic", b"ftypheix", b"ftypmif1", b"ftyphevc"):
+    if not HEIC_READABLE and sniffed_photo_type(data[:SNIFF_BYTES]) in ("image/heic", "image/heif"):
         raise PhotoError(f"'{name}' is HEIC, which needs the pillow-heif package (pip install pillow-heif)")
 
 
