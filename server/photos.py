@@ -348,8 +348,9 @@ def _upright_orientation(exif: PhotoExif, name: str) -> int:
 _UPRIGHT_TURNS = {3: 2, 6: -1, 8: 1}
 
 
-def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Photo:
-    """The photo's luma, turned upright by its EXIF orientation, and its EXIF; PhotoError names what is wrong.
+def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS, upright: bool = True) -> Photo:
+    """The photo's luma, turned upright by its EXIF orientation (as stored when not `upright`: the sensor's
+    readout rows), and its EXIF; PhotoError names what is wrong.
 
     Too many pixels are refused from the header before anything else is read, a damaged EXIF and mirrored
     orientations before decoding (`_header`, as `photo_size`).
@@ -361,7 +362,7 @@ def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Ph
     expected = tuple(math.ceil(side / reduction) for side in size)
     if pixels.shape != (expected[1], expected[0]):
         raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
-    turns = _UPRIGHT_TURNS.get(exif.orientation, 0)
+    turns = _UPRIGHT_TURNS.get(exif.orientation, 0) if upright else 0
     if turns:
         pixels = np.ascontiguousarray(np.rot90(pixels, turns))
     pixels.flags.writeable = False
