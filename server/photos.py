@@ -200,15 +200,19 @@ def photo_size(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> tu
 def _check_size(image: Image.Image, name: str, max_pixels: int) -> int:
     """The reduction the photo is decoded at (1 but for a large JPEG), or PhotoError when it is too large."""
     width, height = image.size
-    reducible = image.format in REDUCIBLE_KINDS
-    reduction = jpeg_reduction(image.size, max_pixels) if reducible and width * height <= MAX_JPEG_PIXELS else None
-    if reduction is None and (width * height > max_pixels or reducible):
-        if reducible and width * height <= MAX_JPEG_PIXELS:
-            allowed = f"{max_pixels / 1e6:.4g} megapixels allowed, even decoded at 1/{JPEG_REDUCTIONS[-1]}"
-        else:
-            allowed = f"{(MAX_JPEG_PIXELS if reducible else max_pixels) / 1e6:.4g} megapixels allowed"
-        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than the {allowed}")
-    return reduction or 1
+    too_many = f"'{name}' has {width}x{height} pixels, more than the"
+    if image.format in REDUCIBLE_KINDS:
+        if width * height > MAX_JPEG_PIXELS:
+            raise PhotoError(f"{too_many} {MAX_JPEG_PIXELS / 1e6:.4g} megapixels allowed")
+        reduction = jpeg_reduction(image.size, max_pixels)
+        if reduction is None:
+            raise PhotoError(
+                f"{too_many} {max_pixels / 1e6:.4g} megapixels allowed, even decoded at 1/{JPEG_REDUCTIONS[-1]}"
+            )
+        return reduction
+    if width * height > max_pixels:
+        raise PhotoError(f"{too_many} {max_pixels / 1e6:.4g} megapixels allowed")
+    return 1
 
 
 _STRIP_ROWS = 256  # rows of a colour photo turned to luma at a time: a few MB
