@@ -137,6 +137,16 @@ def test_a_real_cropped_heic_is_refused_for_the_35mm_rule():
     assert caught.value.field == "exif.PixelXDimension" and "principal point is unknown" in caught.value.message
 
 
+def test_a_given_profile_is_applied_to_a_crop_with_a_note():
+    photo = read_photo((PHOTOS / "exif-heic_IMG_5195_cropped.heic").read_bytes(), "IMG_5195.HEIC")
+    profile = profile_table()["xiaomi-mi8-rear"]
+    given = photo_camera(photo.exif, (2566, 3313), profile_table(), profile=profile)
+    assert given.profile == "xiaomi-mi8-rear" and given.detail.startswith("datasheet profile 'xiaomi-mi8-rear'")
+    assert "the photo looks cropped from 4032x3024" in given.detail and "principal point may be off" in given.detail
+    whole = photo_camera(photo.exif, (3024, 4032), profile_table(), profile=profile)
+    assert "cropped" not in whole.detail
+
+
 def test_a_crop_is_refused_and_a_uniform_downscale_kept(tmp_path, capsys, room):
     full = (WIDTH * 8, HEIGHT * 8)  # the camera's 3024 x 4032: the test photo is its 1/8, or a crop of that
     scaled = tmp_path / "scaled.jpg"
