@@ -335,8 +335,9 @@ def photo_camera(
     width, height = size
     if camera is not None:
         return PhotoCamera(camera, CameraSource.camera, "given intrinsics", None)
-    if profile is not None:
-        return _profile_photo_camera(profile, size, exif, CameraSource.profile)
+    if profile is not None:  # what the user asked for, even on a crop: only said
+        chosen = _profile_photo_camera(profile, size, exif, CameraSource.profile)
+        return replace(chosen, detail=f"{chosen.detail}{_cropped(exif, size)}")
     matched = profile_for_exif(exif, profiles)
     if matched is not None:
         _refuse_crop(exif, size, f"the profile its EXIF names ('{matched.id}')", f"{ask[1]}")
@@ -358,6 +359,17 @@ def photo_camera(
         f"the photo's camera is unknown ({seen}, no 35 mm equivalent focal length; {has}): pass {ask[0]} "
         f"(known: {', '.join(sorted(profiles))}) or {ask[1]}",
         field="camera",
+    )
+
+
+def _cropped(exif: PhotoExif, size: tuple[int, int]) -> str:
+    """The detail's note of a photo whose EXIF size says it is cropped (a given profile assumes the whole image)."""
+    if exif_scale(exif, size) is not None:
+        return ""
+    assert exif.pixel_size is not None
+    return (
+        f"; the photo looks cropped from {exif.pixel_size[0]}x{exif.pixel_size[1]} (its EXIF PixelXDimension, "
+        "PixelYDimension): the profile's principal point may be off"
     )
 
 

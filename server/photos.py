@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-from shared_schemas.fixture_files import PNG_SIGNATURE
+from shared_schemas.fixture_files import PNG_SIGNATURE, SNIFF_BYTES, sniffed_photo_type
 
 MAX_PHOTO_PIXELS = 100_000_000  # as a frame (server.ingest.MAX_PIXELS): a 50 MP phone photo fits twice
 # A JPEG's header may declare up to this many pixels (the largest phone mode is 200 MP, 16320 x 12240): it is
@@ -168,7 +168,7 @@ def jpeg_reduction(size: tuple[int, int], max_pixels: int) -> int | None:
 
 
 def _refuse_heic_unreadable(data: bytes, name: str) -> None:
-    if not HEIC_READABLE and data[4:12] in (b"ftypheic", b"ftypheix", b"ftypmif1", b"ftyphevc"):
+    if not HEIC_READABLE and sniffed_photo_type(data[:SNIFF_BYTES]) in ("image/heic", "image/heif"):
         raise PhotoError(f"'{name}' is HEIC, which needs the pillow-heif package (pip install pillow-heif)")
 
 
@@ -200,15 +200,19 @@ def photo_size(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> tu
 def _check_size(image: Image.Image, name: str, max_pixels: int) -> int:
     """The reduction the photo is decoded at (1 but for a large JPEG), or PhotoError when it is too large."""
     width, height = image.size
-    reducible = image.format in REDUCIBLE_KINDS
-    reduction = jpeg_reduction(image.size, max_pixels) if reducible and width * height <= MAX_JPEG_PIXELS else None
-    if reduction is None and (width * height > max_pixels or reducible):
-        if reducible and width * height <= MAX_JPEG_PIXELS:
-            allowed = f"{max_pixels / 1e6:.4g} megapixels allowed, even decoded at 1/{JPEG_REDUCTIONS[-1]}"
-        else:
-            allowed = f"{(MAX_JPEG_PIXELS if reducible else max_pixels) / 1e6:.4g} megapixels allowed"
-        raise PhotoError(f"'{name}' has {width}x{height} pixels, more than the {allowed}")
-    return reduction or 1
+    too_many = f"'{name}' has {width}x{height} pixels, more than the"
+    if image.format in REDUCIBLE_KINDS:
+        if width * height > MAX_JPEG_PIXELS:
+            raise PhotoError(f"{too_many} {MAX_JPEG_PIXELS / 1e6:.4g} megapixels allowed")
+        reduction = jpeg_reduction(image.size, max_pixels)
+        if reduction is None:
+            raise PhotoError(
+                f"{too_many} {max_pixels / 1e6:.4g} megapixels allowed, even decoded at 1/{JPEG_REDUCTIONS[-1]}"
+            )
+        return reduction
+    if width * height > max_pixels:
+        raise PhotoError(f"{too_many} {max_pixels / 1e6:.4g} megapixels allowed")
+    return 1
 
 
 _STRIP_ROWS = 256  # rows of a colour photo turned to luma at a time: a few MB
@@ -348,8 +352,9 @@ def _upright_orientation(exif: PhotoExif, name: str) -> int:
 _UPRIGHT_TURNS = {3: 2, 6: -1, 8: 1}
 
 
-def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Photo:
-    """The photo's luma, turned upright by its EXIF orientation, and its EXIF; PhotoError names what is wrong.
+def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS, upright: bool = True) -> Photo:
+    """The photo's luma, turned upright by its EXIF orientation (as stored when not `upright`: the sensor's
+    readout rows), and its EXIF; PhotoError names what is wrong.
 
     Too many pixels are refused from the header before anything else is read, a damaged EXIF and mirrored
     orientations before decoding (`_header`, as `photo_size`).
@@ -361,7 +366,7 @@ def read_photo(data: bytes, name: str, max_pixels: int = MAX_PHOTO_PIXELS) -> Ph
     expected = tuple(math.ceil(side / reduction) for side in size)
     if pixels.shape != (expected[1], expected[0]):
         raise PhotoError(f"'{name}' cannot be decoded (damaged or truncated)")
-    turns = _UPRIGHT_TURNS.get(exif.orientation, 0)
+    turns = _UPRIGHT_TURNS.get(exif.orientation, 0) if upright else 0
     if turns:
         pixels = np.ascontiguousarray(np.rot90(pixels, turns))
     pixels.flags.writeable = False

@@ -11,7 +11,15 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Annotated, Final, Literal
 
-from pydantic import ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    ConfigDict,
+    Field,
+    SerializerFunctionWrapHandler,
+    ValidationInfo,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
 from shared_schemas.models import MAX_SIDE_PX, DeviceProfile, Strict
 
@@ -111,7 +119,8 @@ class BoardSpec(Strict):
         description="side of one marker, metres (a ChArUco board's; a chessboard has none)",
     )
     dictionary: ArucoDictionary = Field(
-        default=ArucoDictionary.dict_5x5_100, description="the markers' dictionary (a chessboard's is not used)"
+        default=ArucoDictionary.dict_5x5_100,
+        description="the markers' dictionary (a ChArUco board's; a chessboard has none)",
     )
     # OpenCV before 4.6 drew boards of an even number of rows with the top-left square white
     legacy: bool = Field(default=False, description="OpenCV's layout before 4.6 (CharucoBoard.setLegacyPattern)")
@@ -123,8 +132,11 @@ class BoardSpec(Strict):
     @model_validator(mode="after")
     def _fits(self) -> BoardSpec:
         if self.kind == BoardKind.chessboard:
-            if self.marker_m is not None or self.legacy or self.first_marker_id:
-                raise ValueError("a chessboard has no markers: marker_m, legacy and first_marker_id are ChArUco's")
+            given_dictionary = "dictionary" in self.model_fields_set
+            if self.marker_m is not None or self.legacy or self.first_marker_id or given_dictionary:
+                raise ValueError(
+                    "a chessboard has no markers: marker_m, legacy, first_marker_id and dictionary are ChArUco's"
+                )
             return self
         if self.marker_m is None:
             raise ValueError("a ChArUco board needs marker_m (the side of one marker)")
@@ -138,6 +150,14 @@ class BoardSpec(Strict):
                 + f"; {self.dictionary.value} has {size} (ids 0 to {size - 1})"
             )
         return self
+
+    @model_serializer(mode="wrap")
+    def _without_unused(self, handler: SerializerFunctionWrapHandler) -> dict:
+        """A chessboard's spec without its (unused, default) dictionary: as written, it is read back."""
+        data = handler(self)
+        if self.kind == BoardKind.chessboard:
+            data.pop("dictionary", None)
+        return data
 
     @property
     def inner_corners(self) -> int:

@@ -19,7 +19,7 @@ from server.api.errors import ApiError
 from server.ingest import parse_meta
 from shared_schemas import CameraUsed, FrameFormat, FrameMeta
 from shared_schemas.fixture_files import PHOTO_TYPES as PHOTO_SUFFIX_TYPES
-from shared_schemas.fixture_files import sniffed_photo_type
+from shared_schemas.fixture_files import SNIFF_BYTES, sniffed_photo_type
 
 FRAME_HEADER = "X-Lumipose-Frame"
 RAW_TYPES = ("application/octet-stream", "image/png")
@@ -45,7 +45,7 @@ def media_type(header: str | None) -> str:
 
 def _is_photo(media: str, data: bytes | bytearray) -> bool:
     """A photo by its type, or by its bytes (JPEG, PNG, HEIF) when it comes untyped."""
-    return media in PHOTO_TYPES or (media in UNTYPED and sniffed_photo_type(bytes(data[:16])) is not None)
+    return media in PHOTO_TYPES or (media in UNTYPED and sniffed_photo_type(bytes(data[:SNIFF_BYTES])) is not None)
 
 
 MULTIPART = "multipart/form-data"
@@ -161,7 +161,7 @@ async def _multipart_parts(request: Request, body: bytes | bytearray) -> tuple[s
         ) from None
     meta, frame = form.get("meta"), form.get("frame")
     if meta is None and isinstance(frame, UploadFile):
-        head = await frame.read(16)
+        head = await frame.read(SNIFF_BYTES)
         await frame.seek(0)
         if _is_photo(media_type(frame.content_type), head):
             data = await frame.read()

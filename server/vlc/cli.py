@@ -21,7 +21,11 @@ def add_vlc_command(commands) -> None:
         "stripes", help="the blink frequency, duty and edge width of a picture's stripes (docs/vlc.md, 'A real frame')"
     )
     stripes.add_argument(
-        "frame", type=Path, metavar="FRAME", help="a picture (PNG, JPEG, ...), rows as the sensor reads"
+        "frame",
+        type=Path,
+        metavar="FRAME",
+        help="an 8-bit picture (PNG, JPEG, HEIC), read as stored: its EXIF orientation is not applied, since the "
+        "stripes follow the sensor's readout rows, which are the stored rows",
     )
     timing = stripes.add_mutually_exclusive_group(required=True)
     timing.add_argument("--skew-s", type=float, help="readout time from the first row to the last (s)")
@@ -45,15 +49,19 @@ def add_vlc_command(commands) -> None:
 
 
 def _luma(path: Path):
-    import numpy as np
-    from PIL import Image, UnidentifiedImageError
+    """The picture's luma as stored, through `server.photos`' reader and its guards (8-bit only, its size
+    checked from the header); never reduced, since a reduced decode would merge rows."""
+    from server.photos import MAX_JPEG_PIXELS, PhotoError, read_photo
 
     try:
-        with Image.open(path) as image:
-            grey = image if image.mode == "L" else image.convert("L")
-            return np.asarray(grey)
-    except (OSError, UnidentifiedImageError) as error:
+        data = path.read_bytes()
+    except OSError as error:
         raise BadInput(f"cannot read {path}: {error}", field="frame") from None
+    try:
+        # as stored, not turned upright by its EXIF orientation: the stripes follow the sensor's readout rows
+        return read_photo(data, path.name, max_pixels=MAX_JPEG_PIXELS, upright=False).pixels
+    except PhotoError as error:
+        raise BadInput(str(error), field="frame") from None
 
 
 def _run_stripes(args) -> int:
@@ -62,7 +70,7 @@ def _run_stripes(args) -> int:
 
     from server.tone import SRGB_TO_LINEAR_DN
     from server.vlc.decoder import row_time_s
-    from server.vlc.stripes import NoStripes, TurnedRules, measure_stripes, row_signal, stripe_axis
+    from server.vlc.stripes import NoStripes, measure_stripes, row_signal, stripe_axis, turned_frame_problem
 
     try:
         pixels = _luma(args.frame)
@@ -88,7 +96,7 @@ def _run_stripes(args) -> int:
     axis = stripe_axis(values, [((y, x), mask)])
     signal = row_signal(values, mask, (y, x), row_time, args.exposure_s)
     measured = NoStripes("too few rows") if signal is None else measure_stripes(*signal, row_time, args.exposure_s)
-    turned = axis.ratio >= TurnedRules().max_ratio
+    turned = turned_frame_problem(values, [((y, x), mask)], [(x, y, w, h)])
     if args.json:
         body = {
             "frame": str(args.frame),
@@ -107,9 +115,7 @@ def _run_stripes(args) -> int:
     if isinstance(measured, NoStripes):
         print(f"no stripes: {measured.reason}")
         if turned:
-            print(
-                f"the columns' means step {axis.ratio:.3g} times as much as the rows': is the frame turned 90 degrees?"
-            )
+            print(turned)
         return EXIT_NO_FIX
     m = measured
     print(f"rows            {m.rows} read, {row_time * 1e6:.3f} us apart, exposure {args.exposure_s:.4g} s")

@@ -149,6 +149,7 @@ def test_board_prints_a_chessboard_and_its_spec(tmp_path, capsys):
     assert "10 x 7 chessboard (9 x 6 inner corners" in capsys.readouterr().out
     spec = BoardSpec.model_validate_json((tmp_path / "chess.json").read_text())
     assert (spec.kind.value, spec.marker_m) == ("chessboard", None)
+    assert "dictionary" not in (tmp_path / "chess.json").read_text()
     view = find_board(np.asarray(Image.open(out)), spec, "chess")
     assert view is not None and len(view.corner_ids) == 54
 
@@ -164,9 +165,11 @@ def test_board_prints_a_charuco_board_of_any_layout(tmp_path):
     assert view is not None and view.inverted and len(view.corner_ids) == spec.inner_corners
 
 
-def test_a_chessboard_with_a_charuco_option_is_bad_input(tmp_path, capsys):
-    assert main(["calibrate", "board", "--out", str(tmp_path / "c.png"), "--kind", "chessboard", "--legacy"]) == 2
+@pytest.mark.parametrize("option", [["--legacy"], ["--dictionary", "DICT_4X4_50"]])
+def test_a_chessboard_with_a_charuco_option_is_bad_input(tmp_path, capsys, option):
+    assert main(["calibrate", "board", "--out", str(tmp_path / "c.png"), "--kind", "chessboard", *option]) == 2
     assert "a chessboard has no markers" in capsys.readouterr().err
+    assert not (tmp_path / "c.json").exists()
 
 
 def test_camera_prints_a_refused_sets_fit_as_not_trusted(capsys):

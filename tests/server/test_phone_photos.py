@@ -7,6 +7,7 @@ panel of tests/server/test_photos.py written as a phone would.
 
 import io
 import json
+import struct
 import warnings
 from pathlib import Path
 
@@ -21,8 +22,10 @@ from server.camera import FULL_FRAME_DIAGONAL_MM, exif_scale, photo_camera, prof
 from server.ingest import decode_photo
 from server.locator import locate
 from server.outcomes import FrameError
+from server import photos
 from server.photos import PhotoError, photo_size, read_photo
 from shared_schemas import BeaconMap
+from shared_schemas.fixture_files import SNIFF_BYTES, sniffed_photo_type
 from tests.server.test_photos import CAMERA, HEIGHT, PANEL, WIDTH, assert_near_truth, png_claiming, upright_frame
 
 PHOTOS = Path(__file__).parents[1] / "fixtures" / "phone_photos"
@@ -114,6 +117,15 @@ def test_a_real_heic_cut_short_is_refused_naming_it(tmp_path, capsys, room):
     assert code == 2 and error["error"] == "bad_frame" and "truncated" in error["message"]
 
 
+@pytest.mark.parametrize("brand", [b"heic", b"heix", b"heim", b"heis", b"mif1", b"msf1"])
+def test_every_heif_brand_the_upload_takes_is_named_when_pillow_heif_is_missing(monkeypatch, brand):
+    monkeypatch.setattr(photos, "HEIC_READABLE", False)
+    header = struct.pack(">I", 24) + b"ftyp" + brand + b"\0\0\0\0" + b"mif1heic"
+    assert sniffed_photo_type(header[:SNIFF_BYTES]) in ("image/heic", "image/heif")
+    with pytest.raises(PhotoError, match=r"'x.heic' is HEIC, which needs the pillow-heif package"):
+        read_photo(header, "x.heic")
+
+
 # 3. A cropped photo
 
 
@@ -123,6 +135,16 @@ def test_a_real_cropped_heic_is_refused_for_the_35mm_rule():
     with pytest.raises(FrameError, match=r"2566x3313 pixels but its EXIF says the camera wrote 4032x3024") as caught:
         photo_camera(photo.exif, (2566, 3313), profile_table())
     assert caught.value.field == "exif.PixelXDimension" and "principal point is unknown" in caught.value.message
+
+
+def test_a_given_profile_is_applied_to_a_crop_with_a_note():
+    photo = read_photo((PHOTOS / "exif-heic_IMG_5195_cropped.heic").read_bytes(), "IMG_5195.HEIC")
+    profile = profile_table()["xiaomi-mi8-rear"]
+    given = photo_camera(photo.exif, (2566, 3313), profile_table(), profile=profile)
+    assert given.profile == "xiaomi-mi8-rear" and given.detail.startswith("datasheet profile 'xiaomi-mi8-rear'")
+    assert "the photo looks cropped from 4032x3024" in given.detail and "principal point may be off" in given.detail
+    whole = photo_camera(photo.exif, (3024, 4032), profile_table(), profile=profile)
+    assert "cropped" not in whole.detail
 
 
 def test_a_crop_is_refused_and_a_uniform_downscale_kept(tmp_path, capsys, room):

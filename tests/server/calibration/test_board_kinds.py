@@ -7,7 +7,7 @@ import pytest
 from pydantic import ValidationError
 
 from server.calibration.board import find_board
-from server.calibration.printing import board_image, printed_spec
+from server.calibration.printing import board_image, printed_spec, spec_json
 from shared_schemas.calibration import BoardSpec
 
 DPI = 60.0  # 24 mm squares of 57 px: small images, markers still read
@@ -73,6 +73,8 @@ def test_a_mirrored_photo_gives_the_unmirrored_photos_corners():
     ("fields", "message"),
     [
         (dict(kind="chessboard"), "a chessboard has no markers"),
+        (dict(kind="chessboard", marker_m=None, dictionary="DICT_4X4_50"), "first_marker_id and dictionary are"),
+        (dict(kind="chessboard", marker_m=None, dictionary="DICT_5X5_100"), "a chessboard has no markers"),
         (dict(marker_m=None), "a ChArUco board needs marker_m"),
         (dict(dictionary="DICT_4X4_50", first_marker_id=40), "needs 12 markers from id 40; DICT_4X4_50 has 50"),
         (dict(dictionary="DICT_APRILTAG_16h5", squares_x=9, squares_y=9), "DICT_APRILTAG_16h5 has 30"),
@@ -82,3 +84,10 @@ def test_a_mirrored_photo_gives_the_unmirrored_photos_corners():
 def test_a_spec_that_cannot_be_is_refused_saying_why(fields, message):
     with pytest.raises(ValidationError, match=message):
         _spec(**fields)
+
+
+def test_a_chessboards_spec_is_written_without_a_dictionary_and_read_back():
+    chessboard = _spec(kind="chessboard", marker_m=None)
+    for written in (spec_json(chessboard), chessboard.model_dump_json(by_alias=True)):
+        assert "dictionary" not in written and BoardSpec.model_validate_json(written) == chessboard
+    assert "dictionary" in spec_json(_spec()) and "dictionary" in _spec().model_dump_json()

@@ -60,7 +60,7 @@ public final class BoardSpec {
     public final double squareM;
     /** Side of one marker, m; null on a chessboard. */
     public final Double markerM;
-    /** The markers' dictionary (a chessboard's is not used). */
+    /** The markers' dictionary (on a chessboard the default, unused, and neither given nor written). */
     public final String dictionary;
     /** OpenCV's ChArUco layout before 4.6 (an even number of rows starts with a white square). */
     public final boolean legacy;
@@ -97,10 +97,10 @@ public final class BoardSpec {
         }
         if (CHESSBOARD.equals(k)) {
             String marked = markerM != null ? "marker_m" : legacy ? "legacy" : firstMarkerId != 0 ? "first_marker_id"
-                    : null;
+                    : dictionary != null ? "dictionary" : null;
             if (marked != null) {
-                throw new ContractException(marked, "a chessboard has no markers: marker_m, legacy and "
-                        + "first_marker_id are ChArUco's");
+                throw new ContractException(marked, "a chessboard has no markers: marker_m, legacy, "
+                        + "first_marker_id and dictionary are ChArUco's");
             }
         } else {
             if (markerM == null) {
@@ -172,7 +172,9 @@ public final class BoardSpec {
         if (markerM != null) {
             Json.put(o, "marker_m", markerM);
         }
-        Json.put(o, "dictionary", dictionary);
+        if (!isChessboard()) {
+            Json.put(o, "dictionary", dictionary);
+        }
         if (legacy) {
             Json.put(o, "legacy", true);
         }

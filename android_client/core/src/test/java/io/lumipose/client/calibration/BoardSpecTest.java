@@ -82,8 +82,8 @@ class BoardSpecTest {
         assertNull(b.markerM);
         assertEquals(54, b.innerCorners());
         JSONObject written = b.toJson();
-        assertEquals(new HashSet<String>(Arrays.asList("schema", "kind", "squares_x", "squares_y", "square_m",
-                "dictionary")), written.keySet());
+        assertEquals(new HashSet<String>(Arrays.asList("schema", "kind", "squares_x", "squares_y", "square_m")),
+                written.keySet());
         assertEquals(written.toString(), BoardSpec.chessboard(10, 7, 0.025, false).toJson().toString());
     }
 
@@ -109,6 +109,8 @@ class BoardSpecTest {
             "legacy"},
         {"{\"kind\": \"chessboard\", \"squares_x\": 10, \"squares_y\": 7, \"square_m\": 0.025, "
             + "\"first_marker_id\": 3}", "first_marker_id"},
+        {"{\"kind\": \"chessboard\", \"squares_x\": 10, \"squares_y\": 7, \"square_m\": 0.025, "
+            + "\"dictionary\": \"DICT_5X5_100\"}", "dictionary"},
         {"{\"squares_x\": 7, \"squares_y\": 5, \"square_m\": 0.03}", "marker_m"},
         {"{\"kind\": \"circles\", " + CHARUCO_7X5 + "}", "kind"},
         // 17 markers from id 983 end at 999: the last of DICT_4X4_1000
