@@ -7,8 +7,9 @@ the app sends them (`shared_schemas.captures`). One line (or JSON line) per fram
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
 Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
 Several frames: a frame that cannot be read (a damaged photo, a missing file) is its own line, its error as
-the API's error body (`ErrorBody`), and the others are located; the exit code is the worst of them (2 over
-1 over 0). A bad option (map, profile, --camera) is still one error for the whole call.
+the API's error body (`ErrorBody`), and the others are located (its kind unknown, it ends the capture before
+it: no frame moves into another capture); the exit code is the worst of them (2 over 1 over 0). A bad option
+(map, profile, --camera) is still one error for the whole call.
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ def run_locate(args) -> int:
     from server.locator import in_device_session, locate
     from server.options import LocateOptions
     from server.tracking.devices import Devices
-    from shared_schemas import LocateResult
+    from shared_schemas import FrameKind, LocateResult
     from shared_schemas.captures import all_located, bursts_in_upload_order
 
     try:
@@ -105,10 +106,10 @@ def run_locate(args) -> int:
     options = LocateOptions(pipeline=pipeline_options(args))
     devices = Devices() if args.device is not None else None
     results: dict[int, LocateResult] = {}
-    readable = sorted(frames)
-    for capture in bursts_in_upload_order([frames[index].meta.frame_kind for index in readable]):
-        capture = [readable[position] for position in capture]
-        for index in capture:
+    # an unreadable frame's kind is unknown: it ends the capture before it, so it moves no frame into another
+    kinds = [frames[index].meta.frame_kind if index in frames else FrameKind.pose for index in range(len(args.frames))]
+    for capture in bursts_in_upload_order(kinds):
+        for index in (index for index in capture if index in frames):
             picture = pictures[index]
             diagnostics = Diagnostics() if picture is not None else None
             results[index] = locate(
