@@ -233,7 +233,7 @@ def _locate_photos(
                 annotate=picture is not None,
             )
         except (LumiposeError, OSError) as error:
-            body = _photo_fault(error, path)
+            body = _photo_fault(error, path, given={"camera": args.camera, "profile": profile})
             if body is None or len(args.frames) == 1:
                 raise  # the call's fault (a key, a map, the service), or the one photo's: `_run` reports it
             named = body.model_copy(update={"message": f"{path.name}: {body.message}"})  # the service saw no name
@@ -251,12 +251,16 @@ def _locate_photos(
     return 0 if all(result.ok for result in results) else 1
 
 
-def _photo_fault(error: LumiposeError | OSError, path: Path) -> ErrorBody | None:
+def _photo_fault(error: LumiposeError | OSError, path: Path, given: dict[str, str | None]) -> ErrorBody | None:
     """The error body of a photo of several that the service could not take (as `lumipose locate` prints a
-    frame it cannot read: its line, and the others go on), or None when the fault is the whole call's."""
+    frame it cannot read: its line, and the others go on), or None when the fault is the whole call's: one
+    naming an option the call `given` (`--camera` is every photo's; without it, field camera is a photo's
+    unknown camera)."""
     if isinstance(error, OSError):
         return BadInput(f"cannot read {path}: {error}", field="frames").body
-    return error.body if error.status in PHOTO_FAULT_STATUSES else None
+    if error.status not in PHOTO_FAULT_STATUSES or given.get(error.body.field or "") is not None:
+        return None
+    return error.body
 
 
 def _print_json(value: list[BaseModel] | dict) -> None:

@@ -7,8 +7,9 @@ the app sends them (`shared_schemas.captures`). One line (or JSON line) per fram
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
 Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
 Several frames: a frame that cannot be read (a damaged photo, a missing file) is its own line, its error as
-the API's error body (`ErrorBody`), and the others are located; the exit code is the worst of them (2 over
-1 over 0). A bad option (map, profile, --camera) is still one error for the whole call.
+the API's error body (`ErrorBody`), and the others are located (its kind unknown, it ends the capture before
+it: no frame moves into another capture); the exit code is the worst of them (2 over 1 over 0). A bad option
+(map, profile, --camera) is still one error for the whole call.
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ def run_locate(args) -> int:
     from server.locator import in_device_session, locate
     from server.options import LocateOptions
     from server.tracking.devices import Devices
-    from shared_schemas import LocateResult
+    from shared_schemas import FrameKind, LocateResult
     from shared_schemas.captures import all_located, bursts_in_upload_order
 
     try:
@@ -93,22 +94,19 @@ def run_locate(args) -> int:
         beacon_map = read_map(args.map, args.data_dir)
         check_beacon_id(args.beacon_id, beacon_map)
         pictures = annotation_paths(args.annotate, args.frames)
-        if args.camera is not None:  # the option's own fault is the whole call's, not each frame's
-            read_camera(args.camera)
-        if len(args.frames) == 1:
-            frames = {0: read_frame(args.frames[0], profiles, profile, args.camera)}
-            unreadable: dict[int, BadInput] = {}
-        else:
-            frames, unreadable = read_frames(args.frames, profiles, profile, args.camera)
+        camera = None if args.camera is None else read_camera(args.camera)  # its fault is the call's, not a frame's
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
+    frames, unreadable = read_frames(args.frames, profiles, profile, camera)
+    if len(args.frames) == 1 and unreadable:  # one frame: its fault is the call's
+        return report_bad_input(unreadable[0], as_json=args.json)
     options = LocateOptions(pipeline=pipeline_options(args))
     devices = Devices() if args.device is not None else None
     results: dict[int, LocateResult] = {}
-    readable = sorted(frames)
-    for capture in bursts_in_upload_order([frames[index].meta.frame_kind for index in readable]):
-        capture = [readable[position] for position in capture]
-        for index in capture:
+    # an unreadable frame's kind is unknown: it ends the capture before it, so it moves no frame into another
+    kinds = [frames[index].meta.frame_kind if index in frames else FrameKind.pose for index in range(len(args.frames))]
+    for capture in bursts_in_upload_order(kinds):
+        for index in (index for index in capture if index in frames):
             picture = pictures[index]
             diagnostics = Diagnostics() if picture is not None else None
             results[index] = locate(
@@ -125,9 +123,9 @@ def run_locate(args) -> int:
                     write_annotation(picture, frames[index], diagnostics, results[index], in_session)
                 except BadInput as problem:
                     return report_bad_input(problem, as_json=args.json)
-        if len(args.frames) == 1:
-            print_result(results[0], frames[0], as_json=args.json, beacon_map=beacon_map)
-    if len(args.frames) > 1:
+    if len(args.frames) == 1:
+        print_result(results[0], frames[0], as_json=args.json, beacon_map=beacon_map)
+    else:
         for index, path in enumerate(args.frames):
             if index in unreadable:
                 print_error_line(path, unreadable[index], as_json=args.json)
@@ -138,12 +136,12 @@ def run_locate(args) -> int:
     return EXIT_OK if all_located(list(results.values())) else EXIT_NO_FIX
 
 
-def read_frames(paths: list[Path], profiles, profile=None, camera_text: str | None = None):
-    """Each frame of several read on its own: (the readable ones, the others' BadInput), by index."""
+def read_frames(paths: list[Path], profiles, profile=None, camera=None):
+    """Each frame read on its own: (the readable ones, the others' BadInput), by index."""
     frames, unreadable = {}, {}
     for index, path in enumerate(paths):
         try:
-            frames[index] = read_frame(path, profiles, profile, camera_text)
+            frames[index] = read_frame(path, profiles, profile, camera)
         except BadInput as problem:
             unreadable[index] = problem
     return frames, unreadable
@@ -174,12 +172,12 @@ def read_map(value: str, data_dir: Path | None = None):
     return read_map_argument(value, data_dir)
 
 
-def read_frame(path: Path, profiles, profile=None, camera_text: str | None = None):
-    """A recorded frame (its JSON names its camera) or a photo (`--camera` > `profile` > EXIF)."""
+def read_frame(path: Path, profiles, profile=None, camera=None):
+    """A recorded frame (its JSON names its camera) or a photo (`camera`, `--camera`'s intrinsics > `profile` >
+    EXIF)."""
     from server.ingest import is_photo, read_fixture, read_photo_file
     from server.outcomes import FrameError
 
-    camera = None if camera_text is None else read_camera(camera_text)
     try:
         if is_photo(path):
             return read_photo_file(path, profiles, camera, profile)[0]

@@ -164,3 +164,16 @@ def test_one_photo_the_service_refuses_is_its_own_line_in_a_batch(server_url, ca
     assert main(args) == 2
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 3 and out[1].startswith("b.jpg  error: "), out
+
+
+def test_a_bad_camera_for_several_photos_is_one_error_for_the_call(server_url, capsys, tmp_path):
+    """The service refuses `--camera` itself (400, field camera), not a photo: one error, as `lumipose locate`."""
+    real = Path(__file__).parents[1] / "fixtures" / "real_photos" / "exif-jpg_hdr_canon_hdr_NO.jpg"
+    args = ["client", "--url", server_url, "locate", str(real), str(real), "--camera", "3000,3000"]
+    assert main([*args, "--json"]) == 2
+    captured = capsys.readouterr()
+    error = json.loads(captured.out or captured.err)
+    assert error["error"] == "bad_frame" and error["field"] == "camera", error
+    assert main(args) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("camera takes 4 to 9 numbers") == 1, captured

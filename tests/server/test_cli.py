@@ -2,8 +2,11 @@
 
 import json
 
+import server.locator
 from lumipose_cli.main import main
-from tests.helpers import CALIBRATED, FRONT, calibrated_lens_frame
+from shared_schemas import FrameKind
+from simulator.fixtures import write_fixture
+from tests.helpers import CALIBRATED, FRONT, ROOM, calibrated_lens_frame, dark_frame
 
 
 def test_locate_uses_a_given_profile_file_and_refuses_unknown_or_taken_ids(tmp_path, capsys):
@@ -58,3 +61,27 @@ def test_the_quickstart_walk_does_not_name_a_panel_after_stripes_outside_the_map
     # every confident reading is a map ID
     readings = [r["vlc"] for r in results if r.get("vlc")]
     assert all(v["beacon_id"] in (17, 42, 99, 200) for v in readings if v["confident"])
+
+
+def test_an_unreadable_frame_moves_no_frame_into_another_capture(tmp_path, capsys, monkeypatch):
+    """[pose A, id A, pose B (damaged), id B] with --device: A's capture is id A then pose A, and B's ID frame is
+    located after them as a capture of its own, not before pose A in A's session."""
+    paths = []
+    for t_s, kind in enumerate([FrameKind.pose, FrameKind.id, FrameKind.pose, FrameKind.id]):
+        frame = dark_frame(kind, float(t_s))
+        paths.append(write_fixture(tmp_path / f"f{t_s}", frame.pixels, frame.meta)[1])
+    paths[2].with_suffix(".y").unlink()  # pose B cannot be read
+    room = tmp_path / "room.json"
+    room.write_text(ROOM.model_dump_json())
+    located, locate = [], server.locator.locate
+    monkeypatch.setattr(
+        server.locator, "locate", lambda frame, *a, **k: located.append(frame.meta) or locate(frame, *a, **k)
+    )
+    assert main(["locate", *map(str, paths), "--map", str(room), "--device", "phone", "--json"]) == 2
+    assert [(meta.frame_kind, meta.timestamp_ns // 10**9) for meta in located] == [
+        (FrameKind.id, 1),
+        (FrameKind.pose, 0),
+        (FrameKind.id, 3),
+    ]
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(lines) == 4 and lines[2]["error"] == "bad_frame"
