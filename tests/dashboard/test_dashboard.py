@@ -138,6 +138,9 @@ def test_markers_follow_the_walk(page, live):
     open_view(page, live.url, "live")
     page.wait_for_function("() => document.querySelector('[data-testid=\"live-connection\"]').textContent === 'live'",
                            timeout=TIMEOUT_MS)
+    # the active map is fetched beside the stream, not before it: "live" may show before the room is drawn
+    page.wait_for_function("() => document.querySelectorAll('[data-testid=\"room-map\"] "
+                           "[data-testid=\"panel\"]').length > 0", timeout=TIMEOUT_MS)
     panels = page.get_by_test_id("room-map").get_by_test_id("panel")
     assert sorted(int(panels.nth(k).get_attribute("data-beacon-id")) for k in range(panels.count())) == [
         beacon.id for beacon in live.walk.beacon_map.beacons]
