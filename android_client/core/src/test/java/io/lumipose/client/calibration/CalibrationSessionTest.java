@@ -182,7 +182,7 @@ class CalibrationSessionTest {
         assertEquals(" (board found inverted, photo mirrored: un-mirrored)", photo.view.foundAs(), "the photo's line");
         String header = t.calls.get(0).headers.get("X-Lumipose-Board");
         assertTrue(new JSONObject("{\"schema\": \"lumipose.board/1\", \"kind\": \"chessboard\", \"squares_x\": 10, "
-                + "\"squares_y\": 7, \"square_m\": 0.025, \"dictionary\": \"DICT_5X5_100\", \"inverted\": true}")
+                + "\"squares_y\": 7, \"square_m\": 0.025, \"inverted\": true}") // a chessboard's has no dictionary
                 .similar(new JSONObject(header)), header);
 
         // the session's file keeps them (the screen's restore after process death)
