@@ -88,6 +88,13 @@ def plural(count: int, noun: str, plural_form: str | None = None) -> str:
     return f"{count} {noun if count == 1 else plural_form or noun + 's'}"
 
 
+def table_cell(row: dict, key: str, width: int, decimals: int) -> str:
+    """`row[key]` right-aligned in `width` with `decimals` decimals, or '-' where the row has no value (a bench's
+    table: a cell of no fix has no error)."""
+    value = row.get(key)
+    return f"{'-':>{width}}" if value is None else f"{value:{width}.{decimals}f}"
+
+
 def number(value: float, decimals: int = 2, digits: int = 2) -> str:
     """`value` with `decimals` decimals, or `digits` significant ones where the decimals would hide it
     (an ambiguity ratio of 0.0031 prints as 0.0031, not 0.00)."""

@@ -46,7 +46,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.outline import OutlineFitRules
 from shared_schemas import Beacon, BeaconMap, PanelShape, device_profiles
-from shared_schemas.cli import BadInput, plural, report_bad_input
+from shared_schemas.cli import BadInput, plural, report_bad_input, table_cell
 from simulator.bench_shapes import CHI2_2DOF_95, PROFILE_ID, ShapeCase, ShapesConfig, draw_shape_pose
 from simulator.benchmarks import noisy_gravity, progress
 from simulator.fixtures import fixture_meta
@@ -300,10 +300,6 @@ def run_photos(local: Path | None = None, workers: int = 2, sigmas_m: tuple[floa
 
 
 
-def _num(row: dict, key: str, width: int, digits: int = 1) -> str:
-    value = row.get(key)
-    return f"{'-':>{width}}" if value is None else f"{value:{width}.{digits}f}"
-
 
 def format_negatives(report: dict) -> str:
     config = report["config"]
@@ -319,8 +315,8 @@ def format_negatives(report: dict) -> str:
         refusals = ", ".join(f"{k} {v}" for k, v in row["refusals"].items()) or "-"
         lines.append(
             f"{row['panel']:<12} {row['label']:<28} {row['refused_pct']:7.0f}% {row['fixed_pct']:6.0f}% "
-            f"{_num(row, 'mean_mm', 8)} {_num(row, 'max_mm', 8)} {_num(row, 'inside_95_pct', 5, 0)}"
-            f"{'%' if row.get('inside_95_pct') is not None else ' '} {_num(row, 'mean_sigma_mm', 6)}  {refusals}"
+            f"{table_cell(row, 'mean_mm', 8, 1)} {table_cell(row, 'max_mm', 8, 1)} {table_cell(row, 'inside_95_pct', 5, 0)}"
+            f"{'%' if row.get('inside_95_pct') is not None else ' '} {table_cell(row, 'mean_sigma_mm', 6, 1)}  {refusals}"
         )
     if report["photos"] is not None:
         lines.append("real photos (maps " + ", ".join(bench_maps()) + "; required_sigma_m "

@@ -59,7 +59,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.outline import OutlineFitRules
 from shared_schemas import Beacon, BeaconMap, PanelShape, device_profiles
-from shared_schemas.cli import BadInput, plural, report_bad_input
+from shared_schemas.cli import BadInput, plural, report_bad_input, table_cell
 from simulator.benchmarks import noisy_gravity, summarize
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
@@ -316,11 +316,6 @@ def run_shapes(config: ShapesConfig, workers: int | None = None) -> dict:
     }
 
 
-def _cell(row: dict, key: str, width: int, digits: int = 2) -> str:
-    value = row.get(key)
-    return f"{'-':>{width}}" if value is None else f"{value:{width}.{digits}f}"
-
-
 def format_shapes(report: dict) -> str:
     config = report["config"]
     lines = [
@@ -335,10 +330,10 @@ def format_shapes(report: dict) -> str:
     for row in report["shapes"].values():
         refusals = ", ".join(f"{reason} {count}" for reason, count in row["refusals"].items()) or "-"
         lines.append(
-            f"{row['label']:<26} {row['coverage_pct']:5.1f}% {_cell(row, 'mean_mm', 7)} {_cell(row, 'std_mm', 7)} "
-            f"{_cell(row, 'max_mm', 7)} {_cell(row, 'p95_mm', 7)} {_cell(row, 'mean_3d_mm', 7)} "
-            f"{_cell(row, 'inside_95_pct', 5, 0)}{'%' if row.get('inside_95_pct') is not None else ' '} "
-            f"{_cell(row, 'mean_sigma_2d_mm', 7)} {_cell(row, 'median_locate_ms', 6, 0)}  {refusals}"
+            f"{row['label']:<26} {row['coverage_pct']:5.1f}% {table_cell(row, 'mean_mm', 7, 2)} {table_cell(row, 'std_mm', 7, 2)} "
+            f"{table_cell(row, 'max_mm', 7, 2)} {table_cell(row, 'p95_mm', 7, 2)} {table_cell(row, 'mean_3d_mm', 7, 2)} "
+            f"{table_cell(row, 'inside_95_pct', 5, 0)}{'%' if row.get('inside_95_pct') is not None else ' '} "
+            f"{table_cell(row, 'mean_sigma_2d_mm', 7, 2)} {table_cell(row, 'median_locate_ms', 6, 0)}  {refusals}"
         )
     for row in report["shapes"].values():
         if row["turned_fixes"]:
