@@ -89,10 +89,12 @@ def beacon_window(pixels: np.ndarray) -> tuple[int, int, int, int] | None:
     return x0, y0, x1, y1
 
 
-def crop_frame(pixels: np.ndarray, meta: FrameMeta) -> tuple[FrameMeta, bytes]:
-    """The frame cut to the window around its panel, with the contract's `crop` block; the whole
-    frame unchanged when no panel is found (the server then says why)."""
-    window = beacon_window(pixels)
+def crop_frame(
+    pixels: np.ndarray, meta: FrameMeta, window: tuple[int, int, int, int] | None = None
+) -> tuple[FrameMeta, bytes]:
+    """The frame cut to `window` (x0, y0, x1, y1; default: the window around its panel), with the contract's
+    `crop` block; the whole frame unchanged when no panel is found (the server then says why)."""
+    window = window or beacon_window(pixels)
     if window is None:
         return meta, np.ascontiguousarray(pixels).tobytes()
     x0, y0, x1, y1 = window

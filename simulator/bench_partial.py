@@ -184,8 +184,11 @@ def stratified_share(index: int, frames: int, rng: np.random.Generator) -> float
     return low + (high - low) * (index + rng.uniform()) / frames
 
 
-def _partial_sample(args: tuple[PartialConfig, float, float, int]) -> dict:
-    config, scale, distance_m, index = args
+def partial_frame(
+    config: PartialConfig, scale: float, distance_m: float, index: int
+) -> tuple[LumaFrame, BeaconMap, LocateOptions, PartialPose]:
+    """Frame `index` of the (`scale`, `distance_m`) cell (the same for the same seed), its map, the options
+    it is located with, and the drawn pose (`bench speed` times the same frames)."""
     rng = np.random.default_rng([config.seed, index, round(distance_m * 1000), round(scale * 1000)])
     width, height = frame_size(scale)
     camera = intrinsics_from_profile(device_profiles()[PROFILE_ID], width, height)
@@ -199,11 +202,15 @@ def _partial_sample(args: tuple[PartialConfig, float, float, int]) -> dict:
     gravity = noisy_gravity(drawn.pose.rotation_wc, config.gravity_sigma_deg, rng)
     meta = fixture_meta(camera, width, height, drawn.pose, gravity_camera=gravity)
     options = PipelineOptions(gravity_mode=GravityMode.auto, gravity_sigma_deg=config.gravity_sigma_deg)
-    result = locate(
-        LumaFrame(pixels=pixels, meta=meta, camera=camera),
-        BeaconMap(name="bench", beacons=[beacon]),
-        LocateOptions(pipeline=options),
-    )
+    frame = LumaFrame(pixels=pixels, meta=meta, camera=camera)
+    return frame, BeaconMap(name="bench", beacons=[beacon]), LocateOptions(pipeline=options), drawn
+
+
+def _partial_sample(args: tuple[PartialConfig, float, float, int]) -> dict:
+    config, scale, distance_m, index = args
+    frame, beacon_map, options, drawn = partial_frame(config, scale, distance_m, index)
+    beacon, camera, (height, width) = beacon_map.beacons[0], frame.camera, frame.pixels.shape
+    result = locate(frame, beacon_map, options)
     record = {
         "scale": scale,
         "distance_m": distance_m,

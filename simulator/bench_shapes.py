@@ -145,8 +145,20 @@ def draw_shape_pose(
         redraws += 1
 
 
-def shape_sample(args: tuple[ShapesConfig, str, int]) -> dict:
-    config, key, index = args
+@dataclass(frozen=True)
+class ShapeFrame:
+    """Frame `index` of a shape (`shape_frame`): what is located, and the truth it is scored against."""
+
+    frame: LumaFrame
+    beacon_map: BeaconMap
+    options: LocateOptions
+    pose: CameraPose
+    redraws: int  # attitudes drawn again because no position fitted
+    heading_deg: float | None  # what the frame reports (the circle's), with its compass error
+
+
+def shape_frame(config: ShapesConfig, key: str, index: int) -> ShapeFrame:
+    """Frame `index` of shape `key` (the same for the same seed; `bench speed` times the same frames)."""
     case = shape_cases(config.above_m)[key]
     # the uncapped circle sees the very frames of the capped one
     rng = np.random.default_rng([config.seed, index, SHAPES.index(key.removesuffix("-uncapped"))])
@@ -167,11 +179,19 @@ def shape_sample(args: tuple[ShapesConfig, str, int]) -> dict:
     meta = fixture_meta(camera, width, height, pose, gravity_camera=gravity, heading_deg=heading)
     frame = LumaFrame(pixels=pixels, meta=meta, camera=camera)
     pipeline = PipelineOptions(gravity_sigma_deg=config.gravity_sigma_deg, outline_fit=case.outline_fit)
-    options = LocateOptions(pipeline=pipeline)
-    start = time.perf_counter()
     # the map states the position error it needs (`required_sigma_m`): the outline fit's cap
     beacon_map = BeaconMap(name="bench-shapes", beacons=[case.beacon], required_sigma_m=case.outline_fit.max_sigma_m)
-    result = locate(frame, beacon_map, options)
+    return ShapeFrame(frame, beacon_map, LocateOptions(pipeline=pipeline), pose, redraws, heading)
+
+
+def shape_sample(args: tuple[ShapesConfig, str, int]) -> dict:
+    config, key, index = args
+    case = shape_cases(config.above_m)[key]
+    drawn = shape_frame(config, key, index)
+    pose, redraws, heading = drawn.pose, drawn.redraws, drawn.heading_deg
+    true_yaw = math.degrees(math.atan2(pose.rotation_wc[1, 0], pose.rotation_wc[0, 0]))
+    start = time.perf_counter()
+    result = locate(drawn.frame, drawn.beacon_map, drawn.options)
     locate_ms = (time.perf_counter() - start) * 1000.0
     tilt = math.degrees(math.acos(float(np.clip(pose.rotation_wc[2, 2], -1.0, 1.0))))
     sample = {

@@ -1,4 +1,4 @@
-"""`lumipose bench accuracy` and `lumipose bench speed`: figures, not tests.
+"""`lumipose bench accuracy`: figures, not tests (its frames are also `bench speed`'s: simulator/bench_speed.py).
 
 Accuracy: frames rendered at the paper's test-bench geometry (Xiaomi Mi 8 front camera,
 0.174 m panel with 0.02 m corner radius), camera positions drawn uniformly over the
@@ -6,22 +6,16 @@ beacon-adjusted FOV (paper eq. 4) at each distance, tilts up to `max_tilt_deg`, 
 the contract's +-45 degree rule, PSF and overexposure drawn per frame. Poses whose panel
 leaves the frame are drawn again (a cut-off panel is refused, and is another benchmark's
 subject). Each frame is located three ways: vision only, gravity prior always, and auto.
-
-Speed: the whole pipeline on one full-resolution frame against one `cv2.threshold` pass over
-the same frame, both timed in the same run.
 """
 
 from __future__ import annotations
 
 import math
 import os
-import statistics
 import sys
-import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from server.camera import intrinsics_from_profile
@@ -43,7 +37,6 @@ from simulator.scene import (
 )
 from simulator.render import (
     CameraPose, Emitter, ReadoutMotion, SensorModel, beacon_outline_px, exposure_polygons_px, render_emitters,
-    render_frame,
 )
 
 PROFILE_ID = "xiaomi-mi8-front"
@@ -316,90 +309,3 @@ def renderer_ratios(reports: list[dict], mode: str = "auto") -> list[dict]:
             ratios.append({"distance_m": distance, "mode": mode, "ours_mean_mm": ours, "blender_mean_mm": blender,
                            "ratio": blender / ours})
     return ratios
-
-
-def run_speed_over_frames(frames: int = 10, distances_m: tuple[float, ...] = (1.0, 2.0, 3.0), rounds: int = 5,
-                          seed: int = 1) -> dict:
-    """The pipeline's time against one `cv2.threshold` pass of the same frame, over many frames.
-
-    The accuracy benchmark's frames (`frames` per distance, full resolution, tilts and yaws drawn,
-    gravity with its sensor error), each timed once per round, the threshold pass just before
-    the pipeline on the same frame; `rounds` passes over all of them. The ratio is the median of
-    the per-frame ratios; each round's median shows how much the machine moved it.
-    """
-    scenes = [accuracy_frame(AccuracyConfig(distance_m=d, seed=seed), i)[:2]
-              for d in distances_m for i in range(frames)]
-    for frame, beacon_map in scenes:
-        locate(frame, beacon_map)  # warm-up: first calls allocate
-    ratios: list[list[float]] = []
-    pipeline_ms: list[float] = []
-    refusals = 0
-    for _ in range(rounds):
-        ratios.append([])
-        for frame, beacon_map in scenes:
-            start = time.perf_counter()
-            cv2.threshold(frame.pixels, 128, 255, cv2.THRESH_BINARY)
-            threshold = time.perf_counter() - start
-            start = time.perf_counter()
-            result = locate(frame, beacon_map)
-            elapsed = time.perf_counter() - start
-            refusals += not result.ok
-            pipeline_ms.append(elapsed * 1000.0)
-            ratios[-1].append(elapsed / threshold)
-    every = [r for round_ratios in ratios for r in round_ratios]
-    return {
-        "frames": len(scenes),
-        "distances_m": list(distances_m),
-        "rounds": rounds,
-        "median_ratio_to_threshold": statistics.median(every),
-        "round_median_ratios": [statistics.median(r) for r in ratios],
-        "p90_ratio": float(np.percentile(every, 90)),
-        "median_ms": statistics.median(pipeline_ms),
-        "refusals": refusals,
-        "cv2_threads": cv2.getNumThreads(),
-        "cpu_count": os.cpu_count(),
-    }
-
-
-def run_speed(repeats: int = 50, distance_m: float = 1.0, seed: int = 7, gravity: bool = True) -> dict:
-    """Median pipeline time on a full-resolution frame, and its ratio to one threshold pass.
-
-    With `gravity` the frame carries the phone's gravity vector, as a phone sends it, so the
-    default pose path (the MAP fit with the gravity prior) is what is timed.
-    """
-    profile = device_profiles()[PROFILE_ID]
-    width, height = profile.width, profile.height
-    camera = intrinsics_from_profile(profile, width, height)
-    beacon = bench_beacon(distance_m)
-    rng = np.random.default_rng(seed)
-    pose = CameraPose(position_m=np.array([0.12, -0.2, 0.0]), rotation_wc=rotation_from_ypr(10.0, 3.0, -2.0))
-    pixels = render_frame(beacon, camera, pose, width, height, SensorModel(psf_sigma_px=1.0), rng)
-    down = (pose.rotation_wc.T @ np.array([0.0, 0.0, -1.0])).tolist() if gravity else None
-    frame = LumaFrame(pixels=pixels, meta=fixture_meta(camera, width, height, pose, gravity_camera=down), camera=camera)
-    beacon_map = BeaconMap(name="bench", beacons=[beacon])
-    pipeline_ms, threshold_ms, stages = [], [], []
-    locate(frame, beacon_map)  # warm-up: first calls allocate
-    for _ in range(repeats):
-        start = time.perf_counter()
-        cv2.threshold(pixels, 128, 255, cv2.THRESH_BINARY)
-        threshold_ms.append((time.perf_counter() - start) * 1000.0)
-        start = time.perf_counter()
-        result = locate(frame, beacon_map)
-        pipeline_ms.append((time.perf_counter() - start) * 1000.0)
-        stages.append(result.timing_ms)
-    if not result.ok:
-        raise RuntimeError(f"speed benchmark frame gave no fix: {result.message}")
-    median_ms = statistics.median(pipeline_ms)
-    threshold_median = statistics.median(threshold_ms)
-    return {
-        "frame": f"{width}x{height}",
-        "repeats": repeats,
-        "median_ms": median_ms,
-        "p90_ms": float(np.percentile(pipeline_ms, 90)),
-        "threshold_median_ms": threshold_median,
-        "ratio_to_threshold": median_ms / threshold_median,
-        "stage_median_ms": {k: statistics.median(s[k] for s in stages) for k in stages[0]},
-        "gravity": gravity,
-        "cv2_threads": cv2.getNumThreads(),
-        "cpu_count": os.cpu_count(),
-    }

@@ -16,6 +16,9 @@ FIGURES_HELP = "write {pngs} into this folder, with {data} beside them (default:
 
 ROBUSTNESS_GROUPS = ("reference", "defocus", "glare", "binning", "demosaic", "noise", "sharpen", "tone", "jpeg",
                      "motion", "panel", "phone")
+# simulator.bench_speed.PATHS, likewise without importing it
+SPEED_PATHS = ("square", "square-quarter", "cut", "rectangle", "circle", "id-frame", "first-capture", "service-full",
+               "service-window")
 
 
 def add_bench_flags(parser, *, seed: int | None | bool = 1, workers: bool = True, figures: str | None = None) -> None:
@@ -119,14 +122,26 @@ def add_commands(commands) -> None:
                                  "ISP off and ISP on always run)")
     add_bench_flags(robustness)
     robustness.set_defaults(run=_run_robustness)
-    speed = benches.add_parser("speed", help="pipeline time on a full-resolution frame")
-    speed.add_argument("--repeats", type=int, default=50, help="timed runs")
-    speed.add_argument("--distance", type=float, default=1.0, help="camera to beacon, metres")
+    speed = benches.add_parser("speed", help="every path's time as a ratio to one cv2.threshold pass (issue 30)",
+                               description="Every path of issue 30's table (simulator/bench_speed.py) against one "
+                                           "cv2.threshold pass over a full frame timed just before each call; "
+                                           "medians over the frames and rounds, beside each path's target.")
+    speed.add_argument("--path", nargs="+", default=["all"], choices=[*SPEED_PATHS, "all"], metavar="PATH",
+                       help="paths to measure: " + ", ".join(SPEED_PATHS) + " or all (default)")
+    speed.add_argument("--frames", type=int, default=3,
+                       help="frames per distance (square, cut); the other paths take as many at their one distance")
+    speed.add_argument("--rounds", type=int, default=5, help="passes over all the frames")
+    speed.add_argument("--repeats", type=int, default=1, help="timed calls of each frame per round")
+    speed.add_argument("--distance", type=float, nargs="+", default=[1.0, 2.0, 3.0],
+                       help="camera to beacon, metres (square, cut; the ID paths take the first)")
     speed.add_argument("--no-gravity", action="store_true", help="leave the gravity vector out (no MAP pose fit)")
-    speed.add_argument("--frames", type=int, default=None,
-                       help="instead: N accuracy-bench frames per distance (1, 2, 3 m), the median ratio over them")
-    speed.add_argument("--rounds", type=int, default=5, help="with --frames: passes over all the frames")
-    add_bench_flags(speed, seed=False, workers=False)
+    speed.add_argument("--report", type=Path, default=None, metavar="JSON",
+                       help="instead of measuring: the report of an earlier `bench speed --json`")
+    speed.add_argument("--baseline", type=Path, default=None, metavar="JSON",
+                       help="a `bench speed --json` report at the commit before: the table's and figure's before")
+    speed.add_argument("--markdown", action="store_true",
+                       help="print issue 30's table (path, before, target, after) in Markdown")
+    add_bench_flags(speed, seed=1, workers=False, figures=FIGURES_HELP.format(pngs="speed.png", data="speed.json"))
     speed.set_defaults(run=_run_speed)
     load = benches.add_parser("load", help="the HTTP service under concurrent clients (over 3 minutes by default)",
                               description="The HTTP service under concurrent clients (its own server, or --url). One "
@@ -547,29 +562,35 @@ def _run_render_speed(args) -> int:
 
 
 def _run_speed(args) -> int:
-    from simulator.benchmarks import run_speed, run_speed_over_frames
+    from simulator.bench_speed import SpeedConfig, format_speed, markdown_table, plot_speed, read_report, run_speed
+    from simulator.reports import print_figures
 
-    if args.frames is not None:
-        many = run_speed_over_frames(args.frames, rounds=args.rounds)
-        if args.json:
-            print(json.dumps(many, indent=2))
-            return 0
-        rounds = ", ".join(f"{r:.2f}" for r in many["round_median_ratios"])
-        print(f"{plural(many['frames'], 'frame')} at {many['distances_m']} m, {plural(many['rounds'], 'round')}, "
-              f"{plural(many['cpu_count'], 'core')}")
-        print(f"pipeline / cv2.threshold: median {many['median_ratio_to_threshold']:.2f} "
-              f"(p90 {many['p90_ratio']:.2f}; per round {rounds}); pipeline median {many['median_ms']:.2f} ms, "
-              f"{plural(many['refusals'], 'refusal')}")
-        return 0
-    report = run_speed(args.repeats, args.distance, gravity=not args.no_gravity)
+    if args.frames < 1 or args.rounds < 1 or args.repeats < 1 or min(args.distance) <= 0:
+        return report_bad_input(BadInput("--frames, --rounds and --repeats must be at least 1 and every --distance "
+                                         "positive"), args.json)
+    try:
+        before = None if args.baseline is None else read_report(args.baseline)
+        if args.report is not None:
+            report = read_report(args.report)
+        else:
+            paths = SPEED_PATHS if "all" in args.path else tuple(dict.fromkeys(args.path))
+            report = run_speed(SpeedConfig(paths=paths, frames=args.frames, rounds=args.rounds, repeats=args.repeats,
+                                           distances_m=tuple(args.distance), gravity=not args.no_gravity,
+                                           seed=args.seed))
+    except (OSError, ValueError) as error:
+        return report_bad_input(BadInput(str(error)), args.json)
+    if args.figures is not None:
+        args.figures.mkdir(parents=True, exist_ok=True)
+        (args.figures / "speed.json").write_text(json.dumps(report, indent=2) + "\n")
+        plot_speed(report, args.figures / "speed.png", before)
+        report["figures"] = [str(args.figures / "speed.png")]
     if args.json:
         print(json.dumps(report, indent=2))
-        return 0
-    print(f"frame {report['frame']}, {plural(report['repeats'], 'run')}, {plural(report['cpu_count'], 'core')}")
-    print(f"pipeline median {report['median_ms']:.2f} ms (p90 {report['p90_ms']:.2f} ms)")
-    print(f"cv2.threshold median {report['threshold_median_ms']:.2f} ms, ratio {report['ratio_to_threshold']:.2f}")
-    for stage, ms in report["stage_median_ms"].items():
-        print(f"  {stage:>10} {ms:7.3f} ms")
+    elif args.markdown:
+        print(markdown_table(report, before))
+    else:
+        print(format_speed(report))
+    print_figures(report.get("figures", []), args.json)
     return 0
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from server.fov import fov_grid, grid_points
 from server.geometry import rotation_from_ypr
-from shared_schemas import device_profiles
+from shared_schemas import FrameMeta, device_profiles
 from shared_schemas.api import cell_label
 from simulator import trajectories
 from simulator.bursts import burst_scenes, burst_span_s, capture_starts, render_burst
@@ -221,14 +221,19 @@ def _write_one(args: tuple[Scene, SamplePose, Path]) -> str:
     return raw.stem
 
 
-def _write_burst(args: tuple[Scene, SamplePose, Path, float]) -> list[str]:
-    """One capture of the sample (`simulator.bursts`) starting at `start_s`: NAME_0000_0_pose, NAME_0000_1_id, ..."""
-    scene, sample, out_dir, start_s = args
-    frames = render_burst(
+def render_capture(scene: Scene, sample: SamplePose, start_s: float) -> list[tuple[np.ndarray, FrameMeta]]:
+    """One capture of the sample (`simulator.bursts`) starting at `start_s`, as `simulate --bursts` writes it."""
+    return render_burst(
         burst_scenes(scene), start_s, lambda t: sample.camera_pose(sample.t_s + t - start_s),
         sample_rng(scene.seed, sample.index, 1),
         motion_of=lambda frame_scene: readout_motion(frame_scene, sample.velocity_mps, sample.angular_velocity_dps),
         simulator=_simulator_block(scene, sample))
+
+
+def _write_burst(args: tuple[Scene, SamplePose, Path, float]) -> list[str]:
+    """One capture of the sample (`simulator.bursts`) starting at `start_s`: NAME_0000_0_pose, NAME_0000_1_id, ..."""
+    scene, sample, out_dir, start_s = args
+    frames = render_capture(scene, sample, start_s)
     stems = []
     for k, (pixels, meta) in enumerate(frames):
         raw, _ = write_fixture(out_dir / f"{scene.name}_{sample.index:04d}_{k}_{meta.frame_kind.value}", pixels, meta)
