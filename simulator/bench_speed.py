@@ -367,6 +367,7 @@ def run_speed(config: SpeedConfig) -> dict:
     unknown = sorted(set(config.paths) - set(PATHS))
     if unknown:
         raise ValueError(f"unknown paths {unknown}: use {', '.join(PATHS)}")
+    box = machine()  # its load as the run starts; the end's is added below
     reference = _reference_frame(config)
     rows = []
 
@@ -404,11 +405,20 @@ def run_speed(config: SpeedConfig) -> dict:
                 measured(path, "raw", cases[path])
     order = list(TARGETS)
     rows.sort(key=lambda row: order.index((row["path"], row["variant"])))
-    return {"rows": rows, "config": {"paths": list(config.paths), "frames": config.frames, "rounds": config.rounds,
+    return {"command": speed_command(config), "rows": rows, "config": {"paths": list(config.paths), "frames": config.frames, "rounds": config.rounds,
                                      "repeats": config.repeats, "distances_m": list(config.distances_m),
                                      "gravity": config.gravity, "seed": config.seed},
-            "machine": machine(), "reference": "cv2.threshold(full 3880x5184 frame, 128, 255, THRESH_BINARY, "
+            "machine": {**box, "load_average_1min_end": os.getloadavg()[0],
+                        "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}, "reference": "cv2.threshold(full 3880x5184 frame, 128, 255, THRESH_BINARY, "
                                                 "dst=preallocated), cv2.setNumThreads(1) around it only"}
+
+
+def speed_command(config: SpeedConfig) -> str:
+    """The command line that measures `config` again."""
+    paths = "all" if set(config.paths) == set(PATHS) else " ".join(config.paths)
+    distances = " ".join(f"{d:g}" for d in config.distances_m)
+    return (f"lumipose bench speed --path {paths} --frames {config.frames} --rounds {config.rounds} --repeats "
+            f"{config.repeats} --distance {distances} --seed {config.seed}{'' if config.gravity else ' --no-gravity'}")
 
 
 def machine() -> dict:
@@ -418,9 +428,18 @@ def machine() -> dict:
                                 cwd=Path(__file__).resolve().parent, timeout=10).stdout.strip() or None
     except (OSError, subprocess.SubprocessError):
         commit = None
-    return {"cpu_count": os.cpu_count(), "load_average_1min": os.getloadavg()[0], "python": platform.python_version(),
+    return {"cpu_count": os.cpu_count(), "cpu": _cpu_model(), "load_average_1min": os.getloadavg()[0],
+            "when_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "python": platform.python_version(),
             "numpy": np.__version__, "opencv": cv2.__version__, "cv2_threads": cv2.getNumThreads(),
             "platform": platform.platform(), "commit": commit}
+
+
+def _cpu_model() -> str | None:
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return platform.processor() or None
+    return next((line.split(":", 1)[1].strip() for line in text.splitlines() if line.startswith("model name")), None)
 
 
 def _ratio(value: float | None) -> str:
@@ -429,11 +448,16 @@ def _ratio(value: float | None) -> str:
     return f"{value:.1f}x" if value >= 10 else f"{value:.2f}x"
 
 
+def _load_end(box: dict) -> str:
+    return f"-{box['load_average_1min_end']:.1f}" if "load_average_1min_end" in box else ""
+
+
 def format_speed(report: dict) -> str:
     """The readable table: each row's median ratio beside its target, its rounds' medians and its time."""
     config, box = report["config"], report["machine"]
     lines = [f"{config['frames']} frames per distance at {config['distances_m']} m, {config['rounds']} rounds x "
-             f"{config['repeats']} repeats; {box['cpu_count']} cores, load {box['load_average_1min']:.1f}, "
+             f"{config['repeats']} repeats; {box['cpu_count']} cores, load {box['load_average_1min']:.1f}"
+             f"{_load_end(box)}, "
              f"commit {box.get('commit')}",
              "ratio to one reference pass (cv2.threshold, full frame, one thread, preallocated output)",
              f"{'path':<48} {'ratio':>8} {'target':>7} {'met':>5} {'ms':>8}  per round"]
@@ -486,6 +510,8 @@ def plot_speed(report: dict, path: Path, before: dict | None = None) -> None:
         axis.hlines(row["target_ratio"], k - 0.45, k + 0.45, colors="black", linestyles="--",
                     label="target" if k == 0 else None)
     axis.set_yscale("log")
+    shown = [v for v in [*now, *[r["target_ratio"] for r in rows]] if v > 0]
+    axis.set_ylim(min(shown) / 2, max(shown) * 2)  # every target inside the axes
     axis.set_xticks(x, [TARGETS[(r["path"], r["variant"])].label for r in rows], rotation=35, ha="right",
                     fontsize=8)
     axis.set_ylabel("time / one cv2.threshold pass (full frame)")
