@@ -10,13 +10,14 @@ from simulator.bench_speed import PATHS, TARGETS, format_speed, id_window, markd
 from simulator.cli import SPEED_PATHS
 
 ROW_FIELDS = {"path", "variant", "label", "target_ratio", "median_ratio", "round_median_ratios", "p90_ratio",
-              "median_ms", "reference_median_ms", "refusals", "frames", "calls", "met"}
+              "median_ms", "reference_median_ms", "refusals", "frames", "calls", "met", "cpu_median_ratio",
+              "cpu_round_median_ratios"}
 
 
 def _report(ratios: dict[tuple[str, str], float]) -> dict:
     rows = [{"path": path, "variant": variant, "label": TARGETS[(path, variant)].label,
              "target_ratio": TARGETS[(path, variant)].ratio, "median_ratio": ratio, "round_median_ratios": [ratio],
-             "p90_ratio": ratio, "median_ms": 5.0 * ratio, "reference_median_ms": 5.0, "refusals": 0, "frames": 1,
+             "p90_ratio": ratio, "cpu_median_ratio": ratio, "median_ms": 5.0 * ratio, "reference_median_ms": 5.0, "refusals": 0, "frames": 1,
              "calls": 1, "met": ratio <= TARGETS[(path, variant)].ratio} for (path, variant), ratio in ratios.items()]
     return {"rows": rows, "config": {"frames": 1, "rounds": 1, "repeats": 1, "distances_m": [1.0]},
             "machine": {"cpu_count": 2, "load_average_1min": 1.0, "commit": "abc1234"}}
