@@ -279,11 +279,16 @@ def code_version() -> dict:
 def run_cases(cases: tuple[Case, ...], workers: int | None, folder: Path | None = None) -> dict:
     """Every case's per-frame records, summary figures and wall time; with `folder`, each case's bench
     reports as FOLDER/<case>.json."""
-    runs = {}
+    runs: dict[str, dict] = {}
     for case in cases:
         start = time.perf_counter()
         print(f"bench results: {case.name} ({case.bench})", file=sys.stderr, flush=True)
-        reports, frames, figures = RUNNERS[case.bench](case.params, workers)
+        try:
+            reports, frames, figures = RUNNERS[case.bench](case.params, workers)
+        except Exception as error:  # a bench that fails on a branch is that case's result, the others still run
+            runs[case.name] = {"bench": case.bench, "params": case.params, "error": f"{type(error).__name__}: {error}"}
+            print(f"bench results: {case.name} failed: {error}", file=sys.stderr, flush=True)
+            continue
         runs[case.name] = {"bench": case.bench, "params": case.params, "frames": frames, "figures": figures,
                            "wall_s": time.perf_counter() - start}
         if folder is not None:
@@ -315,7 +320,11 @@ def _max_move_mm(before: dict, after: dict) -> float:
 def compare_run(base: dict, now: dict) -> dict:
     """One case now against its baseline: changed decisions, the largest move of a position, the per-frame
     numbers' and summary figures' differences; `ok` unless a decision changed, a position moved by more
-    than TOLERANCE_MM or the frames are not the same ones."""
+    than TOLERANCE_MM or the frames are not the same ones (or the bench failed)."""
+    if "error" in base or "error" in now:
+        return {"frames": 0, "changed": [], "missing": [], "added": [], "max_move_mm": 0.0, "worst_frame": None,
+                "moved": [], "max_number_difference": {}, "figures": {}, "wall_s": [None, None], "ok": False,
+                "error": now.get("error") or f"the baseline's: {base['error']}"}
     before = {f["frame"]: f for f in base["frames"]}
     after = {f["frame"]: f for f in now["frames"]}
     changed: list[dict] = []
@@ -376,7 +385,7 @@ def format_comparison(report: dict, all_figures: bool = False) -> str:
              f"{report['tolerance_mm']} mm",
              f"{'case':<22} {'frames':>6} {'changed':>7} {'max move mm':>11} {'s then':>6} {'s now':>6}  verdict"]
     for name, case in report["cases"].items():
-        verdict = "same" if case["ok"] else "DIFFERENT"
+        verdict = "same" if case["ok"] else f"FAILED ({case['error']})" if "error" in case else "DIFFERENT"
         if case["missing"] or case["added"]:
             verdict += f" ({len(case['missing'])} frames missing, {len(case['added'])} added)"
         then_s, now_s = (f"{s:.0f}" if s is not None else "-" for s in case["wall_s"])
@@ -437,13 +446,16 @@ def run_results_command(args) -> int:
     mode = "quick" if args.quick else "full"
     if args.action == "save":
         saved = save(args.folder, mode, args.workers, args.benches)
-        frames = sum(len(run["frames"]) for run in saved["runs"].values())
+        frames = sum(len(run.get("frames", [])) for run in saved["runs"].values())
+        failed = {name: run["error"] for name, run in saved["runs"].items() if "error" in run}
         if args.json:
-            print(json.dumps({k: v for k, v in saved.items() if k != "runs"} | {"frames": frames}, indent=2))
+            print(json.dumps({k: v for k, v in saved.items() if k != "runs"} | {"frames": frames, "failed": failed},
+                             indent=2))
         else:
             print(f"saved {frames} frames of {len(saved['runs'])} cases ({mode}) into {args.folder / RESULTS_FILE} "
-                  f"in {saved['wall_s']:.0f} s, code {saved['code']}")
-        return 0
+                  f"in {saved['wall_s']:.0f} s, code {saved['code']}"
+                  + "".join(f"\n  {name} FAILED: {error}" for name, error in failed.items()))
+        return 1 if failed else 0
     try:
         report = compare(args.folder, mode, args.workers, args.benches)
     except (OSError, ValueError) as error:

@@ -50,3 +50,8 @@ def test_identical_results_pass_and_missing_frames_fail():
     assert compare_runs(BASE, json.loads(json.dumps(BASE)))["ok"]
     fewer = compare_runs(BASE, _results(_frame("1m/0/auto")))
     assert not fewer["ok"] and fewer["cases"]["accuracy-full"]["missing"] == ["1m/1/auto"]
+
+
+def test_a_bench_that_failed_fails_its_case():
+    report = compare_runs(BASE, {**BASE, "runs": {"accuracy-full": {"bench": "accuracy", "error": "ValueError: x"}}})
+    assert not report["ok"] and "FAILED (ValueError: x)" in format_comparison({**report, "wall_s": 1.0})
