@@ -301,13 +301,16 @@ def selected(mode: str, benches: list[str] | None) -> tuple[Case, ...]:
     return tuple(c for c in cases if benches is None or c.bench in benches)
 
 
-def save(folder: Path, mode: str, workers: int | None, benches: list[str] | None = None) -> dict:
-    folder.mkdir(parents=True, exist_ok=True)
+def save(folder: Path | None, mode: str, workers: int | None, benches: list[str] | None = None) -> dict:
+    """Run the cases; with `folder`, write them there (RESULTS_FILE and each case's bench reports)."""
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     runs = run_cases(selected(mode, benches), workers, folder)
     saved = {"mode": mode, "code": code_version(), "workers": workers or os.cpu_count(), "cpu_count": os.cpu_count(),
              "tolerance_mm": TOLERANCE_MM, "wall_s": time.perf_counter() - start, "runs": runs}
-    (folder / RESULTS_FILE).write_text(json.dumps(saved, indent=1) + "\n")
+    if folder is not None:
+        (folder / RESULTS_FILE).write_text(json.dumps(saved, indent=1) + "\n")
     return saved
 
 
@@ -359,15 +362,16 @@ def compare_runs(base: dict, now: dict) -> dict:
             "ok": bool(cases) and all(c["ok"] for c in cases.values()) and not not_in_baseline}
 
 
-def compare(folder: Path, mode: str, workers: int | None, benches: list[str] | None = None) -> dict:
+def compare(folder: Path, mode: str, workers: int | None, benches: list[str] | None = None,
+            save_to: Path | None = None) -> dict:
+    """The cases run again against FOLDER's; with `save_to`, this run is saved there as well (`save`)."""
     base = json.loads((folder / RESULTS_FILE).read_text())
     if base["mode"] != mode:
         raise ValueError(f"{folder / RESULTS_FILE} holds the {base['mode']} cases: compare with"
                          f"{' --quick' if base['mode'] == 'quick' else 'out --quick'}")
-    start = time.perf_counter()
-    now = {"mode": mode, "code": code_version(), "runs": run_cases(selected(mode, benches), workers)}
+    now = save(save_to, mode, workers, benches)
     report = compare_runs(base, now)
-    report["wall_s"] = time.perf_counter() - start
+    report["wall_s"] = now["wall_s"]
     return report
 
 
@@ -438,6 +442,8 @@ def add_results_bench(benches) -> None:
     results.add_argument("--benches", nargs="+", choices=BENCHES, default=None, help="only these benches' cases")
     results.add_argument("--all-figures", action="store_true", help="compare: list every summary figure, not "
                                                                     "only those that differ")
+    results.add_argument("--save-to", type=Path, default=None, metavar="OUT",
+                         help="compare: also save this run into OUT, as save does (default: not saved)")
     add_bench_flags(results, seed=False)
     results.set_defaults(run=run_results_command)
 
@@ -457,7 +463,7 @@ def run_results_command(args) -> int:
                   + "".join(f"\n  {name} FAILED: {error}" for name, error in failed.items()))
         return 1 if failed else 0
     try:
-        report = compare(args.folder, mode, args.workers, args.benches)
+        report = compare(args.folder, mode, args.workers, args.benches, args.save_to)
     except (OSError, ValueError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
