@@ -8,8 +8,8 @@ report; `save` writes them with the benches' summary figures and reports into DI
 cases again and holds them against DIR:
 - a decision changed (fix or refusal and its reason, beacon ID and where it came from, the orientation rule,
   the gravity prior used, a VLC trial's ID, confidence and frames needed): fails, the frames listed;
-- a position moved by more than `TOLERANCE_MM` (0.01 mm, the largest |difference| of any coordinate of any
-  fix): fails;
+- a position (a fix, office's filtered track) moved by more than `TOLERANCE_MM` (0.01 mm, the 3-D distance):
+  fails;
 - other per-frame numbers (VLC chips seen) and the summary figures: shown side by side, never failing.
 """
 
@@ -315,8 +315,8 @@ def save(folder: Path | None, mode: str, workers: int | None, benches: list[str]
 
 
 def _max_move_mm(before: dict, after: dict) -> float:
-    moves = [abs(a - b) for name in before.keys() & after.keys()
-             for a, b in zip(after[name], before[name], strict=True)]
+    """The longest move (mm) of any of a frame's positions (name -> [x, y, z] m) between `before` and `after`."""
+    moves = [math.dist(after[name], before[name]) for name in before.keys() & after.keys()]
     return 1000.0 * max(moves, default=0.0)
 
 
