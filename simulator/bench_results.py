@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 TOLERANCE_MM = 0.01
+FIGURE_EPSILON = 1e-6  # summary figures closer than this (in their units) are listed as the same
 RESULTS_FILE = "results.json"
 SHOWN_CHANGES = 10  # changed frames listed per case
 
@@ -363,13 +364,18 @@ def compare_runs(base: dict, now: dict) -> dict:
 
 
 def compare(folder: Path, mode: str, workers: int | None, benches: list[str] | None = None,
-            save_to: Path | None = None) -> dict:
-    """The cases run again against FOLDER's; with `save_to`, this run is saved there as well (`save`)."""
+            save_to: Path | None = None, saved: Path | None = None) -> dict:
+    """The cases run again against FOLDER's; with `save_to`, this run is saved there as well (`save`); with
+    `saved`, that folder's saved run instead of running again."""
     base = json.loads((folder / RESULTS_FILE).read_text())
     if base["mode"] != mode:
         raise ValueError(f"{folder / RESULTS_FILE} holds the {base['mode']} cases: compare with"
                          f"{' --quick' if base['mode'] == 'quick' else 'out --quick'}")
-    now = save(save_to, mode, workers, benches)
+    if saved is not None:
+        now = json.loads((saved / RESULTS_FILE).read_text())
+        now["runs"] = {name: run for name, run in now["runs"].items() if benches is None or run["bench"] in benches}
+    else:
+        now = save(save_to, mode, workers, benches)
     report = compare_runs(base, now)
     report["wall_s"] = now["wall_s"]
     return report
@@ -393,7 +399,7 @@ def format_comparison(report: dict, all_figures: bool = False) -> str:
         if case["missing"] or case["added"]:
             verdict += f" ({len(case['missing'])} frames missing, {len(case['added'])} added)"
         then_s, now_s = (f"{s:.0f}" if s is not None else "-" for s in case["wall_s"])
-        lines.append(f"{name:<22} {case['frames']:6d} {len(case['changed']):7d} {case['max_move_mm']:11.6f} "
+        lines.append(f"{name:<22} {case['frames']:6d} {len(case['changed']):7d} {case['max_move_mm']:11.3g} "
                      f"{then_s:>6} {now_s:>6}  {verdict}")
     for name, case in report["cases"].items():
         for change in case["changed"][:SHOWN_CHANGES]:
@@ -407,8 +413,10 @@ def format_comparison(report: dict, all_figures: bool = False) -> str:
         for number, difference in case["max_number_difference"].items():
             if difference:
                 lines.append(f"  {name}: per-frame '{number}' differs by up to {difference:.4g} (shown, not failing)")
-    def same(a, b) -> bool:  # NaN (no fix to average) equals NaN here
-        return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b))
+    def same(a, b) -> bool:  # within FIGURE_EPSILON (an exact rewrite's rounding); NaN (nothing to average) is NaN
+        if a is None or b is None:
+            return a is b
+        return abs(a - b) <= FIGURE_EPSILON or (math.isnan(a) and math.isnan(b))
 
     shown = identical = 0
     lines.append("summary figures, baseline -> now" + ("" if all_figures else " (those that differ)") + ":")
@@ -418,9 +426,12 @@ def format_comparison(report: dict, all_figures: bool = False) -> str:
                 identical += 1
                 continue
             shown += 1
-            lines.append(f"  {name} {figure}: {_number(then)} -> {_number(now_value)}")
+            lines.append(f"  {name} {figure}: {_number(then)} -> {_number(now_value)}"
+                         + (f" ({now_value - then:+.3g})" if isinstance(then, float) and isinstance(now_value, float)
+                            else ""))
     if not all_figures:
-        lines.append(f"  ({shown} differ, {identical} identical; --all-figures shows every one)")
+        lines.append(f"  ({shown} differ by more than {FIGURE_EPSILON:g}, {identical} within it; --all-figures shows "
+                     f"every one)")
     if report["not_in_baseline"]:
         lines.append("cases not in the baseline: " + ", ".join(report["not_in_baseline"]))
     lines.append(f"results {'unchanged' if report['ok'] else 'CHANGED'} ({report['wall_s']:.0f} s)")
@@ -444,6 +455,8 @@ def add_results_bench(benches) -> None:
                                                                     "only those that differ")
     results.add_argument("--save-to", type=Path, default=None, metavar="OUT",
                          help="compare: also save this run into OUT, as save does (default: not saved)")
+    results.add_argument("--saved", type=Path, default=None, metavar="OUT",
+                         help="compare: OUT's saved run (save, or compare --save-to) against DIR, running nothing")
     add_bench_flags(results, seed=False)
     results.set_defaults(run=run_results_command)
 
@@ -463,7 +476,7 @@ def run_results_command(args) -> int:
                   + "".join(f"\n  {name} FAILED: {error}" for name, error in failed.items()))
         return 1 if failed else 0
     try:
-        report = compare(args.folder, mode, args.workers, args.benches, args.save_to)
+        report = compare(args.folder, mode, args.workers, args.benches, args.save_to, args.saved)
     except (OSError, ValueError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
