@@ -191,8 +191,8 @@ def shape_speed_cases(config: SpeedConfig, key: str, scale: float, reference: np
 
 
 # the app cuts an ID frame to its burst's pose window grown by these shares of that window's height and width
-# on each side (android_client FramePipeline.ID_WINDOW_ROW_GROWTH / ID_WINDOW_COLUMN_GROWTH): the panel moves
-# until the burst's last ID frame
+# on each side, rounded up (android_client FramePipeline.idWindow, Window.grown): the panel moves until the
+# burst's last ID frame
 ID_WINDOW_ROW_GROWTH = 0.25
 ID_WINDOW_COLUMN_GROWTH = 0.1
 
@@ -200,7 +200,7 @@ ID_WINDOW_COLUMN_GROWTH = 0.1
 def id_window(pose_window: tuple[int, int, int, int], width: int, height: int) -> tuple[int, int, int, int]:
     """The window (x0, y0, x1, y1) the app cuts a burst's ID frames to from its pose frame's window."""
     x0, y0, x1, y1 = pose_window
-    grow_x, grow_y = round(ID_WINDOW_COLUMN_GROWTH * (x1 - x0)), round(ID_WINDOW_ROW_GROWTH * (y1 - y0))
+    grow_x, grow_y = math.ceil(ID_WINDOW_COLUMN_GROWTH * (x1 - x0)), math.ceil(ID_WINDOW_ROW_GROWTH * (y1 - y0))
     return max(0, x0 - grow_x), max(0, y0 - grow_y), min(width, x1 + grow_x), min(height, y1 + grow_y)
 
 

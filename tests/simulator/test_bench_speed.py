@@ -59,6 +59,7 @@ def test_the_readable_table_and_the_figure_come_from_a_report(tmp_path):
 
 
 @pytest.mark.parametrize(("window", "grown"), [((100, 200, 300, 400), (80, 150, 320, 450)),
-                                               ((0, 10, 50, 990), (0, 0, 55, 1000))])
+                                               ((0, 10, 50, 990), (0, 0, 55, 1000)),
+                                               ((0, 0, 33, 33), (0, 0, 37, 42))])  # rounded up, as the app's
 def test_an_id_window_is_its_pose_window_grown_as_the_app_grows_it(window, grown):
     assert id_window(window, 1000, 1000) == grown
