@@ -149,10 +149,9 @@ class _Problem:
         plane = np.sum(axes[None] * offset[:, :, None, :], axis=1)  # (k, 2, N) in the panel's axes
         return reach, rotation, plane, np.abs(plane) - inner[None]
 
-    def distances_px(self, params: np.ndarray) -> np.ndarray:
-        """Signed distance (px, outward positive) of each point to the outline grown by D:
-        (N,) for one parameter vector (9,), (k, N) for k of them (k, 9) at once."""
-        batch = np.atleast_2d(params)
+    def _terms(self, batch: np.ndarray) -> SimpleNamespace:
+        """The distances (k, N) of k parameter vectors (k, 9) and what they are made of, which
+        the analytic Jacobian reuses."""
         _, axes, _, radius = self._geometry
         reach, rotation, plane, q = self._on_panels(batch)
         qx, qy = q[:, 0], q[:, 1]
@@ -182,6 +181,16 @@ class _Problem:
         # a panel behind the camera (the ray meets its plane backwards) is no pose it can be seen
         # from: a residual far beyond any real one, finite so that the Jacobian's differences are
         distances = np.where(reach > 0, distances, BEHIND_PX)
+        return SimpleNamespace(
+            reach=reach, rotation=rotation, plane=plane, q=q, outside=outside, signed=signed, corner=corner,
+            gx=gx, gy=gy, normal=normal, x=x, y=y, z=z, du=du, dv=dv, scale=scale,
+            on_arc=np.broadcast_to(on_arc, distances.shape), arc_px=arc_px, distances=distances,
+        )  # fmt: skip
+
+    def distances_px(self, params: np.ndarray) -> np.ndarray:
+        """Signed distance (px, outward positive) of each point to the outline grown by D:
+        (N,) for one parameter vector (9,), (k, N) for k of them (k, 9) at once."""
+        distances = self._terms(np.atleast_2d(params)).distances
         return distances if np.ndim(params) == 2 else distances[0]
 
     def segments(self, params: np.ndarray) -> np.ndarray:
@@ -219,12 +228,86 @@ class _Problem:
         return np.concatenate([self.distances_px(params) / point_sigma_px, self.priors(params)], axis=-1)
 
     def jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
-        """d residuals / d params (n, 9), central differences, all eighteen in one batch."""
+        """d residuals / d params (n, 9) at one parameter vector (9,), by the chain rule through
+        `_terms` (one evaluation's cost; `numeric_jacobian` is its reference)."""
+        t = self._terms(params[None])
+        _, axes, _, radius = self._geometry
+        rotation, reach, plane, along = t.rotation[0], t.reach[0], t.plane[0], t.rotation[0] @ self.rays
+        # d R_wc / d (yaw, pitch, roll) of R = Rz Ry Rx: Kz R, Rz Ry Ky Rx, R Kx (K: the generators)
+        cy, sy, cp, sp, cr, sr = (f(a) for a in params[:3] for f in (math.cos, math.sin))
+        rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+        ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+        rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+        turns = np.stack([_GENERATORS[2] @ rotation, rz @ ry @ _GENERATORS[1] @ rx, rotation @ _GENERATORS[0]])
+        # per pose parameter (yaw, pitch, roll, x, y, z; 6 rows): the ray's direction in the map,
+        # its length to the plane, the point on the plane (3, N) and in the panel's axes (2, N)
+        d_along = np.zeros((6, 3, len(self.rays[0])))
+        d_along[:3] = turns @ self.rays
+        grazing = np.abs(along[2]) <= 1e-9  # the rise is held at 1e-9 there: no derivative
+        rise = np.where(grazing, 1e-9, along[2])
+        d_along[:, 2] *= ~grazing
+        d_reach = -reach / rise * d_along[:, 2]
+        d_reach[5] = -1.0 / rise
+        d_offset = d_reach[:, None] * along + reach * d_along
+        d_offset[3:, [0, 1, 2], :] += np.eye(3)[:, :, None]
+        d_plane = np.sum(axes[None] * d_offset[:, :, None, :], axis=1)  # (6, 2, N)
+        gx, gy, corner, outside = t.gx[0], t.gy[0], t.corner[0], t.outside[0]
+        d_signed = gx * d_plane[:, 0] + gy * d_plane[:, 1]
+        # the normal turns with the point on an arc: d w = (d q - w (w . d q)) / |q|, w = q / |q|
+        sign = np.sign(plane)
+        d_q = sign * d_plane
+        w = np.where(corner, np.maximum(t.q[0], 0.0) / np.maximum(outside, 1e-12), 0.0)
+        d_w = (d_q - w * np.sum(w * d_q, axis=1, keepdims=True)) / np.maximum(outside, 1e-12)
+        d_g = np.where(corner, sign * d_w, 0.0)  # (6, 2, N)
+        in_map = axes[:, 0] * gx + axes[:, 1] * gy
+        d_in_map = axes[None, :, 0] * d_g[:, None, 0] + axes[None, :, 1] * d_g[:, None, 1]
+        d_normal = rotation.T @ d_in_map
+        d_normal[:3] += turns.transpose(0, 2, 1) @ in_map
+        normal = t.normal[0]
+        x, y, z = t.x[0], t.y[0], t.z[0]
+        d_z = d_reach * self.rays[2]
+        fx, fy = self.focal_px
+        across_u = normal[0] - x / z * normal[2]  # (x / z is the ray's own: no derivative)
+        across_v = normal[1] - y / z * normal[2]
+        d_du = fx * ((d_normal[:, 0] - x / z * d_normal[:, 2]) / z - across_u * d_z / z**2)
+        d_dv = fy * ((d_normal[:, 1] - y / z * d_normal[:, 2]) / z - across_v * d_z / z**2)
+        scale = t.scale[0]
+        d_scale = (t.du[0] * d_du + t.dv[0] * d_dv) / scale
+        # the curved edge's term b^2 / (2 (R s + D)) where it is above its floor of 1 px
+        bends = t.on_arc[0] & (t.arc_px[0] > 1.0)
+        d_arc = np.where(bends, -(self.blur_px**2) / (2 * np.where(bends, t.arc_px[0], 1.0) ** 2), 0.0)
+        d_pose = d_signed * scale + t.signed[0] * d_scale + d_arc * radius * d_scale
+        d_growth = (d_arc - 1.0) * np.vstack([np.ones_like(scale), self._spread])
+        d_distances = np.vstack([d_pose, d_growth]).T * (reach > 0)[:, None]  # (N, 9); behind: held
+        return np.vstack([d_distances / point_sigma_px, self._priors_jacobian(params)])
+
+    def _priors_jacobian(self, params: np.ndarray) -> np.ndarray:
+        """d priors / d params (m, 9): each term is one parameter less its prior, in its sigma."""
+        rows = []
+        if self.tilt_rad is not None:
+            rows += [(1, self.tilt_sigma_rad), (2, self.tilt_sigma_rad)]
+        if self.yaw_prior_rad is not None:
+            rows.append((0, self.yaw_sigma_rad))
+        if self.growth_prior_px is not None:
+            rows.append((6, self.growth_sigma_px))
+        rows += [(7, self.gradient_sigma_px), (8, self.gradient_sigma_px)]
+        jacobian = np.zeros((len(rows), 9))
+        for row, (column, sigma) in enumerate(rows):
+            jacobian[row, column] = 1.0 / sigma
+        return jacobian
+
+    def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
+        """d residuals / d params (n, 9), central differences, all eighteen in one batch: the
+        reference `jacobian` is tested against."""
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
         return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
 
 
+# d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
+_GENERATORS = np.array(
+    [[[0, 0, 0], [0, 0, -1], [0, 1, 0]], [[0, 0, 1], [0, 0, 0], [-1, 0, 0]], [[0, -1, 0], [1, 0, 0], [0, 0, 0]]], float
+)
 _STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4, 1e-3, 1e-3])  # rad, m, px, px per unit
 
 
