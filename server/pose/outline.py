@@ -128,18 +128,21 @@ class _Problem:
     @cached_property
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Per point: its panel's centre (3, N), axes x_B, y_B in the map (3, 2, N), the half
-        size of the rectangle of the arcs' centres (2, N) and the arcs' radius (N,)."""
-        centres = np.array([b.center_m for b in self.panels], float)[self.panel_of].T
-        axes = np.array([beacon_rotation(b)[:, :2] for b in self.panels])[self.panel_of].transpose(1, 2, 0)
+        size of the rectangle of the arcs' centres (2, N) and the arcs' radius (N,); N is 1
+        (broadcast, the same arithmetic on fewer numbers) when all points are on one panel."""
+        of = self.panel_of if len(self.panels) > 1 else np.zeros(1, int)
+        centres = np.array([b.center_m for b in self.panels], float)[of].T
+        axes = np.array([beacon_rotation(b)[:, :2] for b in self.panels])[of].transpose(1, 2, 0)
         inner = np.array([[w / 2 - b.outline_radius_m, h / 2 - b.outline_radius_m] for b in self.panels
-                          for w, h in [b.extent_m]])[self.panel_of].T  # fmt: skip
-        radius = np.array([b.outline_radius_m for b in self.panels])[self.panel_of]
+                          for w, h in [b.extent_m]])[of].T  # fmt: skip
+        radius = np.array([b.outline_radius_m for b in self.panels])[of]
         return centres, axes, inner, radius
 
     def _on_panels(self, batch: np.ndarray):
         """For k parameter vectors (k, 9): each ray's length to its panel's plane (k, N), the
-        rotations (k, 3, 3), the points in their panel's axes (k, 2, N) and the q of the
-        signed distance (k, 2, N): |point| - inner (both > 0 beyond an arc's centre)."""
+        rotations (k, 3, 3), the points in their panel's axes (k, 2, N), the q of the signed
+        distance (k, 2, N): |point| - inner (both > 0 beyond an arc's centre), and the rays in
+        the map (k, 3, N)."""
         centres, axes, inner, _ = self._geometry
         rotation = _rotations(batch[:, 0], batch[:, 1], batch[:, 2])  # (k, 3, 3) camera to map
         along = rotation @ self.rays  # (k, 3, N)
@@ -147,13 +150,13 @@ class _Problem:
         reach = (centres[2] - batch[:, 5, None]) / rise  # ray length to the ceiling plane, in ray units
         offset = batch[:, 3:6, None] + reach[:, None, :] * along - centres[None]
         plane = np.sum(axes[None] * offset[:, :, None, :], axis=1)  # (k, 2, N) in the panel's axes
-        return reach, rotation, plane, np.abs(plane) - inner[None]
+        return reach, rotation, plane, np.abs(plane) - inner[None], along
 
     def _terms(self, batch: np.ndarray) -> SimpleNamespace:
         """The distances (k, N) of k parameter vectors (k, 9) and what they are made of, which
         the analytic Jacobian reuses."""
         _, axes, _, radius = self._geometry
-        reach, rotation, plane, q = self._on_panels(batch)
+        reach, rotation, plane, q, along = self._on_panels(batch)
         qx, qy = q[:, 0], q[:, 1]
         outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
         signed = outside + np.minimum(np.maximum(qx, qy), 0.0) - radius
@@ -182,8 +185,8 @@ class _Problem:
         # from: a residual far beyond any real one, finite so that the Jacobian's differences are
         distances = np.where(reach > 0, distances, BEHIND_PX)
         return SimpleNamespace(
-            reach=reach, rotation=rotation, plane=plane, q=q, outside=outside, signed=signed, corner=corner,
-            gx=gx, gy=gy, normal=normal, x=x, y=y, z=z, du=du, dv=dv, scale=scale,
+            reach=reach, rotation=rotation, along=along, plane=plane, q=q, outside=outside, signed=signed,
+            corner=corner, gx=gx, gy=gy, in_map=in_map, normal=normal, x=x, y=y, z=z, du=du, dv=dv, scale=scale,
             on_arc=np.broadcast_to(on_arc, distances.shape), arc_px=arc_px, distances=distances,
         )  # fmt: skip
 
@@ -196,7 +199,7 @@ class _Problem:
     def segments(self, params: np.ndarray) -> np.ndarray:
         """Which part of which panel's outline (N,) each point lies on at `params`: 8 per panel,
         0-3 its four sides (left, right, bottom, top in its axes), 4-7 its four corner arcs."""
-        _, _, plane, q = self._on_panels(params[None])
+        _, _, plane, q, _ = self._on_panels(params[None])
         (px, py), (qx, qy) = plane[0], q[0]
         side = np.where(qx >= qy, (px > 0).astype(int), 2 + (py > 0))
         arc = 4 + (px > 0) + 2 * (py > 0)
@@ -227,56 +230,57 @@ class _Problem:
         """Points' distances in their sigma, then the priors: (n,) or (k, n)."""
         return np.concatenate([self.distances_px(params) / point_sigma_px, self.priors(params)], axis=-1)
 
-    def jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
+    def jacobian(self, params: np.ndarray, point_sigma_px: float, terms: SimpleNamespace | None = None) -> np.ndarray:
         """d residuals / d params (n, 9) at one parameter vector (9,), by the chain rule through
-        `_terms` (one evaluation's cost; `numeric_jacobian` is its reference)."""
-        t = self._terms(params[None])
+        `_terms` (`terms`: theirs at `params`, when already evaluated there); about one
+        evaluation's cost, `numeric_jacobian` is its reference."""
+        t = self._terms(params[None]) if terms is None else terms
         _, axes, _, radius = self._geometry
-        rotation, reach, plane, along = t.rotation[0], t.reach[0], t.plane[0], t.rotation[0] @ self.rays
+        rotation, reach, along, plane = t.rotation[0], t.reach[0], t.along[0], t.plane[0]
         # d R_wc / d (yaw, pitch, roll) of R = Rz Ry Rx: Kz R, Rz Ry Ky Rx, R Kx (K: the generators)
         cy, sy, cp, sp, cr, sr = (f(a) for a in params[:3] for f in (math.cos, math.sin))
         rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
         ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
         rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
         turns = np.stack([_GENERATORS[2] @ rotation, rz @ ry @ _GENERATORS[1] @ rx, rotation @ _GENERATORS[0]])
-        # per pose parameter (yaw, pitch, roll, x, y, z; 6 rows): the ray's direction in the map,
-        # its length to the plane, the point on the plane (3, N) and in the panel's axes (2, N)
-        d_along = np.zeros((6, 3, len(self.rays[0])))
-        d_along[:3] = turns @ self.rays
+        # per pose parameter (yaw, pitch, roll, x, y, z: the first axis, 6) the ray's length to
+        # the plane (6, N) and the point's move in the panel's axes (6, 2, N); the position moves
+        # the point by itself, less the ray's change of length
+        turned = turns @ self.rays  # (3, 3, N) the rays' turn in the map
         grazing = np.abs(along[2]) <= 1e-9  # the rise is held at 1e-9 there: no derivative
         rise = np.where(grazing, 1e-9, along[2])
-        d_along[:, 2] *= ~grazing
-        d_reach = -reach / rise * d_along[:, 2]
+        d_reach = np.zeros((6, len(reach)))
+        d_reach[:3] = -reach / rise * turned[:, 2] * ~grazing
         d_reach[5] = -1.0 / rise
-        d_offset = d_reach[:, None] * along + reach * d_along
-        d_offset[3:, [0, 1, 2], :] += np.eye(3)[:, :, None]
-        d_plane = np.sum(axes[None] * d_offset[:, :, None, :], axis=1)  # (6, 2, N)
+        along_panel = np.sum(axes * along[:, None], axis=0)  # (2, N)
+        d_plane = d_reach[:, None] * along_panel
+        d_plane[:3] += reach * np.sum(axes * turned[:, :, None], axis=1)
+        d_plane[3:] += axes  # (3, 2, N or 1): each map axis in the panel's axes x_B, y_B
         gx, gy, corner, outside = t.gx[0], t.gy[0], t.corner[0], t.outside[0]
         d_signed = gx * d_plane[:, 0] + gy * d_plane[:, 1]
         # the normal turns with the point on an arc: d w = (d q - w (w . d q)) / |q|, w = q / |q|
         sign = np.sign(plane)
         d_q = sign * d_plane
-        w = np.where(corner, np.maximum(t.q[0], 0.0) / np.maximum(outside, 1e-12), 0.0)
-        d_w = (d_q - w * np.sum(w * d_q, axis=1, keepdims=True)) / np.maximum(outside, 1e-12)
-        d_g = np.where(corner, sign * d_w, 0.0)  # (6, 2, N)
-        in_map = axes[:, 0] * gx + axes[:, 1] * gy
-        d_in_map = axes[None, :, 0] * d_g[:, None, 0] + axes[None, :, 1] * d_g[:, None, 1]
-        d_normal = rotation.T @ d_in_map
-        d_normal[:3] += turns.transpose(0, 2, 1) @ in_map
-        normal = t.normal[0]
+        width = np.maximum(outside, 1e-12)
+        w = np.maximum(t.q[0], 0.0) / width
+        d_w = (d_q - w * (w[0] * d_q[:, 0] + w[1] * d_q[:, 1])[:, None]) / width
+        d_g = d_w * (sign * corner)  # (6, 2, N); zero on the sides
+        # ... in the camera frame: d (R^T n_map) = R^T (x_B dgx + y_B dgy) + dR^T n_map
+        seen_axes = np.matmul(rotation.T, axes.transpose(2, 0, 1))  # (N or 1, 3, 2)
+        d_normal = seen_axes[:, :, 0].T * d_g[:, None, 0] + seen_axes[:, :, 1].T * d_g[:, None, 1]
+        d_normal[:3] += turns.transpose(0, 2, 1) @ t.in_map[0]
         x, y, z = t.x[0], t.y[0], t.z[0]
         d_z = d_reach * self.rays[2]
         fx, fy = self.focal_px
-        across_u = normal[0] - x / z * normal[2]  # (x / z is the ray's own: no derivative)
-        across_v = normal[1] - y / z * normal[2]
-        d_du = fx * ((d_normal[:, 0] - x / z * d_normal[:, 2]) / z - across_u * d_z / z**2)
-        d_dv = fy * ((d_normal[:, 1] - y / z * d_normal[:, 2]) / z - across_v * d_z / z**2)
+        # du = fx (n_x - x / z n_z) / z with x / z the ray's own (no derivative)
+        d_du = fx * (d_normal[:, 0] - x / z * d_normal[:, 2]) / z - t.du[0] * d_z / z
+        d_dv = fy * (d_normal[:, 1] - y / z * d_normal[:, 2]) / z - t.dv[0] * d_z / z
         scale = t.scale[0]
         d_scale = (t.du[0] * d_du + t.dv[0] * d_dv) / scale
         # the curved edge's term b^2 / (2 (R s + D)) where it is above its floor of 1 px
         bends = t.on_arc[0] & (t.arc_px[0] > 1.0)
         d_arc = np.where(bends, -(self.blur_px**2) / (2 * np.where(bends, t.arc_px[0], 1.0) ** 2), 0.0)
-        d_pose = d_signed * scale + t.signed[0] * d_scale + d_arc * radius * d_scale
+        d_pose = d_signed * scale + (t.signed[0] + d_arc * radius) * d_scale
         d_growth = (d_arc - 1.0) * np.vstack([np.ones_like(scale), self._spread])
         d_distances = np.vstack([d_pose, d_growth]).T * (reach > 0)[:, None]  # (N, 9); behind: held
         return np.vstack([d_distances / point_sigma_px, self._priors_jacobian(params)])
@@ -468,6 +472,24 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
     return replace(problem, blur_px=_blur_px(params[6], level_gap_px), on_arc=problem.on_arcs(params))
 
 
+class _Evaluations:
+    """One fit's residuals and Jacobian: scipy asks for the Jacobian where it has just evaluated
+    the residuals (each accepted step), and the Jacobian reuses that evaluation's `_terms`."""
+
+    def __init__(self, problem: _Problem, point_sigma_px: float):
+        self.problem, self.point_sigma_px = problem, point_sigma_px
+        self.params: np.ndarray | None = None
+        self.terms: SimpleNamespace | None = None
+
+    def residuals(self, params: np.ndarray) -> np.ndarray:
+        self.params, self.terms = params.copy(), self.problem._terms(params[None])
+        return np.concatenate([self.terms.distances[0] / self.point_sigma_px, self.problem.priors(params)])
+
+    def jacobian(self, params: np.ndarray) -> np.ndarray:
+        same = self.params is not None and np.array_equal(params, self.params)
+        return self.problem.jacobian(params, self.point_sigma_px, self.terms if same else None)
+
+
 def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
     """The robust least-squares fit from `start` (x, cost); cost infinite when the start itself
     is not a pose the residuals exist for (the panel's plane behind or edge-on to a ray)."""
@@ -475,11 +497,11 @@ def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: 
     if not np.all(np.isfinite(problem.residuals(start, point_sigma_px))):
         return failed
     try:
+        evaluations = _Evaluations(problem, point_sigma_px)
         return least_squares(
-            problem.residuals,
+            evaluations.residuals,
             start,
-            jac=problem.jacobian,
-            args=(point_sigma_px,),
+            jac=evaluations.jacobian,
             loss="huber",
             f_scale=huber_px / point_sigma_px,
             x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
