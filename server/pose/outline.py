@@ -73,6 +73,12 @@ class OutlineFitRules:
     huber_px: float = 1.0  # points further than this from the outline count linearly
     distances_m: tuple[float, ...] = (0.8, 1.2, 1.8, 2.7, 4.0)  # starts when nothing gives the distance
     growth_probes_px: tuple[float, ...] = (0.3, 2.5)  # where a second minimum is looked for
+    max_evaluations: int = 60  # of one fit's residuals
+    # A start is fitted this far first; one still this many times the cost of a fit already
+    # converged from another start is left there (a rectangle's start with the sides swapped
+    # costs 1e5 times the answer after 60 evaluations): its cost, above the best, cannot win.
+    scout_evaluations: int = 30
+    hopeless_cost_ratio: float = 10.0
     ambiguous_apart_m: float = 0.005  # two minima further apart than this are two answers ...
     ambiguity_chi2: float = 9.0  # ... unless the worse one's chi-square is this much higher (3 sigma)
 
@@ -490,10 +496,13 @@ class _Evaluations:
         return self.problem.jacobian(params, self.point_sigma_px, self.terms if same else None)
 
 
-def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
-    """The robust least-squares fit from `start` (x, cost); cost infinite when the start itself
-    is not a pose the residuals exist for (the panel's plane behind or edge-on to a ray)."""
-    failed = SimpleNamespace(x=start, cost=math.inf)
+def _fit(
+    problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float, max_evaluations: int
+) -> SimpleNamespace:
+    """The robust least-squares fit from `start` (x, cost, status: 0 when `max_evaluations`
+    stopped it); cost infinite when the start itself is not a pose the residuals exist for (the
+    panel's plane behind or edge-on to a ray)."""
+    failed = SimpleNamespace(x=start, cost=math.inf, status=-1)
     if not np.all(np.isfinite(problem.residuals(start, point_sigma_px))):
         return failed
     try:
@@ -505,7 +514,7 @@ def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: 
             loss="huber",
             f_scale=huber_px / point_sigma_px,
             x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
-            max_nfev=60,
+            max_nfev=max_evaluations,
         )
     except ValueError as error:
         # scipy's own check: the residuals or their Jacobian stopped being finite on the way
@@ -513,6 +522,26 @@ def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: 
         if "finite" not in str(error) and "infs or NaNs" not in str(error):
             raise
         return failed
+
+
+def _fit_starts(
+    problem: _Problem, starts: list[np.ndarray], point_sigma_px: float, rules: OutlineFitRules
+) -> list[SimpleNamespace]:
+    """The fits from `starts`, in their order: the most promising (lowest cost) fitted first, each
+    other to `scout_evaluations`, and on to the end (again from its start: the same fit as
+    without the scouting) unless it converged there or is hopeless against the best so far."""
+    huber = rules.huber_px
+    fits: list[SimpleNamespace | None] = [None] * len(starts)
+    best = math.inf
+    for index in sorted(range(len(starts)), key=lambda i: _robust_chi2(problem, starts[i], point_sigma_px, huber)):
+        scout = min(rules.scout_evaluations if math.isfinite(best) else math.inf, rules.max_evaluations)
+        fit = _fit(problem, starts[index], point_sigma_px, huber, int(scout))
+        if fit.status == 0 and scout < rules.max_evaluations and not fit.cost > rules.hopeless_cost_ratio * best:
+            fit = _fit(problem, starts[index], point_sigma_px, huber, rules.max_evaluations)
+        if fit.status != 0:
+            best = min(best, fit.cost)  # converged: what a left start's cost is held against
+        fits[index] = fit
+    return [fit for fit in fits if fit is not None]
 
 
 def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
@@ -645,22 +674,23 @@ def fit_outline(
     sigma = 0.1  # a first guess of the points' noise; measured from the residuals below
     # first with the growth held (`_held`), then free
     held = _held(problem)
-    fits = [
-        (_fit(held, start, sigma, rules.huber_px), rule)
-        for start, rule in _starts(problem, heading_deg, rules.distances_m)
-    ]
+    starts = _starts(problem, heading_deg, rules.distances_m)
+    fits = zip(
+        _fit_starts(held, [start for start, _ in starts], sigma, rules), [rule for _, rule in starts], strict=True
+    )
     first, rule = min(fits, key=lambda item: item[0].cost)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "no start pose puts the panel's outline in front of the camera")
     problem = _from_first_fit(problem, first.x, level_gap_px)
+    fitting = (rules.huber_px, rules.max_evaluations)
     seeds = [first.x]
     if growth_px is None:
         # Growth trades against distance where no opposite sides are in view, and the trade
         # can make a second minimum: look for it from the growth held low and high.
         for probe in rules.growth_probes_px:
             probed = replace(problem, growth_prior_px=probe, growth_sigma_px=0.3)
-            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe], first.x[7:]]), sigma, rules.huber_px).x)
-    minima = [_as_the_rule_expects(_fit(problem, seed, sigma, rules.huber_px).x, beacon, heading_deg) for seed in seeds]
+            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe], first.x[7:]]), sigma, *fitting).x)
+    minima = [_as_the_rule_expects(_fit(problem, seed, sigma, *fitting).x, beacon, heading_deg) for seed in seeds]
     best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
     probes = [_as_the_rule_expects(seed, beacon, heading_deg) for seed in seeds]
     return _finish(
@@ -691,11 +721,11 @@ def fit_outlines(
     growth = HELD_GROWTH_PX if growth_px is None else growth_px
     start = np.array([math.radians(start_yaw_deg), pitch, roll, *start_position_m, growth, 0.0, 0.0])
     sigma = 0.1
-    first = _fit(_held(problem), start, sigma, rules.huber_px)
+    first = _fit(_held(problem), start, sigma, rules.huber_px, rules.max_evaluations)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "the track's pose puts the panels' outlines behind the camera")
     problem = _from_first_fit(problem, first.x, level_gap_px)
-    best = _fit(problem, first.x, sigma, rules.huber_px).x
+    best = _fit(problem, first.x, sigma, rules.huber_px, rules.max_evaluations).x
     return _finish(problem, best, sigma, [first.x], [best], None, lambda x: x, rules)
 
 
@@ -715,7 +745,9 @@ def _finish(
     problem = replace(problem, on_arc=problem.on_arcs(best))
     measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
     if not math.isclose(measured, sigma, rel_tol=0.5):
-        best = _fit(problem, best, measured, rules.huber_px).x  # the priors' weight against the points depends on it
+        best = _fit(
+            problem, best, measured, rules.huber_px, rules.max_evaluations
+        ).x  # the priors' weight against the points depends on it
     best = as_expected(best)
     distances = problem.distances_px(best)
     rms = float(np.sqrt(np.mean(distances**2)))
