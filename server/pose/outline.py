@@ -324,14 +324,11 @@ _STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4, 1e-3, 1e-3])  # rad
 def _rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray) -> np.ndarray:
     """R_wc = Rz(yaw) Ry(pitch) Rx(roll) (`server.geometry.rotation_from_ypr`), radians, (k, 3, 3)."""
     cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
-    return np.stack(
-        [
-            np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
-            np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
-            np.stack([-sp, cp * sr, cp * cr], axis=-1),
-        ],
-        axis=-2,
-    )
+    rotations = np.empty((len(yaw), 3, 3))  # filled entry by entry: one array, no stacking
+    rotations[:, 0, 0], rotations[:, 0, 1], rotations[:, 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    rotations[:, 1, 0], rotations[:, 1, 1], rotations[:, 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    rotations[:, 2, 0], rotations[:, 2, 1], rotations[:, 2, 2] = -sp, cp * sr, cp * cr
+    return rotations
 
 
 def _blur_px(growth_px: float, level_gap_px: float) -> float:
@@ -480,16 +477,21 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
 
 class _Evaluations:
     """One fit's residuals and Jacobian: scipy asks for the Jacobian where it has just evaluated
-    the residuals (each accepted step), and the Jacobian reuses that evaluation's `_terms`."""
+    the residuals (each accepted step), and the Jacobian reuses that evaluation's `_terms`; the
+    residuals at the start, checked before the fit, are not evaluated again for it."""
 
     def __init__(self, problem: _Problem, point_sigma_px: float):
         self.problem, self.point_sigma_px = problem, point_sigma_px
         self.params: np.ndarray | None = None
         self.terms: SimpleNamespace | None = None
+        self.values = np.zeros(0)
 
     def residuals(self, params: np.ndarray) -> np.ndarray:
+        if self.params is not None and np.array_equal(params, self.params):
+            return self.values.copy()
         self.params, self.terms = params.copy(), self.problem._terms(params[None])
-        return np.concatenate([self.terms.distances[0] / self.point_sigma_px, self.problem.priors(params)])
+        self.values = np.concatenate([self.terms.distances[0] / self.point_sigma_px, self.problem.priors(params)])
+        return self.values.copy()
 
     def jacobian(self, params: np.ndarray) -> np.ndarray:
         same = self.params is not None and np.array_equal(params, self.params)
@@ -503,10 +505,10 @@ def _fit(
     stopped it); cost infinite when the start itself is not a pose the residuals exist for (the
     panel's plane behind or edge-on to a ray)."""
     failed = SimpleNamespace(x=start, cost=math.inf, status=-1)
-    if not np.all(np.isfinite(problem.residuals(start, point_sigma_px))):
+    evaluations = _Evaluations(problem, point_sigma_px)
+    if not np.all(np.isfinite(evaluations.residuals(start))):
         return failed
     try:
-        evaluations = _Evaluations(problem, point_sigma_px)
         return least_squares(
             evaluations.residuals,
             start,
