@@ -19,7 +19,9 @@ points of `server.vision.outline` directly:
 - starts: tilt from gravity (level without it); in the levelled view the panel's image is a
   similarity of its outline, so the visible straight sides give the yaw (modulo the shape's
   symmetry, settled by the contract's orientation rule), and opposite sides or the panel's
-  known size the distance; without any opposite pair, a few distances are tried.
+  known size the distance; without any opposite pair, a few distances are tried. The most
+  promising start (lowest cost) is fitted first; another one still `hopeless_cost_ratio` times a
+  converged start's cost after `scout_evaluations` is left there (not expected to end below it).
 - uncertainty: the position's covariance from the fit's information (the points' noise and
   its correlation along the outline measured from the fit's own residuals, a shared offset
   per side or arc, the priors), widened until it explains fits with the growth held low and
