@@ -19,7 +19,9 @@ points of `server.vision.outline` directly:
 - starts: tilt from gravity (level without it); in the levelled view the panel's image is a
   similarity of its outline, so the visible straight sides give the yaw (modulo the shape's
   symmetry, settled by the contract's orientation rule), and opposite sides or the panel's
-  known size the distance; without any opposite pair, a few distances are tried.
+  known size the distance; without any opposite pair, a few distances are tried. The most
+  promising start (lowest cost) is fitted first; another one still `hopeless_cost_ratio` times a
+  converged start's cost after `scout_evaluations` is left there (not expected to end below it).
 - uncertainty: the position's covariance from the fit's information (the points' noise and
   its correlation along the outline measured from the fit's own residuals, a shared offset
   per side or arc, the priors), widened until it explains fits with the growth held low and
@@ -73,6 +75,12 @@ class OutlineFitRules:
     huber_px: float = 1.0  # points further than this from the outline count linearly
     distances_m: tuple[float, ...] = (0.8, 1.2, 1.8, 2.7, 4.0)  # starts when nothing gives the distance
     growth_probes_px: tuple[float, ...] = (0.3, 2.5)  # where a second minimum is looked for
+    max_evaluations: int = 60  # of one fit's residuals
+    # A start is fitted this far first; one still this many times the cost of a fit already
+    # converged from another start is left there (a rectangle's start with the sides swapped
+    # costs 1e5 times the answer after 60 evaluations): its cost, above the best, cannot win.
+    scout_evaluations: int = 30
+    hopeless_cost_ratio: float = 10.0
     ambiguous_apart_m: float = 0.005  # two minima further apart than this are two answers ...
     ambiguity_chi2: float = 9.0  # ... unless the worse one's chi-square is this much higher (3 sigma)
 
@@ -128,18 +136,21 @@ class _Problem:
     @cached_property
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Per point: its panel's centre (3, N), axes x_B, y_B in the map (3, 2, N), the half
-        size of the rectangle of the arcs' centres (2, N) and the arcs' radius (N,)."""
-        centres = np.array([b.center_m for b in self.panels], float)[self.panel_of].T
-        axes = np.array([beacon_rotation(b)[:, :2] for b in self.panels])[self.panel_of].transpose(1, 2, 0)
+        size of the rectangle of the arcs' centres (2, N) and the arcs' radius (N,); N is 1
+        (broadcast, the same arithmetic on fewer numbers) when all points are on one panel."""
+        of = self.panel_of if len(self.panels) > 1 else np.zeros(1, int)
+        centres = np.array([b.center_m for b in self.panels], float)[of].T
+        axes = np.array([beacon_rotation(b)[:, :2] for b in self.panels])[of].transpose(1, 2, 0)
         inner = np.array([[w / 2 - b.outline_radius_m, h / 2 - b.outline_radius_m] for b in self.panels
-                          for w, h in [b.extent_m]])[self.panel_of].T  # fmt: skip
-        radius = np.array([b.outline_radius_m for b in self.panels])[self.panel_of]
+                          for w, h in [b.extent_m]])[of].T  # fmt: skip
+        radius = np.array([b.outline_radius_m for b in self.panels])[of]
         return centres, axes, inner, radius
 
     def _on_panels(self, batch: np.ndarray):
         """For k parameter vectors (k, 9): each ray's length to its panel's plane (k, N), the
-        rotations (k, 3, 3), the points in their panel's axes (k, 2, N) and the q of the
-        signed distance (k, 2, N): |point| - inner (both > 0 beyond an arc's centre)."""
+        rotations (k, 3, 3), the points in their panel's axes (k, 2, N), the q of the signed
+        distance (k, 2, N): |point| - inner (both > 0 beyond an arc's centre), and the rays in
+        the map (k, 3, N)."""
         centres, axes, inner, _ = self._geometry
         rotation = _rotations(batch[:, 0], batch[:, 1], batch[:, 2])  # (k, 3, 3) camera to map
         along = rotation @ self.rays  # (k, 3, N)
@@ -147,14 +158,13 @@ class _Problem:
         reach = (centres[2] - batch[:, 5, None]) / rise  # ray length to the ceiling plane, in ray units
         offset = batch[:, 3:6, None] + reach[:, None, :] * along - centres[None]
         plane = np.sum(axes[None] * offset[:, :, None, :], axis=1)  # (k, 2, N) in the panel's axes
-        return reach, rotation, plane, np.abs(plane) - inner[None]
+        return reach, rotation, plane, np.abs(plane) - inner[None], along
 
-    def distances_px(self, params: np.ndarray) -> np.ndarray:
-        """Signed distance (px, outward positive) of each point to the outline grown by D:
-        (N,) for one parameter vector (9,), (k, N) for k of them (k, 9) at once."""
-        batch = np.atleast_2d(params)
+    def _terms(self, batch: np.ndarray) -> SimpleNamespace:
+        """The distances (k, N) of k parameter vectors (k, 9) and what they are made of, which
+        the analytic Jacobian reuses."""
         _, axes, _, radius = self._geometry
-        reach, rotation, plane, q = self._on_panels(batch)
+        reach, rotation, plane, q, along = self._on_panels(batch)
         qx, qy = q[:, 0], q[:, 1]
         outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
         signed = outside + np.minimum(np.maximum(qx, qy), 0.0) - radius
@@ -182,12 +192,22 @@ class _Problem:
         # a panel behind the camera (the ray meets its plane backwards) is no pose it can be seen
         # from: a residual far beyond any real one, finite so that the Jacobian's differences are
         distances = np.where(reach > 0, distances, BEHIND_PX)
+        return SimpleNamespace(
+            reach=reach, rotation=rotation, along=along, plane=plane, q=q, outside=outside, signed=signed,
+            corner=corner, gx=gx, gy=gy, in_map=in_map, normal=normal, x=x, y=y, z=z, du=du, dv=dv, scale=scale,
+            on_arc=np.broadcast_to(on_arc, distances.shape), arc_px=arc_px, distances=distances,
+        )  # fmt: skip
+
+    def distances_px(self, params: np.ndarray) -> np.ndarray:
+        """Signed distance (px, outward positive) of each point to the outline grown by D:
+        (N,) for one parameter vector (9,), (k, N) for k of them (k, 9) at once."""
+        distances = self._terms(np.atleast_2d(params)).distances
         return distances if np.ndim(params) == 2 else distances[0]
 
     def segments(self, params: np.ndarray) -> np.ndarray:
         """Which part of which panel's outline (N,) each point lies on at `params`: 8 per panel,
         0-3 its four sides (left, right, bottom, top in its axes), 4-7 its four corner arcs."""
-        _, _, plane, q = self._on_panels(params[None])
+        _, _, plane, q, _ = self._on_panels(params[None])
         (px, py), (qx, qy) = plane[0], q[0]
         side = np.where(qx >= qy, (px > 0).astype(int), 2 + (py > 0))
         arc = 4 + (px > 0) + 2 * (py > 0)
@@ -218,27 +238,99 @@ class _Problem:
         """Points' distances in their sigma, then the priors: (n,) or (k, n)."""
         return np.concatenate([self.distances_px(params) / point_sigma_px, self.priors(params)], axis=-1)
 
-    def jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
-        """d residuals / d params (n, 9), central differences, all eighteen in one batch."""
+    def jacobian(self, params: np.ndarray, point_sigma_px: float, terms: SimpleNamespace | None = None) -> np.ndarray:
+        """d residuals / d params (n, 9) at one parameter vector (9,), by the chain rule through
+        `_terms` (`terms`: theirs at `params`, when already evaluated there); about one
+        evaluation's cost, `numeric_jacobian` is its reference."""
+        t = self._terms(params[None]) if terms is None else terms
+        _, axes, _, radius = self._geometry
+        rotation, reach, along, plane = t.rotation[0], t.reach[0], t.along[0], t.plane[0]
+        # d R_wc / d (yaw, pitch, roll) of R = Rz Ry Rx: Kz R, Rz Ry Ky Rx, R Kx (K: the generators)
+        cy, sy, cp, sp, cr, sr = (f(a) for a in params[:3] for f in (math.cos, math.sin))
+        rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+        ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+        rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+        turns = np.stack([_GENERATORS[2] @ rotation, rz @ ry @ _GENERATORS[1] @ rx, rotation @ _GENERATORS[0]])
+        # per pose parameter (yaw, pitch, roll, x, y, z: the first axis, 6) the ray's length to
+        # the plane (6, N) and the point's move in the panel's axes (6, 2, N); the position moves
+        # the point by itself, less the ray's change of length
+        turned = turns @ self.rays  # (3, 3, N) the rays' turn in the map
+        grazing = np.abs(along[2]) <= 1e-9  # the rise is held at 1e-9 there: no derivative
+        rise = np.where(grazing, 1e-9, along[2])
+        d_reach = np.zeros((6, len(reach)))
+        d_reach[:3] = -reach / rise * turned[:, 2] * ~grazing
+        d_reach[5] = -1.0 / rise
+        along_panel = np.sum(axes * along[:, None], axis=0)  # (2, N)
+        d_plane = d_reach[:, None] * along_panel
+        d_plane[:3] += reach * np.sum(axes * turned[:, :, None], axis=1)
+        d_plane[3:] += axes  # (3, 2, N or 1): each map axis in the panel's axes x_B, y_B
+        gx, gy, corner, outside = t.gx[0], t.gy[0], t.corner[0], t.outside[0]
+        d_signed = gx * d_plane[:, 0] + gy * d_plane[:, 1]
+        # the normal turns with the point on an arc: d w = (d q - w (w . d q)) / |q|, w = q / |q|
+        sign = np.sign(plane)
+        d_q = sign * d_plane
+        width = np.maximum(outside, 1e-12)
+        w = np.maximum(t.q[0], 0.0) / width
+        d_w = (d_q - w * (w[0] * d_q[:, 0] + w[1] * d_q[:, 1])[:, None]) / width
+        d_g = d_w * (sign * corner)  # (6, 2, N); zero on the sides
+        # ... in the camera frame: d (R^T n_map) = R^T (x_B dgx + y_B dgy) + dR^T n_map
+        seen_axes = np.matmul(rotation.T, axes.transpose(2, 0, 1))  # (N or 1, 3, 2)
+        d_normal = seen_axes[:, :, 0].T * d_g[:, None, 0] + seen_axes[:, :, 1].T * d_g[:, None, 1]
+        d_normal[:3] += turns.transpose(0, 2, 1) @ t.in_map[0]
+        x, y, z = t.x[0], t.y[0], t.z[0]
+        d_z = d_reach * self.rays[2]
+        fx, fy = self.focal_px
+        # du = fx (n_x - x / z n_z) / z with x / z the ray's own (no derivative)
+        d_du = fx * (d_normal[:, 0] - x / z * d_normal[:, 2]) / z - t.du[0] * d_z / z
+        d_dv = fy * (d_normal[:, 1] - y / z * d_normal[:, 2]) / z - t.dv[0] * d_z / z
+        scale = t.scale[0]
+        d_scale = (t.du[0] * d_du + t.dv[0] * d_dv) / scale
+        # the curved edge's term b^2 / (2 (R s + D)) where it is above its floor of 1 px
+        bends = t.on_arc[0] & (t.arc_px[0] > 1.0)
+        d_arc = np.where(bends, -(self.blur_px**2) / (2 * np.where(bends, t.arc_px[0], 1.0) ** 2), 0.0)
+        d_pose = d_signed * scale + (t.signed[0] + d_arc * radius) * d_scale
+        d_growth = (d_arc - 1.0) * np.vstack([np.ones_like(scale), self._spread])
+        d_distances = np.vstack([d_pose, d_growth]).T * (reach > 0)[:, None]  # (N, 9); behind: held
+        return np.vstack([d_distances / point_sigma_px, self._priors_jacobian(params)])
+
+    def _priors_jacobian(self, params: np.ndarray) -> np.ndarray:
+        """d priors / d params (m, 9): each term is one parameter less its prior, in its sigma."""
+        rows = []
+        if self.tilt_rad is not None:
+            rows += [(1, self.tilt_sigma_rad), (2, self.tilt_sigma_rad)]
+        if self.yaw_prior_rad is not None:
+            rows.append((0, self.yaw_sigma_rad))
+        if self.growth_prior_px is not None:
+            rows.append((6, self.growth_sigma_px))
+        rows += [(7, self.gradient_sigma_px), (8, self.gradient_sigma_px)]
+        jacobian = np.zeros((len(rows), 9))
+        for row, (column, sigma) in enumerate(rows):
+            jacobian[row, column] = 1.0 / sigma
+        return jacobian
+
+    def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
+        """d residuals / d params (n, 9), central differences, all eighteen in one batch: the
+        reference `jacobian` is tested against."""
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
         return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
 
 
+# d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
+_GENERATORS = np.array(
+    [[[0, 0, 0], [0, 0, -1], [0, 1, 0]], [[0, 0, 1], [0, 0, 0], [-1, 0, 0]], [[0, -1, 0], [1, 0, 0], [0, 0, 0]]], float
+)
 _STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4, 1e-3, 1e-3])  # rad, m, px, px per unit
 
 
 def _rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray) -> np.ndarray:
     """R_wc = Rz(yaw) Ry(pitch) Rx(roll) (`server.geometry.rotation_from_ypr`), radians, (k, 3, 3)."""
     cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
-    return np.stack(
-        [
-            np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
-            np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
-            np.stack([-sp, cp * sr, cp * cr], axis=-1),
-        ],
-        axis=-2,
-    )
+    rotations = np.empty((len(yaw), 3, 3))  # filled entry by entry: one array, no stacking
+    rotations[:, 0, 0], rotations[:, 0, 1], rotations[:, 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    rotations[:, 1, 0], rotations[:, 1, 1], rotations[:, 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    rotations[:, 2, 0], rotations[:, 2, 1], rotations[:, 2, 2] = -sp, cp * sr, cp * cr
+    return rotations
 
 
 def _blur_px(growth_px: float, level_gap_px: float) -> float:
@@ -385,22 +477,48 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
     return replace(problem, blur_px=_blur_px(params[6], level_gap_px), on_arc=problem.on_arcs(params))
 
 
-def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float) -> SimpleNamespace:
-    """The robust least-squares fit from `start` (x, cost); cost infinite when the start itself
-    is not a pose the residuals exist for (the panel's plane behind or edge-on to a ray)."""
-    failed = SimpleNamespace(x=start, cost=math.inf)
-    if not np.all(np.isfinite(problem.residuals(start, point_sigma_px))):
+class _Evaluations:
+    """One fit's residuals and Jacobian: scipy asks for the Jacobian where it has just evaluated
+    the residuals (each accepted step), and the Jacobian reuses that evaluation's `_terms`; the
+    residuals at the start, checked before the fit, are not evaluated again for it."""
+
+    def __init__(self, problem: _Problem, point_sigma_px: float):
+        self.problem, self.point_sigma_px = problem, point_sigma_px
+        self.params: np.ndarray | None = None
+        self.terms: SimpleNamespace | None = None
+        self.values = np.zeros(0)
+
+    def residuals(self, params: np.ndarray) -> np.ndarray:
+        if self.params is not None and np.array_equal(params, self.params):
+            return self.values.copy()
+        self.params, self.terms = params.copy(), self.problem._terms(params[None])
+        self.values = np.concatenate([self.terms.distances[0] / self.point_sigma_px, self.problem.priors(params)])
+        return self.values.copy()
+
+    def jacobian(self, params: np.ndarray) -> np.ndarray:
+        same = self.params is not None and np.array_equal(params, self.params)
+        return self.problem.jacobian(params, self.point_sigma_px, self.terms if same else None)
+
+
+def _fit(
+    problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float, max_evaluations: int
+) -> SimpleNamespace:
+    """The robust least-squares fit from `start` (x, cost, status: 0 when `max_evaluations`
+    stopped it); cost infinite when the start itself is not a pose the residuals exist for (the
+    panel's plane behind or edge-on to a ray)."""
+    failed = SimpleNamespace(x=start, cost=math.inf, status=-1)
+    evaluations = _Evaluations(problem, point_sigma_px)
+    if not np.all(np.isfinite(evaluations.residuals(start))):
         return failed
     try:
         return least_squares(
-            problem.residuals,
+            evaluations.residuals,
             start,
-            jac=problem.jacobian,
-            args=(point_sigma_px,),
+            jac=evaluations.jacobian,
             loss="huber",
             f_scale=huber_px / point_sigma_px,
             x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
-            max_nfev=60,
+            max_nfev=max_evaluations,
         )
     except ValueError as error:
         # scipy's own check: the residuals or their Jacobian stopped being finite on the way
@@ -408,6 +526,26 @@ def _fit(problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: 
         if "finite" not in str(error) and "infs or NaNs" not in str(error):
             raise
         return failed
+
+
+def _fit_starts(
+    problem: _Problem, starts: list[np.ndarray], point_sigma_px: float, rules: OutlineFitRules
+) -> list[SimpleNamespace]:
+    """The fits from `starts`, in their order: the most promising (lowest cost) fitted first, each
+    other to `scout_evaluations`, and on to the end (again from its start: the same fit as
+    without the scouting) unless it converged there or is hopeless against the best so far."""
+    huber = rules.huber_px
+    fits: list[SimpleNamespace | None] = [None] * len(starts)
+    best = math.inf
+    for index in sorted(range(len(starts)), key=lambda i: _robust_chi2(problem, starts[i], point_sigma_px, huber)):
+        scout = min(rules.scout_evaluations if math.isfinite(best) else math.inf, rules.max_evaluations)
+        fit = _fit(problem, starts[index], point_sigma_px, huber, int(scout))
+        if fit.status == 0 and scout < rules.max_evaluations and not fit.cost > rules.hopeless_cost_ratio * best:
+            fit = _fit(problem, starts[index], point_sigma_px, huber, rules.max_evaluations)
+        if fit.status != 0:
+            best = min(best, fit.cost)  # converged: what a left start's cost is held against
+        fits[index] = fit
+    return [fit for fit in fits if fit is not None]
 
 
 def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
@@ -540,22 +678,23 @@ def fit_outline(
     sigma = 0.1  # a first guess of the points' noise; measured from the residuals below
     # first with the growth held (`_held`), then free
     held = _held(problem)
-    fits = [
-        (_fit(held, start, sigma, rules.huber_px), rule)
-        for start, rule in _starts(problem, heading_deg, rules.distances_m)
-    ]
+    starts = _starts(problem, heading_deg, rules.distances_m)
+    fits = zip(
+        _fit_starts(held, [start for start, _ in starts], sigma, rules), [rule for _, rule in starts], strict=True
+    )
     first, rule = min(fits, key=lambda item: item[0].cost)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "no start pose puts the panel's outline in front of the camera")
     problem = _from_first_fit(problem, first.x, level_gap_px)
+    fitting = (rules.huber_px, rules.max_evaluations)
     seeds = [first.x]
     if growth_px is None:
         # Growth trades against distance where no opposite sides are in view, and the trade
         # can make a second minimum: look for it from the growth held low and high.
         for probe in rules.growth_probes_px:
             probed = replace(problem, growth_prior_px=probe, growth_sigma_px=0.3)
-            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe], first.x[7:]]), sigma, rules.huber_px).x)
-    minima = [_as_the_rule_expects(_fit(problem, seed, sigma, rules.huber_px).x, beacon, heading_deg) for seed in seeds]
+            seeds.append(_fit(probed, np.concatenate([first.x[:6], [probe], first.x[7:]]), sigma, *fitting).x)
+    minima = [_as_the_rule_expects(_fit(problem, seed, sigma, *fitting).x, beacon, heading_deg) for seed in seeds]
     best = min(minima, key=lambda x: _robust_chi2(problem, x, sigma, rules.huber_px))
     probes = [_as_the_rule_expects(seed, beacon, heading_deg) for seed in seeds]
     return _finish(
@@ -586,11 +725,11 @@ def fit_outlines(
     growth = HELD_GROWTH_PX if growth_px is None else growth_px
     start = np.array([math.radians(start_yaw_deg), pitch, roll, *start_position_m, growth, 0.0, 0.0])
     sigma = 0.1
-    first = _fit(_held(problem), start, sigma, rules.huber_px)
+    first = _fit(_held(problem), start, sigma, rules.huber_px, rules.max_evaluations)
     if not math.isfinite(first.cost):
         return Refusal(FailureReason.pose_failed, "the track's pose puts the panels' outlines behind the camera")
     problem = _from_first_fit(problem, first.x, level_gap_px)
-    best = _fit(problem, first.x, sigma, rules.huber_px).x
+    best = _fit(problem, first.x, sigma, rules.huber_px, rules.max_evaluations).x
     return _finish(problem, best, sigma, [first.x], [best], None, lambda x: x, rules)
 
 
@@ -610,7 +749,9 @@ def _finish(
     problem = replace(problem, on_arc=problem.on_arcs(best))
     measured = _noise_px(problem.distances_px(best), rules.point_sigma_floor_px)
     if not math.isclose(measured, sigma, rel_tol=0.5):
-        best = _fit(problem, best, measured, rules.huber_px).x  # the priors' weight against the points depends on it
+        best = _fit(
+            problem, best, measured, rules.huber_px, rules.max_evaluations
+        ).x  # the priors' weight against the points depends on it
     best = as_expected(best)
     distances = problem.distances_px(best)
     rms = float(np.sqrt(np.mean(distances**2)))

@@ -101,8 +101,8 @@ def outline_points(
     margin = int(rules.half_window_px + rules.neighbour_px) + 2
     x0, y0 = max(0, x - margin), max(0, y - margin)
     x1, y1 = min(width, x + w + margin), min(height, y + h + margin)
-    window = np.ascontiguousarray(pixels[y0:y1, x0:x1])
-    mask = (window > level).astype(np.uint8)
+    window = pixels[y0:y1, x0:x1]  # a view: OpenCV reads it in place, no copy of the box
+    _, mask = cv2.threshold(window, level, 1, cv2.THRESH_BINARY)  # uint8: the same as window > level
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     if not contours:
         return OutlinePoints(np.zeros((0, 2)))

@@ -1,12 +1,13 @@
 """The outline fit on exact outline points (no rendering): what it must recover, and refuse."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from server.geometry import beacon_to_world, dense_beacon_outline_m, rotation_from_ypr, world_to_camera
 from server.outcomes import Refusal
-from server.pose.outline import _as_the_rule_expects, fit_outline, fit_outlines
+from server.pose.outline import OutlineFitRules, _as_the_rule_expects, _problem, fit_outline, fit_outlines
 from shared_schemas import Beacon, FailureReason
 
 K = np.array([[978.0, 0.0, 484.5], [0.0, 978.0, 647.5], [0.0, 0.0, 1.0]])
@@ -70,3 +71,19 @@ def test_the_rule_turns_a_rectangle_pose_by_half_a_turn_about_its_centre():
     assert math.isclose(math.degrees(turned[0]), -30.0, abs_tol=1e-9)
     np.testing.assert_allclose(turned[3:5], [0.7, 1.9])  # mirrored through the point under the centre
     np.testing.assert_array_equal(turned[[1, 2, 5, 6]], params[[1, 2, 5, 6]])
+
+
+def test_the_analytic_jacobian_is_the_central_differences():
+    # two panels, a rounded rectangle and a circle, points off the outline, the blur's arc term on:
+    # every branch of the signed distance (sides, arcs, inside) and of the growth's terms
+    rectangle = Beacon(id=5, center_m=[0.4, 0.1, 1.1], width_m=0.6, height_m=0.2, corner_radius_m=0.03, yaw_deg=20.0)
+    circle = Beacon(id=6, center_m=[-0.2, 0.0, 1.0], shape="circle", diameter_m=0.2)
+    rng = np.random.default_rng(3)
+    panels = [(b, outline_points(b) + rng.normal(0.0, 0.5, (len(outline_points(b)), 2))) for b in (rectangle, circle)]
+    problem = _problem(panels, 1.2, K, gravity(), 0.1, 10.0, None, OutlineFitRules())
+    problem = replace(problem, growth_prior_px=1.0, blur_px=1.5)
+    truth = np.array([math.radians(12.0), math.radians(2.0), math.radians(-3.0), *POSITION, 1.0, 0.2, -0.1])
+    for params in (truth, truth + [0.02, -0.01, 0.01, 0.01, -0.02, 0.03, 0.5, 0.3, 0.2]):
+        for frozen in (problem, replace(problem, on_arc=problem.on_arcs(params))):
+            numeric = frozen.numeric_jacobian(params, 0.1)
+            np.testing.assert_allclose(frozen.jacobian(params, 0.1), numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
