@@ -40,11 +40,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
+from functools import lru_cache
 
 import cv2
 import numpy as np
 
-from server.geometry import angle_deg, beacon_corners_m, beacon_rotation, beacon_to_world, orthonormal_pair, rotation_z
+from server.geometry import angle_deg, beacon_corners_m, beacon_to_world, orthonormal_pair, rotation_z
 from server.outcomes import Refusal
 from server.pose.consistency import FitResiduals, chi_square
 from server.vision.subpixel import MIN_LOCKING_PERIOD_PX, EdgeRules
@@ -92,19 +93,34 @@ class PoseSolution:
     residuals: FitResiduals | None = None
 
 
+@lru_cache(maxsize=256)
+def _beacon_frame(yaw_deg: float, center_m: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
+    rotation, center = rotation_z(yaw_deg), np.asarray(center_m, dtype=float)
+    rotation.setflags(write=False)
+    center.setflags(write=False)
+    return rotation, center
+
+
+def beacon_frame(beacon: Beacon) -> tuple[np.ndarray, np.ndarray]:
+    """(R_wb (3, 3), centre (3,) m) of `beacon` in the map, read-only: the same numbers as
+    `geometry.beacon_rotation` and `beacon.center_m`, made once per beacon (a pose uses them ~8 times)."""
+    return _beacon_frame(beacon.yaw_deg, tuple(beacon.center_m))
+
+
 def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(position, R_wc) of the camera from a beacon-frame PnP solution."""
     rotation_cb, _ = cv2.Rodrigues(rvec)
     position_b = -rotation_cb.T @ tvec.ravel()
-    position = beacon_to_world(beacon, position_b[None, :])[0]
-    return position, beacon_rotation(beacon) @ rotation_cb.T
+    rotation_wb, center = beacon_frame(beacon)
+    position = (position_b[None, :] @ rotation_wb.T + center)[0]  # geometry.beacon_to_world
+    return position, rotation_wb @ rotation_cb.T
 
 
 def _beacon_in_camera(beacon: Beacon, position: np.ndarray, rotation_wc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rvec, tvec) of the beacon frame in the camera, from the camera's pose in the map."""
-    rotation_cw = rotation_wc.T @ beacon_rotation(beacon)
-    rvec, _ = cv2.Rodrigues(rotation_cw)
-    return rvec, (rotation_wc.T @ (np.asarray(beacon.center_m) - position)).reshape(3, 1)
+    rotation_wb, center = beacon_frame(beacon)
+    rvec, _ = cv2.Rodrigues(rotation_wc.T @ rotation_wb)
+    return rvec, (rotation_wc.T @ (center - position)).reshape(3, 1)
 
 
 def _rms(projected: np.ndarray, observed: np.ndarray) -> float:
@@ -154,16 +170,20 @@ def _map_residuals(params, object_points, image_points, camera_matrix, across_gr
 
     params = (rvec, tvec) of the beacon frame in the camera; gravity is predicted as
     R_cb (0, 0, -1) (the beacon frame is level) and compared across the measured one.
+    Written into arrays made once (this runs 3-7 times a fit): the same arithmetic, fewer calls.
     """
     pixel_weight, gravity_weight = weights
     projected, jacobian = cv2.projectPoints(object_points, params[:3], params[3:], camera_matrix, None)
-    image = (projected.reshape(-1) - image_points.reshape(-1)) * pixel_weight
     rotation, rotation_jacobian = cv2.Rodrigues(params[:3])  # d R / d rvec, (3, 9) row-major R
-    down_column = -rotation[:, 2]
-    d_down = -rotation_jacobian.reshape(3, 3, 3)[:, :, 2].T  # (3 components, 3 rvec)
-    tilt = across_gravity @ down_column * gravity_weight
-    d_tilt = np.hstack([across_gravity @ d_down, np.zeros((2, 3))]) * gravity_weight
-    return np.concatenate([image, tilt]), np.vstack([jacobian[:, :6] * pixel_weight, d_tilt])
+    image_terms = 2 * len(object_points)
+    residuals = np.empty(image_terms + 2)
+    np.multiply(projected.reshape(-1) - image_points.reshape(-1), pixel_weight, out=residuals[:image_terms])
+    residuals[image_terms:] = across_gravity @ -rotation[:, 2] * gravity_weight
+    full_jacobian = np.zeros((image_terms + 2, 6))
+    np.multiply(jacobian[:, :6], pixel_weight, out=full_jacobian[:image_terms])
+    d_down = -rotation_jacobian[:, 2::3].T  # d (-R[:, 2]) / d rvec: (3 components, 3 rvec)
+    np.multiply(across_gravity @ d_down, gravity_weight, out=full_jacobian[image_terms:, :3])
+    return residuals, full_jacobian
 
 
 def fuse_gravity(
@@ -241,9 +261,9 @@ def _ippe_square_minima(corners4, image_corners, camera_matrix) -> list[tuple[fl
         corners4, image_corners, camera_matrix, None, flags=cv2.SOLVEPNP_IPPE_SQUARE
     )
     minima = [
-        (float(e), r, t)
-        for e, r, t in zip(np.ravel(errors)[:count], rvecs, tvecs, strict=False)
-        if np.isfinite(e) and np.all(np.isfinite(r)) and np.all(np.isfinite(t))
+        (e, r, t)
+        for e, r, t in zip(np.ravel(errors)[:count].tolist(), rvecs, tvecs, strict=False)
+        if math.isfinite(e) and all(map(math.isfinite, [*r.ravel().tolist(), *t.ravel().tolist()]))
     ]
     return sorted(minima, key=lambda m: m[0])
 
@@ -268,8 +288,8 @@ def _square_ambiguity(
         return 0.0, 0.0
     (first, r0, t0), (last, r1, t1) = minima[0], minima[-1]
     ratio = (first + 1e-9) / (last + 1e-9)
-    positions = [_camera_in_map(beacon, r, t)[0] for r, t in ((r0, t0), (r1, t1))]
-    return float(ratio), float(np.linalg.norm(positions[0] - positions[1]))
+    apart = _camera_in_map(beacon, r0, t0)[0] - _camera_in_map(beacon, r1, t1)[0]
+    return float(ratio), math.sqrt(float(apart @ apart))  # np.linalg.norm's arithmetic
 
 
 def _side_geometry(corners: np.ndarray) -> tuple[list[tuple[float, float]], list[float], list[float]]:
@@ -560,7 +580,7 @@ def _position_covariance(
     to_beacon = np.empty((3, 6))  # d (-R^T t) / d (rvec, tvec)
     to_beacon[:, :3] = -(tvec.ravel() @ by_rvec).T
     to_beacon[:, 3:] = -rotation.T
-    position = beacon_rotation(beacon) @ (to_beacon @ parameters)
+    position = beacon_frame(beacon)[0] @ (to_beacon @ parameters)
     return position @ position.T, factor, fitted
 
 
