@@ -188,33 +188,43 @@ def _map_residuals(params, object_points, image_points, camera_matrix, across_gr
     return residuals, full_jacobian
 
 
-def fuse_gravity(
-    object_points: np.ndarray,
-    image_points: np.ndarray,
-    start: tuple[np.ndarray, np.ndarray],
-    camera_matrix: np.ndarray,
-    gravity_camera: np.ndarray,
-    corner_sigma_px: float,
-    gravity_sigma_deg: float,
-    iterations: int = 6,
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """(rvec, tvec, cost) minimising reprojection error / corner_sigma_px and gravity angle / sigma.
+@dataclass(frozen=True, eq=False)  # identity: holds numpy arrays
+class _MapFit:
+    """The MAP fit's terms (`_map_residuals`): made once, fitted from one or two starts."""
 
-    Gauss-Newton from `start` (rvec, tvec); cost is the sum of squared weighted residuals
-    (chi-square with 2 N + 2 terms), so that two starts can be compared.
-    """
-    g = np.asarray(gravity_camera, dtype=float)
-    across = orthonormal_pair(g / np.linalg.norm(g))
-    weights = (1.0 / corner_sigma_px, 1.0 / np.radians(gravity_sigma_deg))
-    params = np.concatenate([np.ravel(start[0]), np.ravel(start[1])]).astype(float)
-    for _ in range(iterations):
-        residuals, jacobian = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
-        step = np.linalg.solve(jacobian.T @ jacobian, -(jacobian.T @ residuals))
-        params = params + step
-        if np.abs(step).max() < 1e-8:
-            break
-    residuals, _ = _map_residuals(params, object_points, image_points, camera_matrix, across, weights)
-    return params[:3].reshape(3, 1), params[3:].reshape(3, 1), float(residuals @ residuals)
+    object_points: np.ndarray
+    image_points: np.ndarray
+    camera_matrix: np.ndarray
+    across_gravity: np.ndarray  # (2, 3): unit vectors across the measured gravity
+    weights: tuple[float, float]  # 1 / corner sigma (px), 1 / gravity sigma (rad)
+
+    @classmethod
+    def of(cls, object_points, image_points, camera_matrix, gravity_camera, corner_sigma_px, gravity_sigma_deg):
+        g = np.asarray(gravity_camera, dtype=float)
+        across = orthonormal_pair(g / np.linalg.norm(g))
+        weights = (1.0 / corner_sigma_px, 1.0 / np.radians(gravity_sigma_deg))
+        return cls(object_points, image_points, camera_matrix, across, weights)
+
+    def residuals(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return _map_residuals(
+            params, self.object_points, self.image_points, self.camera_matrix, self.across_gravity, self.weights
+        )
+
+    def fit(self, start: tuple[np.ndarray, np.ndarray], iterations: int = 6) -> np.ndarray:
+        """The parameters (rvec, tvec) (6,) Gauss-Newton reaches from `start` (rvec, tvec)."""
+        params = np.concatenate([np.ravel(start[0]), np.ravel(start[1])]).astype(float)
+        for _ in range(iterations):
+            residuals, jacobian = self.residuals(params)
+            step = np.linalg.solve(jacobian.T @ jacobian, -(jacobian.T @ residuals))
+            params = params + step
+            if np.abs(step).max() < 1e-8:
+                break
+        return params
+
+    def cost(self, params: np.ndarray) -> float:
+        """The sum of squared weighted residuals at `params` (chi-square with 2 N + 2 terms)."""
+        residuals, _ = self.residuals(params)
+        return float(residuals @ residuals)
 
 
 def _gravity_angle_deg(rvec: np.ndarray, gravity_camera: np.ndarray) -> float:
@@ -255,19 +265,16 @@ def _map_pose(
     minima). The lower cost wins; a fit that puts the beacon behind the camera never does (None
     when both do)."""
 
-    def fit(start):
-        return fuse_gravity(
-            object_points, image_points, start, camera_matrix, gravity_camera, corner_sigma_px, gravity_sigma_deg
-        )
-
-    candidates = [fit(start)]
-    if try_level or _gravity_angle_deg(candidates[0][0], gravity_camera) > 3 * gravity_sigma_deg:
-        candidates.append(fit(_level_start(image_points, beacon, camera_matrix, gravity_camera)))
-    in_front = [c for c in candidates if c[1][2, 0] > 0]
+    terms = _MapFit.of(object_points, image_points, camera_matrix, gravity_camera, corner_sigma_px, gravity_sigma_deg)
+    candidates = [terms.fit(start)]
+    if try_level or _gravity_angle_deg(candidates[0][:3], gravity_camera) > 3 * gravity_sigma_deg:
+        candidates.append(terms.fit(_level_start(image_points, beacon, camera_matrix, gravity_camera)))
+    in_front = [params for params in candidates if params[5] > 0]
     if not in_front:
         return None
-    best = min(in_front, key=lambda c: c[2])
-    return best[0], best[1]
+    # the costs only to choose between two fits (each is one more evaluation)
+    best = in_front[0] if len(in_front) == 1 else min(in_front, key=terms.cost)
+    return best[:3].reshape(3, 1), best[3:].reshape(3, 1)
 
 
 def _ippe_square_minima(corners4, image_corners, camera_matrix) -> list[tuple[float, np.ndarray, np.ndarray]]:
