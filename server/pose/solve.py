@@ -15,7 +15,7 @@ Gravity prior, two ways:
   parameters minimises the reprojection residuals (divided by the corner noise) plus the
   angle between predicted and measured gravity (divided by the sensor's sigma), started
   from the vision solution, IPPE_SQUARE's best minimum (SQPnP's only when IPPE has none in
-  front of the camera; both lead the fit to the same minimum, within 1e-8 mm on the benches),
+  front of the camera; both lead the fit to the same minimum: the same fixes on the benches),
   and from the gravity one when the square is nearly ambiguous or vision and gravity disagree
   by over 3 sigma. Each source weighs what it knows: a
   large, near panel fixes the tilt by perspective and gravity hardly moves it; a small,
