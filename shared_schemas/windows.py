@@ -9,6 +9,8 @@ rule in Java (its constants come from shared_schemas/capture_protocol.json).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 COARSE_SHORT_SIDE_PX = 480  # the coarse view's short side is at least this: step = short side // it
@@ -49,16 +51,30 @@ def histogram_levels(samples: np.ndarray, plateau_fraction: float = PLATEAU_FRAC
     """(background, plateau) of 8-bit samples: the median and the (1 - plateau_fraction) quantile,
     as the smallest grey levels whose cumulative counts reach them (whole counts against float64
     fractions of the total, so that another language reproduces them exactly)."""
-    cumulative = np.cumsum(np.bincount(samples.ravel(), minlength=256))
+    return count_levels(grey_level_counts(samples), plateau_fraction)
+
+
+def count_levels(counts: np.ndarray, plateau_fraction: float = PLATEAU_FRACTION) -> tuple[float, float]:
+    """`histogram_levels` from the samples' counts (256,) per grey level (whole numbers, any dtype
+    that holds them exactly: the server counts with OpenCV, several times faster than `np.bincount`)."""
+    cumulative = np.cumsum(counts.astype(np.int64, copy=False))
     total = float(cumulative[-1])
     background = float(np.searchsorted(cumulative, 0.5 * total))
     plateau = float(np.searchsorted(cumulative, (1.0 - plateau_fraction) * total))
     return background, plateau
 
 
-def view_levels(small: np.ndarray) -> tuple[float, float]:
-    """(background, plateau) from a coarse view: every other row is plenty for two quantiles."""
-    return histogram_levels(small[::2])
+def grey_level_counts(samples: np.ndarray) -> np.ndarray:
+    """Counts (256,) of each grey level of 8-bit `samples`."""
+    return np.bincount(samples.ravel(), minlength=256)
+
+
+def view_levels(
+    small: np.ndarray, counts: Callable[[np.ndarray], np.ndarray] = grey_level_counts
+) -> tuple[float, float]:
+    """(background, plateau) from a coarse view: every other row is plenty for two quantiles.
+    `counts`: how the grey levels are counted (the server's is OpenCV's, the same whole numbers)."""
+    return count_levels(counts(small[::2]))
 
 
 def frame_levels(pixels: np.ndarray) -> tuple[float, float]:

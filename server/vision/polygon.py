@@ -40,20 +40,29 @@ class Quad:
 
 def intersect_lines(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray | None:
     """Intersection of the line p1-p2 with the line q1-q2 (None if parallel)."""
-    # Written out (Cramer's rule): np.cross costs ~20 us a call on 3-vectors.
-    (px, py), (rx, ry) = p1, np.subtract(p2, p1)
-    (qx, qy), (sx, sy) = q1, np.subtract(q2, q1)
-    denominator = float(rx * sy - ry * sx)
+    point = _intersect(*map(float, (*p1, *p2, *q1, *q2)))
+    return None if point is None else np.array(point, dtype=float)
+
+
+def _intersect(
+    px: float, py: float, p2x: float, p2y: float, qx: float, qy: float, q2x: float, q2y: float
+) -> tuple[float, float] | None:
+    """`intersect_lines` in plain floats. Written out (Cramer's rule): np.cross costs ~20 us a call on 3-vectors."""
+    rx, ry = p2x - px, p2y - py
+    sx, sy = q2x - qx, q2y - qy
+    denominator = rx * sy - ry * sx
     if abs(denominator) < 1e-12:
         return None
     t = ((qx - px) * sy - (qy - py) * sx) / denominator
-    return np.array([px + t * rx, py + t * ry], dtype=float)
+    return px + t * rx, py + t * ry
 
 
-def _merge_collinear(starts: np.ndarray, ends: np.ndarray, max_angle_deg: float) -> list[tuple[np.ndarray, np.ndarray]]:
+def _merge_collinear(
+    starts: list[list[float]], ends: list[list[float]], max_angle_deg: float
+) -> list[tuple[list, list]]:
     """Merge runs of consecutive segments (cyclic) whose directions differ < `max_angle_deg`.
 
-    starts, ends (n, 2): the segments in order; a run is compared by its chord so far.
+    starts, ends (n x 2 floats): the segments in order; a run is compared by its chord so far.
     Returns (start, end) pairs.
     """
 
@@ -79,23 +88,26 @@ def rounded_square_corners(contour: np.ndarray, rules: PolygonRules = PolygonRul
     """Corners of the square circumscribing a rounded-square contour (N, 2)."""
     hull = cv2.convexHull(contour.reshape(-1, 1, 2).astype(np.float32))
     perimeter = cv2.arcLength(hull, True)
-    polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2).astype(float)
-    following = np.roll(polygon, -1, axis=0)
-    lengths = np.hypot(*(following - polygon).T)
+    # Plain floats from here: a polygon of a few dozen vertices costs less in Python than in numpy calls.
+    polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2).tolist()
+    following = polygon[1:] + polygon[:1]
+    lengths = np.hypot([b[0] - a[0] for a, b in zip(polygon, following, strict=True)],
+                       [b[1] - a[1] for a, b in zip(polygon, following, strict=True)]).tolist()
     # the corner arcs' short segments go (not "shorter than the mean": when RDP leaves one
     # vertex per corner, as for a large panel with small corners, that drops two real sides)
-    long_enough = lengths >= 0.5 * lengths.max()
-    sides = _merge_collinear(polygon[long_enough], following[long_enough], rules.merge_angle_deg)
+    shortest = 0.5 * max(lengths)
+    kept = [k for k, length in enumerate(lengths) if length >= shortest]
+    sides = _merge_collinear([polygon[k] for k in kept], [following[k] for k in kept], rules.merge_angle_deg)
     if len(sides) < 4:
         return Refusal(FailureReason.not_four_sides, f"the outline has {len(sides)} straight sides, not 4")
-    side_lengths = np.array([np.hypot(*(end - start)) for start, end in sides])
-    longest = sorted(np.argsort(side_lengths)[-4:])  # keep the contour's cyclic order
+    side_lengths = np.hypot([end[0] - start[0] for start, end in sides], [end[1] - start[1] for start, end in sides])
+    longest = sorted(np.argsort(side_lengths)[-4:].tolist())  # keep the contour's cyclic order
     if side_lengths[longest].sum() < rules.min_side_share * perimeter:
         return Refusal(FailureReason.not_four_sides, "the four longest sides cover too little of the outline")
     chosen = [sides[i] for i in longest]
     corners = []
     for previous, current in zip(chosen[-1:] + chosen[:-1], chosen, strict=True):
-        corner = intersect_lines(previous[0], previous[1], current[0], current[1])
+        corner = _intersect(*previous[0], *previous[1], *current[0], *current[1])
         if corner is None:
             return Refusal(FailureReason.not_four_sides, "two neighbouring sides are parallel")
         corners.append(corner)

@@ -18,7 +18,14 @@ from server.outcomes import Refusal
 from server.vision.binarize import Levels, threshold
 from server.vision.contour import BlobRules, PanelLook, find_beacon_blob
 from shared_schemas import FailureReason, FrameMeta
-from shared_schemas.windows import COARSE_SHORT_SIDE_PX, ROI_MARGIN_PX, coarse_step, coarse_view, view_levels
+from shared_schemas.windows import (
+    COARSE_SHORT_SIDE_PX,
+    ROI_MARGIN_PX,
+    coarse_step,
+    coarse_view,
+    grey_level_counts,
+    view_levels,
+)
 
 
 @dataclass(frozen=True)
@@ -68,7 +75,15 @@ class FrameView:
 
 def coarse_levels(small: np.ndarray) -> Levels:
     """The frame's levels from its coarse view (the contract's rule: `crop.levels_dn`)."""
-    return Levels(*view_levels(small))
+    return Levels(*view_levels(small, _grey_level_counts))
+
+
+def _grey_level_counts(samples: np.ndarray) -> np.ndarray:
+    """`grey_level_counts` by OpenCV: ~3x faster than `np.bincount`, which first widens every sample to
+    int64; its float32 counts are whole numbers, exact below 2^24 samples (a coarse view has < 2^20)."""
+    if samples.size >= 1 << 24:
+        return grey_level_counts(samples)
+    return cv2.calcHist([samples], [0], None, [256], [0, 256]).ravel()
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,16 @@ from server.geometry import (
 )
 from server.outcomes import Refusal
 from server.pose.ordering import order_corners
-from server.pose.solve import GravityMode, _map_residuals, pose_with_gravity, solve_pose
+from server.pose.solve import (
+    GravityMode,
+    PoseRules,
+    _camera_in_map,
+    _map_pose,
+    _map_residuals,
+    _vision_pose,
+    pose_with_gravity,
+    solve_pose,
+)
 from shared_schemas import Beacon, CameraIntrinsics, FailureReason, OrientationRule
 
 CAMERA = CameraIntrinsics(fx=977.78, fy=977.78, cx=484.5, cy=647.5)
@@ -140,6 +149,25 @@ def test_map_prior_weighs_vision_and_gravity_by_what_each_knows():
     # vision's tilt is ~0.5 degree uncertain here, the sensor's 0.1: the fit keeps ~4 % of vision's error
     assert tilt_error_deg(fused.rotation_wc, rotation) < min(0.1, tilt_error_deg(vision.rotation_wc, rotation) / 5)
     assert np.linalg.norm(fused.position_m - [0.6, -0.4, 0]) < np.linalg.norm(vision.position_m - [0.6, -0.4, 0])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_map_fit_from_ippe_reaches_the_minimum_the_vision_pose_starts_it_at(seed):
+    # the MAP fit starts from IPPE_SQUARE's best minimum, not SQPnP + LM: the same fix (speed, issue 30)
+    rng = np.random.default_rng(seed)
+    beacon = Beacon(id=0, center_m=[0, 0, rng.uniform(1.0, 3.0)], side_m=0.174)
+    rotation = rotation_from_ypr(rng.uniform(-40, 40), *rng.uniform(-10, 10, 2))
+    corners, center = project(beacon, np.array([*rng.uniform(-0.5, 0.5, 2), 0.0]), rotation)
+    corners = corners + rng.normal(0, 0.05, corners.shape)
+    gravity = gravity_of(rotation_from_ypr(0.0, *rng.normal(0, 0.1, 2)) @ rotation)
+    pose = solve_pose(corners, center, beacon, K, gravity, 0.1, GravityMode.auto, 0.05)
+    object_points = np.vstack([model_corners_m(beacon.side_m), np.zeros(3)])
+    image_points = np.vstack([corners, center])
+    vision = _vision_pose(object_points, image_points, K)
+    try_level = pose.ambiguity_ratio > PoseRules().max_ambiguity_ratio / 4
+    rvec, tvec = _map_pose(object_points, image_points, vision, beacon, K, gravity, 0.05, 0.1, try_level)
+    position, _ = _camera_in_map(beacon, rvec, tvec)
+    np.testing.assert_allclose(pose.position_m, position, atol=1e-9)
 
 
 # Corners the pipeline measured at commit 64752c6 on two face-to-face frames of

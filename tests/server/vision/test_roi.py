@@ -2,8 +2,10 @@
 
 import numpy as np
 
-from server.vision.roi import RoiRules, coarse_view, find_roi
+from server.vision.binarize import Levels
+from server.vision.roi import RoiRules, _grey_level_counts, coarse_levels, coarse_view, find_roi
 from shared_schemas import FailureReason
+from shared_schemas.windows import grey_level_counts, view_levels
 
 HEIGHT, WIDTH = 1296, 970  # step 2: the frame's last row and column are not on the grid
 
@@ -57,3 +59,11 @@ def test_a_window_is_read_on_the_full_frames_grid_and_finds_the_same_region():
     assert whole.levels == Levels(8.0, 255.0)
     alone = find_roi(window)
     assert getattr(alone, "reason", None) is FailureReason.no_beacon
+
+
+def test_opencv_counts_the_grey_levels_as_numpy_does():
+    # the coarse levels count with cv2.calcHist (float32), the contract's rule with np.bincount
+    rng = np.random.default_rng(3)
+    view = coarse_view(rng.integers(0, 256, (HEIGHT, WIDTH), dtype=np.uint8), 2)[::2]  # rows of a view, not contiguous
+    np.testing.assert_array_equal(_grey_level_counts(view), grey_level_counts(view))
+    assert coarse_levels(view) == Levels(*view_levels(view))
