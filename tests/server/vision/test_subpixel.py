@@ -1,6 +1,8 @@
 """Sub-pixel stage: the corner geometry that measures the clipped-edge growth, the blur
 estimate, the side error model, and the whole stage on rendered noise-free frames."""
 
+import warnings
+
 import cv2
 import numpy as np
 import pytest
@@ -15,6 +17,7 @@ from server.vision.binarize import blur, threshold
 from server.vision.subpixel import (
     _fit_lines,
     _line_offset_sigma,
+    _nanmedians,
     _outward_normals,
     _remove_pixel_locking,
     blur_sigma_px,
@@ -73,6 +76,17 @@ def test_blur_is_read_from_two_level_crossings(sigma_px, growth_px):
     gap = x[np.argmin(np.abs(amplitude_ratio - 0.5))] - growth_px
     assert blur_sigma_px(growth_px, gap) == pytest.approx(sigma_px, rel=2e-3)
     assert blur_sigma_px(growth_px, float("nan")) is None
+
+
+def test_row_medians_are_numpys_nanmedian():
+    rng = np.random.default_rng(3)
+    values = rng.normal(0, 1, (40, 4, 25))
+    values[rng.random(values.shape) < np.linspace(0, 1, 40)[:, None, None]] = np.nan  # none missing to all
+    for rows in [*values, values[0, :, :1], values[1, :, :2]]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # numpy's "All-NaN slice"
+            expected = np.nanmedian(rows, axis=1)
+        np.testing.assert_array_equal(_nanmedians(rows), expected)
 
 
 def test_a_slow_wave_along_a_side_counts_more_than_noise():
