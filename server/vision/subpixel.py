@@ -198,26 +198,23 @@ def _fit_lines(
     further than 3.5 robust sigmas (MAD) from the first fit are dropped: a noise crossing
     must not tilt a side.
     """
-    x, y = points[..., 0], points[..., 1]
+    coords = np.ascontiguousarray(np.moveaxis(points, 2, 0))  # (2, 4, n): x, y, each row summed pairwise
+    sides = np.arange(4)
     for _ in range(2):
-        total = weights.sum(axis=1)
-        cx, cy = (weights * x).sum(axis=1) / total, (weights * y).sum(axis=1) / total
-        dx, dy = x - cx[:, None], y - cy[:, None]
-        sxx, syy, sxy = (
-            (weights * dx * dx).sum(axis=1),
-            (weights * dy * dy).sum(axis=1),
-            (weights * dx * dy).sum(axis=1),
-        )
+        centres = (weights * coords).sum(axis=2) / weights.sum(axis=1)  # (2, 4)
+        deltas = coords - centres[..., None]
+        sxx, syy, sxy = (weights * deltas[[0, 1, 0]] * deltas[[0, 1, 1]]).sum(axis=2)
         along = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the scatter's major axis
-        normal = np.column_stack([-np.sin(along), np.cos(along)])
-        normal *= np.sign(np.sum(normal * outward, axis=1))[:, None]
-        lines = np.column_stack([normal, -(normal[:, 0] * cx + normal[:, 1] * cy)])
-        residuals = dx * normal[:, :1] + dy * normal[:, 1:]
-        ordered = np.sort(np.where(weights > 0, np.abs(residuals), np.inf), axis=1)
-        spread = ordered[np.arange(4), (weights > 0).sum(axis=1) // 2] * 1.4826  # MAD of each side
-        weights = weights * (np.abs(residuals) <= 3.5 * np.maximum(spread, 1e-3)[:, None])
+        normal = np.stack([-np.sin(along), np.cos(along)])  # (2, 4)
+        normal *= np.sign(np.sum(normal * outward.T, axis=0))
+        residuals = deltas[0] * normal[0, :, None] + deltas[1] * normal[1, :, None]
+        kept, distances = weights > 0, np.abs(residuals)
+        ordered = np.sort(np.where(kept, distances, np.inf), axis=1)
+        spread = ordered[sides, kept.sum(axis=1) // 2] * 1.4826  # MAD of each side
+        weights = weights * (distances <= 3.5 * np.maximum(spread, 1e-3)[:, None])
+    lines = np.column_stack([normal.T, -(normal[0] * centres[0] + normal[1] * centres[1])])
     if phase_points is not None:
-        lines, residuals = _remove_pixel_locking(lines, points, weights, phase_points, np.column_stack([cx, cy]))
+        lines, residuals = _remove_pixel_locking(lines, points, weights, phase_points, centres.T)
     rms = np.sqrt(np.sum(weights * residuals**2, axis=1) / weights.sum(axis=1))
     return lines, rms, _line_offset_sigma(residuals, weights, rms)
 
@@ -254,46 +251,46 @@ def _remove_pixel_locking(
     refitted and each side keeps its L in its offset and, over the part of the period it crosses,
     in its turn (`solve.side_errors` counts both).
     """
+    sides = np.arange(4)
     normal = lines[:, :2]
-    tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
+    tangent = normal[:, ::-1] * [-1.0, 1.0]
     axis = np.argmax(np.abs(normal), axis=1)  # 0: the side's outward axis is x
-    sign = np.sign(normal[np.arange(4), axis])
-    phase = np.mod(sign[:, None] * phase_points[np.arange(4), :, axis], 1.0)
+    sign = np.sign(normal[sides, axis])
+    phase = np.mod(sign[:, None] * phase_points[sides, :, axis], 1.0)
     offset = points - centres[:, None, :]
     residuals = offset[..., 0] * normal[:, :1] + offset[..., 1] * normal[:, 1:]
     along = offset[..., 0] * tangent[:, :1] + offset[..., 1] * tangent[:, 1:]
     kept = weights > 0
     extent = np.where(kept, along, -np.inf).max(axis=1) - np.where(kept, along, np.inf).min(axis=1)
-    spans = np.abs(tangent[np.arange(4), axis]) * extent  # px the line crosses on its outward axis
-    sampled = spans >= min_phase_span_px
+    spans = np.abs(tangent[sides, axis]) * extent  # px the line crosses on its outward axis
     if spans.max() < min_period_span_px:
         return lines, residuals
     # columns: a small turn of each side (4), a shift of each side (4), the series (2 per harmonic)
     design = np.zeros(points.shape[:2] + (8 + 2 * harmonics,))
-    sides = np.arange(4)
     design[sides, :, sides] = along
     design[sides, :, 4 + sides] = 1.0
-    angle = 2 * np.pi * phase
-    for m in range(1, harmonics + 1):
-        design[..., 6 + 2 * m] = -np.cos(m * angle) * sampled[:, None]
-        design[..., 7 + 2 * m] = -np.sin(m * angle) * sampled[:, None]
-    # Normal equations with einsum, not lstsq: LAPACK's least squares wakes OpenBLAS's threads,
-    # which then spin on a 2-core machine and stall every stage after them by milliseconds.
-    weighted = design * weights[..., None]
-    normal_matrix = np.einsum("kni,knj->ij", weighted, design)
-    solution = np.linalg.solve(normal_matrix, -np.einsum("kni,kn->i", weighted, residuals))
+    angles = (2 * np.pi * phase)[..., None] * np.arange(1, harmonics + 1)  # (4, n, harmonics)
+    cosines, sines = np.cos(angles), np.sin(angles)
+    sampled = (spans >= min_phase_span_px)[:, None, None]
+    design[..., 8::2] = -cosines * sampled
+    design[..., 9::2] = -sines * sampled
+    # Normal equations by one matrix product (a 12 x 4n by 4n x 12 GEMM, far below OpenBLAS's
+    # threading threshold), not lstsq: LAPACK's least squares wakes OpenBLAS's threads, which
+    # then spin on a 2-core machine and stall every stage after them by milliseconds.
+    weighted = (design * weights[..., None]).reshape(-1, design.shape[2])
+    normal_matrix = weighted.T @ design.reshape(-1, design.shape[2])
+    solution = np.linalg.solve(normal_matrix, -(weighted.T @ residuals.reshape(-1)))
     # L, fitted on the sides that sample its phase, is taken out of all four (the edge profile
-    # is the same): each side's turn and shift are fitted again to its crossings less L.
-    harmonic = np.arange(1, harmonics + 1)
-    locking = (
-        np.cos(angle[..., None] * harmonic) @ solution[8::2] + np.sin(angle[..., None] * harmonic) @ solution[9::2]
-    )
-    own = np.stack([along, np.ones_like(along)], axis=-1)
-    weighted_own = own * weights[..., None]
-    turn, shift = np.linalg.solve(
-        np.einsum("kni,knj->kij", weighted_own, own),
-        np.einsum("kni,kn->ki", weighted_own, locking - residuals)[..., None],
-    )[..., 0].T
+    # is the same): each side's turn and shift are fitted again to its crossings less L. Their
+    # 2 x 2 normal equations are the diagonal blocks of the ones above.
+    locking = cosines @ solution[8::2] + sines @ solution[9::2]
+    target = locking - residuals
+    moment_0, moment_1 = normal_matrix[sides + 4, sides + 4], normal_matrix[sides, sides + 4]
+    moment_2 = normal_matrix[sides, sides]
+    rhs_turn, rhs_shift = np.sum(weights * along * target, axis=1), np.sum(weights * target, axis=1)
+    determinant = moment_2 * moment_0 - moment_1**2
+    turn = (moment_0 * rhs_turn - moment_1 * rhs_shift) / determinant
+    shift = (moment_2 * rhs_shift - moment_1 * rhs_turn) / determinant
     new_normal = normal + turn[:, None] * tangent
     scale = np.linalg.norm(new_normal, axis=1)
     c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
