@@ -56,6 +56,9 @@ MIN_LOCKING_PERIOD_PX = 0.5
 # A gap between two level crossings along a pixel row or column is off by their pixel-locking
 # errors (~0.06 px rms each, `PoseRules.pixel_locking_sigma_px`), which do not average out there.
 LOCKING_GAP_PX = 0.085
+# the blurs (px) `blur_sigma_px` reads the level gap against
+BLUR_TABLE_PX = np.linspace(0.1, 8.0, 160)
+BLUR_TABLE_PX.flags.writeable = False
 
 
 @dataclass(frozen=True)
@@ -103,14 +106,40 @@ class EdgeFit:
     locking_px: float | None = None
 
 
+def _norms(vectors: np.ndarray) -> np.ndarray:
+    """Euclidean lengths along the last axis: `np.linalg.norm(vectors, axis=-1)`'s own arithmetic
+    (the root of the summed squares), without its Python layers."""
+    return np.sqrt((vectors * vectors).sum(axis=-1))
+
+
+def _linspace(start: float, stop: float, num: int) -> np.ndarray:
+    """`np.linspace(start, stop, num)` for num >= 2 and start != stop, by its own arithmetic (the
+    same values) without its Python layers."""
+    values = np.arange(num, dtype=float) * ((stop - start) / (num - 1)) + start
+    values[-1] = stop
+    return values
+
+
+def _nanmedians(values: np.ndarray) -> np.ndarray:
+    """Median of each row of `values` (k, n) float, its NaNs left out (NaN for a row of NaNs).
+
+    The value `np.nanmedian(values, axis=1)` gives (the mean of the two middle values of an even
+    count), from one sort: numpy's own takes its masked-array path for rows this short, ~50 calls.
+    """
+    ordered = np.sort(values, axis=1)  # NaNs sort last
+    counts = values.shape[1] - np.count_nonzero(np.isnan(values), axis=1)
+    rows = np.arange(len(values))
+    return (ordered[rows, (counts - 1) // 2] + ordered[rows, counts // 2]) / 2  # a row of NaNs: both NaN
+
+
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit directions, outward normals and lengths of the four sides of a convex quad."""
     starts, ends = corners, corners[NEXT]
     directions = ends - starts
-    lengths = np.linalg.norm(directions, axis=1)
+    lengths = _norms(directions)
     directions = directions / lengths[:, None]
-    normals = np.stack([directions[:, 1], -directions[:, 0]], axis=1)
-    outward = np.sign(np.sum(normals * ((starts + ends) / 2 - corners.mean(axis=0)), axis=1))
+    normals = directions[:, ::-1] * [1.0, -1.0]
+    outward = np.sign((normals * ((starts + ends) / 2 - corners.mean(axis=0))).sum(axis=1))
     return directions, normals * outward[:, None], lengths
 
 
@@ -159,9 +188,9 @@ def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> 
 
 def _side_profiles(corners, directions, normals, lengths, straight_fraction, rules):
     """Base points (4, n, 2) on the straight part of each side, and their outward normals."""
-    n_along = int(np.clip(lengths.min() / 2, 12, rules.max_profiles_per_side))
+    n_along = int(min(max(float(lengths.min()) / 2, 12), rules.max_profiles_per_side))
     start = (1.0 - straight_fraction) / 2 + rules.corner_margin
-    along = np.linspace(start, 1.0 - start, n_along)
+    along = _linspace(start, 1.0 - start, n_along)
     bases = corners[:, None, :] + along[None, :, None] * (lengths[:, None, None] * directions[:, None, :])
     return bases.reshape(-1, 2), np.repeat(normals, n_along, axis=0), n_along
 
@@ -173,13 +202,13 @@ def _arc_profiles(corners, directions, radius_px, rules):
     along side k - 1, the arc of radius R is centre - R (cos t v + sin t u) for t in 0..90 deg.
     """
     arc_length = np.pi / 2 * radius_px * rules.arc_span_deg / 90.0
-    n_arc = int(np.clip(arc_length, 6, rules.max_profiles_per_corner))
-    half_span = np.radians(rules.arc_span_deg) / 2
-    t = np.pi / 4 + np.linspace(-half_span, half_span, n_arc)
+    n_arc = int(min(max(arc_length, 6), rules.max_profiles_per_corner))
+    half_span = math.radians(rules.arc_span_deg) / 2
+    t = np.pi / 4 + _linspace(-half_span, half_span, n_arc)
     u = directions
     v = -directions[PREVIOUS]
     outward = -(np.cos(t)[None, :, None] * v[:, None, :] + np.sin(t)[None, :, None] * u[:, None, :])
-    outward /= np.linalg.norm(outward, axis=2, keepdims=True)
+    outward /= _norms(outward)[..., None]
     centres = corners + radius_px * (u + v)
     bases = centres[:, None, :] + radius_px * outward
     return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
@@ -205,17 +234,17 @@ def _fit_lines(
         deltas = coords - centres[..., None]
         sxx, syy, sxy = (weights * deltas[[0, 1, 0]] * deltas[[0, 1, 1]]).sum(axis=2)
         along = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the scatter's major axis
-        normal = np.stack([-np.sin(along), np.cos(along)])  # (2, 4)
-        normal *= np.sign(np.sum(normal * outward.T, axis=0))
+        normal = np.array([-np.sin(along), np.cos(along)])  # (2, 4)
+        normal *= np.sign((normal * outward.T).sum(axis=0))
         residuals = deltas[0] * normal[0, :, None] + deltas[1] * normal[1, :, None]
         kept, distances = weights > 0, np.abs(residuals)
         ordered = np.sort(np.where(kept, distances, np.inf), axis=1)
         spread = ordered[sides, kept.sum(axis=1) // 2] * 1.4826  # MAD of each side
         weights = weights * (distances <= 3.5 * np.maximum(spread, 1e-3)[:, None])
-    lines = np.column_stack([normal.T, -(normal[0] * centres[0] + normal[1] * centres[1])])
+    lines = np.array([*normal, -(normal[0] * centres[0] + normal[1] * centres[1])]).T.copy()
     if phase_points is not None:
         lines, residuals = _remove_pixel_locking(lines, points, weights, phase_points, centres.T)
-    rms = np.sqrt(np.sum(weights * residuals**2, axis=1) / weights.sum(axis=1))
+    rms = np.sqrt((weights * residuals**2).sum(axis=1) / weights.sum(axis=1))
     return lines, rms, _line_offset_sigma(residuals, weights, rms)
 
 
@@ -287,14 +316,14 @@ def _remove_pixel_locking(
     target = locking - residuals
     moment_0, moment_1 = normal_matrix[sides + 4, sides + 4], normal_matrix[sides, sides + 4]
     moment_2 = normal_matrix[sides, sides]
-    rhs_turn, rhs_shift = np.sum(weights * along * target, axis=1), np.sum(weights * target, axis=1)
+    rhs_turn, rhs_shift = (weights * along * target).sum(axis=1), (weights * target).sum(axis=1)
     determinant = moment_2 * moment_0 - moment_1**2
     turn = (moment_0 * rhs_turn - moment_1 * rhs_shift) / determinant
     shift = (moment_2 * rhs_shift - moment_1 * rhs_turn) / determinant
     new_normal = normal + turn[:, None] * tangent
-    scale = np.linalg.norm(new_normal, axis=1)
-    c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
-    new_lines = np.column_stack([new_normal, c]) / scale[:, None]
+    scale = _norms(new_normal)
+    c = lines[:, 2] + shift - turn * (tangent * centres).sum(axis=1)
+    new_lines = np.array([*new_normal.T, c]).T / scale[:, None]
     new_residuals = points[..., 0] * new_lines[:, :1] + points[..., 1] * new_lines[:, 1:2] + new_lines[:, 2:3] - locking
     return new_lines, new_residuals
 
@@ -312,16 +341,16 @@ def _line_offset_sigma(residuals: np.ndarray, weights: np.ndarray, rms: np.ndarr
     chunk_weights = weights[:, :size].reshape(4, chunks, -1).sum(axis=2)
     chunk_sums = (weights * residuals)[:, :size].reshape(4, chunks, -1).sum(axis=2)
     means = chunk_sums / np.maximum(chunk_weights, 1.0)
-    wave = np.sum(chunk_weights * means**2, axis=1) / np.maximum(chunk_weights.sum(axis=1), 1.0)
+    wave = (chunk_weights * means**2).sum(axis=1) / np.maximum(chunk_weights.sum(axis=1), 1.0)
     wave = np.maximum(wave - chunks * rms**2 / count, 0.0)
-    return float(np.sqrt(np.mean(rms**2 / count + wave)))
+    return math.sqrt((rms**2 / count + wave).mean())
 
 
 def _intersections(lines: np.ndarray) -> np.ndarray:
     """Corner k = side k - 1 meets side k, (4, 2)."""
     (a0, b0, c0), (a1, b1, c1) = lines[PREVIOUS].T, lines.T
     w = a0 * b1 - b0 * a1
-    return np.column_stack([(b0 * c1 - c0 * b1) / w, (c0 * a1 - a0 * c1) / w])
+    return np.array([(b0 * c1 - c0 * b1) / w, (c0 * a1 - a0 * c1) / w]).T.copy()
 
 
 def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
@@ -334,11 +363,12 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
     """
     if not (np.isfinite(level_gap_px) and level_gap_px > 0):
         return None
-    sigmas = np.linspace(0.1, 8.0, 160)
+    sigmas = BLUR_TABLE_PX
     growth = max(growth_px, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):  # both tails underflow for the narrowest blurs
         ratio = ndtr(-(growth + level_gap_px) / sigmas) / ndtr(-growth / sigmas)
-    return float(np.interp(0.5, np.nan_to_num(ratio, nan=0.0), sigmas))  # the ratio's limit there is 0
+    ratio[np.isnan(ratio)] = 0.0  # 0 / 0 where both tails underflow: the ratio's limit there is 0
+    return float(np.interp(0.5, ratio, sigmas))
 
 
 def locking_sigma_px(blur_px: float, growth_px: float, phases: int = 32) -> float:
@@ -366,8 +396,9 @@ def locking_sigma_px(blur_px: float, growth_px: float, phases: int = 32) -> floa
     below = np.argmax(values < 0.5, axis=1) - 1  # the last pixel centre at or above the mid level
     rows = np.arange(phases)
     upper, lower = values[rows, below], values[rows, below + 1]
-    crossing = centres[below] + (upper - 0.5) / (upper - lower)
-    return float(np.std(crossing - phase))
+    errors = centres[below] + (upper - 0.5) / (upper - lower) - phase
+    errors = errors - errors.sum() / phases
+    return math.sqrt((errors * errors).sum() / phases)  # np.std's arithmetic
 
 
 # Where a bare panel's blurred edge has fallen to the background: this band beyond its mid-level
@@ -390,25 +421,13 @@ def pedestal_levels(profiles: np.ndarray, offsets: np.ndarray, crossings: np.nda
     band = (beyond >= SURROUND_BAND_PX[0]) & (beyond <= SURROUND_BAND_PX[1])
     if not band.any():
         return levels
-    surround = float(np.median(profiles[band]))
+    surround = float(_nanmedians(profiles[band][None, :])[0])
     rise = surround - levels.background
     # light at half the contrast or more beside the panel is no pedestal under its edge but glare
     # over it: the edge would be read above its own plateau
     if rise <= SURROUND_RISE * levels.contrast or rise >= 0.5 * levels.contrast:
         return levels
     return Levels(background=surround, plateau=levels.plateau)
-
-
-def _nanmedians(values: np.ndarray) -> np.ndarray:
-    """Median of each row of `values` (k, n) float, its NaNs left out (NaN for a row of NaNs).
-
-    The value `np.nanmedian(values, axis=1)` gives (the mean of the two middle values of an even
-    count), from one sort: numpy's own takes its masked-array path for rows this short, ~50 calls.
-    """
-    ordered = np.sort(values, axis=1)  # NaNs sort last
-    counts = values.shape[1] - np.count_nonzero(np.isnan(values), axis=1)
-    rows = np.arange(len(values))
-    return (ordered[rows, (counts - 1) // 2] + ordered[rows, counts // 2]) / 2  # a row of NaNs: both NaN
 
 
 def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float, fraction: float) -> np.ndarray | None:
@@ -423,7 +442,7 @@ def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float,
 
     side_gaps_px (4, n): the gaps of each side's profiles (NaN where a crossing is missing).
     """
-    counts = np.sum(np.isfinite(side_gaps_px), axis=1)
+    counts = np.isfinite(side_gaps_px).sum(axis=1)
     if counts.min() < 6:
         return None
     medians = _nanmedians(side_gaps_px)
@@ -431,9 +450,9 @@ def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float,
     standard_errors = np.hypot(1.2533 * np.maximum(spread, 1e-3) / np.sqrt(counts), locking_px)
     pairs = (medians[[0, 1]] + medians[[2, 3]]) / 2
     between = abs(float(pairs[0] - pairs[1]))
-    within = float(np.max(np.abs(medians[[0, 1]] - medians[[2, 3]])))
-    noise = 0.5 * float(np.sqrt(np.sum(standard_errors**2)))  # of the difference of two pairs' means
-    if between <= max(sigmas * noise, fraction * float(np.mean(medians)), 2 * within):
+    within = float(np.abs(medians[[0, 1]] - medians[[2, 3]]).max())
+    noise = 0.5 * math.sqrt((standard_errors**2).sum())  # of the difference of two pairs' means
+    if between <= max(sigmas * noise, fraction * float(medians.mean()), 2 * within):
         return None
     return pairs[[0, 1, 0, 1]]
 
