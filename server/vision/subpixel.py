@@ -43,6 +43,8 @@ from server.vision.binarize import Levels
 
 UNIT_SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or side k + 1, k - 1
+# each corner's own axes in the unit square (4, 2, 2): columns along side k and back along side k - 1
+CORNER_AXES = np.stack([UNIT_SQUARE[NEXT] - UNIT_SQUARE, UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE], axis=2)
 # A side takes part in the pixel-locking fit only if its line crosses this much of its outward
 # axis (a tenth of L's period, several times the crossings' 0.01-0.04 px noise): below it
 # the crossings' phases are set by their noise, not by the geometry.
@@ -127,7 +129,7 @@ def _nanmedians(values: np.ndarray) -> np.ndarray:
     count), from one sort: numpy's own takes its masked-array path for rows this short, ~50 calls.
     """
     ordered = np.sort(values, axis=1)  # NaNs sort last
-    counts = values.shape[1] - np.count_nonzero(np.isnan(values), axis=1)
+    counts = values.shape[1] - np.isnan(values).sum(axis=1)
     rows = np.arange(len(values))
     return (ordered[rows, (counts - 1) // 2] + ordered[rows, counts // 2]) / 2  # a row of NaNs: both NaN
 
@@ -305,10 +307,13 @@ def _remove_pixel_locking(
     design[..., 9::2] = -sines * sampled
     # Normal equations by one matrix product (a 12 x 4n by 4n x 12 GEMM, far below OpenBLAS's
     # threading threshold), not lstsq: LAPACK's least squares wakes OpenBLAS's threads, which
-    # then spin on a 2-core machine and stall every stage after them by milliseconds.
+    # then spin on a 2-core machine and stall every stage after them by milliseconds. OpenCV's
+    # LU solves them in a tenth of numpy's time (its layers, not the 12 x 12 arithmetic).
     weighted = (design * weights[..., None]).reshape(-1, design.shape[2])
     normal_matrix = weighted.T @ design.reshape(-1, design.shape[2])
-    solution = np.linalg.solve(normal_matrix, -(weighted.T @ residuals.reshape(-1)))
+    rhs = -(weighted.T @ residuals.reshape(-1))
+    solved, solution = cv2.solve(normal_matrix, rhs, flags=cv2.DECOMP_LU)
+    solution = solution[:, 0] if solved else np.linalg.solve(normal_matrix, rhs)  # numpy's say when singular
     # L, fitted on the sides that sample its phase, is taken out of all four (the edge profile
     # is the same): each side's turn and shift are fitted again to its crossings less L. Their
     # 2 x 2 normal equations are the diagonal blocks of the ones above.
@@ -468,7 +473,15 @@ def side_growths(growth_px: float, level_gap_px: float, side_gaps_px: np.ndarray
     return growth_px * own / common
 
 
-def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float) -> float | None:
+def square_homography(corners_px: np.ndarray) -> np.ndarray:
+    """The homography (3, 3) that takes the square of the sides, corners_px (4, 2) in cyclic order,
+    to the unit square (`contour_growth`'s plane; OpenCV's, from the corners as float32)."""
+    return cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
+
+
+def contour_growth(
+    corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float, homography: np.ndarray | None = None
+) -> float | None:
     """How far (px, >= 0 outward) the measured contour lies outside the panel's outline.
 
     corners_px (4, 2): corners of the square the measured sides make, cyclic order;
@@ -477,19 +490,21 @@ def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fra
     square of the sides, a point (x, y) of a corner with both axes pointing inward lies on
     the circle of radius R tangent to both axes (centre (R, R)) when R = x + y + sqrt(2 x y)
     (the root on the corner side of the centre). None when fewer than 8 points are usable.
+    `homography`: `square_homography(corners_px)`, when the caller has it already.
     """
-    homography = cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
+    if homography is None:
+        homography = square_homography(corners_px)
     shape = arc_points_px.shape
     plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
-    relative = plane - UNIT_SQUARE[:, None, :]
-    x = np.sum(relative * (UNIT_SQUARE[NEXT] - UNIT_SQUARE)[:, None, :], axis=2)
-    y = np.sum(relative * (UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE)[:, None, :], axis=2)
+    local = (plane - UNIT_SQUARE[:, None, :]) @ CORNER_AXES  # (4, m, 2): exact, the axes' entries are 0 and 1
+    x, y = local[..., 0], local[..., 1]
     usable = (x > 0) & (y > 0)  # NaN compares False
-    if usable.sum() < 8:
+    if np.count_nonzero(usable) < 8:
         return None
-    radii = x[usable] + y[usable] + np.sqrt(2 * x[usable] * y[usable])
-    growth_units = (float(np.median(radii)) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
-    side_px = float(np.mean(np.linalg.norm(corners_px[NEXT] - corners_px, axis=1)))
+    x, y = x[usable], y[usable]
+    radii = x + y + np.sqrt(2 * x * y)
+    growth_units = (float(_nanmedians(radii[None, :])[0]) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
+    side_px = float(_norms(corners_px[NEXT] - corners_px).mean())
     return growth_units * side_px
 
 
@@ -517,7 +532,7 @@ def refine_edges(
     use_arcs = radius_px >= rules.min_corner_radius_px
     if use_arcs:
         arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
-        bases, across = np.vstack([side_bases, arc_bases]), np.vstack([side_normals, arc_normals])
+        bases, across = np.concatenate([side_bases, arc_bases]), np.concatenate([side_normals, arc_normals])
     else:
         bases, across, n_arc = side_bases, side_normals, 0
     offsets = profile_offsets(rules.half_window_px, rules.step_px)
@@ -531,19 +546,17 @@ def refine_edges(
         levels = side_levels
         crossings = level_crossings(profiles, offsets, levels.threshold)
     height, width = roi.shape
-    ends = (bases32 + offsets[0] * across32, bases32 + offsets[-1] * across32)  # each profile's first, last sample
-    inside = [
-        (end[:, 0] >= 0) & (end[:, 1] >= 0) & (end[:, 0] <= width - 1) & (end[:, 1] <= height - 1) for end in ends
-    ]
-    valid = np.isfinite(crossings) & inside[0] & inside[1]
+    ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
+    inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
+    valid = np.isfinite(crossings) & inside
     quarter_level = (levels.threshold + levels.background) / 2
     level_gap = level_crossings(profiles[: 4 * n_along], offsets, quarter_level) - crossings[: 4 * n_along]
     every_third = level_gap[::3]  # the common gap from a third of the profiles, as it always was
     level_gap_px = float(_nanmedians(every_third[None, :])[0])
     # A side along the pixel grid keeps its crossings' pixel-locking error as an offset of its gap
     # (two crossings, ~0.06 px each); across the grid by a pixel or more it averages out.
-    phase_span_px = straight_fraction * lengths * np.min(np.abs(directions), axis=1)
-    locking_px = LOCKING_GAP_PX * np.clip(1.0 - phase_span_px, 0.0, 1.0)
+    phase_span_px = straight_fraction * lengths * np.abs(directions).min(axis=1)
+    locking_px = LOCKING_GAP_PX * np.minimum(np.maximum(1.0 - phase_span_px, 0.0), 1.0)
     side_gaps_px = uneven_blur(
         level_gap.reshape(4, n_along), locking_px, rules.uneven_blur_sigmas, rules.uneven_blur_fraction
     )
@@ -569,13 +582,14 @@ def refine_edges(
         first = 4 * n_along
         arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
         square = _intersections(lines_array)
-        growth = contour_growth(square, arc_points, radius_fraction)
+        homography = square_homography(square)
+        growth = contour_growth(square, arc_points, radius_fraction, homography)
         blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
         if growth is not None and blur_px is not None:
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
             arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
-            before, growth = growth, contour_growth(square, arc_points, radius_fraction)
+            before, growth = growth, contour_growth(square, arc_points, radius_fraction, homography)
             curvature_px = abs(before - growth) if growth is not None else 0.0
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")
@@ -599,10 +613,10 @@ def refine_edges(
         corners=_intersections(lines_array),
         lines=lines_array,
         edge_shift_px=shift,
-        line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
+        line_rms_px=math.sqrt((rms * rms).mean()),
         line_sigma_px=line_sigma,
-        points_per_side=tuple(int(c) for c in counts),
-        arc_points=int(valid[4 * n_along :].sum()),
+        points_per_side=tuple(counts.tolist()),
+        arc_points=int(np.count_nonzero(valid[4 * n_along :])),
         warnings=tuple(warnings),
         curvature_px=curvature_px,
         uneven_px=uneven_px,
