@@ -122,6 +122,14 @@ def _linspace(start: float, stop: float, num: int) -> np.ndarray:
     return values
 
 
+def _median(values: np.ndarray) -> float:
+    """`np.median(values)` of a 1-D array without NaNs (the mean of the two middle values of an
+    even count, in the array's precision), by one partition, without numpy's Python layers."""
+    half = len(values) // 2
+    part = np.partition(values, [half - 1, half] if len(values) % 2 == 0 else half)
+    return float((part[(len(values) - 1) // 2] + part[half]) / 2)
+
+
 def _nanmedians(values: np.ndarray) -> np.ndarray:
     """Median of each row of `values` (k, n) float, its NaNs left out (NaN for a row of NaNs).
 
@@ -177,15 +185,17 @@ def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> 
     the one nearest offset 0 is taken and placed between its two samples by linear
     interpolation, so the result is a sub-pixel offset from the profile's base point.
     """
-    above, below = profiles[:, :-1], profiles[:, 1:]
-    crossing = (above >= level) & (below < level)
-    distance = np.where(crossing, np.abs(offsets[:-1]), np.inf)
-    j = np.argmin(distance, axis=1)
+    at_or_above = profiles >= level  # profiles are finite (sampled from an image)
+    falls = at_or_above[:, :-1] > at_or_above[:, 1:]  # sample j at or above the level, j + 1 below it
+    # The first crossing in the order of nearness to offset 0 (of two as near, the first): one
+    # gather and a boolean argmax, a third of the time of an argmin over distances.
+    nearest_first = np.argsort(np.abs(offsets[:-1]), kind="stable")
+    j = nearest_first[np.argmax(falls[:, nearest_first], axis=1)]
     rows = np.arange(len(profiles))
-    v0, v1 = above[rows, j], below[rows, j]
+    v0, v1 = profiles[rows, j], profiles[rows, j + 1]
     fraction = (v0 - level) / np.maximum(v0 - v1, 1e-9)
     result = offsets[j] + fraction * (offsets[1] - offsets[0])
-    return np.where(np.isfinite(distance[rows, j]), result, np.nan)
+    return np.where(falls[rows, j], result, np.nan)
 
 
 def _side_profiles(corners, directions, normals, lengths, straight_fraction, rules):
@@ -426,7 +436,7 @@ def pedestal_levels(profiles: np.ndarray, offsets: np.ndarray, crossings: np.nda
     band = (beyond >= SURROUND_BAND_PX[0]) & (beyond <= SURROUND_BAND_PX[1])
     if not band.any():
         return levels
-    surround = float(_nanmedians(profiles[band][None, :])[0])
+    surround = _median(profiles[band])
     rise = surround - levels.background
     # light at half the contrast or more beside the panel is no pedestal under its edge but glare
     # over it: the edge would be read above its own plateau
@@ -503,7 +513,7 @@ def contour_growth(
         return None
     x, y = x[usable], y[usable]
     radii = x + y + np.sqrt(2 * x * y)
-    growth_units = (float(_nanmedians(radii[None, :])[0]) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
+    growth_units = (_median(radii) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
     side_px = float(_norms(corners_px[NEXT] - corners_px).mean())
     return growth_units * side_px
 
