@@ -187,8 +187,8 @@ def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> 
     """
     at_or_above = profiles >= level  # profiles are finite (sampled from an image)
     falls = at_or_above[:, :-1] > at_or_above[:, 1:]  # sample j at or above the level, j + 1 below it
-    # The first crossing in the order of nearness to offset 0 (of two as near, the first): one
-    # gather and a boolean argmax, a third of the time of an argmin over distances.
+    # The first crossing in the order of nearness to offset 0 (of two as near, the first, as an
+    # argmin over the distances takes it): a gather and a boolean argmax, no float array.
     nearest_first = np.argsort(np.abs(offsets[:-1]), kind="stable")
     j = nearest_first[np.argmax(falls[:, nearest_first], axis=1)]
     rows = np.arange(len(profiles))
@@ -506,7 +506,7 @@ def contour_growth(
         homography = square_homography(corners_px)
     shape = arc_points_px.shape
     plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
-    local = (plane - UNIT_SQUARE[:, None, :]) @ CORNER_AXES  # (4, m, 2): exact, the axes' entries are 0 and 1
+    local = (plane - UNIT_SQUARE[:, None, :]) @ CORNER_AXES  # (4, m, 2): exact, the axes' entries are 0, +-1
     x, y = local[..., 0], local[..., 1]
     usable = (x > 0) & (y > 0)  # NaN compares False
     if np.count_nonzero(usable) < 8:
