@@ -43,6 +43,8 @@ from server.vision.binarize import Levels
 
 UNIT_SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 NEXT, PREVIOUS = np.array([1, 2, 3, 0]), np.array([3, 0, 1, 2])  # corner or side k + 1, k - 1
+# each corner's own axes in the unit square (4, 2, 2): columns along side k and back along side k - 1
+CORNER_AXES = np.stack([UNIT_SQUARE[NEXT] - UNIT_SQUARE, UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE], axis=2)
 # A side takes part in the pixel-locking fit only if its line crosses this much of its outward
 # axis (a tenth of L's period, several times the crossings' 0.01-0.04 px noise): below it
 # the crossings' phases are set by their noise, not by the geometry.
@@ -56,6 +58,9 @@ MIN_LOCKING_PERIOD_PX = 0.5
 # A gap between two level crossings along a pixel row or column is off by their pixel-locking
 # errors (~0.06 px rms each, `PoseRules.pixel_locking_sigma_px`), which do not average out there.
 LOCKING_GAP_PX = 0.085
+# the blurs (px) `blur_sigma_px` reads the level gap against
+BLUR_TABLE_PX = np.linspace(0.1, 8.0, 160)
+BLUR_TABLE_PX.flags.writeable = False
 
 
 @dataclass(frozen=True)
@@ -103,14 +108,48 @@ class EdgeFit:
     locking_px: float | None = None
 
 
+def _norms(vectors: np.ndarray) -> np.ndarray:
+    """Euclidean lengths along the last axis: `np.linalg.norm(vectors, axis=-1)`'s own arithmetic
+    (the root of the summed squares), without its Python layers."""
+    return np.sqrt((vectors * vectors).sum(axis=-1))
+
+
+def _linspace(start: float, stop: float, num: int) -> np.ndarray:
+    """`np.linspace(start, stop, num)` for num >= 2 and start != stop, by its own arithmetic (the
+    same values) without its Python layers."""
+    values = np.arange(num, dtype=float) * ((stop - start) / (num - 1)) + start
+    values[-1] = stop
+    return values
+
+
+def _median(values: np.ndarray) -> float:
+    """`np.median(values)` of a 1-D array without NaNs (the mean of the two middle values of an
+    even count, in the array's precision), by one partition, without numpy's Python layers."""
+    half = len(values) // 2
+    part = np.partition(values, [half - 1, half] if len(values) % 2 == 0 else half)
+    return float((part[(len(values) - 1) // 2] + part[half]) / 2)
+
+
+def _nanmedians(values: np.ndarray) -> np.ndarray:
+    """Median of each row of `values` (k, n) float, its NaNs left out (NaN for a row of NaNs).
+
+    The value `np.nanmedian(values, axis=1)` gives (the mean of the two middle values of an even
+    count), from one sort: numpy's own takes its masked-array path for rows this short, ~50 calls.
+    """
+    ordered = np.sort(values, axis=1)  # NaNs sort last
+    counts = values.shape[1] - np.isnan(values).sum(axis=1)
+    rows = np.arange(len(values))
+    return (ordered[rows, (counts - 1) // 2] + ordered[rows, counts // 2]) / 2  # a row of NaNs: both NaN
+
+
 def _outward_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit directions, outward normals and lengths of the four sides of a convex quad."""
     starts, ends = corners, corners[NEXT]
     directions = ends - starts
-    lengths = np.linalg.norm(directions, axis=1)
+    lengths = _norms(directions)
     directions = directions / lengths[:, None]
-    normals = np.stack([directions[:, 1], -directions[:, 0]], axis=1)
-    outward = np.sign(np.sum(normals * ((starts + ends) / 2 - corners.mean(axis=0)), axis=1))
+    normals = directions[:, ::-1] * [1.0, -1.0]
+    outward = np.sign((normals * ((starts + ends) / 2 - corners.mean(axis=0))).sum(axis=1))
     return directions, normals * outward[:, None], lengths
 
 
@@ -146,22 +185,24 @@ def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> 
     the one nearest offset 0 is taken and placed between its two samples by linear
     interpolation, so the result is a sub-pixel offset from the profile's base point.
     """
-    above, below = profiles[:, :-1], profiles[:, 1:]
-    crossing = (above >= level) & (below < level)
-    distance = np.where(crossing, np.abs(offsets[:-1]), np.inf)
-    j = np.argmin(distance, axis=1)
+    at_or_above = profiles >= level  # profiles are finite (sampled from an image)
+    falls = at_or_above[:, :-1] > at_or_above[:, 1:]  # sample j at or above the level, j + 1 below it
+    # The first crossing in the order of nearness to offset 0 (of two as near, the first, as an
+    # argmin over the distances takes it): a gather and a boolean argmax, no float array.
+    nearest_first = np.argsort(np.abs(offsets[:-1]), kind="stable")
+    j = nearest_first[np.argmax(falls[:, nearest_first], axis=1)]
     rows = np.arange(len(profiles))
-    v0, v1 = above[rows, j], below[rows, j]
+    v0, v1 = profiles[rows, j], profiles[rows, j + 1]
     fraction = (v0 - level) / np.maximum(v0 - v1, 1e-9)
     result = offsets[j] + fraction * (offsets[1] - offsets[0])
-    return np.where(np.isfinite(distance[rows, j]), result, np.nan)
+    return np.where(falls[rows, j], result, np.nan)
 
 
 def _side_profiles(corners, directions, normals, lengths, straight_fraction, rules):
     """Base points (4, n, 2) on the straight part of each side, and their outward normals."""
-    n_along = int(np.clip(lengths.min() / 2, 12, rules.max_profiles_per_side))
+    n_along = int(min(max(float(lengths.min()) / 2, 12), rules.max_profiles_per_side))
     start = (1.0 - straight_fraction) / 2 + rules.corner_margin
-    along = np.linspace(start, 1.0 - start, n_along)
+    along = _linspace(start, 1.0 - start, n_along)
     bases = corners[:, None, :] + along[None, :, None] * (lengths[:, None, None] * directions[:, None, :])
     return bases.reshape(-1, 2), np.repeat(normals, n_along, axis=0), n_along
 
@@ -173,13 +214,13 @@ def _arc_profiles(corners, directions, radius_px, rules):
     along side k - 1, the arc of radius R is centre - R (cos t v + sin t u) for t in 0..90 deg.
     """
     arc_length = np.pi / 2 * radius_px * rules.arc_span_deg / 90.0
-    n_arc = int(np.clip(arc_length, 6, rules.max_profiles_per_corner))
-    half_span = np.radians(rules.arc_span_deg) / 2
-    t = np.pi / 4 + np.linspace(-half_span, half_span, n_arc)
+    n_arc = int(min(max(arc_length, 6), rules.max_profiles_per_corner))
+    half_span = math.radians(rules.arc_span_deg) / 2
+    t = np.pi / 4 + _linspace(-half_span, half_span, n_arc)
     u = directions
     v = -directions[PREVIOUS]
     outward = -(np.cos(t)[None, :, None] * v[:, None, :] + np.sin(t)[None, :, None] * u[:, None, :])
-    outward /= np.linalg.norm(outward, axis=2, keepdims=True)
+    outward /= _norms(outward)[..., None]
     centres = corners + radius_px * (u + v)
     bases = centres[:, None, :] + radius_px * outward
     return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
@@ -198,27 +239,24 @@ def _fit_lines(
     further than 3.5 robust sigmas (MAD) from the first fit are dropped: a noise crossing
     must not tilt a side.
     """
-    x, y = points[..., 0], points[..., 1]
+    coords = np.ascontiguousarray(np.moveaxis(points, 2, 0))  # (2, 4, n): x, y, each row summed pairwise
+    sides = np.arange(4)
     for _ in range(2):
-        total = weights.sum(axis=1)
-        cx, cy = (weights * x).sum(axis=1) / total, (weights * y).sum(axis=1) / total
-        dx, dy = x - cx[:, None], y - cy[:, None]
-        sxx, syy, sxy = (
-            (weights * dx * dx).sum(axis=1),
-            (weights * dy * dy).sum(axis=1),
-            (weights * dx * dy).sum(axis=1),
-        )
+        centres = (weights * coords).sum(axis=2) / weights.sum(axis=1)  # (2, 4)
+        deltas = coords - centres[..., None]
+        sxx, syy, sxy = (weights * deltas[[0, 1, 0]] * deltas[[0, 1, 1]]).sum(axis=2)
         along = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # the scatter's major axis
-        normal = np.column_stack([-np.sin(along), np.cos(along)])
-        normal *= np.sign(np.sum(normal * outward, axis=1))[:, None]
-        lines = np.column_stack([normal, -(normal[:, 0] * cx + normal[:, 1] * cy)])
-        residuals = dx * normal[:, :1] + dy * normal[:, 1:]
-        ordered = np.sort(np.where(weights > 0, np.abs(residuals), np.inf), axis=1)
-        spread = ordered[np.arange(4), (weights > 0).sum(axis=1) // 2] * 1.4826  # MAD of each side
-        weights = weights * (np.abs(residuals) <= 3.5 * np.maximum(spread, 1e-3)[:, None])
+        normal = np.array([-np.sin(along), np.cos(along)])  # (2, 4)
+        normal *= np.sign((normal * outward.T).sum(axis=0))
+        residuals = deltas[0] * normal[0, :, None] + deltas[1] * normal[1, :, None]
+        kept, distances = weights > 0, np.abs(residuals)
+        ordered = np.sort(np.where(kept, distances, np.inf), axis=1)
+        spread = ordered[sides, kept.sum(axis=1) // 2] * 1.4826  # MAD of each side
+        weights = weights * (distances <= 3.5 * np.maximum(spread, 1e-3)[:, None])
+    lines = np.array([*normal, -(normal[0] * centres[0] + normal[1] * centres[1])]).T.copy()
     if phase_points is not None:
-        lines, residuals = _remove_pixel_locking(lines, points, weights, phase_points, np.column_stack([cx, cy]))
-    rms = np.sqrt(np.sum(weights * residuals**2, axis=1) / weights.sum(axis=1))
+        lines, residuals = _remove_pixel_locking(lines, points, weights, phase_points, centres.T)
+    rms = np.sqrt((weights * residuals**2).sum(axis=1) / weights.sum(axis=1))
     return lines, rms, _line_offset_sigma(residuals, weights, rms)
 
 
@@ -254,50 +292,53 @@ def _remove_pixel_locking(
     refitted and each side keeps its L in its offset and, over the part of the period it crosses,
     in its turn (`solve.side_errors` counts both).
     """
+    sides = np.arange(4)
     normal = lines[:, :2]
-    tangent = np.column_stack([-normal[:, 1], normal[:, 0]])
+    tangent = normal[:, ::-1] * [-1.0, 1.0]
     axis = np.argmax(np.abs(normal), axis=1)  # 0: the side's outward axis is x
-    sign = np.sign(normal[np.arange(4), axis])
-    phase = np.mod(sign[:, None] * phase_points[np.arange(4), :, axis], 1.0)
+    sign = np.sign(normal[sides, axis])
+    phase = np.mod(sign[:, None] * phase_points[sides, :, axis], 1.0)
     offset = points - centres[:, None, :]
     residuals = offset[..., 0] * normal[:, :1] + offset[..., 1] * normal[:, 1:]
     along = offset[..., 0] * tangent[:, :1] + offset[..., 1] * tangent[:, 1:]
     kept = weights > 0
     extent = np.where(kept, along, -np.inf).max(axis=1) - np.where(kept, along, np.inf).min(axis=1)
-    spans = np.abs(tangent[np.arange(4), axis]) * extent  # px the line crosses on its outward axis
-    sampled = spans >= min_phase_span_px
+    spans = np.abs(tangent[sides, axis]) * extent  # px the line crosses on its outward axis
     if spans.max() < min_period_span_px:
         return lines, residuals
     # columns: a small turn of each side (4), a shift of each side (4), the series (2 per harmonic)
     design = np.zeros(points.shape[:2] + (8 + 2 * harmonics,))
-    sides = np.arange(4)
     design[sides, :, sides] = along
     design[sides, :, 4 + sides] = 1.0
-    angle = 2 * np.pi * phase
-    for m in range(1, harmonics + 1):
-        design[..., 6 + 2 * m] = -np.cos(m * angle) * sampled[:, None]
-        design[..., 7 + 2 * m] = -np.sin(m * angle) * sampled[:, None]
-    # Normal equations with einsum, not lstsq: LAPACK's least squares wakes OpenBLAS's threads,
-    # which then spin on a 2-core machine and stall every stage after them by milliseconds.
-    weighted = design * weights[..., None]
-    normal_matrix = np.einsum("kni,knj->ij", weighted, design)
-    solution = np.linalg.solve(normal_matrix, -np.einsum("kni,kn->i", weighted, residuals))
+    angles = (2 * np.pi * phase)[..., None] * np.arange(1, harmonics + 1)  # (4, n, harmonics)
+    cosines, sines = np.cos(angles), np.sin(angles)
+    sampled = (spans >= min_phase_span_px)[:, None, None]
+    design[..., 8::2] = -cosines * sampled
+    design[..., 9::2] = -sines * sampled
+    # Normal equations by one matrix product (a 12 x 4n by 4n x 12 GEMM, far below OpenBLAS's
+    # threading threshold), not lstsq: LAPACK's least squares wakes OpenBLAS's threads, which
+    # then spin on a 2-core machine and stall every stage after them by milliseconds. OpenCV's
+    # LU solves them in a tenth of numpy's time (its layers, not the 12 x 12 arithmetic).
+    weighted = (design * weights[..., None]).reshape(-1, design.shape[2])
+    normal_matrix = weighted.T @ design.reshape(-1, design.shape[2])
+    rhs = -(weighted.T @ residuals.reshape(-1))
+    solved, solution = cv2.solve(normal_matrix, rhs, flags=cv2.DECOMP_LU)
+    solution = solution[:, 0] if solved else np.linalg.solve(normal_matrix, rhs)  # numpy's say when singular
     # L, fitted on the sides that sample its phase, is taken out of all four (the edge profile
-    # is the same): each side's turn and shift are fitted again to its crossings less L.
-    harmonic = np.arange(1, harmonics + 1)
-    locking = (
-        np.cos(angle[..., None] * harmonic) @ solution[8::2] + np.sin(angle[..., None] * harmonic) @ solution[9::2]
-    )
-    own = np.stack([along, np.ones_like(along)], axis=-1)
-    weighted_own = own * weights[..., None]
-    turn, shift = np.linalg.solve(
-        np.einsum("kni,knj->kij", weighted_own, own),
-        np.einsum("kni,kn->ki", weighted_own, locking - residuals)[..., None],
-    )[..., 0].T
+    # is the same): each side's turn and shift are fitted again to its crossings less L. Their
+    # 2 x 2 normal equations are the diagonal blocks of the ones above.
+    locking = cosines @ solution[8::2] + sines @ solution[9::2]
+    target = locking - residuals
+    moment_0, moment_1 = normal_matrix[sides + 4, sides + 4], normal_matrix[sides, sides + 4]
+    moment_2 = normal_matrix[sides, sides]
+    rhs_turn, rhs_shift = (weights * along * target).sum(axis=1), (weights * target).sum(axis=1)
+    determinant = moment_2 * moment_0 - moment_1**2
+    turn = (moment_0 * rhs_turn - moment_1 * rhs_shift) / determinant
+    shift = (moment_2 * rhs_shift - moment_1 * rhs_turn) / determinant
     new_normal = normal + turn[:, None] * tangent
-    scale = np.linalg.norm(new_normal, axis=1)
-    c = lines[:, 2] + shift - turn * np.sum(tangent * centres, axis=1)
-    new_lines = np.column_stack([new_normal, c]) / scale[:, None]
+    scale = _norms(new_normal)
+    c = lines[:, 2] + shift - turn * (tangent * centres).sum(axis=1)
+    new_lines = np.array([*new_normal.T, c]).T / scale[:, None]
     new_residuals = points[..., 0] * new_lines[:, :1] + points[..., 1] * new_lines[:, 1:2] + new_lines[:, 2:3] - locking
     return new_lines, new_residuals
 
@@ -315,16 +356,16 @@ def _line_offset_sigma(residuals: np.ndarray, weights: np.ndarray, rms: np.ndarr
     chunk_weights = weights[:, :size].reshape(4, chunks, -1).sum(axis=2)
     chunk_sums = (weights * residuals)[:, :size].reshape(4, chunks, -1).sum(axis=2)
     means = chunk_sums / np.maximum(chunk_weights, 1.0)
-    wave = np.sum(chunk_weights * means**2, axis=1) / np.maximum(chunk_weights.sum(axis=1), 1.0)
+    wave = (chunk_weights * means**2).sum(axis=1) / np.maximum(chunk_weights.sum(axis=1), 1.0)
     wave = np.maximum(wave - chunks * rms**2 / count, 0.0)
-    return float(np.sqrt(np.mean(rms**2 / count + wave)))
+    return math.sqrt((rms**2 / count + wave).mean())
 
 
 def _intersections(lines: np.ndarray) -> np.ndarray:
     """Corner k = side k - 1 meets side k, (4, 2)."""
     (a0, b0, c0), (a1, b1, c1) = lines[PREVIOUS].T, lines.T
     w = a0 * b1 - b0 * a1
-    return np.column_stack([(b0 * c1 - c0 * b1) / w, (c0 * a1 - a0 * c1) / w])
+    return np.array([(b0 * c1 - c0 * b1) / w, (c0 * a1 - a0 * c1) / w]).T.copy()
 
 
 def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
@@ -337,11 +378,12 @@ def blur_sigma_px(growth_px: float, level_gap_px: float) -> float | None:
     """
     if not (np.isfinite(level_gap_px) and level_gap_px > 0):
         return None
-    sigmas = np.linspace(0.1, 8.0, 160)
+    sigmas = BLUR_TABLE_PX
     growth = max(growth_px, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):  # both tails underflow for the narrowest blurs
         ratio = ndtr(-(growth + level_gap_px) / sigmas) / ndtr(-growth / sigmas)
-    return float(np.interp(0.5, np.nan_to_num(ratio, nan=0.0), sigmas))  # the ratio's limit there is 0
+    ratio[np.isnan(ratio)] = 0.0  # 0 / 0 where both tails underflow: the ratio's limit there is 0
+    return float(np.interp(0.5, ratio, sigmas))
 
 
 def locking_sigma_px(blur_px: float, growth_px: float, phases: int = 32) -> float:
@@ -369,8 +411,9 @@ def locking_sigma_px(blur_px: float, growth_px: float, phases: int = 32) -> floa
     below = np.argmax(values < 0.5, axis=1) - 1  # the last pixel centre at or above the mid level
     rows = np.arange(phases)
     upper, lower = values[rows, below], values[rows, below + 1]
-    crossing = centres[below] + (upper - 0.5) / (upper - lower)
-    return float(np.std(crossing - phase))
+    errors = centres[below] + (upper - 0.5) / (upper - lower) - phase
+    errors = errors - errors.sum() / phases
+    return math.sqrt((errors * errors).sum() / phases)  # np.std's arithmetic
 
 
 # Where a bare panel's blurred edge has fallen to the background: this band beyond its mid-level
@@ -393,7 +436,7 @@ def pedestal_levels(profiles: np.ndarray, offsets: np.ndarray, crossings: np.nda
     band = (beyond >= SURROUND_BAND_PX[0]) & (beyond <= SURROUND_BAND_PX[1])
     if not band.any():
         return levels
-    surround = float(np.median(profiles[band]))
+    surround = _median(profiles[band])
     rise = surround - levels.background
     # light at half the contrast or more beside the panel is no pedestal under its edge but glare
     # over it: the edge would be read above its own plateau
@@ -414,17 +457,17 @@ def uneven_blur(side_gaps_px: np.ndarray, locking_px: np.ndarray, sigmas: float,
 
     side_gaps_px (4, n): the gaps of each side's profiles (NaN where a crossing is missing).
     """
-    counts = np.sum(np.isfinite(side_gaps_px), axis=1)
+    counts = np.isfinite(side_gaps_px).sum(axis=1)
     if counts.min() < 6:
         return None
-    medians = np.nanmedian(side_gaps_px, axis=1)
-    spread = 1.4826 * np.nanmedian(np.abs(side_gaps_px - medians[:, None]), axis=1)  # robust sigma
+    medians = _nanmedians(side_gaps_px)
+    spread = 1.4826 * _nanmedians(np.abs(side_gaps_px - medians[:, None]))  # robust sigma
     standard_errors = np.hypot(1.2533 * np.maximum(spread, 1e-3) / np.sqrt(counts), locking_px)
     pairs = (medians[[0, 1]] + medians[[2, 3]]) / 2
     between = abs(float(pairs[0] - pairs[1]))
-    within = float(np.max(np.abs(medians[[0, 1]] - medians[[2, 3]])))
-    noise = 0.5 * float(np.sqrt(np.sum(standard_errors**2)))  # of the difference of two pairs' means
-    if between <= max(sigmas * noise, fraction * float(np.mean(medians)), 2 * within):
+    within = float(np.abs(medians[[0, 1]] - medians[[2, 3]]).max())
+    noise = 0.5 * math.sqrt((standard_errors**2).sum())  # of the difference of two pairs' means
+    if between <= max(sigmas * noise, fraction * float(medians.mean()), 2 * within):
         return None
     return pairs[[0, 1, 0, 1]]
 
@@ -440,7 +483,15 @@ def side_growths(growth_px: float, level_gap_px: float, side_gaps_px: np.ndarray
     return growth_px * own / common
 
 
-def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float) -> float | None:
+def square_homography(corners_px: np.ndarray) -> np.ndarray:
+    """The homography (3, 3) that takes the square of the sides, corners_px (4, 2) in cyclic order,
+    to the unit square (`contour_growth`'s plane; OpenCV's, from the corners as float32)."""
+    return cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
+
+
+def contour_growth(
+    corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float, homography: np.ndarray | None = None
+) -> float | None:
     """How far (px, >= 0 outward) the measured contour lies outside the panel's outline.
 
     corners_px (4, 2): corners of the square the measured sides make, cyclic order;
@@ -449,19 +500,21 @@ def contour_growth(corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fra
     square of the sides, a point (x, y) of a corner with both axes pointing inward lies on
     the circle of radius R tangent to both axes (centre (R, R)) when R = x + y + sqrt(2 x y)
     (the root on the corner side of the centre). None when fewer than 8 points are usable.
+    `homography`: `square_homography(corners_px)`, when the caller has it already.
     """
-    homography = cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
+    if homography is None:
+        homography = square_homography(corners_px)
     shape = arc_points_px.shape
     plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
-    relative = plane - UNIT_SQUARE[:, None, :]
-    x = np.sum(relative * (UNIT_SQUARE[NEXT] - UNIT_SQUARE)[:, None, :], axis=2)
-    y = np.sum(relative * (UNIT_SQUARE[PREVIOUS] - UNIT_SQUARE)[:, None, :], axis=2)
+    local = (plane - UNIT_SQUARE[:, None, :]) @ CORNER_AXES  # (4, m, 2): exact, the axes' entries are 0, +-1
+    x, y = local[..., 0], local[..., 1]
     usable = (x > 0) & (y > 0)  # NaN compares False
-    if usable.sum() < 8:
+    if np.count_nonzero(usable) < 8:
         return None
-    radii = x[usable] + y[usable] + np.sqrt(2 * x[usable] * y[usable])
-    growth_units = (float(np.median(radii)) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
-    side_px = float(np.mean(np.linalg.norm(corners_px[NEXT] - corners_px, axis=1)))
+    x, y = x[usable], y[usable]
+    radii = x + y + np.sqrt(2 * x * y)
+    growth_units = (_median(radii) - radius_fraction) / (1.0 - 2.0 * radius_fraction)
+    side_px = float(_norms(corners_px[NEXT] - corners_px).mean())
     return growth_units * side_px
 
 
@@ -489,7 +542,7 @@ def refine_edges(
     use_arcs = radius_px >= rules.min_corner_radius_px
     if use_arcs:
         arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
-        bases, across = np.vstack([side_bases, arc_bases]), np.vstack([side_normals, arc_normals])
+        bases, across = np.concatenate([side_bases, arc_bases]), np.concatenate([side_normals, arc_normals])
     else:
         bases, across, n_arc = side_bases, side_normals, 0
     offsets = profile_offsets(rules.half_window_px, rules.step_px)
@@ -503,19 +556,17 @@ def refine_edges(
         levels = side_levels
         crossings = level_crossings(profiles, offsets, levels.threshold)
     height, width = roi.shape
-    ends = (bases32 + offsets[0] * across32, bases32 + offsets[-1] * across32)  # each profile's first, last sample
-    inside = [
-        (end[:, 0] >= 0) & (end[:, 1] >= 0) & (end[:, 0] <= width - 1) & (end[:, 1] <= height - 1) for end in ends
-    ]
-    valid = np.isfinite(crossings) & inside[0] & inside[1]
+    ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
+    inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
+    valid = np.isfinite(crossings) & inside
     quarter_level = (levels.threshold + levels.background) / 2
     level_gap = level_crossings(profiles[: 4 * n_along], offsets, quarter_level) - crossings[: 4 * n_along]
     every_third = level_gap[::3]  # the common gap from a third of the profiles, as it always was
-    level_gap_px = float(np.nanmedian(every_third)) if np.isfinite(every_third).any() else float("nan")
+    level_gap_px = float(_nanmedians(every_third[None, :])[0])
     # A side along the pixel grid keeps its crossings' pixel-locking error as an offset of its gap
     # (two crossings, ~0.06 px each); across the grid by a pixel or more it averages out.
-    phase_span_px = straight_fraction * lengths * np.min(np.abs(directions), axis=1)
-    locking_px = LOCKING_GAP_PX * np.clip(1.0 - phase_span_px, 0.0, 1.0)
+    phase_span_px = straight_fraction * lengths * np.abs(directions).min(axis=1)
+    locking_px = LOCKING_GAP_PX * np.minimum(np.maximum(1.0 - phase_span_px, 0.0), 1.0)
     side_gaps_px = uneven_blur(
         level_gap.reshape(4, n_along), locking_px, rules.uneven_blur_sigmas, rules.uneven_blur_fraction
     )
@@ -541,13 +592,14 @@ def refine_edges(
         first = 4 * n_along
         arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
         square = _intersections(lines_array)
-        growth = contour_growth(square, arc_points, radius_fraction)
+        homography = square_homography(square)
+        growth = contour_growth(square, arc_points, radius_fraction, homography)
         blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
         if growth is not None and blur_px is not None:
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
             arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
-            before, growth = growth, contour_growth(square, arc_points, radius_fraction)
+            before, growth = growth, contour_growth(square, arc_points, radius_fraction, homography)
             curvature_px = abs(before - growth) if growth is not None else 0.0
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")
@@ -571,10 +623,10 @@ def refine_edges(
         corners=_intersections(lines_array),
         lines=lines_array,
         edge_shift_px=shift,
-        line_rms_px=float(np.sqrt(np.mean(np.square(rms)))),
+        line_rms_px=math.sqrt((rms * rms).mean()),
         line_sigma_px=line_sigma,
-        points_per_side=tuple(int(c) for c in counts),
-        arc_points=int(valid[4 * n_along :].sum()),
+        points_per_side=tuple(counts.tolist()),
+        arc_points=int(np.count_nonzero(valid[4 * n_along :])),
         warnings=tuple(warnings),
         curvature_px=curvature_px,
         uneven_px=uneven_px,

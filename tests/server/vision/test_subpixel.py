@@ -1,6 +1,8 @@
 """Sub-pixel stage: the corner geometry that measures the clipped-edge growth, the blur
 estimate, the side error model, and the whole stage on rendered noise-free frames."""
 
+import warnings
+
 import cv2
 import numpy as np
 import pytest
@@ -15,10 +17,14 @@ from server.vision.binarize import blur, threshold
 from server.vision.subpixel import (
     _fit_lines,
     _line_offset_sigma,
+    _median,
+    _nanmedians,
     _outward_normals,
     _remove_pixel_locking,
     blur_sigma_px,
     contour_growth,
+    level_crossings,
+    profile_offsets,
     refine_edges,
 )
 from shared_schemas import Beacon, device_profiles
@@ -73,6 +79,31 @@ def test_blur_is_read_from_two_level_crossings(sigma_px, growth_px):
     gap = x[np.argmin(np.abs(amplitude_ratio - 0.5))] - growth_px
     assert blur_sigma_px(growth_px, gap) == pytest.approx(sigma_px, rel=2e-3)
     assert blur_sigma_px(growth_px, float("nan")) is None
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])  # the gaps are float32, the radii float64
+def test_medians_are_numpys(dtype):
+    rng = np.random.default_rng(3)
+    values = rng.normal(0, 1, (40, 4, 25)).astype(dtype)
+    values[rng.random(values.shape) < np.linspace(0, 1, 40)[:, None, None]] = np.nan  # none missing to all
+    for rows in [*values, values[0, :, :1], values[1, :, :2]]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # numpy's "All-NaN slice"
+            expected = np.nanmedian(rows, axis=1)
+        np.testing.assert_array_equal(_nanmedians(rows), expected)
+        for row in rows:
+            if np.isfinite(row).any():
+                assert _median(row[np.isfinite(row)]) == np.median(row[np.isfinite(row)])
+
+
+def test_the_crossing_nearest_the_base_point_is_taken():
+    offsets = profile_offsets(6.0, 0.25)
+    two = np.where((offsets <= -2.0) | ((offsets >= 1.5) & (offsets <= 2.0)), 200.0, 0.0)  # falls at -2 and +2
+    later = np.where(offsets <= 2.0, 200.0, 0.0) * (offsets >= 1.5)  # only the fall at +2
+    dark = np.zeros_like(offsets)
+    crossings = level_crossings(np.array([two, later, dark], dtype=np.float32), offsets, 100.0)
+    # of two as near, the first (inward): between the samples at -2 and -1.75, halfway down
+    np.testing.assert_array_equal(crossings, [-1.875, 2.125, np.nan])
 
 
 def test_a_slow_wave_along_a_side_counts_more_than_noise():
