@@ -310,9 +310,11 @@ def _locate_by_corners(job: _Job, roi: Roi, seed: _SeedBlob) -> Fix | Refusal:
     warnings = (*warnings, *weights.warnings, *overruled)
     if isinstance(pose, Refusal):
         return job.timer.refusal(pose, warnings)
-    fix = _checked_corner_fix(job, corners, edges, pose, warnings)
-    if isinstance(fix, Refusal):
-        return fix
+    reported = _reported_px(job, corners)
+    refusal = _check_corner_pose(job, pose, edges, reported)
+    if refusal is not None:
+        return job.timer.refusal(refusal, warnings)
+    fix = _corner_fix(job, corners.ordered, edges, pose, reported, warnings)
     return _unless_loose(job, fix, edges, seed.box, roi.levels)
 
 
@@ -439,26 +441,36 @@ def _corner_pose(
     return pose, warnings
 
 
-def _checked_corner_fix(
-    job: _Job, corners: _Corners, edges: EdgeFit | None, pose: PoseSolution, warnings: tuple[str, ...]
-) -> Fix | Refusal:
-    """The corner path's fix, unless its numbers are not finite or it does not explain its own corners."""
-    reported = _distorted(np.vstack([corners.ordered.corners, corners.center_px]), job.matrix, job.distortion)
-    numbers = (pose.position_m, pose.rotation_wc, reported, pose.reprojection_error_px, pose.ambiguity_ratio)
+def _reported_px(job: _Job, corners: _Corners) -> np.ndarray:
+    """The corners (4, in the map's order) and the centre (last) in the frame's (distorted) pixels, for the fix."""
+    return _distorted(np.vstack([corners.ordered.corners, corners.center_px]), job.matrix, job.distortion)
+
+
+def _check_corner_pose(job: _Job, pose: PoseSolution, edges: EdgeFit | None, reported_px: np.ndarray) -> Refusal | None:
+    """Why the corner path's pose is no fix (numbers not finite, or it does not explain its own corners), or None."""
+    numbers = (pose.position_m, pose.rotation_wc, reported_px, pose.reprojection_error_px, pose.ambiguity_ratio)
     if not all(np.all(np.isfinite(value)) for value in numbers):
         # extreme but valid intrinsics or distortion can overflow without raising: such a fix
         # must not reach a device's track (it would stay NaN) nor the result
-        return job.timer.refusal(
-            Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers"),
-            warnings,
-        )
-    if edges is not None and pose.residuals is not None:
-        # the fix must answer to its own evidence: the corners against the map beacon's shape, within
-        # the noise the sides measured (the paper's paths measure none: their corners are the mask's)
-        with job.timer.stage("consistency"):
-            judged = check_fit(pose.residuals, job.beacon, job.options.consistency)
-        if isinstance(judged, Refusal):
-            return job.timer.refusal(judged, warnings)
+        return Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers")
+    if edges is None or pose.residuals is None:
+        return None
+    # the fix must answer to its own evidence: the corners against the map beacon's shape, within
+    # the noise the sides measured (the paper's paths measure none: their corners are the mask's)
+    with job.timer.stage("consistency"):
+        judged = check_fit(pose.residuals, job.beacon, job.options.consistency)
+    return judged if isinstance(judged, Refusal) else None
+
+
+def _corner_fix(
+    job: _Job,
+    ordered: OrderedCorners,
+    edges: EdgeFit | None,
+    pose: PoseSolution,
+    reported_px: np.ndarray,
+    warnings: tuple[str, ...],
+) -> Fix:
+    """The corner path's `Fix`, with the stage times so far."""
     return Fix(
         position_m=pose.position_m,
         rotation_wc=pose.rotation_wc,
@@ -466,9 +478,9 @@ def _checked_corner_fix(
         id_source=job.id_source,
         reprojection_error_px=pose.reprojection_error_px,
         gravity_used=pose.gravity_used,
-        center_px=reported[4],
-        corners_px=reported[:4],
-        orientation_rule=corners.ordered.rule,
+        center_px=reported_px[4],
+        corners_px=reported_px[:4],
+        orientation_rule=ordered.rule,
         ambiguity_ratio=pose.ambiguity_ratio,
         covariance_m2=pose.covariance_m2,
         growth_px=-edges.edge_shift_px if edges is not None and edges.edge_shift_px else None,
