@@ -114,7 +114,7 @@ def test_a_stage_that_fails_numerically_gives_a_refusal_naming_it(monkeypatch, c
     with caplog.at_level(logging.WARNING, logger="lumipose.pipeline"):
         result = locate(FIXTURE, ONE)
     assert not result.ok and result.reason is FailureReason.numerical_failure
-    assert "in server.pipeline._locate_beacon:" in result.message and str(error.args[0]) in result.message
+    assert "in server.pipeline._corner_pose:" in result.message and str(error.args[0]) in result.message
     record = next(r for r in caplog.records if r.name == "lumipose.pipeline")
     assert record.levelno == logging.WARNING and record.exc_info and record.exc_info[1] is error
 
