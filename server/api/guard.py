@@ -27,7 +27,7 @@ from server.api.config import Settings
 from server.api.deps import api_key_problem, require_api_key
 from server.api.errors import ApiError
 from server.api.params import board_upload, frame_upload, photos_body
-from server.api.upload import receive_body, too_large
+from server.api.upload import RECEIVE_BUFFER, BufferLease, receive_body, too_large
 
 
 class GuardedRoute(APIRoute):
@@ -48,7 +48,12 @@ class GuardedRoute(APIRoute):
             limit = settings.max_upload_bytes if takes_frame else settings.max_body_bytes
             _check_length(request.headers.get("content-length"), limit)
             if takes_frame:
-                return await services.frame_slots.run(settings.read_timeout_s, lambda: handler(request))
+
+                async def framed(lease: BufferLease) -> Response:
+                    setattr(request.state, RECEIVE_BUFFER, lease)  # where `receive_frame` receives the body
+                    return await handler(request)
+
+                return await services.frame_slots.run(settings.read_timeout_s, framed)
             body = await _read_json_body(request, limit, settings.read_timeout_s)
             return await handler(Request(request.scope, _replay(body, request.receive)))
 

@@ -5,17 +5,16 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, replace
 
-from starlette.concurrency import run_in_threadpool
+import anyio.to_thread
 
 from server.annotate import FrameSeen, picture, seen_in
 from server.api.deps import Services
 from server.api.params import LocateQuery
 from server.api.upload import FrameUpload
-from server.camera import ProfileTable
 from server.diagnostics import Diagnostics
 from server.ingest import decode_frame
 from server.locator import in_device_session, locate
-from shared_schemas import BeaconMap, FailureReason, LocateResult, ProfileRef
+from shared_schemas import FailureReason, LocateResult, ProfileRef
 
 
 @dataclass(frozen=True)
@@ -28,14 +27,20 @@ class Located:
 def _locate_now(
     services: Services,
     upload: FrameUpload,
-    beacon_map: BeaconMap,
-    profiles: ProfileTable | None,
+    map_name: str | None,
     query: LocateQuery,
     device: str | None,
     annotated: bool,
-) -> tuple[LocateResult, FrameSeen | None, bytes | None]:
-    """The result; what a picture of the frame needs, when one is asked for or kept for the web page;
-    the picture, when asked for."""
+) -> tuple[str, LocateResult, FrameSeen | None, bytes | None]:
+    """The map's name and the result; what a picture of the frame needs, when one is asked for or kept
+    for the web page; the picture, when asked for."""
+    # The data folder (or Redis) is read here, in the pipeline's thread: one hop off the event loop
+    # for the whole request. The active map's name and map are read as one.
+    name, beacon_map = (map_name, services.maps.get(map_name)) if map_name else services.maps.active()
+    camera = upload.meta.camera
+    # Only a frame naming a profile needs the table (bundled and stored); one naming a damaged stored
+    # profile is refused by name (409) rather than as unknown.
+    profiles = services.profiles.table(camera.profile) if isinstance(camera, ProfileRef) else None
     frame = decode_frame(upload.data, upload.meta, profiles)
     if upload.camera_used is not None:  # a photo: its intrinsics' source, not "the frame's"
         frame = replace(frame, camera_used=upload.camera_used)
@@ -45,9 +50,9 @@ def _locate_now(
         options = replace(options, pipeline=replace(options.pipeline, diagnostics=diagnostics))
     result = locate(frame, beacon_map, options, beacon_id=query.beacon_id, device_id=device, devices=services.devices)
     if diagnostics is None or (result.reason is FailureReason.id_frame and not annotated):
-        return result, None, None  # an ID frame's stripes are not kept for the page: nothing to see
+        return name, result, None, None  # an ID frame's stripes are not kept for the page: nothing to see
     seen = seen_in(frame, diagnostics, result, in_device_session(beacon_map, query.beacon_id, device))
-    return result, seen, picture(seen, result) if annotated else None
+    return name, result, seen, picture(seen, result) if annotated else None
 
 
 async def locate_upload(
@@ -63,21 +68,9 @@ async def locate_upload(
     session (tracking, ID frames combined) when the map has several beacons, and on the live board
     (`started`: the request's `time.perf_counter()`, for its latency); `annotated`: with a picture
     of what the pipeline saw."""
-    # reads the data folder (or Redis): off the event loop; the active map's name and map read as one
-    if map_name:
-        name, beacon_map = map_name, await run_in_threadpool(services.maps.get, map_name)
-    else:
-        name, beacon_map = await run_in_threadpool(services.maps.active)
-    camera = upload.meta.camera
-    # Only a frame naming a profile needs the table (bundled and stored); one naming a damaged stored
-    # profile is refused by name (409) rather than as unknown.
-    profiles = None
-    if isinstance(camera, ProfileRef):
-        profiles = await run_in_threadpool(services.profiles.table, camera.profile)
-    async with services.pipeline_limiter:
-        result, seen, drawn = await run_in_threadpool(
-            _locate_now, services, upload, beacon_map, profiles, query, device, annotated
-        )
+    name, result, seen, drawn = await anyio.to_thread.run_sync(
+        _locate_now, services, upload, map_name, query, device, annotated, limiter=services.pipeline_limiter
+    )
     services.metrics.record_result(result)
     if device is not None:
         latency_ms = None if started is None else 1000 * (time.perf_counter() - started)

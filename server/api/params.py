@@ -67,7 +67,7 @@ class LocateQuery:
     beacon_id: int | None = None
 
 
-def _locate_query(
+async def _locate_query(  # a coroutine: no worker thread for it (server.api.deps)
     services: ServicesDep,
     beacon_id: BeaconQuery = None,
     gravity: GravityQuery = GravityMode.auto,

@@ -10,7 +10,9 @@ that sends them at a byte a second holds its connection (and a slot of the serve
   endless header line too), and the request is never run;
 - closes the connection once a response is sent before its request's body has arrived (an
   early refusal, or a route that reads no body): the rest would otherwise trickle in forever;
-- closes an event stream (`endless_paths`) at once when the server shuts down.
+- closes an event stream (`endless_paths`) at once when the server shuts down;
+- hands a body's chunks to the app as httptools parsed them, not copied twice more (a 20 MB frame
+  arrives in ~80 of them).
 `configure` is called by `create_app` in every worker, before it serves.
 """
 
@@ -74,6 +76,14 @@ class GuardedHttpToolsProtocol(HttpToolsProtocol):
         if self._refused:
             return  # never run a request that was refused
         super().on_headers_complete()
+
+    def on_body(self, body: bytes) -> None:
+        if self.cycle is not None and not self.cycle.body:
+            # uvicorn appends each chunk to a bytearray and hands on `bytes()` of it: two copies. Onto
+            # empty bytes, `+=` keeps the chunk itself and `bytes()` returns it: none (a second
+            # chunk before the app reads the first is joined to it, as before).
+            self.cycle.body = b""  # type: ignore[assignment]
+        super().on_body(body)
 
     def on_message_complete(self) -> None:
         self._body_done, self._in_head = True, True  # what comes next is the next request's head

@@ -59,4 +59,6 @@ async def locate_frame(
     located = await locate_upload(services, upload, map, query, device, annotated=annotate, started=started)
     if located.picture is not None:
         return Response(located.picture, media_type="image/png", headers={RESULT_HEADER: result_header(located.result)})
-    return located.result
+    # The result is a LocateResult already: as `response_model` FastAPI would validate it again, dump it and
+    # encode that with `json` (~0.15 ms of the event loop's, ten times pydantic's own JSON).
+    return Response(located.result.model_dump_json(by_alias=True), media_type="application/json")
