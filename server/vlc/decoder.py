@@ -167,7 +167,8 @@ def read_stripes(
 
 @lru_cache(maxsize=16)
 def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int, chip_rate_hz: float) -> np.ndarray:
-    """(C, MESSAGE_CHIPS * steps) each candidate's 0/1 code box-averaged over `exposure_s`."""
+    """(MESSAGE_CHIPS * steps, C) each candidate's 0/1 code box-averaged over `exposure_s`, one row a time
+    step: a bin's rows are gathered as whole rows of all candidates."""
     chip_s = 1.0 / chip_rate_hz
     times = np.arange(MESSAGE_CHIPS * steps_per_chip) * chip_s / steps_per_chip
     table = [
@@ -176,7 +177,12 @@ def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int,
         )
         for i in candidates
     ]
-    return np.array(table, dtype=np.float32)
+    return np.ascontiguousarray(np.array(table, dtype=np.float32).T)
+
+
+# phases x bins fitted at once: a block's arrays (about 1 MB) stay in cache and are reused; fresh 10 MB arrays for all
+# phases at once cost more in page faults than the sums themselves
+BLOCK_PHASE_BINS = 400
 
 
 def _frame_log_likelihood(
@@ -188,7 +194,7 @@ def _frame_log_likelihood(
 ) -> np.ndarray:
     """(C, phases, clock errors) log-likelihood of one frame; relative to its best fit."""
     lut = _lookup(candidates, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz)
-    steps = lut.shape[1]
+    steps, count = lut.shape
     chip_s = 1.0 / rules.chip_rate_hz
     period_s = MESSAGE_CHIPS * chip_s
     phases_s = np.arange(MESSAGE_CHIPS * rules.phase_steps_per_chip) * chip_s / rules.phase_steps_per_chip
@@ -196,27 +202,42 @@ def _frame_log_likelihood(
     weights = 1.0 / obs.sigma_dn
     basis = np.vander(obs.position, rules.trend_degree + 1) * weights[:, None]
     q, _ = np.linalg.qr(basis)
+    q_t = np.ascontiguousarray(q.T)
     y = obs.values_dn * weights
     y_p = y - q @ (q.T @ y)
     level = float(np.mean(obs.values_dn))
-    result = np.empty((len(candidates), len(phases_s), len(clock_errors_ppm)), np.float64)
+    bins, rows = obs.row_offsets_s.shape
+    block = int(np.clip(BLOCK_PHASE_BINS // bins, 1, len(phases_s)))
+    raw_block = np.empty((block, bins, count), np.float32)  # (phases, bins, C): reused, block by block
+    row_block = np.empty_like(raw_block)
+    template_block = np.empty((block, bins, count))
+    trend_block = np.empty_like(template_block)
+    explained = np.empty((len(phases_s), count, len(clock_errors_ppm)))
     for e, ppm in enumerate(clock_errors_ppm):
         rate = 1.0 + ppm * 1e-6
         times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
         index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
-        raw = lut[:, index].mean(axis=-1)  # (C, P, n): each bin's share of a 1 chip
-        templates = raw * weights
-        t_p = templates - (templates @ q) @ q.T
-        norm = np.einsum("cpn,cpn->cp", t_p, t_p)
-        along = t_p @ y_p
-        # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
-        # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
-        # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
-        gain = along / np.maximum(norm, 1e-12)
-        bright = level + gain * (1.0 - raw.mean(axis=-1))
-        plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
-        explained = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
-        result[:, :, e] = float(y_p @ y_p) - explained
+        for start in range(0, len(phases_s), block):
+            stop = min(start + block, len(phases_s))
+            raw, row = raw_block[: stop - start], row_block[: stop - start]
+            templates, trend = template_block[: stop - start], trend_block[: stop - start]
+            # each bin's share of a 1 chip: the mean of its rows' (summed in order, as numpy's mean sums them)
+            np.take(lut, index[start:stop, :, 0], axis=0, out=raw)
+            for j in range(1, rows):
+                raw += np.take(lut, index[start:stop, :, j], axis=0, out=row)
+            raw /= np.float32(rows)
+            np.multiply(raw, weights[:, None], out=templates)
+            templates -= np.matmul(q, np.matmul(q_t, templates), out=trend)  # the trend-free part
+            norm = np.einsum("pnc,pnc->pc", templates, templates)
+            along = np.einsum("n,pnc->pc", y_p, templates)
+            # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
+            # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
+            # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
+            gain = along / np.maximum(norm, 1e-12)
+            bright = level + gain * (1.0 - raw.transpose(0, 2, 1).mean(axis=-1))
+            plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
+            explained[start:stop, :, e] = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
+    result = (float(y_p @ y_p) - explained).transpose(1, 0, 2)
     dof = max(1, obs.samples - rules.trend_degree - 2)
     scale = max(1.0, float(result.min()) / dof)  # residuals beyond the pixel noise: the model's own error
     return -0.5 * result / scale
