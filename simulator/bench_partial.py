@@ -33,6 +33,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, CameraIntrinsics, device_profiles
+from simulator.bench_results import frame_outcome
 from simulator.benchmarks import PROFILE_ID, AccuracyConfig, noisy_gravity, bench_beacon
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, exact_polygon_area_px, render_frame
@@ -223,6 +224,7 @@ def _partial_sample(args: tuple[PartialConfig, float, float, int]) -> dict:
         "mahalanobis2": None,
         "inside_95": None,
         "warnings": list(result.warnings),
+        "outcome": frame_outcome(result),  # for `bench results`
     }
     if not result.ok:
         record["reason"] = result.reason.value if result.reason is not None else NO_REASON

@@ -38,6 +38,7 @@ from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import device_profiles
 from shared_schemas.cli import plural
+from simulator.bench_results import frame_outcome
 from simulator.benchmarks import (
     PROFILE_ID, AccuracyConfig, accuracy_frame, bench_beacon, bench_motion, position_seen_m, summarize,
 )
@@ -132,18 +133,19 @@ class RobustnessConfig:
     seed: int = 1
 
 
-def _sample(args: tuple[AccuracyConfig, int]) -> tuple[float, str | None, float]:
-    """(2-D error against the camera when its panel was read, refusal reason, 2-D error against the timestamp's)."""
+def _sample(args: tuple[AccuracyConfig, int]) -> tuple[float, str | None, float, dict]:
+    """(2-D error against the camera when its panel was read, refusal reason, 2-D error against the timestamp's,
+    the result's `frame_outcome`)."""
     config, index = args
     frame, beacon_map, pose = accuracy_frame(config, index)
     options = PipelineOptions(gravity_mode=GravityMode.auto, gravity_sigma_deg=config.gravity_sigma_deg)
     result = locate(frame, beacon_map, LocateOptions(pipeline=options))
     if not result.ok:
-        return math.nan, result.reason.value, math.nan
+        return math.nan, result.reason.value, math.nan, frame_outcome(result)
     seen_m = position_seen_m(pose, bench_motion(config, index, frame.meta.height), frame.camera,
                              beacon_map.beacons[0].center_m)
     return (float(np.hypot(*np.subtract(result.position_m, seen_m)[:2])), None,
-            float(np.hypot(*np.subtract(result.position_m, pose.position_m)[:2])))
+            float(np.hypot(*np.subtract(result.position_m, pose.position_m)[:2])), frame_outcome(result))
 
 
 def _panel_fields(fields: dict) -> dict:
@@ -182,13 +184,14 @@ def run_robustness(config: RobustnessConfig, workers: int | None = None) -> dict
             if len(results) % config.frames:
                 continue
             scale, distance, name, group, chain = cells[len(rows)]
-            errors = [e for e, _, _ in results]
+            errors = [e for e, *_ in results]
             row = {"scale": scale, "distance_m": distance, "effect": name, "group": group,
                    "chain": None if chain is None else chain.model_dump(mode="json"), "frames": config.frames,
                    **_panel_fields(panel_effects(distance).get(name, {})),
-                   **cell_summary(errors, [r for _, r, _ in results if r is not None])}
+                   **cell_summary(errors, [r for _, r, *_ in results if r is not None]),
+                   "outcomes": [outcome for *_, outcome in results]}  # per frame, for `bench results`
             if group == "motion":
-                row["mean_vs_timestamp_mm"] = summarize([e for _, _, e in results]).get("mean_mm")
+                row["mean_vs_timestamp_mm"] = summarize([e for _, _, e, _ in results]).get("mean_mm")
             rows.append(row)
             results = []
             print(f"{len(rows) * config.frames}/{total} frames ({time.perf_counter() - start:.0f} s): "

@@ -60,6 +60,7 @@ from server.pipeline import PipelineOptions
 from server.pose.outline import OutlineFitRules
 from shared_schemas import Beacon, BeaconMap, PanelShape, device_profiles
 from shared_schemas.cli import BadInput, plural, report_bad_input, table_cell
+from simulator.bench_results import frame_outcome
 from simulator.benchmarks import noisy_gravity, summarize
 from simulator.fixtures import fixture_meta
 from simulator.render import CameraPose, SensorModel, beacon_outline_px, render_frame
@@ -185,6 +186,7 @@ def shape_sample(args: tuple[ShapesConfig, str, int]) -> dict:
         "attitude_redraws": redraws,
         "locate_ms": locate_ms,
         "ok": result.ok,
+        "outcome": frame_outcome(result),
     }
     if not result.ok:
         return {**sample, "reason": result.reason.value, "message": result.message}
@@ -271,9 +273,10 @@ def _fix_note(sample: dict) -> dict:
 
 
 def _frame_note(sample: dict) -> dict:
+    outcome = {"outcome": sample["outcome"]}  # unrounded, for `bench results`
     if sample["ok"]:
-        return {"shape": sample["shape"], "ok": True, **_fix_note(sample)}
-    return {"shape": sample["shape"], "ok": False, **_pose_note(sample), "reason": sample["reason"]}
+        return {"shape": sample["shape"], "ok": True, **_fix_note(sample), **outcome}
+    return {"shape": sample["shape"], "ok": False, **_pose_note(sample), "reason": sample["reason"], **outcome}
 
 
 def run_shapes(config: ShapesConfig, workers: int | None = None) -> dict:

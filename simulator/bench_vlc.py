@@ -217,7 +217,7 @@ def run_vlc(config: VlcConfig, workers: int | None = None) -> dict:
     return {"distance_m": config.distance_m, "exposure_s": config.exposure_s, "depth": config.depth, "side_m": config.side_m,
             "shape": config.shape, "extent_m": list(extent), "trials": config.trials, "max_frames": config.max_frames,
             "map_ids": config.map_ids, "foreign_share": config.foreign_share if config.map_ids else None,
-            "single": single, "combined": combined}
+            "single": single, "combined": combined, "trials_run": trials}  # per trial, for `bench results`
 
 
 def panel_name(report: dict) -> str:
@@ -357,6 +357,7 @@ def _cut_trial(args: tuple[CutConfig, int]) -> dict:
         record["named"] = None if panel.beacon is None else panel.beacon.id
         if panel.fix is not None and hasattr(panel.fix, "position_m"):
             record["error_mm"] = 1000 * float(np.linalg.norm(panel.fix.position_m[:2] - pose.position_m[:2]))
+            record["position_m"] = [float(v) for v in panel.fix.position_m]
         elif panel.fix is not None:
             record["refusal"] = panel.fix.reason.value
     return record
@@ -384,6 +385,7 @@ def run_cut(config: CutConfig, workers: int | None = None) -> dict:
         "named_pct": 100.0 * len(right) / config.trials, "named_wrong": len(named) - len(right),
         "located": len(errors), "mean_mm": float(np.mean(errors)) if errors else math.nan,
         "max_mm": float(np.max(errors)) if errors else math.nan, "refusals": refusals,
+        "trials_run": records,  # per trial, for `bench results`
     }
     print(f"vlc cut at the {config.edge}, {config.share:.2f} in view: named {summary['named_pct']:.0f} %, "
           f"located {len(errors)}", file=sys.stderr)

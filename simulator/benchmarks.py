@@ -35,6 +35,7 @@ from server.options import LocateOptions
 from server.pipeline import PipelineOptions
 from server.pose.solve import GravityMode
 from shared_schemas import Beacon, BeaconMap, device_profiles
+from simulator.bench_results import frame_outcome
 from simulator.chain import ChainSpec
 from simulator.fixtures import fixture_meta
 from simulator.panels import PanelSpec, panel_emitters
@@ -209,10 +210,11 @@ def bench_emitters(beacon: Beacon, camera, pose: CameraPose, size: tuple[int, in
 def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
     config, index = args
     frame, beacon_map, pose = accuracy_frame(config, index)
-    errors = {}
+    errors, outcomes = {}, {}
     for mode, gravity_mode in MODES.items():
         options = PipelineOptions(gravity_mode=gravity_mode, gravity_sigma_deg=config.gravity_sigma_deg)
         result = locate(frame, beacon_map, LocateOptions(pipeline=options))
+        outcomes[mode] = frame_outcome(result)
         if result.ok:
             delta = np.subtract(result.position_m, pose.position_m)
             errors[mode] = (float(np.hypot(*delta[:2])), float(np.linalg.norm(delta)),
@@ -220,7 +222,7 @@ def _accuracy_sample(args: tuple[AccuracyConfig, int]) -> dict:
                             *ellipse_test(delta[:2], result.position_covariance_m2))
         else:
             errors[mode] = (math.nan, math.nan, result.reason.value, None, None)
-    return {"index": index, "errors": errors}
+    return {"index": index, "errors": errors, "outcomes": outcomes}
 
 
 def ellipse_test(delta_xy, covariance_m2) -> tuple[bool | None, float | None]:
@@ -303,7 +305,8 @@ def run_accuracy(config: AccuracyConfig, workers: int | None = None) -> dict:
             summary[mode]["p95_tilt_error_deg"] = float(np.percentile(tilts, 95))
         summary[mode].update(calibration([(e[3], e[4]) for e in located]))
     return {"distance_m": config.distance_m, "frames": config.frames, "scale": config.scale,
-            "renderer": config.renderer, "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary}
+            "renderer": config.renderer, "gravity_sigma_deg": config.gravity_sigma_deg, "modes": summary,
+            "outcomes": [{"index": s["index"], **s["outcomes"]} for s in samples]}  # per mode, for `bench results`
 
 
 def renderer_ratios(reports: list[dict], mode: str = "auto") -> list[dict]:

@@ -244,6 +244,9 @@ def add_commands(commands) -> None:
     from simulator.survey_cli import add_survey_bench  # `bench survey` (issue 14)
 
     add_survey_bench(benches)
+    from simulator.bench_results import add_results_bench  # `bench results` (issue 30: results unchanged)
+
+    add_results_bench(benches)
 
 
 def plot_sample_evaluation(report, folder: Path, cell_m: float) -> list[Path]:

@@ -1,0 +1,57 @@
+"""`bench results` compare: a changed decision or a move over 0.01 mm fails, a smaller move passes (no bench run)."""
+
+import json
+
+from simulator.bench_results import compare_runs, format_comparison
+
+CODE = {"commit": "abc1234", "dirty": False, "server_tree": "1234567", "shared_schemas_tree": "7654321"}
+
+
+def _frame(key, ok=True, x_m=0.1, reason=None, beacon_id=0):
+    decision = {"ok": ok, "reason": reason, "beacon_id": beacon_id if ok else None}
+    return {"frame": key, "decision": decision, "positions_m": {"fix": [x_m, 0.2, 0.0]} if ok else {},
+            "figures": {}}
+
+
+def _results(*frames, mean_mm=1.0):
+    run = {"bench": "accuracy", "params": {}, "frames": list(frames), "figures": {"1m auto mean_mm": mean_mm},
+           "wall_s": 1.0}
+    return {"mode": "quick", "code": CODE, "runs": {"accuracy-full": run}}
+
+
+BASE = _results(_frame("1m/0/auto"), _frame("1m/1/auto", ok=False, reason="no_beacon"))
+
+
+def test_a_move_under_the_tolerance_passes_and_one_over_it_fails():
+    small = compare_runs(BASE, _results(_frame("1m/0/auto", x_m=0.1 + 0.005e-3),
+                                        _frame("1m/1/auto", ok=False, reason="no_beacon")))
+    assert small["ok"] and 0.004 < small["cases"]["accuracy-full"]["max_move_mm"] < 0.006
+    large = compare_runs(BASE, _results(_frame("1m/0/auto", x_m=0.1 + 0.02e-3),
+                                        _frame("1m/1/auto", ok=False, reason="no_beacon"), mean_mm=1.02))
+    case = large["cases"]["accuracy-full"]
+    assert not large["ok"] and case["moved"] == ["1m/0/auto"] and case["figures"]["1m auto mean_mm"] == [1.0, 1.02]
+    text = format_comparison({**large, "wall_s": 1.0})
+    assert "1 frames moved by more than 0.01 mm" in text and "results CHANGED" in text and "1.0000 -> 1.0200" in text
+
+
+def test_a_changed_decision_fails_and_is_listed():
+    now = _results(_frame("1m/0/auto"), _frame("1m/1/auto", ok=False, reason="pose_ambiguous"))
+    report = compare_runs(BASE, now)
+    changed = report["cases"]["accuracy-full"]["changed"]
+    assert not report["ok"] and [c["frame"] for c in changed] == ["1m/1/auto"]
+    assert changed[0]["before"]["reason"] == "no_beacon" and changed[0]["after"]["reason"] == "pose_ambiguous"
+    assert "1m/1/auto" in format_comparison({**report, "wall_s": 1.0})
+    # a fix that became a refusal is a decision, whatever its position
+    assert not compare_runs(BASE, _results(_frame("1m/0/auto", ok=False, reason="no_beacon"),
+                                           _frame("1m/1/auto", ok=False, reason="no_beacon")))["ok"]
+
+
+def test_identical_results_pass_and_missing_frames_fail():
+    assert compare_runs(BASE, json.loads(json.dumps(BASE)))["ok"]
+    fewer = compare_runs(BASE, _results(_frame("1m/0/auto")))
+    assert not fewer["ok"] and fewer["cases"]["accuracy-full"]["missing"] == ["1m/1/auto"]
+
+
+def test_a_bench_that_failed_fails_its_case():
+    report = compare_runs(BASE, {**BASE, "runs": {"accuracy-full": {"bench": "accuracy", "error": "ValueError: x"}}})
+    assert not report["ok"] and "FAILED (ValueError: x)" in format_comparison({**report, "wall_s": 1.0})
