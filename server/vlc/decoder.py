@@ -126,20 +126,23 @@ def read_stripes(
     if exposure_s is None or not exposure_s > 0:
         raise ValueError(f"exposure_s must be positive to read stripes, got {exposure_s}")
     y0, x0 = origin_yx
+    mask = np.asarray(mask, dtype=bool)
     h, w = mask.shape
-    window = np.asarray(pixels[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
     if rules.edge_margin_px > 0:
         size = 2 * rules.edge_margin_px + 1
-        mask = cv2.erode(mask.astype(np.uint8), np.ones((size, size), np.uint8)).astype(bool)
+        mask = cv2.erode(mask.view(np.uint8), np.ones((size, size), np.uint8)).view(bool)
     counts = mask.sum(axis=1)
     rows = np.flatnonzero(counts >= rules.min_pixels_per_row)
     if len(rows) == 0:
         return None
-    rows = np.arange(rows[0], rows[-1] + 1)  # the panel is convex: one run of rows
+    first, last = rows[0], rows[-1]
+    rows = np.arange(first, last + 1)  # the panel is convex: one run of rows
     counts = np.maximum(counts[rows], 1)
-    inside = mask[rows]
-    sums = np.where(inside, window[rows], 0.0).sum(axis=1)
-    squares = np.where(inside, window[rows] ** 2, 0.0).sum(axis=1)
+    # the pixels inside (0 outside) as float32, summed per row as before: float32 sums, in numpy's order
+    inside = pixels[y0 + first : y0 + last + 1, x0 : x0 + w].astype(np.float32)
+    inside[~mask[first : last + 1]] = 0.0
+    sums = inside.sum(axis=1)
+    squares = np.square(inside, out=inside).sum(axis=1)
     means = sums / counts
     variances = np.maximum(squares / counts - means**2, 1.0) / counts  # of each row mean
     chip_s = 1.0 / rules.chip_rate_hz
