@@ -230,14 +230,19 @@ def _frame_log_likelihood(
                 raw += np.take(lut, index[start:stop, :, j], axis=0, out=row)
             raw /= np.float32(rows)
             np.multiply(raw, weights[:, None], out=templates)
-            templates -= np.matmul(q, np.matmul(q_t, templates), out=trend)  # the trend-free part
-            norm = np.einsum("pnc,pnc->pc", templates, templates)
+            coefficients = np.matmul(q_t, templates)  # (P, trend, C) on the orthonormal trend basis
+            # the trend-free part's squared norm, |t|^2 - |q^T t|^2, and its product with y_p (y_p has no trend part)
+            whole = np.einsum("pnc,pnc->pc", templates, templates)
+            norm = whole - np.einsum("pkc,pkc->pc", coefficients, coefficients)
+            if np.any(norm < 1e-9 * whole):  # a template almost all trend: the difference has lost its digits
+                templates -= np.matmul(q, coefficients, out=trend)
+                norm = np.einsum("pnc,pnc->pc", templates, templates)
             along = np.einsum("n,pnc->pc", y_p, templates)
             # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
             # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
             # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
             gain = along / np.maximum(norm, 1e-12)
-            bright = level + gain * (1.0 - raw.transpose(0, 2, 1).mean(axis=-1))
+            bright = level + gain * (1.0 - raw.mean(axis=1))
             plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
             explained[start:stop, :, e] = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
     result = (float(y_p @ y_p) - explained).transpose(1, 0, 2)
