@@ -225,9 +225,10 @@ def _frame_log_likelihood(
             raw, row = raw_block[: stop - start], row_block[: stop - start]
             templates, trend = template_block[: stop - start], trend_block[: stop - start]
             # each bin's share of a 1 chip: the mean of its rows' (summed in order, as numpy's mean sums them)
-            np.take(lut, index[start:stop, :, 0], axis=0, out=raw)
+            # indices are in [0, steps) already; "clip" writes straight into `out` ("raise" buffers it: a copy more)
+            np.take(lut, index[start:stop, :, 0], axis=0, out=raw, mode="clip")
             for j in range(1, rows):
-                raw += np.take(lut, index[start:stop, :, j], axis=0, out=row)
+                raw += np.take(lut, index[start:stop, :, j], axis=0, out=row, mode="clip")
             raw /= np.float32(rows)
             np.multiply(raw, weights[:, None], out=templates)
             coefficients = np.matmul(q_t, templates)  # (P, trend, C) on the orthonormal trend basis
