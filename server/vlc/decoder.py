@@ -126,7 +126,7 @@ def read_stripes(
     if exposure_s is None or not exposure_s > 0:
         raise ValueError(f"exposure_s must be positive to read stripes, got {exposure_s}")
     y0, x0 = origin_yx
-    mask = np.asarray(mask, dtype=bool)
+    mask = np.ascontiguousarray(mask, dtype=bool)  # viewed as uint8 for OpenCV
     h, w = mask.shape
     if rules.edge_margin_px > 0:
         size = 2 * rules.edge_margin_px + 1

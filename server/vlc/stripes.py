@@ -332,7 +332,7 @@ def stripe_axis(
     level_sum, level_count = 0.0, 0
     for (y0, x0), mask in regions:
         h, w = mask.shape
-        mask = np.asarray(mask, dtype=bool)
+        mask = np.ascontiguousarray(mask, dtype=bool)  # viewed as uint8 for OpenCV
         inner = cv2.erode(mask.view(np.uint8), kernel).view(bool) if rules.edge_margin_px > 0 else mask
         if not inner.any():
             continue
