@@ -183,8 +183,8 @@ def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int,
     return np.ascontiguousarray(np.array(table, dtype=np.float32).T)
 
 
-# phases x bins fitted at once: a block's arrays (about 1 MB) stay in cache and are reused; fresh 10 MB arrays for all
-# phases at once cost more in page faults than the sums themselves
+# phases x bins fitted at once: a block's arrays (about 1 MB) stay in cache and are reused; fresh 10-50 MB arrays
+# for all phases at once cost more in page faults than the sums themselves
 BLOCK_PHASE_BINS = 400
 
 
@@ -205,48 +205,45 @@ def _frame_log_likelihood(
     weights = 1.0 / obs.sigma_dn
     basis = np.vander(obs.position, rules.trend_degree + 1) * weights[:, None]
     q, _ = np.linalg.qr(basis)
-    q_t = np.ascontiguousarray(q.T)
     y = obs.values_dn * weights
     y_p = y - q @ (q.T @ y)
     level = float(np.mean(obs.values_dn))
     bins, rows = obs.row_offsets_s.shape
-    block = int(np.clip(BLOCK_PHASE_BINS // bins, 1, len(phases_s)))
-    raw_block = np.empty((block, bins, count), np.float32)  # (phases, bins, C): reused, block by block
-    row_block = np.empty_like(raw_block)
-    template_block = np.empty((block, bins, count))
-    trend_block = np.empty_like(template_block)
-    explained = np.empty((len(phases_s), count, len(clock_errors_ppm)))
+    phases = len(phases_s)
+    # blocks of one size, a divisor of the phases; in each, every hypothesis's template is a row fitted by the
+    # same calls as when all were fitted at once: the same numbers to the last bit (codes that fit alike tie
+    # exactly, and the first in ID order is named)
+    block = max(d for d in range(1, phases + 1) if phases % d == 0 and (d == 1 or d * bins <= BLOCK_PHASE_BINS))
+    raw = np.empty((block, bins, count), np.float32)  # gathered as whole rows of the table
+    row = np.empty_like(raw)
+    codes = np.empty((block, count, bins), np.float32)  # (phases, C, n): each bin's share of a 1 chip
+    templates = np.empty((block, count, bins))
+    trend = np.empty_like(templates)
+    explained = np.empty((count, phases, len(clock_errors_ppm)))  # C order as before: decide() sums along phases
     for e, ppm in enumerate(clock_errors_ppm):
         rate = 1.0 + ppm * 1e-6
         times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
         index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
-        for start in range(0, len(phases_s), block):
-            stop = min(start + block, len(phases_s))
-            raw, row = raw_block[: stop - start], row_block[: stop - start]
-            templates, trend = template_block[: stop - start], trend_block[: stop - start]
-            # each bin's share of a 1 chip: the mean of its rows' (summed in order, as numpy's mean sums them)
-            # indices are in [0, steps) already; "clip" writes straight into `out` ("raise" buffers it: a copy more)
-            np.take(lut, index[start:stop, :, 0], axis=0, out=raw, mode="clip")
+        for start in range(0, phases, block):
+            # each bin's mean over its rows, summed in order as numpy's mean sums them; the indices are in range
+            # already: "clip" writes straight into `out` ("raise" buffers it, a copy more)
+            np.take(lut, index[start : start + block, :, 0], axis=0, out=raw, mode="clip")
             for j in range(1, rows):
-                raw += np.take(lut, index[start:stop, :, j], axis=0, out=row, mode="clip")
+                raw += np.take(lut, index[start : start + block, :, j], axis=0, out=row, mode="clip")
             raw /= np.float32(rows)
-            np.multiply(raw, weights[:, None], out=templates)
-            coefficients = np.matmul(q_t, templates)  # (P, trend, C) on the orthonormal trend basis
-            # the trend-free part's squared norm, |t|^2 - |q^T t|^2, and its product with y_p (y_p has no trend part)
-            whole = np.einsum("pnc,pnc->pc", templates, templates)
-            norm = whole - np.einsum("pkc,pkc->pc", coefficients, coefficients)
-            if np.any(norm < 1e-9 * whole):  # a template almost all trend: the difference has lost its digits
-                templates -= np.matmul(q, coefficients, out=trend)
-                norm = np.einsum("pnc,pnc->pc", templates, templates)
-            along = np.einsum("n,pnc->pc", y_p, templates)
+            codes[...] = raw.transpose(0, 2, 1)
+            np.multiply(codes, weights, out=templates)
+            templates -= np.matmul(np.matmul(templates, q), q.T, out=trend)  # the trend-free part
+            norm = np.einsum("pcn,pcn->pc", templates, templates)
+            along = templates @ y_p
             # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
             # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
             # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
             gain = along / np.maximum(norm, 1e-12)
-            bright = level + gain * (1.0 - raw.mean(axis=1))
+            bright = level + gain * (1.0 - codes.mean(axis=-1))
             plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
-            explained[start:stop, :, e] = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
-    result = (float(y_p @ y_p) - explained).transpose(1, 0, 2)
+            explained[:, start : start + block, e] = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0).T
+    result = float(y_p @ y_p) - explained
     dof = max(1, obs.samples - rules.trend_degree - 2)
     scale = max(1.0, float(result.min()) / dof)  # residuals beyond the pixel noise: the model's own error
     return -0.5 * result / scale
