@@ -126,20 +126,23 @@ def read_stripes(
     if exposure_s is None or not exposure_s > 0:
         raise ValueError(f"exposure_s must be positive to read stripes, got {exposure_s}")
     y0, x0 = origin_yx
+    mask = np.ascontiguousarray(mask, dtype=bool)  # viewed as uint8 for OpenCV
     h, w = mask.shape
-    window = np.asarray(pixels[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
     if rules.edge_margin_px > 0:
         size = 2 * rules.edge_margin_px + 1
-        mask = cv2.erode(mask.astype(np.uint8), np.ones((size, size), np.uint8)).astype(bool)
+        mask = cv2.erode(mask.view(np.uint8), np.ones((size, size), np.uint8)).view(bool)
     counts = mask.sum(axis=1)
     rows = np.flatnonzero(counts >= rules.min_pixels_per_row)
     if len(rows) == 0:
         return None
-    rows = np.arange(rows[0], rows[-1] + 1)  # the panel is convex: one run of rows
+    first, last = rows[0], rows[-1]
+    rows = np.arange(first, last + 1)  # the panel is convex: one run of rows
     counts = np.maximum(counts[rows], 1)
-    inside = mask[rows]
-    sums = np.where(inside, window[rows], 0.0).sum(axis=1)
-    squares = np.where(inside, window[rows] ** 2, 0.0).sum(axis=1)
+    # the pixels inside (0 outside) as float32, summed per row as before: float32 sums, in numpy's order
+    inside = pixels[y0 + first : y0 + last + 1, x0 : x0 + w].astype(np.float32)
+    inside[~mask[first : last + 1]] = 0.0
+    sums = inside.sum(axis=1)
+    squares = np.square(inside, out=inside).sum(axis=1)
     means = sums / counts
     variances = np.maximum(squares / counts - means**2, 1.0) / counts  # of each row mean
     chip_s = 1.0 / rules.chip_rate_hz
@@ -167,7 +170,8 @@ def read_stripes(
 
 @lru_cache(maxsize=16)
 def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int, chip_rate_hz: float) -> np.ndarray:
-    """(C, MESSAGE_CHIPS * steps) each candidate's 0/1 code box-averaged over `exposure_s`."""
+    """(MESSAGE_CHIPS * steps, C) each candidate's 0/1 code box-averaged over `exposure_s`, one row a time
+    step: a bin's rows are gathered as whole rows of all candidates."""
     chip_s = 1.0 / chip_rate_hz
     times = np.arange(MESSAGE_CHIPS * steps_per_chip) * chip_s / steps_per_chip
     table = [
@@ -176,7 +180,12 @@ def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int,
         )
         for i in candidates
     ]
-    return np.array(table, dtype=np.float32)
+    return np.ascontiguousarray(np.array(table, dtype=np.float32).T)
+
+
+# phases x bins fitted at once: a block's arrays (about 1 MB) stay in cache and are reused; fresh 10-50 MB arrays
+# for all phases at once cost more in page faults than the sums themselves
+BLOCK_PHASE_BINS = 400
 
 
 def _frame_log_likelihood(
@@ -188,7 +197,7 @@ def _frame_log_likelihood(
 ) -> np.ndarray:
     """(C, phases, clock errors) log-likelihood of one frame; relative to its best fit."""
     lut = _lookup(candidates, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz)
-    steps = lut.shape[1]
+    steps, count = lut.shape
     chip_s = 1.0 / rules.chip_rate_hz
     period_s = MESSAGE_CHIPS * chip_s
     phases_s = np.arange(MESSAGE_CHIPS * rules.phase_steps_per_chip) * chip_s / rules.phase_steps_per_chip
@@ -199,24 +208,42 @@ def _frame_log_likelihood(
     y = obs.values_dn * weights
     y_p = y - q @ (q.T @ y)
     level = float(np.mean(obs.values_dn))
-    result = np.empty((len(candidates), len(phases_s), len(clock_errors_ppm)), np.float64)
+    bins, rows = obs.row_offsets_s.shape
+    phases = len(phases_s)
+    # blocks of one size, a divisor of the phases; in each, every hypothesis's template is a row fitted by the
+    # same calls as when all were fitted at once: the same numbers to the last bit (codes that fit alike tie
+    # exactly, and the first in ID order is named)
+    block = max(d for d in range(1, phases + 1) if phases % d == 0 and (d == 1 or d * bins <= BLOCK_PHASE_BINS))
+    raw = np.empty((block, bins, count), np.float32)  # gathered as whole rows of the table
+    row = np.empty_like(raw)
+    codes = np.empty((block, count, bins), np.float32)  # (phases, C, n): each bin's share of a 1 chip
+    templates = np.empty((block, count, bins))
+    trend = np.empty_like(templates)
+    explained = np.empty((count, phases, len(clock_errors_ppm)))  # C order as before: decide() sums along phases
     for e, ppm in enumerate(clock_errors_ppm):
         rate = 1.0 + ppm * 1e-6
         times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
         index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
-        raw = lut[:, index].mean(axis=-1)  # (C, P, n): each bin's share of a 1 chip
-        templates = raw * weights
-        t_p = templates - (templates @ q) @ q.T
-        norm = np.einsum("cpn,cpn->cp", t_p, t_p)
-        along = t_p @ y_p
-        # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
-        # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
-        # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
-        gain = along / np.maximum(norm, 1e-12)
-        bright = level + gain * (1.0 - raw.mean(axis=-1))
-        plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
-        explained = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
-        result[:, :, e] = float(y_p @ y_p) - explained
+        for start in range(0, phases, block):
+            # each bin's mean over its rows, summed in order as numpy's mean sums them; the indices are in range
+            # already: "clip" writes straight into `out` ("raise" buffers it, a copy more)
+            np.take(lut, index[start : start + block, :, 0], axis=0, out=raw, mode="clip")
+            for j in range(1, rows):
+                raw += np.take(lut, index[start : start + block, :, j], axis=0, out=row, mode="clip")
+            raw /= np.float32(rows)
+            codes[...] = raw.transpose(0, 2, 1)
+            np.multiply(codes, weights, out=templates)
+            templates -= np.matmul(np.matmul(templates, q), q.T, out=trend)  # the trend-free part
+            norm = np.einsum("pcn,pcn->pc", templates, templates)
+            along = templates @ y_p
+            # a hypothesis must explain stripes as deep as an LED's code makes them, whatever its depth: the
+            # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
+            # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
+            gain = along / np.maximum(norm, 1e-12)
+            bright = level + gain * (1.0 - codes.mean(axis=-1))
+            plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
+            explained[:, start : start + block, e] = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0).T
+    result = float(y_p @ y_p) - explained
     dof = max(1, obs.samples - rules.trend_degree - 2)
     scale = max(1.0, float(result.min()) / dof)  # residuals beyond the pixel noise: the model's own error
     return -0.5 * result / scale

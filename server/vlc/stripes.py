@@ -266,16 +266,16 @@ def measure_stripes(
     )
 
 
-def _profile_roughness(window: np.ndarray, inner: np.ndarray, axis: int, trim: int) -> tuple[float, int]:
-    """(sum of squared central differences, their count) of the means of `window` over `inner` (bool)
-    along `axis` (1: each row's mean, a profile down the rows; 0: each column's), without the `trim`
-    first and last means (what is left there of the blurred outline)."""
+def _profile_roughness(inside: np.ndarray, inner: np.ndarray, axis: int, trim: int) -> tuple[float, int]:
+    """(sum of squared central differences, their count) of the means over `inner` (bool) of a window
+    (`inside`: its pixels there, 0 elsewhere) along `axis` (1: each row's mean, a profile down the rows; 0: each
+    column's), without the `trim` first and last means (what is left there of the blurred outline)."""
     counts = inner.sum(axis=axis)
     used = np.flatnonzero(counts > 0)
     if len(used) < 2 * trim + 3:
         return 0.0, 0
     span = slice(used[0] + trim, used[-1] + 1 - trim)
-    means = np.where(inner, window, 0.0).sum(axis=axis)[span] / np.maximum(counts[span], 1)
+    means = inside.sum(axis=axis)[span] / np.maximum(counts[span], 1)
     both = (counts[span][2:] > 0) & (counts[span][:-2] > 0)
     differences = (means[2:] - means[:-2])[both]
     return float(np.sum(differences**2)), int(both.sum())
@@ -332,14 +332,16 @@ def stripe_axis(
     level_sum, level_count = 0.0, 0
     for (y0, x0), mask in regions:
         h, w = mask.shape
-        inner = cv2.erode(mask.astype(np.uint8), kernel).astype(bool) if rules.edge_margin_px > 0 else mask
+        mask = np.ascontiguousarray(mask, dtype=bool)  # viewed as uint8 for OpenCV
+        inner = cv2.erode(mask.view(np.uint8), kernel).view(bool) if rules.edge_margin_px > 0 else mask
         if not inner.any():
             continue
-        window = np.asarray(pixels[y0 : y0 + h, x0 : x0 + w], dtype=np.float32)
-        level_sum += float(window[inner].sum())
+        inside = pixels[y0 : y0 + h, x0 : x0 + w].astype(np.float32)
+        level_sum += float(inside[inner].sum())
         level_count += int(inner.sum())
+        inside[~inner] = 0.0  # both profiles sum the same values
         for axis in (0, 1):
-            total, count = _profile_roughness(window, inner, axis, rules.trim)
+            total, count = _profile_roughness(inside, inner, axis, rules.trim)
             rough[axis] += total
             counts[axis] += count
     return StripeAxis(

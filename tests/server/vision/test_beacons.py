@@ -112,3 +112,24 @@ def test_blobs_are_judged_by_the_looks_of_the_map_s_panels():
     image[450:560, 500:740] = 250  # 2.2 : 1, like none of them
     found = find_beacon_blobs(image, CandidateRules(looks=panel_looks([square, circle])))
     assert any("none of the map's 2 panels" in r for r in found.rejected)
+
+
+def test_components_give_opencvs_labels_stats_and_centroids():
+    from server.vision.beacons import _centroid, _components
+
+    rng = np.random.default_rng(3)
+    for trial in range(60):
+        height, width = (int(v) for v in rng.integers(5, 200, 2))
+        mask = np.zeros((height, width), np.uint8)
+        for _ in range(int(rng.integers(0, 6))):
+            centre = (int(rng.integers(0, width)), int(rng.integers(0, height)))
+            cv2.circle(mask, centre, int(rng.integers(1, 40)), 255, -1)
+        if trial % 3 == 0:
+            mask[rng.random(mask.shape) < 0.002] = 255  # specks: beyond a few components, OpenCV's own stats
+        mask[:: 5 + trial % 4] = 0
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        own_count, own_labels, own_stats = _components(mask)
+        assert own_count == count and np.array_equal(own_labels, labels)
+        assert np.array_equal(own_stats[1:], stats[1:])
+        for label in range(1, count):
+            assert np.array_equal(_centroid(labels, label, int(stats[label, cv2.CC_STAT_AREA])), centroids[label])

@@ -129,3 +129,55 @@ def test_the_id_frame_exposure_limit_comes_from_the_stripe_rules(make_id_frames)
     assert "averaged away" in id_frame_problem(frame, StripeRules(max_exposure_chips=0.5))
     longer = frame.__class__(frame.pixels, frame.meta.model_copy(update={"exposure_s": 1 / 2000}), frame.camera)
     assert "averaged away" in id_frame_problem(longer)
+
+
+def _reference_log_likelihood(obs, reference_s, clock_errors_ppm, rules):
+    """The likelihood as first written (all phases at once, one gather of every row's table entry): the
+    reference `_frame_log_likelihood`'s blocks of phases are held to."""
+    from server.vlc.codec import MESSAGE_CHIPS
+    from server.vlc.decoder import ALL_IDS, _lookup
+
+    lut = _lookup(ALL_IDS, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz).T
+    steps = lut.shape[1]
+    chip_s = 1.0 / rules.chip_rate_hz
+    period_s = MESSAGE_CHIPS * chip_s
+    phases_s = np.arange(MESSAGE_CHIPS * rules.phase_steps_per_chip) * chip_s / rules.phase_steps_per_chip
+    weights = 1.0 / obs.sigma_dn
+    q, _ = np.linalg.qr(np.vander(obs.position, rules.trend_degree + 1) * weights[:, None])
+    y = obs.values_dn * weights
+    y_p = y - q @ (q.T @ y)
+    level = float(np.mean(obs.values_dn))
+    result = np.empty((lut.shape[0], len(phases_s), len(clock_errors_ppm)))
+    for e, ppm in enumerate(clock_errors_ppm):
+        times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * (1.0 + ppm * 1e-6)
+        index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
+        raw = lut[:, index].mean(axis=-1)
+        templates = raw * weights
+        t_p = templates - (templates @ q) @ q.T
+        norm = np.einsum("cpn,cpn->cp", t_p, t_p)
+        along = t_p @ y_p
+        gain = along / np.maximum(norm, 1e-12)
+        bright = level + gain * (1.0 - raw.mean(axis=-1))
+        plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
+        result[:, :, e] = float(y_p @ y_p) - np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
+    scale = max(1.0, float(result.min()) / max(1, obs.samples - rules.trend_degree - 2))
+    return -0.5 * result / scale
+
+
+@pytest.mark.parametrize("distance_m, bins", [(1.0, None), (2.5, 6)])
+def test_the_frame_likelihood_equals_the_reference(make_id_frames, distance_m, bins):
+    from dataclasses import replace
+
+    from server.vlc.decoder import ALL_IDS, StripeRules, _frame_log_likelihood
+
+    frame = make_id_frames(77, distance_m, 1 / 8000, 1, seed=5)[0]
+    obs = next(p.observation for p in read_id_frame(frame).panels if p.observation is not None)
+    if bins is not None:  # the fewest bins decoded
+        obs = replace(obs, row_offsets_s=obs.row_offsets_s[:bins], values_dn=obs.values_dn[:bins],
+                      sigma_dn=obs.sigma_dn[:bins], position=np.linspace(-1, 1, bins))
+    rules, errors = StripeRules(), np.array([-40.0, 0.0, 40.0])
+    fast = _frame_log_likelihood(obs, obs.timestamp_s - 0.02, ALL_IDS, errors, rules)
+    reference = _reference_log_likelihood(obs, obs.timestamp_s - 0.02, errors, rules)
+    # bit for bit: in each block every hypothesis's template is a row fitted by the same calls (exact ties kept)
+    np.testing.assert_array_equal(fast, reference)
+    assert fast.flags.c_contiguous  # decide() sums along the phases: a strided layout sums them in another order
