@@ -91,8 +91,10 @@ def rounded_square_corners(contour: np.ndarray, rules: PolygonRules = PolygonRul
     # Plain floats from here: a polygon of a few dozen vertices costs less in Python than in numpy calls.
     polygon = cv2.approxPolyDP(hull, rules.rdp_fraction * perimeter, True).reshape(-1, 2).tolist()
     following = polygon[1:] + polygon[:1]
-    lengths = np.hypot([b[0] - a[0] for a, b in zip(polygon, following, strict=True)],
-                       [b[1] - a[1] for a, b in zip(polygon, following, strict=True)]).tolist()
+    lengths = np.hypot(
+        [b[0] - a[0] for a, b in zip(polygon, following, strict=True)],
+        [b[1] - a[1] for a, b in zip(polygon, following, strict=True)],
+    ).tolist()
     # the corner arcs' short segments go (not "shorter than the mean": when RDP leaves one
     # vertex per corner, as for a large panel with small corners, that drops two real sides)
     shortest = 0.5 * max(lengths)
