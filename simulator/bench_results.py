@@ -7,7 +7,8 @@ per-frame outcomes (`frame_outcome` of every `locate` result, or its trials' dec
 report; `save` writes them with the benches' summary figures and reports into DIR, `compare` runs the same
 cases again and holds them against DIR:
 - a decision changed (fix or refusal and its reason, beacon ID and where it came from, the orientation rule,
-  the gravity prior used, a VLC trial's ID, confidence and frames needed): fails, the frames listed;
+  the gravity prior used, a VLC trial's ID, confidence and frames needed): fails, the frames listed; an
+  unconfident VLC reading's best guess is no decision (listed apart, not failing);
 - a position (a fix, office's filtered track) moved by more than `TOLERANCE_MM` (0.01 mm, the 3-D distance):
   fails;
 - other per-frame numbers (VLC chips seen) and the summary figures: shown side by side, never failing.
@@ -321,24 +322,41 @@ def _max_move_mm(before: dict, after: dict) -> float:
     return 1000.0 * max(moves, default=0.0)
 
 
+def _decided(decision: dict) -> dict:
+    """`decision` without the best guess of an unconfident VLC reading (a trial's "single"/"combined" [id,
+    confident, ...], office's vlc_id): no ID was decided, which of the near-equal IDs came first is not a
+    decision (a changed guess is listed apart, not failing)."""
+    out = dict(decision)
+    for kind in ("single", "combined"):
+        if isinstance(out.get(kind), list) and out[kind][1] is False:
+            out[kind] = [None, *out[kind][1:]]
+    if out.get("vlc_confident") is False:
+        out["vlc_id"] = None
+    return out
+
+
 def compare_run(base: dict, now: dict) -> dict:
     """One case now against its baseline: changed decisions, the largest move of a position, the per-frame
     numbers' and summary figures' differences; `ok` unless a decision changed, a position moved by more
     than TOLERANCE_MM or the frames are not the same ones (or the bench failed)."""
     if "error" in base or "error" in now:
         return {"frames": 0, "changed": [], "missing": [], "added": [], "max_move_mm": 0.0, "worst_frame": None,
-                "moved": [], "max_number_difference": {}, "figures": {}, "wall_s": [None, None], "ok": False,
+                "moved": [], "guesses_changed": [], "max_number_difference": {}, "figures": {}, "wall_s": [None, None],
+                "ok": False,
                 "error": now.get("error") or f"the baseline's: {base['error']}"}
     before = {f["frame"]: f for f in base["frames"]}
     after = {f["frame"]: f for f in now["frames"]}
     changed: list[dict] = []
+    guesses: list[str] = []
     moves: list[tuple[float, str]] = []
     numbers: dict[str, float] = {}
     for key in before.keys() & after.keys():
         b, a = before[key], after[key]
-        if b["decision"] != a["decision"] or b["positions_m"].keys() != a["positions_m"].keys():
+        if _decided(b["decision"]) != _decided(a["decision"]) or b["positions_m"].keys() != a["positions_m"].keys():
             changed.append({"frame": key, "before": b["decision"], "after": a["decision"]})
             continue
+        if b["decision"] != a["decision"]:
+            guesses.append(key)
         moves.append((_max_move_mm(b["positions_m"], a["positions_m"]), key))
         for name in b["figures"].keys() & a["figures"].keys():
             numbers[name] = max(numbers.get(name, 0.0), abs(a["figures"][name] - b["figures"][name]))
@@ -348,7 +366,7 @@ def compare_run(base: dict, now: dict) -> dict:
     missing, added = sorted(before.keys() - after.keys()), sorted(after.keys() - before.keys())
     return {"frames": len(after), "changed": sorted(changed, key=lambda c: c["frame"]), "missing": missing,
             "added": added, "max_move_mm": max_move_mm, "worst_frame": worst,
-            "moved": sorted(key for move, key in moves if move > TOLERANCE_MM),
+            "moved": sorted(key for move, key in moves if move > TOLERANCE_MM), "guesses_changed": sorted(guesses),
             "max_number_difference": numbers, "figures": figures,
             "wall_s": [base.get("wall_s"), now.get("wall_s")],
             "ok": not changed and not missing and not added and max_move_mm <= TOLERANCE_MM}
@@ -410,6 +428,9 @@ def format_comparison(report: dict, all_figures: bool = False) -> str:
             lines.append(f"  {name}: {len(case['moved'])} frames moved by more than {report['tolerance_mm']} mm, "
                          f"the most {case['worst_frame']} ({case['max_move_mm']:.4f} mm): "
                          + ", ".join(case["moved"][:SHOWN_CHANGES]))
+        if case["guesses_changed"]:
+            lines.append(f"  {name}: {len(case['guesses_changed'])} unconfident VLC guesses changed (no ID decided "
+                         f"before or after; not failing): " + ", ".join(case["guesses_changed"][:SHOWN_CHANGES]))
         for number, difference in case["max_number_difference"].items():
             if difference:
                 lines.append(f"  {name}: per-frame '{number}' differs by up to {difference:.4g} (shown, not failing)")

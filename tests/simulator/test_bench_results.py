@@ -55,3 +55,17 @@ def test_identical_results_pass_and_missing_frames_fail():
 def test_a_bench_that_failed_fails_its_case():
     report = compare_runs(BASE, {**BASE, "runs": {"accuracy-full": {"bench": "accuracy", "error": "ValueError: x"}}})
     assert not report["ok"] and "FAILED (ValueError: x)" in format_comparison({**report, "wall_s": 1.0})
+
+
+def test_an_unconfident_vlc_guess_is_no_decision_a_confident_id_is():
+    def trial(single, combined):
+        run = {"bench": "vlc", "frames": [{"frame": "3m/0", "decision": {"id": 7, "single": single,
+                                                                         "combined": combined},
+                                           "positions_m": {}, "figures": {}}], "figures": {}}
+        return {"mode": "quick", "code": CODE, "runs": {"vlc": run}}
+
+    base = trial([149, False], [7, True, 5])
+    guess = compare_runs(base, trial([169, False], [7, True, 5]))
+    assert guess["ok"] and guess["cases"]["vlc"]["guesses_changed"] == ["3m/0"]
+    assert not compare_runs(base, trial([149, False], [8, True, 5]))["ok"]  # a confident ID changed
+    assert not compare_runs(base, trial([149, False], [7, True, 6]))["ok"]  # one more frame needed
