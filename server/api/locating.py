@@ -11,10 +11,11 @@ from server.annotate import FrameSeen, picture, seen_in
 from server.api.deps import Services
 from server.api.params import LocateQuery
 from server.api.upload import FrameUpload
+from server.camera import ProfileTable
 from server.diagnostics import Diagnostics
 from server.ingest import decode_frame
 from server.locator import in_device_session, locate
-from shared_schemas import FailureReason, LocateResult, ProfileRef
+from shared_schemas import BeaconMap, FailureReason, LocateResult, ProfileRef
 
 
 @dataclass(frozen=True)
@@ -24,23 +25,28 @@ class Located:
     picture: bytes | None = None  # PNG of what the pipeline saw, when asked (`server.annotate`)
 
 
+def _stored_inputs(
+    services: Services, upload: FrameUpload, map_name: str | None
+) -> tuple[str, BeaconMap, ProfileTable | None]:
+    """The map's name and map (the active map's read as one), and the profile table when the frame
+    names a profile (a damaged stored profile is refused by name, 409, rather than as unknown)."""
+    name, beacon_map = (map_name, services.maps.get(map_name)) if map_name else services.maps.active()
+    camera = upload.meta.camera
+    profiles = services.profiles.table(camera.profile) if isinstance(camera, ProfileRef) else None
+    return name, beacon_map, profiles
+
+
 def _locate_now(
     services: Services,
     upload: FrameUpload,
-    map_name: str | None,
+    beacon_map: BeaconMap,
+    profiles: ProfileTable | None,
     query: LocateQuery,
     device: str | None,
     annotated: bool,
-) -> tuple[str, LocateResult, FrameSeen | None, bytes | None]:
-    """The map's name and the result; what a picture of the frame needs, when one is asked for or kept
-    for the web page; the picture, when asked for."""
-    # The data folder (or Redis) is read here, in the pipeline's thread: one hop off the event loop
-    # for the whole request. The active map's name and map are read as one.
-    name, beacon_map = (map_name, services.maps.get(map_name)) if map_name else services.maps.active()
-    camera = upload.meta.camera
-    # Only a frame naming a profile needs the table (bundled and stored); one naming a damaged stored
-    # profile is refused by name (409) rather than as unknown.
-    profiles = services.profiles.table(camera.profile) if isinstance(camera, ProfileRef) else None
+) -> tuple[LocateResult, FrameSeen | None, bytes | None]:
+    """The result; what a picture of the frame needs, when one is asked for or kept for the web page;
+    the picture, when asked for."""
     frame = decode_frame(upload.data, upload.meta, profiles)
     if upload.camera_used is not None:  # a photo: its intrinsics' source, not "the frame's"
         frame = replace(frame, camera_used=upload.camera_used)
@@ -50,9 +56,9 @@ def _locate_now(
         options = replace(options, pipeline=replace(options.pipeline, diagnostics=diagnostics))
     result = locate(frame, beacon_map, options, beacon_id=query.beacon_id, device_id=device, devices=services.devices)
     if diagnostics is None or (result.reason is FailureReason.id_frame and not annotated):
-        return name, result, None, None  # an ID frame's stripes are not kept for the page: nothing to see
+        return result, None, None  # an ID frame's stripes are not kept for the page: nothing to see
     seen = seen_in(frame, diagnostics, result, in_device_session(beacon_map, query.beacon_id, device))
-    return name, result, seen, picture(seen, result) if annotated else None
+    return result, seen, picture(seen, result) if annotated else None
 
 
 async def locate_upload(
@@ -68,8 +74,20 @@ async def locate_upload(
     session (tracking, ID frames combined) when the map has several beacons, and on the live board
     (`started`: the request's `time.perf_counter()`, for its latency); `annotated`: with a picture
     of what the pipeline saw."""
-    name, result, seen, drawn = await anyio.to_thread.run_sync(
-        _locate_now, services, upload, map_name, query, device, annotated, limiter=services.pipeline_limiter
+    # The data folder (or Redis) is read in a hop of its own, outside the pipeline's limiter: an unknown
+    # map or profile is answered at once, not after the frames ahead of it, and no pipeline thread
+    # waits on the disk.
+    name, beacon_map, profiles = await anyio.to_thread.run_sync(_stored_inputs, services, upload, map_name)
+    result, seen, drawn = await anyio.to_thread.run_sync(
+        _locate_now,
+        services,
+        upload,
+        beacon_map,
+        profiles,
+        query,
+        device,
+        annotated,
+        limiter=services.pipeline_limiter,
     )
     services.metrics.record_result(result)
     if device is not None:

@@ -32,7 +32,7 @@ def order_corners(corners: np.ndarray, beacon_yaw_deg: float, heading_deg: float
     # Plain floats: for four corners Python arithmetic is several times faster than numpy's calls.
     points = corners.tolist()
     # Seen from below, the model's corners run with negative signed area in image coordinates.
-    if _signed_area(points) >= 0:
+    if not _signed_area(points) < 0:  # NaN corners turned as before (refused later as not finite)
         corners, points = corners[::-1], points[::-1]
     expected = math.radians(beacon_yaw_deg - heading_deg) if heading_deg is not None else 0.0
     best = min(range(4), key=lambda shift: _angle_off(points[shift], points[(shift + 1) % 4], expected))

@@ -87,10 +87,13 @@ def covered_share(model_px: np.ndarray, points_px: np.ndarray, tolerance_px: flo
     """The share of model outline samples (M, 2) with an edge point (N, 2) within `tolerance_px`."""
     if len(model_px) == 0:
         return None
-    if len(points_px) == 0:
+    # The k-d tree takes finite points only: a non-finite edge point meets no sample, a non-finite
+    # sample is not covered (as with the distance matrix before it).
+    points_px, finite = points_px[np.isfinite(points_px).all(axis=1)], np.isfinite(model_px).all(axis=1)
+    if len(points_px) == 0 or not finite.any():
         return 0.0
-    gap, _ = cKDTree(points_px).query(model_px)  # each sample's nearest edge point (no M x N distances)
-    return float(np.mean(gap <= tolerance_px))
+    gap, _ = cKDTree(points_px).query(model_px[finite])  # each sample's nearest edge point (no M x N distances)
+    return float(np.count_nonzero(gap <= tolerance_px) / len(model_px))
 
 
 def shape_test(

@@ -96,8 +96,9 @@ class PoseSolution:
 
 
 @lru_cache(maxsize=256)
-def _beacon_frame(yaw_deg: float, center_m: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
-    rotation, center = rotation_z(yaw_deg), np.asarray(center_m, dtype=float)
+def _beacon_frame(yaw_hex: str, center_hex: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    rotation = rotation_z(float.fromhex(yaw_hex))
+    center = np.array([float.fromhex(value) for value in center_hex])
     rotation.setflags(write=False)
     center.setflags(write=False)
     return rotation, center
@@ -106,7 +107,8 @@ def _beacon_frame(yaw_deg: float, center_m: tuple[float, ...]) -> tuple[np.ndarr
 def beacon_frame(beacon: Beacon) -> tuple[np.ndarray, np.ndarray]:
     """(R_wb (3, 3), centre (3,) m) of `beacon` in the map, read-only: the same numbers as
     `geometry.beacon_rotation` and `beacon.center_m`, made once per beacon (a pose uses them ~8 times)."""
-    return _beacon_frame(beacon.yaw_deg, tuple(beacon.center_m))
+    # keyed by the floats' exact bits: -0.0 and 0.0 are equal keys but not the same numbers
+    return _beacon_frame(float(beacon.yaw_deg).hex(), tuple(float(value).hex() for value in beacon.center_m))
 
 
 def _beacon_to_map(beacon: Beacon, points_b: np.ndarray) -> np.ndarray:

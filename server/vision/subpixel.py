@@ -333,6 +333,8 @@ def _remove_pixel_locking(
     moment_2 = normal_matrix[sides, sides]
     rhs_turn, rhs_shift = (weights * along * target).sum(axis=1), (weights * target).sum(axis=1)
     determinant = moment_2 * moment_0 - moment_1**2
+    if not np.all(determinant != 0):  # as np.linalg.solve said of a singular side: a numerical failure
+        raise np.linalg.LinAlgError("a side's turn and shift are not determined by its crossings")
     turn = (moment_0 * rhs_turn - moment_1 * rhs_shift) / determinant
     shift = (moment_2 * rhs_shift - moment_1 * rhs_turn) / determinant
     new_normal = normal + turn[:, None] * tangent

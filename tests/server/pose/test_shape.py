@@ -14,7 +14,7 @@ from server.camera import intrinsics_from_profile, resolve_profile_args
 from server.geometry import rotation_from_ypr
 from server.ingest import LumaFrame, read_photo_file
 from server.locator import locate
-from server.pose.shape import ShapeRules, shape_refusal, shape_test
+from server.pose.shape import ShapeRules, covered_share, shape_refusal, shape_test
 from server.vision.outline import run_scatter_px
 from shared_schemas import Beacon, BeaconMap, FailureReason, PanelShape, device_profiles
 from simulator.fixtures import fixture_meta
@@ -117,3 +117,11 @@ def test_real_photos_of_rooms_and_lamps_are_no_fix_at_one_metre(entry):
                    Beacon(id=0, center_m=[0, 0, 1.4], width_m=1.2, height_m=0.3, corner_radius_m=0.01)):  # fmt: skip
         result = locate(frame, BeaconMap(name="real-photos", beacons=[beacon], required_sigma_m=1.0))
         assert not result.ok, f"{entry['file']} ({entry['shows']}) located with a {beacon.extent_m} m panel"
+
+
+def test_covered_share_counts_non_finite_points_as_before_the_k_d_tree():
+    # the k-d tree (issue 30) refuses NaN; the distance matrix it replaced let a NaN point meet nothing
+    model = np.array([[0.0, 0.0], [1.0, 0.0], [np.nan, 0.0], [5.0, 5.0]])
+    points = np.array([[0.0, 0.1], [np.inf, 1.0], [1.0, -0.1]])
+    assert covered_share(model, points, tolerance_px=0.5) == 0.5
+    assert covered_share(model, np.full((2, 2), np.nan), tolerance_px=0.5) == 0.0

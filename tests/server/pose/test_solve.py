@@ -12,6 +12,7 @@ from server.geometry import (
     model_corners_m,
     orthonormal_pair,
     rotation_from_ypr,
+    rotation_z,
     world_to_camera,
     ypr_from_rotation,
 )
@@ -24,6 +25,7 @@ from server.pose.solve import (
     _map_pose,
     _map_residuals,
     _vision_pose,
+    beacon_frame,
     pose_with_gravity,
     solve_pose,
 )
@@ -207,3 +209,18 @@ def test_face_to_face_square_gives_a_finite_ambiguity_ratio(height_m):
         assert np.isfinite(pose.ambiguity_ratio) and pose.ambiguity_ratio < 0.01
         assert np.isfinite(pose.alternative_distance_m)
         assert abs(pose.position_m[2]) < 0.01  # the camera is at height 0
+
+
+def test_beacon_frame_keeps_the_sign_of_a_zero():
+    # cached by the floats' bits: after a beacon at 0.0 one at -0.0 gets its own numbers, as uncached
+    first = beacon_frame(Beacon(id=91, center_m=[0.0, 0.0, 3.0], side_m=0.2, yaw_deg=0.0))
+    second = beacon_frame(Beacon(id=92, center_m=[-0.0, 0.0, 3.0], side_m=0.2, yaw_deg=-0.0))
+    assert math.copysign(1, first[1][0]) == 1 and math.copysign(1, second[1][0]) == -1
+    assert np.array_equal(np.signbit(second[0]), np.signbit(rotation_z(-0.0)))
+
+
+def test_order_corners_turns_nan_corners_as_before():
+    corners = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [np.nan, 1.0]])
+    # no signed area: turned round, as before issue 30's plain floats (kept only when the area is negative)
+    ordered = order_corners(corners, 0.0, None).corners
+    assert any(np.array_equal(ordered, np.roll(corners[::-1], k, axis=0), equal_nan=True) for k in range(4))
