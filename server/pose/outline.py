@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cache, cached_property
 from types import SimpleNamespace
 
 import numpy as np
@@ -45,7 +45,6 @@ from scipy.optimize import least_squares
 
 from server.geometry import beacon_rotation, rotation_from_ypr, worst_sigma_2d_m
 from server.outcomes import Refusal
-from server.pose.outline_kernel import outline_residuals
 from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
 
@@ -316,8 +315,9 @@ class _Problem:
         frozen = self.on_arc is not None
         on_arc = self.on_arc if self.on_arc is not None else np.zeros(len(self.rays[0]), bool)
         arrays = (self.rays, *self._geometry, self._spread)
-        return (*(np.ascontiguousarray(a, float) for a in arrays), *self.focal_px, self.blur_px**2,
-                np.ascontiguousarray(on_arc, bool), frozen, *self._prior_terms)  # fmt: skip
+        # writable C-ordered copies: the types the kernel was compiled (and warmed) for
+        return (*(np.array(a, float, order="C") for a in arrays), *self.focal_px, self.blur_px**2,
+                np.array(on_arc, bool), frozen, *self._prior_terms)  # fmt: skip
 
     def compiled_residuals(
         self, params: np.ndarray, point_sigma_px: float, with_jacobian: bool = False
@@ -326,7 +326,7 @@ class _Problem:
         compiled kernel (`server.pose.outline_kernel`, equal to them); the Jacobian (0, 9) if not."""
         rows = len(self.rays[0]) + len(self._priors_jacobian)
         values, jacobian = np.empty(rows), np.empty((rows if with_jacobian else 0, 9))
-        outline_residuals(np.asarray(params, float), *self._kernel_inputs, float(point_sigma_px), values, jacobian)
+        _kernel()(np.ascontiguousarray(params, float), *self._kernel_inputs, float(point_sigma_px), values, jacobian)
         return values, jacobian
 
     def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
@@ -335,6 +335,25 @@ class _Problem:
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
         return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
+
+
+@cache
+def _kernel() -> Callable:
+    """`server.pose.outline_kernel.outline_residuals`, imported at the first fit: numba takes
+    ~0.7 s to import, which every command and service start would pay otherwise."""
+    from server.pose.outline_kernel import outline_residuals
+
+    return outline_residuals
+
+
+def warm_kernel() -> None:
+    """Load the compiled kernel (compile it, on a cold cache: seconds) with a fit's own argument
+    types, so that the first fit does not wait for it (`server.api.main` at start-up)."""
+    square = Beacon(id=1, center_m=[0.0, 0.0, 1.0], side_m=0.2)
+    corners = np.array([[90.0, 90.0], [110.0, 90.0], [110.0, 110.0], [90.0, 110.0]])
+    camera = np.array([[100.0, 0.0, 100.0], [0.0, 100.0, 100.0], [0.0, 0.0, 1.0]])
+    problem = _problem([(square, corners)], 1.0, camera, None, 1.0, None, None, OutlineFitRules())
+    problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, with_jacobian=True)
 
 
 # d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
