@@ -588,7 +588,7 @@ def _fit_starts(
 
 def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
     """Twice the fit's cost (Huber beyond `huber_px`) in the points' sigma: comparable between minima."""
-    residuals = problem.residuals(params, point_sigma_px)
+    residuals = problem.compiled_residuals(params, point_sigma_px)[0]
     if not np.all(np.isfinite(residuals)):
         return math.inf
     limit = huber_px / point_sigma_px
@@ -636,7 +636,7 @@ def _covariance(
     """The parameters' covariance (9, 9) from the residuals' Jacobian, with the points' errors
     white (`point_sigma_px`) plus one shared offset per side or arc (`segment_sigma_px`): the
     information J^T Sigma^-1 J, Sigma's inverse per part by the Sherman-Morrison formula."""
-    jacobian = problem.jacobian(params, point_sigma_px)  # rows of the points in point sigmas
+    jacobian = problem.compiled_residuals(params, point_sigma_px, with_jacobian=True)[1]  # rows in point sigmas
     points = len(problem.rays[0])
     information = jacobian.T @ jacobian
     share = (segment_sigma_px / point_sigma_px) ** 2
