@@ -38,7 +38,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cache, cached_property
-from types import SimpleNamespace
+from types import ModuleType, SimpleNamespace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -326,7 +326,8 @@ class _Problem:
         compiled kernel (`server.pose.outline_kernel`, equal to them); the Jacobian (0, 9) if not."""
         rows = len(self.rays[0]) + len(self._priors_jacobian)
         values, jacobian = np.empty(rows), np.empty((rows if with_jacobian else 0, 9))
-        _kernel()(np.ascontiguousarray(params, float), *self._kernel_inputs, float(point_sigma_px), values, jacobian)
+        point = np.ascontiguousarray(params, float)
+        _kernels().outline_residuals(point, *self._kernel_inputs, float(point_sigma_px), values, jacobian)
         return values, jacobian
 
     def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
@@ -338,22 +339,23 @@ class _Problem:
 
 
 @cache
-def _kernel() -> Callable:
-    """`server.pose.outline_kernel.outline_residuals`, imported at the first fit: numba takes
-    ~0.7 s to import, which every command and service start would pay otherwise."""
-    from server.pose.outline_kernel import outline_residuals
+def _kernels() -> ModuleType:
+    """`server.pose.outline_kernel`, imported at the first fit: numba takes ~0.7 s to import,
+    which every command and service start would pay otherwise."""
+    from server.pose import outline_kernel
 
-    return outline_residuals
+    return outline_kernel
 
 
 def warm_kernel() -> None:
-    """Load the compiled kernel (compile it, on a cold cache: seconds) with a fit's own argument
-    types, so that the first fit does not wait for it (`server.api.main` at start-up)."""
+    """Load the compiled kernels (compile them, on a cold cache: seconds) with a fit's own argument
+    types, so that the first fit does not wait for them (`server.api.main` at start-up)."""
     square = Beacon(id=1, center_m=[0.0, 0.0, 1.0], side_m=0.2)
     corners = np.array([[90.0, 90.0], [110.0, 90.0], [110.0, 110.0], [90.0, 110.0]])
     camera = np.array([[100.0, 0.0, 100.0], [0.0, 100.0, 100.0], [0.0, 0.0, 1.0]])
     problem = _problem([(square, corners)], 1.0, camera, None, 1.0, None, None, OutlineFitRules())
-    problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, with_jacobian=True)
+    values, _ = problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, True)
+    _kernels().huber_rho(values**2)
 
 
 # d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
@@ -553,7 +555,7 @@ def _fit(
             evaluations.residuals,
             start,
             jac=evaluations.jacobian,
-            loss="huber",
+            loss=_kernels().huber_rho,  # scipy's "huber", compiled
             f_scale=huber_px / point_sigma_px,
             x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
             max_nfev=max_evaluations,

@@ -181,3 +181,18 @@ def outline_residuals(params, rays, centres, axes, inner, radius, spread, focal_
         jacobian[j, 6] = d_growth * 1.0 * (1.0 if reach > 0 else 0.0) / point_sigma_px
         jacobian[j, 7] = d_growth * spread[0, j] * (1.0 if reach > 0 else 0.0) / point_sigma_px
         jacobian[j, 8] = d_growth * spread[1, j] * (1.0 if reach > 0 else 0.0) / point_sigma_px
+
+
+@njit(cache=True)
+def huber_rho(z):
+    """scipy's "huber" loss as a callable `least_squares` loss (`scipy.optimize._lsq.least_squares.huber`,
+    the same arithmetic): rho (3, m) of z = (f / f_scale)^2, its value and first two derivatives."""
+    rho = np.empty((3, z.shape[0]))
+    for i in range(z.shape[0]):
+        if z[i] <= 1:
+            rho[0, i], rho[1, i], rho[2, i] = z[i], 1.0, 0.0
+        else:
+            rho[0, i] = 2 * math.sqrt(z[i]) - 1
+            rho[1, i] = z[i] ** -0.5
+            rho[2, i] = -0.5 * z[i] ** -1.5
+    return rho

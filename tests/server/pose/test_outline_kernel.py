@@ -1,13 +1,16 @@
-"""The compiled outline kernel is the NumPy residuals and Jacobian (their reference), on random
-poses of one and two panels: every branch (sides, arcs, inside, the arcs frozen or not, the
-priors with and without gravity and heading, a panel behind the camera)."""
+"""The compiled outline kernels are their references: the residuals and Jacobian the NumPy ones,
+on random poses of one and two panels (every branch: sides, arcs, inside, the arcs frozen or not,
+the priors with and without gravity and heading, a panel behind the camera); the loss scipy's
+"huber"."""
 
 import math
 from dataclasses import replace
 
 import numpy as np
+from scipy.optimize._lsq.least_squares import huber
 
 from server.pose.outline import BEHIND_PX, OutlineFitRules, _problem
+from server.pose.outline_kernel import huber_rho
 from shared_schemas import Beacon
 from tests.server.pose.test_outline import SQUARE, K, gravity, outline_points
 
@@ -48,3 +51,10 @@ def test_a_panel_behind_the_camera_is_held_far_in_the_kernel_too():
     np.testing.assert_array_equal(values[:points], BEHIND_PX / 0.2)
     np.testing.assert_array_equal(values, problem.residuals(behind, 0.2))
     np.testing.assert_array_equal(jacobian, problem.jacobian(behind, 0.2))
+
+
+def test_the_compiled_loss_is_scipys_huber():
+    z = np.concatenate([np.random.default_rng(5).exponential(3.0, 1000), [0.0, 1.0, 1.0 + 1e-15, np.inf]])
+    rho = np.empty((3, len(z)))
+    huber(z, rho, cost_only=False)
+    np.testing.assert_array_equal(huber_rho(z), rho)
