@@ -162,9 +162,11 @@ def outline_residuals(params, rays, centres, axes, inner, radius, spread, focal_
         bends = arc and arc_px > 1.0
         d_arc = -blur_sq / (2 * (arc_px * arc_px)) if bends else 0.0
         for t in range(6):
-            along_w = w0 * d_q[t, 0] + w1 * d_q[t, 1]
-            dg0 = (d_q[t, 0] - w0 * along_w) / width * (sx * (1.0 if corner else 0.0))
-            dg1 = (d_q[t, 1] - w1 * along_w) / width * (sy_ * (1.0 if corner else 0.0))
+            dg0 = dg1 = 0.0  # the normal turns only on an arc (the reference's product with 0, unsigned)
+            if corner:
+                along_w = w0 * d_q[t, 0] + w1 * d_q[t, 1]
+                dg0 = (d_q[t, 0] - w0 * along_w) / width * sx
+                dg1 = (d_q[t, 1] - w1 * along_w) / width * sy_
             dn0, dn1, dn2 = seen[0, 0] * dg0 + seen[0, 1] * dg1, seen[1, 0] * dg0 + seen[1, 1] * dg1, \
                 seen[2, 0] * dg0 + seen[2, 1] * dg1  # fmt: skip
             if t < 3:
