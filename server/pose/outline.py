@@ -28,6 +28,9 @@ points of `server.vision.outline` directly:
   high (growth trades against distance along a curved valley). A fit whose position it does
   not pin down to `max_sigma_m` (the map's `required_sigma_m`) is refused; two minima it does
   not explain are `pose_ambiguous`.
+- evaluation: inside the fits, the residuals, their Jacobian and the Huber loss come from
+  compiled kernels (`server.pose.outline_kernel`, numba): the NumPy `_Problem.residuals` and
+  `.jacobian` here are their reference, equal to them to the last bit on this machine.
 
 All image points here are undistorted pixel coordinates.
 """
