@@ -314,13 +314,13 @@ class _Problem:
     def _kernel_inputs(self) -> tuple:
         """`outline_kernel.outline_residuals`'s fixed arguments: rays and geometry (contiguous
         float arrays), the spread, focal lengths, blur squared, the frozen arcs and whether they
-        are, the priors' rows."""
+        are, the priors' rows, the distance of a point behind the camera."""
         frozen = self.on_arc is not None
         on_arc = self.on_arc if self.on_arc is not None else np.zeros(len(self.rays[0]), bool)
         arrays = (self.rays, *self._geometry, self._spread)
         # writable C-ordered copies: the types the kernel was compiled (and warmed) for
         return (*(np.array(a, float, order="C") for a in arrays), *self.focal_px, self.blur_px**2,
-                np.array(on_arc, bool), frozen, *self._prior_terms)  # fmt: skip
+                np.array(on_arc, bool), frozen, *self._prior_terms, BEHIND_PX)  # fmt: skip
 
     def compiled_residuals(
         self, params: np.ndarray, point_sigma_px: float, with_jacobian: bool = False

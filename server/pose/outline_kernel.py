@@ -24,8 +24,6 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-BEHIND_PX = 1e4  # `server.pose.outline.BEHIND_PX`: the residual of a point whose panel is behind the camera
-
 
 @intrinsic
 def _fma(typingctx, a, b, c):
@@ -60,13 +58,13 @@ def _minimum(a, b):
 
 @njit(cache=True)
 def outline_residuals(params, rays, centres, axes, inner, radius, spread, focal_x, focal_y, blur_sq, on_arc, frozen,
-                      prior_columns, prior_values, prior_sigmas, prior_wrapped, point_sigma_px, residuals,
+                      prior_columns, prior_values, prior_sigmas, prior_wrapped, behind_px, point_sigma_px, residuals,
                       jacobian):  # fmt: skip
     """Fill `residuals` (N + m,): each point's signed distance to the grown outline (px) over
     `point_sigma_px`, then the m priors (`_Problem._prior_terms`' rows); and, when `jacobian`
     has as many rows, d residuals / d params (N + m, 9). `on_arc` (N,) holds the points on an
     arc when `frozen`; else a point beyond its arc's centre is on it. `blur_sq` is the edge's
-    blur squared (px^2)."""
+    blur squared (px^2); `behind_px` the distance of a point whose panel is behind the camera."""
     points = rays.shape[1]
     with_jacobian = jacobian.shape[0] == residuals.shape[0]
     for row in range(prior_columns.shape[0]):
@@ -132,7 +130,7 @@ def outline_residuals(params, rays, centres, axes, inner, radius, spread, focal_
         arc = on_arc[j] if frozen else corner
         arc_px = radius[g] * scale + growth if arc else math.inf
         value = signed * scale - growth + blur_sq / (2 * _maximum(arc_px, 1.0))
-        residuals[j] = (value if reach > 0 else BEHIND_PX) / point_sigma_px
+        residuals[j] = (value if reach > 0 else behind_px) / point_sigma_px
         if not with_jacobian:
             continue
         # the chain rule of `_Problem.jacobian`, term by term
