@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import threading
 import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
 
 import anyio
 from fastapi import FastAPI, Response
@@ -19,6 +22,7 @@ from server.api.metrics import Metrics, MetricsMiddleware, StatusWindow
 from server.api.routes import calibrations, health, live, locate, maps, profiles, samples, surveys
 from server.dashboard import STATIC_DIR
 from server.live import LiveBoard
+from server.pose.outline import warm_kernel
 from server.store import MapBackend, MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices, DeviceSessions
 from shared_schemas.api import RESULT_HEADER
@@ -26,9 +30,18 @@ from shared_schemas.api import RESULT_HEADER
 PICTURES_WAITING = 8  # the live page asks for a few at a time; a flood is refused rather than queued
 
 
+@asynccontextmanager
+async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
+    # the outline fit's compiled kernel loaded (on a cold cache compiled, seconds) beside the
+    # first requests rather than in the first outline fit; a fit that comes sooner waits for it
+    threading.Thread(target=warm_kernel, name="warm-kernel", daemon=True).start()
+    yield
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
     app = FastAPI(
+        lifespan=_lifespan,
         title="Lumipose",
         version=VERSION,
         description="Indoor positioning from one photo of an LED ceiling panel. "

@@ -28,6 +28,9 @@ points of `server.vision.outline` directly:
   high (growth trades against distance along a curved valley). A fit whose position it does
   not pin down to `max_sigma_m` (the map's `required_sigma_m`) is refused; two minima it does
   not explain are `pose_ambiguous`.
+- evaluation: inside the fits, the residuals, their Jacobian and the Huber loss come from
+  compiled kernels (`server.pose.outline_kernel`, numba): the NumPy `_Problem.residuals` and
+  `.jacobian` here are their reference, equal to them to the last bit on this machine.
 
 All image points here are undistorted pixel coordinates.
 """
@@ -37,8 +40,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import cached_property
-from types import SimpleNamespace
+from functools import cache, cached_property
+from types import ModuleType, SimpleNamespace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -217,32 +220,38 @@ class _Problem:
         """Whether each point (N,) lies on one of its panel's corner arcs at `params`."""
         return self.segments(params) % 8 >= 4
 
-    def priors(self, params: np.ndarray) -> np.ndarray:
-        """The gravity, heading and growth residuals, each in its own sigmas: (m,) or (k, m)."""
-        batch = np.atleast_2d(params)
-        terms = []
+    @cached_property
+    def _prior_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The gravity, heading and growth priors as rows (m,): the parameter each one weighs
+        (its column in params), its prior value, its sigma, and whether the difference is an
+        angle wrapped to [-pi, pi) (the heading's)."""
+        rows = []
         if self.tilt_rad is not None:
-            terms += [
-                (batch[:, 1] - self.tilt_rad[0]) / self.tilt_sigma_rad,
-                (batch[:, 2] - self.tilt_rad[1]) / self.tilt_sigma_rad,
-            ]
+            pitch, roll = self.tilt_rad
+            rows += [(1, pitch, self.tilt_sigma_rad, False), (2, roll, self.tilt_sigma_rad, False)]
         if self.yaw_prior_rad is not None:
-            terms.append(_wrap(batch[:, 0] - self.yaw_prior_rad) / self.yaw_sigma_rad)
+            rows.append((0, self.yaw_prior_rad, self.yaw_sigma_rad, True))
         if self.growth_prior_px is not None:
-            terms.append((batch[:, 6] - self.growth_prior_px) / self.growth_sigma_px)
-        terms += [batch[:, 7] / self.gradient_sigma_px, batch[:, 8] / self.gradient_sigma_px]
-        stacked = np.stack(terms, axis=1) if terms else np.zeros((len(batch), 0))
+            rows.append((6, self.growth_prior_px, self.growth_sigma_px, False))
+        rows += [(7, 0.0, self.gradient_sigma_px, False), (8, 0.0, self.gradient_sigma_px, False)]
+        columns, values, sigmas, wrapped = zip(*rows, strict=True)
+        return np.array(columns), np.array(values, float), np.array(sigmas, float), np.array(wrapped)
+
+    def priors(self, params: np.ndarray) -> np.ndarray:
+        """The prior residuals, each parameter less its prior in its own sigmas: (m,) or (k, m)."""
+        columns, values, sigmas, wrapped = self._prior_terms
+        differences = np.atleast_2d(params)[:, columns] - values
+        stacked = np.where(wrapped, _wrap(differences), differences) / sigmas
         return stacked if np.ndim(params) == 2 else stacked[0]
 
     def residuals(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
         """Points' distances in their sigma, then the priors: (n,) or (k, n)."""
         return np.concatenate([self.distances_px(params) / point_sigma_px, self.priors(params)], axis=-1)
 
-    def jacobian(self, params: np.ndarray, point_sigma_px: float, terms: SimpleNamespace | None = None) -> np.ndarray:
+    def jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
         """d residuals / d params (n, 9) at one parameter vector (9,), by the chain rule through
-        `_terms` (`terms`: theirs at `params`, when already evaluated there); about one
-        evaluation's cost, `numeric_jacobian` is its reference."""
-        t = self._terms(params[None]) if terms is None else terms
+        `_terms`; `numeric_jacobian` is its reference."""
+        t = self._terms(params[None])
         _, axes, _, radius = self._geometry
         rotation, reach, along, plane = t.rotation[0], t.reach[0], t.along[0], t.plane[0]
         # d R_wc / d (yaw, pitch, roll) of R = Rz Ry Rx: Kz R, Rz Ry Ky Rx, R Kx (K: the generators)
@@ -291,22 +300,38 @@ class _Problem:
         d_pose = d_signed * scale + (t.signed[0] + d_arc * radius) * d_scale
         d_growth = (d_arc - 1.0) * np.vstack([np.ones_like(scale), self._spread])
         d_distances = np.vstack([d_pose, d_growth]).T * (reach > 0)[:, None]  # (N, 9); behind: held
-        return np.vstack([d_distances / point_sigma_px, self._priors_jacobian(params)])
+        return np.vstack([d_distances / point_sigma_px, self._priors_jacobian])
 
-    def _priors_jacobian(self, params: np.ndarray) -> np.ndarray:
+    @cached_property
+    def _priors_jacobian(self) -> np.ndarray:
         """d priors / d params (m, 9): each term is one parameter less its prior, in its sigma."""
-        rows = []
-        if self.tilt_rad is not None:
-            rows += [(1, self.tilt_sigma_rad), (2, self.tilt_sigma_rad)]
-        if self.yaw_prior_rad is not None:
-            rows.append((0, self.yaw_sigma_rad))
-        if self.growth_prior_px is not None:
-            rows.append((6, self.growth_sigma_px))
-        rows += [(7, self.gradient_sigma_px), (8, self.gradient_sigma_px)]
-        jacobian = np.zeros((len(rows), 9))
-        for row, (column, sigma) in enumerate(rows):
-            jacobian[row, column] = 1.0 / sigma
+        columns, _, sigmas, _ = self._prior_terms
+        jacobian = np.zeros((len(columns), 9))
+        jacobian[np.arange(len(columns)), columns] = 1.0 / sigmas
         return jacobian
+
+    @cached_property
+    def _kernel_inputs(self) -> tuple:
+        """`outline_kernel.outline_residuals`'s fixed arguments: rays and geometry (contiguous
+        float arrays), the spread, focal lengths, blur squared, the frozen arcs and whether they
+        are, the priors' rows, the distance of a point behind the camera."""
+        frozen = self.on_arc is not None
+        on_arc = self.on_arc if self.on_arc is not None else np.zeros(len(self.rays[0]), bool)
+        arrays = (self.rays, *self._geometry, self._spread)
+        # writable C-ordered copies: the types the kernel was compiled (and warmed) for
+        return (*(np.array(a, float, order="C") for a in arrays), *self.focal_px, self.blur_px**2,
+                np.array(on_arc, bool), frozen, *self._prior_terms, BEHIND_PX)  # fmt: skip
+
+    def compiled_residuals(
+        self, params: np.ndarray, point_sigma_px: float, with_jacobian: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """`residuals` (n,) and, when asked, `jacobian` (n, 9) of one parameter vector (9,) by the
+        compiled kernel (`server.pose.outline_kernel`, equal to them); the Jacobian (0, 9) if not."""
+        rows = len(self.rays[0]) + len(self._priors_jacobian)
+        values, jacobian = np.empty(rows), np.empty((rows if with_jacobian else 0, 9))
+        point = np.ascontiguousarray(params, float)
+        _kernels().outline_residuals(point, *self._kernel_inputs, float(point_sigma_px), values, jacobian)
+        return values, jacobian
 
     def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
         """d residuals / d params (n, 9), central differences, all eighteen in one batch: the
@@ -314,6 +339,26 @@ class _Problem:
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
         return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
+
+
+@cache
+def _kernels() -> ModuleType:
+    """`server.pose.outline_kernel`, imported at the first fit: numba takes ~0.7 s to import,
+    which every command and service start would pay otherwise."""
+    from server.pose import outline_kernel
+
+    return outline_kernel
+
+
+def warm_kernel() -> None:
+    """Load the compiled kernels (compile them, on a cold cache: seconds) with a fit's own argument
+    types, so that the first fit does not wait for them (`server.api.main` at start-up)."""
+    square = Beacon(id=1, center_m=[0.0, 0.0, 1.0], side_m=0.2)
+    corners = np.array([[90.0, 90.0], [110.0, 90.0], [110.0, 110.0], [90.0, 110.0]])
+    camera = np.array([[100.0, 0.0, 100.0], [0.0, 100.0, 100.0], [0.0, 0.0, 1.0]])
+    problem = _problem([(square, corners)], 1.0, camera, None, 1.0, None, None, OutlineFitRules())
+    values, _ = problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, True)
+    _kernels().huber_rho(values**2)
 
 
 # d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
@@ -478,26 +523,24 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
 
 
 class _Evaluations:
-    """One fit's residuals and Jacobian: scipy asks for the Jacobian where it has just evaluated
-    the residuals (each accepted step), and the Jacobian reuses that evaluation's `_terms`; the
-    residuals at the start, checked before the fit, are not evaluated again for it."""
+    """One fit's residuals and Jacobian by the compiled kernel (`_Problem.compiled_residuals`,
+    equal to `residuals` and `jacobian`); the residuals at the start, checked before the fit,
+    are not evaluated again for it."""
 
     def __init__(self, problem: _Problem, point_sigma_px: float):
         self.problem, self.point_sigma_px = problem, point_sigma_px
         self.params: np.ndarray | None = None
-        self.terms: SimpleNamespace | None = None
         self.values = np.zeros(0)
 
     def residuals(self, params: np.ndarray) -> np.ndarray:
         if self.params is not None and np.array_equal(params, self.params):
             return self.values.copy()
-        self.params, self.terms = params.copy(), self.problem._terms(params[None])
-        self.values = np.concatenate([self.terms.distances[0] / self.point_sigma_px, self.problem.priors(params)])
+        self.params = params.copy()
+        self.values = self.problem.compiled_residuals(params, self.point_sigma_px)[0]
         return self.values.copy()
 
     def jacobian(self, params: np.ndarray) -> np.ndarray:
-        same = self.params is not None and np.array_equal(params, self.params)
-        return self.problem.jacobian(params, self.point_sigma_px, self.terms if same else None)
+        return self.problem.compiled_residuals(params, self.point_sigma_px, with_jacobian=True)[1]
 
 
 def _fit(
@@ -515,7 +558,7 @@ def _fit(
             evaluations.residuals,
             start,
             jac=evaluations.jacobian,
-            loss="huber",
+            loss=_kernels().huber_rho,  # scipy's "huber", compiled
             f_scale=huber_px / point_sigma_px,
             x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
             max_nfev=max_evaluations,
@@ -550,7 +593,7 @@ def _fit_starts(
 
 def _robust_chi2(problem: _Problem, params: np.ndarray, point_sigma_px: float, huber_px: float) -> float:
     """Twice the fit's cost (Huber beyond `huber_px`) in the points' sigma: comparable between minima."""
-    residuals = problem.residuals(params, point_sigma_px)
+    residuals = problem.compiled_residuals(params, point_sigma_px)[0]
     if not np.all(np.isfinite(residuals)):
         return math.inf
     limit = huber_px / point_sigma_px
@@ -598,7 +641,7 @@ def _covariance(
     """The parameters' covariance (9, 9) from the residuals' Jacobian, with the points' errors
     white (`point_sigma_px`) plus one shared offset per side or arc (`segment_sigma_px`): the
     information J^T Sigma^-1 J, Sigma's inverse per part by the Sherman-Morrison formula."""
-    jacobian = problem.jacobian(params, point_sigma_px)  # rows of the points in point sigmas
+    jacobian = problem.compiled_residuals(params, point_sigma_px, with_jacobian=True)[1]  # rows in point sigmas
     points = len(problem.rays[0])
     information = jacobian.T @ jacobian
     share = (segment_sigma_px / point_sigma_px) ** 2
