@@ -537,6 +537,7 @@ def plot_speed(report: dict, path: Path, before: dict | None = None) -> None:
     x = np.arange(len(rows))
     figure, axis = plt.subplots(figsize=(10, 5))
     width = 0.4 if before_rows else 0.7
+    was: list[float] = []
     if before_rows:
         was = [before_rows.get((r["path"], r["variant"]), {}).get("median_ratio", np.nan) for r in rows]
         axis.bar(x - width / 2, was, width, color="#bbbbbb", label="before")
@@ -549,8 +550,8 @@ def plot_speed(report: dict, path: Path, before: dict | None = None) -> None:
         axis.hlines(row["target_ratio"], k - 0.45, k + 0.45, colors="black", linestyles="--",
                     label="target" if k == 0 else None)
     axis.set_yscale("log")
-    shown = [v for v in [*now, *[r["target_ratio"] for r in rows], *cpu] if v > 0]
-    axis.set_ylim(min(shown) / 2, max(shown) * 2)  # every target inside the axes
+    shown = [v for v in [*now, *[r["target_ratio"] for r in rows], *cpu, *was] if v > 0]
+    axis.set_ylim(min(shown) / 2, max(shown) * 2)  # every bar and target inside the axes
     axis.set_xticks(x, [TARGETS[(r["path"], r["variant"])].label for r in rows], rotation=35, ha="right",
                     fontsize=8)
     axis.set_ylabel("time / one cv2.threshold pass (full frame)")
