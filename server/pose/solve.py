@@ -122,7 +122,7 @@ def _camera_in_map(beacon: Beacon, rvec: np.ndarray, tvec: np.ndarray) -> tuple[
     rotation_cb, _ = cv2.Rodrigues(rvec)
     position_b = -rotation_cb.T @ tvec.ravel()
     rotation_wb, center = beacon_frame(beacon)
-    position = _beacon_to_map(beacon, position_b[None, :])[0]
+    position = (position_b[None, :] @ rotation_wb.T + center)[0]  # _beacon_to_map's arithmetic
     return position, rotation_wb @ rotation_cb.T
 
 
@@ -182,19 +182,25 @@ def _map_residuals(params, object_points, image_points, camera_matrix, across_gr
 
     params = (rvec, tvec) of the beacon frame in the camera; gravity is predicted as
     R_cb (0, 0, -1) (the beacon frame is level) and compared across the measured one.
-    Written into arrays made once (this runs 3-7 times a fit): the same arithmetic, fewer calls.
+    image_points (2 N,) flat; across_gravity: its two rows as tuples of floats. This runs 3-7 times
+    a fit: the two tilt rows in plain floats, the rest into arrays made once.
     """
     pixel_weight, gravity_weight = weights
     projected, jacobian = cv2.projectPoints(object_points, params[:3], params[3:], camera_matrix, None)
     rotation, rotation_jacobian = cv2.Rodrigues(params[:3])  # d R / d rvec, (3, 9) row-major R
-    image_terms = 2 * len(object_points)
+    image_terms = len(image_points)
     residuals = np.empty(image_terms + 2)
-    np.multiply(projected.reshape(-1) - image_points.reshape(-1), pixel_weight, out=residuals[:image_terms])
-    residuals[image_terms:] = across_gravity @ -rotation[:, 2] * gravity_weight
-    full_jacobian = np.zeros((image_terms + 2, 6))
+    np.multiply(projected.reshape(-1) - image_points, pixel_weight, out=residuals[:image_terms])
+    full_jacobian = np.empty((image_terms + 2, 6))
     np.multiply(jacobian[:, :6], pixel_weight, out=full_jacobian[:image_terms])
-    d_down = -rotation_jacobian[:, 2::3].T  # d (-R[:, 2]) / d rvec: (3 components, 3 rvec)
-    np.multiply(across_gravity @ d_down, gravity_weight, out=full_jacobian[image_terms:, :3])
+    down = [-value for value in rotation[:, 2].tolist()]  # the predicted gravity, -R[:, 2]
+    d_down = [[-value for value in column] for column in rotation_jacobian[:, 2::3].tolist()]  # [rvec i][component]
+    tilt_residuals, tilt_rows = [], []
+    for ax, ay, az in across_gravity:
+        tilt_residuals.append((ax * down[0] + ay * down[1] + az * down[2]) * gravity_weight)
+        tilt_rows.append([(ax * d[0] + ay * d[1] + az * d[2]) * gravity_weight for d in d_down] + [0.0, 0.0, 0.0])
+    residuals[image_terms:] = tilt_residuals
+    full_jacobian[image_terms:] = tilt_rows
     return residuals, full_jacobian
 
 
@@ -203,17 +209,17 @@ class _MapFit:
     """The MAP fit's terms (`_map_residuals`): made once, fitted from one or two starts."""
 
     object_points: np.ndarray
-    image_points: np.ndarray
+    image_points: np.ndarray  # (2 N,) x0 y0 x1 y1 ...
     camera_matrix: np.ndarray
-    across_gravity: np.ndarray  # (2, 3): unit vectors across the measured gravity
+    across_gravity: tuple[tuple[float, float, float], ...]  # two unit vectors across the measured gravity
     weights: tuple[float, float]  # 1 / corner sigma (px), 1 / gravity sigma (rad)
 
     @classmethod
     def of(cls, object_points, image_points, camera_matrix, gravity_camera, corner_sigma_px, gravity_sigma_deg):
         g = np.asarray(gravity_camera, dtype=float)
-        across = orthonormal_pair(g / np.linalg.norm(g))
-        weights = (1.0 / corner_sigma_px, 1.0 / np.radians(gravity_sigma_deg))
-        return cls(object_points, image_points, camera_matrix, across, weights)
+        across = tuple(tuple(row) for row in orthonormal_pair(g / np.linalg.norm(g)).tolist())
+        weights = (1.0 / corner_sigma_px, 1.0 / math.radians(gravity_sigma_deg))
+        return cls(object_points, image_points.reshape(-1), camera_matrix, across, weights)
 
     def residuals(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _map_residuals(
@@ -225,8 +231,11 @@ class _MapFit:
         params = np.concatenate([np.ravel(start[0]), np.ravel(start[1])]).astype(float)
         for _ in range(iterations):
             residuals, jacobian = self.residuals(params)
-            step = np.linalg.solve(jacobian.T @ jacobian, -(jacobian.T @ residuals))
-            params = params + step
+            normal, gradient = jacobian.T @ jacobian, jacobian.T @ residuals
+            ok, step = cv2.solve(normal, gradient, flags=cv2.DECOMP_LU)  # numpy's solve costs twice OpenCV's here
+            if not ok:  # singular: numpy's solve raises as before (LinAlgError)
+                step = np.linalg.solve(normal, gradient)
+            params = params - step.ravel()
             if np.abs(step).max() < 1e-8:
                 break
         return params

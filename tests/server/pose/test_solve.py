@@ -111,9 +111,9 @@ def test_map_jacobian_matches_finite_differences():
     rotation = rotation_from_ypr(20.0, 6.0, -4.0)
     corners, center = project(beacon, np.array([0.2, -0.1, 0.0]), rotation)
     objects = np.vstack([model_corners_m(beacon.side_m), np.zeros(3)])
-    images = np.vstack([corners, center]) + 0.3
+    images = (np.vstack([corners, center]) + 0.3).reshape(-1)
     params = np.array([0.1, -0.05, 0.3, 0.02, -0.01, 2.0])
-    across = orthonormal_pair(np.array([0.05, -0.02, -1.0]) / np.linalg.norm([0.05, -0.02, -1.0]))
+    across = orthonormal_pair(np.array([0.05, -0.02, -1.0]) / np.linalg.norm([0.05, -0.02, -1.0])).tolist()
     weights = (1 / 0.05, 1 / np.radians(0.1))
     _, analytic = _map_residuals(params, objects, images, K, across, weights)
     numeric = np.zeros_like(analytic)
