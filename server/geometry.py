@@ -149,16 +149,18 @@ def angle_deg(u: np.ndarray, v: np.ndarray) -> float:
 
 def orthonormal_pair(vector: np.ndarray) -> np.ndarray:
     """Two unit vectors (2, 3) orthogonal to `vector` and to each other."""
-    x, y, z = vector
-    # the cross product with the axis least aligned with `vector`, written out (np.cross is slow)
-    first = (
-        np.array([0.0, z, -y])
-        if abs(x) <= min(abs(y), abs(z))
-        else (np.array([-z, 0.0, x]) if abs(y) <= abs(z) else np.array([y, -x, 0.0]))
-    )
-    first /= np.linalg.norm(first)
-    fx, fy, fz = first
-    return np.array([first, [y * fz - z * fy, z * fx - x * fz, x * fy - y * fx]])
+    x, y, z = np.asarray(vector, dtype=float).tolist()
+    # the cross product with the axis least aligned with `vector`, written out in plain floats (np.cross
+    # and numpy's scalars are slow); the norm is np.linalg.norm's sqrt of the dot product
+    if abs(x) <= min(abs(y), abs(z)):
+        a, b, c = 0.0, z, -y
+    elif abs(y) <= abs(z):
+        a, b, c = -z, 0.0, x
+    else:
+        a, b, c = y, -x, 0.0
+    norm = math.sqrt(a * a + b * b + c * c)
+    fx, fy, fz = a / norm, b / norm, c / norm
+    return np.array([[fx, fy, fz], [y * fz - z * fy, z * fx - x * fz, x * fy - y * fx]])
 
 
 def wrap_deg(angle_deg: float) -> float:

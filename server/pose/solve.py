@@ -134,7 +134,11 @@ def _beacon_in_camera(beacon: Beacon, position: np.ndarray, rotation_wc: np.ndar
 
 
 def _rms(projected: np.ndarray, observed: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - observed) ** 2, axis=1))))
+    """RMS distance (px) of the projected points (N, 1, 2) from the observed (N, 2): plain floats, the
+    same sums in the same order as numpy's for the five points."""
+    values = (projected.reshape(-1) - observed.reshape(-1)).tolist()
+    squares = [dx * dx + dy * dy for dx, dy in zip(values[0::2], values[1::2], strict=True)]
+    return math.sqrt(sum(squares) / len(squares))
 
 
 def _tilt_to_level(gravity_camera: np.ndarray) -> np.ndarray:
@@ -708,7 +712,10 @@ def solve_pose(
         )
     except (ZeroDivisionError, np.linalg.LinAlgError, cv2.error):  # a degenerate quad: no uncertainty, not no fix
         covariance, factor = None, 1.0
-    if covariance is not None and not (np.all(np.isfinite(covariance)) and np.all(np.diag(covariance) >= 0)):
+    if covariance is not None and not (
+        all(map(math.isfinite, covariance.ravel().tolist()))
+        and all(value >= 0 for value in covariance.diagonal().tolist())
+    ):
         covariance = None  # extreme intrinsics overflow the arithmetic: a fix without an uncertainty
     return PoseSolution(
         position_m=position,
