@@ -452,8 +452,9 @@ def _reported_px(job: _Job, corners: _Corners) -> np.ndarray:
 
 def _check_corner_pose(job: _Job, pose: PoseSolution, edges: EdgeFit | None, reported_px: np.ndarray) -> Refusal | None:
     """Why the corner path's pose is no fix (numbers not finite, or it does not explain its own corners), or None."""
-    numbers = (pose.position_m, pose.rotation_wc, reported_px, pose.reprojection_error_px, pose.ambiguity_ratio)
-    if not all(np.all(np.isfinite(value)) for value in numbers):
+    arrays = (pose.position_m, pose.rotation_wc, reported_px)
+    numbers = [value for array in arrays for value in np.ravel(array).tolist()]
+    if not all(map(math.isfinite, (*numbers, pose.reprojection_error_px, pose.ambiguity_ratio))):
         # extreme but valid intrinsics or distortion can overflow without raising: such a fix
         # must not reach a device's track (it would stay NaN) nor the result
         return Refusal(FailureReason.numerical_failure, "the pose or the reported corners are not finite numbers")

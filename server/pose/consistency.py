@@ -90,7 +90,9 @@ def chi_square(residuals: np.ndarray, covariance: np.ndarray, jacobian: np.ndarr
 
     (nan, 0) when the covariance is not positive definite or the parameters are degenerate.
     """
-    ok, solved = cv2.solve(covariance, np.column_stack([residuals, jacobian]), flags=cv2.DECOMP_CHOLESKY)
+    both = np.empty((len(residuals), 1 + jacobian.shape[1]))  # np.column_stack's, in one call less
+    both[:, 0], both[:, 1:] = residuals, jacobian
+    ok, solved = cv2.solve(covariance, both, flags=cv2.DECOMP_CHOLESKY)
     if not ok:
         return math.nan, 0
     b = jacobian.T @ solved[:, 0]

@@ -37,7 +37,7 @@ def order_corners(corners: np.ndarray, beacon_yaw_deg: float, heading_deg: float
     expected = math.radians(beacon_yaw_deg - heading_deg) if heading_deg is not None else 0.0
     best = min(range(4), key=lambda shift: _angle_off(points[shift], points[(shift + 1) % 4], expected))
     rule = OrientationRule.heading if heading_deg is not None else OrientationRule.yaw_within_45deg
-    return OrderedCorners(corners=np.roll(corners, -best, axis=0), rule=rule)
+    return OrderedCorners(corners=np.concatenate((corners[best:], corners[:best])), rule=rule)  # np.roll's rows
 
 
 def _angle_off(first: list[float], second: list[float], expected_rad: float) -> float:

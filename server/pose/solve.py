@@ -547,8 +547,11 @@ def _fit_residuals(
     covariance = np.zeros((10, 10))
     covariance[:8, :8] = corner_covariance
     covariance[8, 8] = covariance[9, 9] = sigma_rad**2
-    jacobian = np.vstack([pixel_jacobian, np.hstack([rows, np.zeros((2, 3))])])
-    return FitResiduals(np.concatenate([corner_residuals_px, residual]), covariance, jacobian, 8)
+    jacobian = np.zeros((10, 6))
+    jacobian[:8], jacobian[8:, :3] = pixel_jacobian, rows
+    residuals = np.empty(10)
+    residuals[:8], residuals[8:] = corner_residuals_px, residual
+    return FitResiduals(residuals, covariance, jacobian, 8)
 
 
 def _position_covariance(
@@ -657,8 +660,10 @@ def solve_pose(
     fits' weights.
     """
     corners4 = beacon_corners_m(beacon)
-    object_points = np.vstack([corners4, np.zeros(3)])
-    image_points = np.vstack([corners_px, center_px]).astype(np.float64)
+    object_points = np.zeros((5, 3))  # the corners, then the centre
+    object_points[:4] = corners4
+    image_points = np.empty((5, 2))
+    image_points[:4], image_points[4] = corners_px, center_px
     ratio, disagreement, best_square = _square_ambiguity(corners4, image_points[:4], beacon, camera_matrix)
     use_gravity = gravity_camera is not None and gravity_mode is not GravityMode.never
     # The MAP fit starts from IPPE_SQUARE's best minimum, in front of the camera, when there is one:
