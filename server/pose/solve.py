@@ -40,6 +40,7 @@ All image points here are undistorted pixel coordinates.
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 from enum import StrEnum
 from functools import lru_cache
@@ -96,9 +97,10 @@ class PoseSolution:
 
 
 @lru_cache(maxsize=256)
-def _beacon_frame(yaw_hex: str, center_hex: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
-    rotation = rotation_z(float.fromhex(yaw_hex))
-    center = np.array([float.fromhex(value) for value in center_hex])
+def _beacon_frame(bits: bytes) -> tuple[np.ndarray, np.ndarray]:
+    yaw_deg, *center_m = struct.unpack("<4d", bits)
+    rotation = rotation_z(yaw_deg)
+    center = np.array(center_m)
     rotation.setflags(write=False)
     center.setflags(write=False)
     return rotation, center
@@ -106,9 +108,10 @@ def _beacon_frame(yaw_hex: str, center_hex: tuple[str, ...]) -> tuple[np.ndarray
 
 def beacon_frame(beacon: Beacon) -> tuple[np.ndarray, np.ndarray]:
     """(R_wb (3, 3), centre (3,) m) of `beacon` in the map, read-only: the same numbers as
-    `geometry.beacon_rotation` and `beacon.center_m`, made once per beacon (a pose uses them ~8 times)."""
-    # keyed by the floats' exact bits: -0.0 and 0.0 are equal keys but not the same numbers
-    return _beacon_frame(float(beacon.yaw_deg).hex(), tuple(float(value).hex() for value in beacon.center_m))
+    `geometry.beacon_rotation` and `beacon.center_m`, made once per beacon (a pose uses them ~5 times)."""
+    # keyed by the floats' exact bits (one pack, not four float.hex): -0.0 and 0.0 are equal keys
+    # but not the same numbers
+    return _beacon_frame(struct.pack("<4d", beacon.yaw_deg, *beacon.center_m))
 
 
 def _beacon_to_map(beacon: Beacon, points_b: np.ndarray) -> np.ndarray:
@@ -592,7 +595,7 @@ def _position_covariance(
         if factor != 1.0:
             design[:, :8] *= math.sqrt(factor)
     # L D, L = [I; d centre / d corners]: the centre is the corners' function, not a measurement
-    moves = pixel_jacobian.T @ np.vstack((design, _centre_jacobian(corners) @ design))  # J^T L D (6, 9)
+    moves = pixel_jacobian.T @ np.concatenate((design, _centre_jacobian(corners) @ design))  # J^T L D (6, 9)
     normal = pixel_jacobian.T @ pixel_jacobian
     rotation, rotation_jacobian = cv2.Rodrigues(rvec)  # d R[r, c] / d rvec_i at [i, 3 r + c]
     by_rvec = rotation_jacobian.reshape(3, 3, 3)
