@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cache
 from typing import Annotated, Any, get_args, get_origin, get_type_hints
 
@@ -83,9 +83,7 @@ async def _locate_query(  # a coroutine: no worker thread for it (server.api.dep
 
 
 def _query(services: Services, beacon_id: int | None, gravity: GravityMode, corners: CornerMethod) -> LocateQuery:
-    options = services.options
-    pipeline = replace(options.pipeline, gravity_mode=gravity, corner_method=corners)
-    return LocateQuery(replace(options, pipeline=pipeline), beacon_id)
+    return LocateQuery(services.options_for(gravity, corners), beacon_id)
 
 
 async def frame_upload(
