@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import re
+import threading
 import traceback
 from dataclasses import replace
 from pathlib import Path
@@ -108,7 +109,7 @@ def _dispatch(
     device_id: str | None,
     devices: DeviceSessions | None,
 ) -> LocateResult:
-    options = options.for_map(beacon_map)
+    options = _FOR_MAP.options(options, beacon_map)
     # Every path below (one panel, rooms, device sessions with their ID frames) reads light: the
     # stripe decoder's model (a row's mean = gain x the code's box average + offset) and the
     # flattening (a row divided by its gain) are linear in light, as the clipped-edge model is.
@@ -127,6 +128,35 @@ def _dispatch(
         assert device_id is not None
         return devices.locate(device_id, frame, beacon_map, options)
     return locate_in_room(frame, beacon_map, options.pipeline, options.room)
+
+
+class _OptionsForMap:
+    """`options.for_map(beacon_map)` made once for the same two objects, not for every frame (~0.1 ms of
+    dataclass copies): the service's options for a request's choices (`Services.options_for`) and a stored map
+    (`server.store` parses a file anew only when it changed) are the same objects from one frame to the next.
+    Keyed by identity and holding both, so that no id is reused while kept; `keep` pairs, the oldest dropped.
+    Safe from any thread."""
+
+    def __init__(self, keep: int) -> None:
+        self.keep = keep
+        self._made: dict[tuple[int, int], tuple[LocateOptions, BeaconMap, LocateOptions]] = {}
+        self._lock = threading.Lock()
+
+    def options(self, options: LocateOptions, beacon_map: BeaconMap) -> LocateOptions:
+        key = (id(options), id(beacon_map))
+        with self._lock:
+            kept = self._made.get(key)
+        if kept is not None and kept[0] is options and kept[1] is beacon_map:
+            return kept[2]
+        made = options.for_map(beacon_map)
+        with self._lock:
+            self._made[key] = (options, beacon_map, made)
+            while len(self._made) > self.keep:
+                del self._made[next(iter(self._made))]
+        return made
+
+
+_FOR_MAP = _OptionsForMap(keep=16)
 
 
 def _with_map_heading(frame: LumaFrame, beacon_map: BeaconMap) -> LumaFrame:

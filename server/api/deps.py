@@ -5,7 +5,7 @@ from __future__ import annotations
 import hmac
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Annotated
 
 import anyio
@@ -19,6 +19,8 @@ from server.api.metrics import Metrics, StatusWindow
 from server.api.upload import BufferLease, ReceiveBuffers
 from server.live import LiveBoard
 from server.options import LocateOptions
+from server.pipeline import CornerMethod
+from server.pose.solve import GravityMode
 from server.store import MapStore, ProfileStore, SampleStore
 from server.tracking.devices import DeviceSessions
 
@@ -105,6 +107,16 @@ class Services:
     live: LiveBoard  # devices as the operator's page shows them (per worker, as `devices`)
     status_window: StatusWindow  # request rates and latencies of the last minute, for the page
     started_s: float  # unix time this worker started
+    _chosen: dict[tuple[GravityMode, CornerMethod], LocateOptions] = field(default_factory=dict, init=False, repr=False)
+
+    def options_for(self, gravity: GravityMode, corners: CornerMethod) -> LocateOptions:
+        """`options` with a request's choice of gravity and corners, made once for each pair (so that the
+        next request's are the same object: `server.locator` then makes its options for the map once too)."""
+        chosen = self._chosen.get((gravity, corners))
+        if chosen is None:
+            pipeline = replace(self.options.pipeline, gravity_mode=gravity, corner_method=corners)
+            chosen = self._chosen[(gravity, corners)] = replace(self.options, pipeline=pipeline)
+        return chosen
 
 
 # The dependencies are coroutines though they never wait: FastAPI runs a plain function's dependency in a

@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import Annotated
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Annotated, Any, get_args, get_origin, get_type_hints
 
 import numpy as np
 from fastapi import Depends, Header, Query, Request
+from fastapi import params as declared
+from fastapi.exceptions import RequestValidationError
+from pydantic import TypeAdapter, ValidationError
 from starlette.concurrency import run_in_threadpool
 
-from server.api.deps import ServicesDep
+from server.api.deps import Services, ServicesDep
 from server.api.errors import ApiError
 from server.api.upload import FRAME_HEADER, FrameUpload, PhotoUpload, receive_body, receive_frame
 from server.options import LocateOptions
@@ -73,9 +79,11 @@ async def _locate_query(  # a coroutine: no worker thread for it (server.api.dep
     gravity: GravityQuery = GravityMode.auto,
     corners: CornersQuery = CornerMethod.rounded,
 ) -> LocateQuery:
-    options = services.options
-    pipeline = replace(options.pipeline, gravity_mode=gravity, corner_method=corners)
-    return LocateQuery(replace(options, pipeline=pipeline), beacon_id)
+    return _query(services, beacon_id, gravity, corners)
+
+
+def _query(services: Services, beacon_id: int | None, gravity: GravityMode, corners: CornerMethod) -> LocateQuery:
+    return LocateQuery(services.options_for(gravity, corners), beacon_id)
 
 
 async def frame_upload(
@@ -146,6 +154,65 @@ async def photos_body(request: Request, services: ServicesDep) -> bytes:
     """A body of photos (a calibration's): read here within the upload limit and time, as a frame is."""
     settings = services.settings
     return bytes(await receive_body(request, settings.max_upload_bytes, settings.read_timeout_s))
+
+
+@dataclass(frozen=True)
+class RequestParam:
+    """One query or header parameter read as FastAPI reads it (by its alias, with its declared type and
+    rules; its default when absent, unchecked; invalid: `RequestValidationError` at the same place, so the
+    same 422), without FastAPI's per-request solving of a route's parameters: ~25 us a parameter and more
+    a dependency, ~0.4 ms for /v1/locate's nine, a fifth of a window upload's time outside the pipeline."""
+
+    where: str  # "query" or "header"
+    alias: str
+    default: Any
+    adapter: TypeAdapter = field(repr=False)
+
+    def read(self, request: Request) -> Any:
+        value = (request.query_params if self.where == "query" else request.headers).get(self.alias)
+        if value is None:
+            return self.default
+        try:
+            return self.adapter.validate_python(value)
+        except ValidationError as error:
+            problem = error.errors(include_url=False)[0]
+            raise RequestValidationError([{**problem, "loc": (self.where, self.alias, *problem["loc"])}]) from None
+
+
+@cache
+def declared_params(function: Callable[..., Any]) -> dict[str, RequestParam]:
+    """`function`'s query and header parameters as a route or dependency declares them (`Annotated` with
+    `Query(...)` or `Header(alias=...)`), by parameter name: the queries, then the headers, as FastAPI
+    checks them."""
+    hints = get_type_hints(function, include_extras=True)
+    found: dict[str, RequestParam] = {}
+    for name, parameter in inspect.signature(function).parameters.items():
+        hint: Any = hints.get(name)
+        if get_origin(hint) is not Annotated:
+            continue
+        rules = [item for item in get_args(hint)[1:] if isinstance(item, declared.Param)]
+        if not rules:
+            continue
+        where = "header" if isinstance(rules[0], declared.Header) else "query"
+        if where == "header" and not rules[0].alias:  # FastAPI's underscores-to-hyphens is not done here
+            raise TypeError(f"{function.__name__}: header parameter '{name}' needs its alias")
+        found[name] = RequestParam(where, rules[0].alias or name, parameter.default, TypeAdapter(hint))
+    return dict(sorted(found.items(), key=lambda item: item[1].where != "query"))
+
+
+def read_params(function: Callable[..., Any], request: Request) -> dict[str, Any]:
+    """The values of `function`'s declared query and header parameters in `request` (the first invalid one
+    raises, as FastAPI's first error is the 422's)."""
+    return {name: param.read(request) for name, param in declared_params(function).items()}
+
+
+async def read_frame_upload(request: Request, services: Services) -> FrameUpload:
+    """`frame_upload` with its parameters read directly (`RequestParam`): the frame routes' fast path."""
+    return await frame_upload(request, services, **read_params(frame_upload, request))
+
+
+def read_locate_query(request: Request, services: Services) -> LocateQuery:
+    return _query(services, **read_params(_locate_query, request))
 
 
 # Route parameters: the pipeline's query options, and the uploaded frame (read by `frame_upload`

@@ -155,3 +155,15 @@ def test_a_plain_bug_in_a_stage_is_not_passed_off_as_a_numerical_failure(monkeyp
     monkeypatch.setattr(server.pipeline, "solve_pose", _raise(error))
     with pytest.raises(type(error)):
         locate(FIXTURE, ONE)
+
+
+def test_the_options_for_a_map_are_made_once_for_the_same_objects_and_anew_for_others():
+    from server.locator import _OptionsForMap
+
+    made, options, beacon_map = _OptionsForMap(keep=2), LocateOptions(), load_map()
+    first = made.options(options, beacon_map)
+    assert first == options.for_map(beacon_map) and made.options(options, beacon_map) is first
+    strict = beacon_map.model_copy(update={"required_sigma_m": 0.001})  # another object: its own options
+    assert made.options(options, strict).pipeline.outline_fit.max_sigma_m == 0.001
+    assert made.options(LocateOptions(), beacon_map) is not first  # equal options, another object
+    assert made.options(options, beacon_map) is not first  # the first pair was dropped: two kept

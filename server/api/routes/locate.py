@@ -8,10 +8,19 @@ from fastapi import APIRouter, Query, Request, Response
 
 from server.api.deps import ServicesDep
 from server.api.errors import ERROR_RESPONSES
-from server.api.guard import GuardedRoute
+from server.api.guard import GuardedRoute, answers_directly
 from server.api.locating import locate_upload
 from server.api.metrics import REQUEST_START
-from server.api.params import FRAME_REQUEST_BODY, DeviceHeader, MapQuery, QueryDep, UploadDep
+from server.api.params import (
+    FRAME_REQUEST_BODY,
+    DeviceHeader,
+    MapQuery,
+    QueryDep,
+    UploadDep,
+    read_frame_upload,
+    read_locate_query,
+    read_params,
+)
 from server.api.routes import DAMAGED_RESPONSES
 from shared_schemas import LocateResult
 from shared_schemas.api import RESULT_HEADER, result_header
@@ -45,7 +54,7 @@ async def locate_frame(
     device: DeviceHeader = None,
     map: MapQuery = None,
     annotate: AnnotateQuery = False,
-) -> LocateResult | Response:
+) -> Response:
     """Locate the camera. 200 with `ok: false` and a `reason` when the frame holds no usable beacon.
 
     With `X-Lumipose-Device` on a map of several beacons, the frame joins the device's session:
@@ -62,3 +71,15 @@ async def locate_frame(
     # The result is a LocateResult already: as `response_model` FastAPI would validate it again, dump it and
     # encode that with `json` (~0.15 ms of the event loop's, ten times pydantic's own JSON).
     return Response(located.result.model_dump_json(by_alias=True), media_type="application/json")
+
+
+async def locate_directly(request: Request) -> Response:
+    """`locate_frame` with its parameters read directly, in FastAPI's order (`server.api.params.RequestParam`):
+    the frame's (its body received once they are valid), the pipeline's, the route's own."""
+    services = request.app.state.services
+    upload = await read_frame_upload(request, services)
+    query = read_locate_query(request, services)
+    return await locate_frame(request, services, upload, query, **read_params(locate_frame, request))
+
+
+answers_directly(locate_frame, locate_directly)

@@ -48,3 +48,22 @@ def test_keyless_writes_with_big_bodies_are_refused_before_the_body(server_url):
         assert response.status_code == 401 and response.json()["field"] == "X-API-Key", (path, response.text)
         assert response.headers.get("connection") == "close"
         assert time.perf_counter() - start < 2.0
+
+
+def test_the_locate_route_s_direct_reader_reads_every_parameter_fastapi_would():
+    """/v1/locate is answered by `locate_directly` (server.api.guard.answers_directly), which reads the
+    parameters its endpoint and the endpoint's dependencies declare: the same ones FastAPI reads and the
+    OpenAPI spec lists, and the endpoint's other arguments are the four the reader passes."""
+    import inspect
+
+    from fastapi.dependencies.utils import get_flat_params  # what the OpenAPI spec lists
+
+    from server.api.params import _locate_query, declared_params, frame_upload
+    from server.api.routes.locate import locate_frame
+
+    route = next(r for r in api_routes() if r.path == "/v1/locate")
+    by_fastapi = {(p.field_info.in_.value, p.alias) for p in get_flat_params(route.dependant)}
+    direct = [declared_params(f) for f in (frame_upload, _locate_query, locate_frame)]
+    assert {(p.where, p.alias) for params in direct for p in params.values()} == by_fastapi
+    assert [name for name in inspect.signature(locate_frame).parameters if name not in direct[2]] == [
+        "request", "services", "upload", "query"]
