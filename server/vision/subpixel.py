@@ -55,6 +55,7 @@ MIN_PHASE_SPAN_PX = 0.1
 # grid: corners the noise model put at 0.06 px, found by the consistency test, `pose/consistency.py`;
 # 0.8 px across it, the fit takes a two-harmonic L out to 0.01 px, tests/server/vision/test_subpixel.py).
 MIN_LOCKING_PERIOD_PX = 0.5
+LOCKING_HARMONICS = 2  # terms of the pixel-locking series
 # A gap between two level crossings along a pixel row or column is off by their pixel-locking
 # errors (~0.06 px rms each, `PoseRules.pixel_locking_sigma_px`), which do not average out there.
 LOCKING_GAP_PX = 0.085
@@ -78,6 +79,9 @@ class EdgeRules:
     # walking at 1.2 m/s gives 3-52 % (quarter resolution, 24 frames): the share is a compromise
     uneven_blur_sigmas: float = 4.0
     uneven_blur_fraction: float = 0.15
+    # the crossings and the line fits by the compiled kernels (`server.vision.subpixel_kernel`);
+    # False: by the NumPy functions here, the reference they equal
+    compiled: bool = True
 
 
 @dataclass(frozen=True)
@@ -106,6 +110,31 @@ class EdgeFit:
     # rms of a crossing's pixel-locking error at this frame's blur and growth (`locking_sigma_px`;
     # px), None when the corners measured neither
     locking_px: float | None = None
+
+
+def _kernels():
+    """`server.vision.subpixel_kernel`, imported at the first refinement: numba takes ~0.7 s to
+    import, which a process that never refines edges (the client's CLI, a survey) need not pay."""
+    from server.vision import subpixel_kernel
+
+    return subpixel_kernel
+
+
+def warm_kernels() -> None:
+    """Load the compiled kernels (compile them, on a cold cache: seconds) with the stage's own
+    argument types, so that the first frame does not wait for them (`server.api.main` at start-up)."""
+    kernels = _kernels()
+    offsets = profile_offsets(EdgeRules().half_window_px, EdgeRules().step_px)
+    profiles = np.linspace(255.0, 0.0, len(offsets), dtype=np.float32)[None, :]
+    kernels.level_crossings(profiles, offsets, 128.0, _nearest_first(offsets), np.empty(1, np.float32))
+    rng = np.random.default_rng(0)
+    corners = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
+    along = np.linspace(0.1, 0.9, 12)[None, :, None]
+    points = corners[:, None, :] + along * (corners[NEXT] - corners)[:, None, :] + rng.normal(0.0, 0.05, (4, 12, 2))
+    outward = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
+    kernels.fit_lines(
+        points, np.ones((4, 12)), outward, points, LOCKING_HARMONICS, MIN_PHASE_SPAN_PX, MIN_LOCKING_PERIOD_PX
+    )
 
 
 def _norms(vectors: np.ndarray) -> np.ndarray:
@@ -176,6 +205,21 @@ def sample_profiles(image: np.ndarray, bases: np.ndarray, normals: np.ndarray, o
     return profiles.astype(np.float32, copy=False)
 
 
+def _nearest_first(offsets: np.ndarray) -> np.ndarray:
+    """The profile's samples but its last in the order a crossing is looked for: the first in the
+    order of nearness to offset 0 (of two as near, the first, as an argmin over the distances takes it)."""
+    return np.argsort(np.abs(offsets[:-1]), kind="stable")
+
+
+def _crossings(profiles: np.ndarray, offsets: np.ndarray, level: float, rules: EdgeRules) -> np.ndarray:
+    """`level_crossings`, by the compiled kernel unless `rules` ask for the reference."""
+    if not rules.compiled:
+        return level_crossings(profiles, offsets, level)
+    return _kernels().level_crossings(
+        profiles, offsets, level, _nearest_first(offsets), np.empty(len(profiles), np.float32)
+    )
+
+
 def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> np.ndarray:
     """Where each profile falls through `level`: (n,) px along its normal, NaN where it does not.
 
@@ -187,9 +231,7 @@ def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> 
     """
     at_or_above = profiles >= level  # profiles are finite (sampled from an image)
     falls = at_or_above[:, :-1] > at_or_above[:, 1:]  # sample j at or above the level, j + 1 below it
-    # The first crossing in the order of nearness to offset 0 (of two as near, the first, as an
-    # argmin over the distances takes it): a gather and a boolean argmax, no float array.
-    nearest_first = np.argsort(np.abs(offsets[:-1]), kind="stable")
+    nearest_first = _nearest_first(offsets)
     j = nearest_first[np.argmax(falls[:, nearest_first], axis=1)]
     rows = np.arange(len(profiles))
     v0, v1 = profiles[rows, j], profiles[rows, j + 1]
@@ -266,7 +308,7 @@ def _remove_pixel_locking(
     weights,
     phase_points,
     centres,
-    harmonics: int = 2,
+    harmonics: int = LOCKING_HARMONICS,
     min_phase_span_px: float = MIN_PHASE_SPAN_PX,
     min_period_span_px: float = MIN_LOCKING_PERIOD_PX,
 ):
@@ -551,18 +593,18 @@ def refine_edges(
     bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
     # straight from the 8-bit pixels (see `sample_profiles`)
     profiles = sample_profiles(roi, bases32, across32, offsets)
-    crossings = level_crossings(profiles, offsets, levels.threshold)
+    crossings = _crossings(profiles, offsets, levels.threshold, rules)
     warnings: list[str] = []
     side_levels = pedestal_levels(profiles[: 4 * n_along], offsets, crossings[: 4 * n_along], levels)
     if side_levels != levels:
         levels = side_levels
-        crossings = level_crossings(profiles, offsets, levels.threshold)
+        crossings = _crossings(profiles, offsets, levels.threshold, rules)
     height, width = roi.shape
     ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
     inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
     valid = np.isfinite(crossings) & inside
     quarter_level = (levels.threshold + levels.background) / 2
-    level_gap = level_crossings(profiles[: 4 * n_along], offsets, quarter_level) - crossings[: 4 * n_along]
+    level_gap = _crossings(profiles[: 4 * n_along], offsets, quarter_level, rules) - crossings[: 4 * n_along]
     every_third = level_gap[::3]  # the common gap from a third of the profiles, as it always was
     level_gap_px = float(_nanmedians(every_third[None, :])[0])
     # A side along the pixel grid keeps its crossings' pixel-locking error as an offset of its gap
@@ -584,9 +626,19 @@ def refine_edges(
     if counts.min() < max(6, n_along // 3):
         return None
     side_points = np.where(side_valid[..., None], points[: 4 * n_along].reshape(4, n_along, 2), 0.0)
-    lines_array, rms, line_sigma = _fit_lines(
-        side_points, side_valid.astype(float), normals, np.where(side_valid[..., None], sensor_points, 0.0)
+    fit_arguments = (
+        side_points,
+        side_valid.astype(float),
+        normals,
+        np.where(side_valid[..., None], sensor_points, 0.0),
     )
+    solved = False
+    if rules.compiled:
+        lines_array, rms, line_sigma, solved = _kernels().fit_lines(
+            *fit_arguments, LOCKING_HARMONICS, MIN_PHASE_SPAN_PX, MIN_LOCKING_PERIOD_PX
+        )
+    if not solved:  # singular equations: the reference says what then
+        lines_array, rms, line_sigma = _fit_lines(*fit_arguments)
 
     shift, curvature_px, uneven_px, locking = 0.0, 0.0, 0.0, None
     side_shifts = np.zeros(4)

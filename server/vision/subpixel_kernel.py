@@ -1,0 +1,342 @@
+"""The sub-pixel stage's arithmetic after the sampling, compiled (numba).
+
+At quarter resolution a frame's sides are a few hundred crossings: in NumPy the stage is ~470
+array calls whose fixed cost, not their arithmetic, is most of its time. These are the same
+operations element by element, a call each. `server.vision.subpixel`'s NumPy functions stay the
+reference (tests/server/vision/test_subpixel_kernel.py holds the two equal on the benches'
+frames): every operation here is theirs, in their order and without fast-math; a reduction over
+a row sums pairwise as NumPy's does (`_sum`), a 2-vector product is fused as OpenBLAS's is
+(`server.pose.outline_kernel._fma`). What is left different: the 12 x 12 normal equations of the
+pixel-locking fit, summed here in row order where OpenBLAS's GEMM blocks them (last bits), and
+solved by OpenCV's own LU (`cv2.solve`'s `DECOMP_LU`, written out).
+
+Conventions as in `server.vision.subpixel`: sides (4, n) of n crossings each; points x, y.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from server.pose.outline_kernel import _fma
+
+_BLOCK = 128  # NumPy's pairwise summation: below it, eight running sums
+
+
+@njit(cache=True)
+def _block_sum(values, start, count):
+    """values[start:start + count], count <= 128, summed as NumPy's `pairwise_sum` sums a block:
+    in order below 8 values, else in eight interleaved running sums, then the rest in order."""
+    if count < 8:
+        total = 0.0
+        for i in range(start, start + count):
+            total += values[i]
+        return total
+    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
+    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
+    i = 8
+    while i < count - count % 8:
+        j = start + i
+        r0 += values[j]
+        r1 += values[j + 1]
+        r2 += values[j + 2]
+        r3 += values[j + 3]
+        r4 += values[j + 4]
+        r5 += values[j + 5]
+        r6 += values[j + 6]
+        r7 += values[j + 7]
+        i += 8
+    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < count:
+        total += values[start + i]
+        i += 1
+    return total
+
+
+@njit(cache=True)
+def _sum(values, start, count):
+    """values[start:start + count] summed as NumPy's `add.reduce` sums a contiguous row
+    (`pairwise_sum`: blocks of up to 128, above that the sum of two halves, the first a multiple
+    of 8). Its recursion is walked with a stack of its own: numba's cache does not load a
+    recursive function."""
+    if count <= _BLOCK:
+        return _block_sum(values, start, count)
+    starts, counts = np.empty(64, np.int64), np.empty(64, np.int64)
+    stages, lefts = np.zeros(64, np.int64), np.empty(64)  # stage: 0 new, 1 left half summed
+    starts[0], counts[0], top, value = start, count, 0, 0.0
+    while top >= 0:
+        first, size = starts[top], counts[top]
+        if size <= _BLOCK or stages[top] == 1:
+            # a block, or a left half's sum and its right one's, just returned
+            value = _block_sum(values, first, size) if size <= _BLOCK else lefts[top] + value
+            top -= 1
+            if top >= 0 and stages[top] == 0:  # a left half: now its right one
+                lefts[top], stages[top] = value, 1
+                half = counts[top] // 2
+                half -= half % 8
+                top += 1
+                starts[top], counts[top], stages[top] = starts[top - 1] + half, counts[top - 1] - half, 0
+            continue
+        half = size // 2
+        half -= half % 8
+        top += 1
+        starts[top], counts[top], stages[top] = first, half, 0
+    return value
+
+
+@njit(cache=True)
+def _row_sum(values):
+    """A 1-D array summed as NumPy sums it."""
+    return _sum(values, 0, values.shape[0])
+
+
+@njit(cache=True)
+def _sign(value):
+    """np.sign of a float (NaN stays NaN)."""
+    if value > 0:
+        return 1.0
+    if value < 0:
+        return -1.0
+    return value  # 0.0, -0.0 or NaN, as np.sign gives them
+
+
+@njit(cache=True)
+def _mod_one(value):
+    """np.mod(value, 1.0): in [0, 1), NumPy's own divmod (fmod, moved up by 1 when negative)."""
+    remainder = np.fmod(value, 1.0)
+    if remainder != 0.0:
+        if remainder < 0.0:
+            remainder += 1.0
+    else:
+        remainder = 0.0
+    return remainder
+
+
+@njit(cache=True)
+def level_crossings(profiles, offsets, level, order, out):
+    """`server.vision.subpixel.level_crossings` into `out` (n,): `order` the sample indices in
+    the order of nearness to offset 0 (`np.argsort(np.abs(offsets[:-1]), kind="stable")`)."""
+    level = np.float32(level)  # NumPy compares and subtracts a Python float in the profiles' float32
+    step = offsets[1] - offsets[0]
+    for row in range(profiles.shape[0]):
+        out[row] = np.nan
+        for j in order:
+            if profiles[row, j] >= level and not profiles[row, j + 1] >= level:
+                v0, v1 = profiles[row, j], profiles[row, j + 1]
+                fraction = (v0 - level) / max(v0 - v1, np.float32(1e-9))
+                out[row] = offsets[j] + fraction * step
+                break
+    return out
+
+
+@njit(cache=True)
+def _lu_solve(matrix, rhs):
+    """OpenCV's `hal::LU64f` (`cv2.solve(..., DECOMP_LU)`): Gaussian elimination with partial
+    pivoting, in place; False when a pivot is below 100 epsilon (singular)."""
+    m = matrix.shape[0]
+    eps = 2.220446049250313e-16 * 100
+    for i in range(m):
+        k = i
+        for j in range(i + 1, m):
+            if abs(matrix[j, i]) > abs(matrix[k, i]):
+                k = j
+        if abs(matrix[k, i]) < eps:
+            return False
+        if k != i:
+            for j in range(i, m):
+                matrix[i, j], matrix[k, j] = matrix[k, j], matrix[i, j]
+            rhs[i], rhs[k] = rhs[k], rhs[i]
+        d = -1 / matrix[i, i]
+        for j in range(i + 1, m):
+            alpha = matrix[j, i] * d
+            for k in range(i + 1, m):
+                matrix[j, k] += alpha * matrix[i, k]
+            rhs[j] += alpha * rhs[i]
+    for i in range(m - 1, -1, -1):
+        s = rhs[i]
+        for k in range(i + 1, m):
+            s -= matrix[i, k] * rhs[k]
+        rhs[i] = s / matrix[i, i]
+    return True
+
+
+@njit(cache=True)
+def fit_lines(points, weights, outward, phase_points, harmonics, min_phase_span_px, min_period_span_px):
+    """`server.vision.subpixel._fit_lines` with its pixel-locking refit and offset sigma:
+    (lines (4, 3), rms (4,), line sigma, solved). `solved` False: the locking fit's normal
+    equations or a side's turn and shift were singular, nothing else is to be read (the
+    reference says what then)."""
+    sides, n = weights.shape
+    weights = weights.copy()
+    centres = np.empty((2, sides))
+    deltas = np.empty((2, sides, n))
+    normal = np.empty((2, sides))
+    residuals = np.empty((sides, n))
+    row = np.empty(n)
+    kept_distances = np.empty(n)
+    for _ in range(2):
+        for s in range(sides):
+            total_weight = _row_sum(weights[s])
+            for c in range(2):
+                for i in range(n):
+                    row[i] = weights[s, i] * points[s, i, c]
+                centres[c, s] = _row_sum(row) / total_weight
+                for i in range(n):
+                    deltas[c, s, i] = points[s, i, c] - centres[c, s]
+            for i in range(n):
+                row[i] = weights[s, i] * deltas[0, s, i] * deltas[0, s, i]
+            sxx = _row_sum(row)
+            for i in range(n):
+                row[i] = weights[s, i] * deltas[1, s, i] * deltas[1, s, i]
+            syy = _row_sum(row)
+            for i in range(n):
+                row[i] = weights[s, i] * deltas[0, s, i] * deltas[1, s, i]
+            sxy = _row_sum(row)
+            along = 0.5 * math.atan2(2 * sxy, sxx - syy)
+            n0, n1 = -math.sin(along), math.cos(along)
+            flip = _sign(n0 * outward[s, 0] + n1 * outward[s, 1])
+            normal[0, s], normal[1, s] = n0 * flip, n1 * flip
+            kept = 0
+            for i in range(n):
+                residuals[s, i] = deltas[0, s, i] * normal[0, s] + deltas[1, s, i] * normal[1, s]
+                if weights[s, i] > 0:
+                    kept_distances[kept] = abs(residuals[s, i])
+                    kept += 1
+            ordered = np.sort(kept_distances[:kept])
+            spread = ordered[kept // 2] * 1.4826 if kept > 0 else np.inf
+            bound = 3.5 * max(spread, 1e-3)
+            for i in range(n):
+                weights[s, i] = weights[s, i] * (1.0 if abs(residuals[s, i]) <= bound else 0.0)
+    lines = np.empty((sides, 3))
+    for s in range(sides):
+        lines[s, 0], lines[s, 1] = normal[0, s], normal[1, s]
+        lines[s, 2] = -(normal[0, s] * centres[0, s] + normal[1, s] * centres[1, s])
+    solved = _remove_pixel_locking(lines, points, weights, phase_points, centres, harmonics, min_phase_span_px,
+                                   min_period_span_px, residuals)  # fmt: skip
+    if not solved:
+        return lines, np.zeros(sides), 0.0, False
+    rms = np.empty(sides)
+    for s in range(sides):
+        for i in range(n):
+            row[i] = weights[s, i] * (residuals[s, i] * residuals[s, i])
+        rms[s] = math.sqrt(_row_sum(row) / _row_sum(weights[s]))
+    return lines, rms, _line_offset_sigma(residuals, weights, rms), True
+
+
+@njit(cache=True)
+def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmonics, min_phase_span_px,
+                          min_period_span_px, residuals):  # fmt: skip
+    """`server.vision.subpixel._remove_pixel_locking`: `lines` (4, 3) and `residuals` (4, n)
+    replaced in place (or left as they are when no side crosses `min_period_span_px`);
+    `centres` (2, 4). False when its equations are singular."""
+    sides, n = weights.shape
+    tangent = np.empty((sides, 2))
+    phase = np.empty((sides, n))
+    along = np.empty((sides, n))
+    spans = np.empty(sides)
+    for s in range(sides):
+        n0, n1 = lines[s, 0], lines[s, 1]
+        tangent[s, 0], tangent[s, 1] = -n1, n0
+        axis = 0 if abs(n0) >= abs(n1) else 1
+        sign = _sign(lines[s, axis])
+        low, high = np.inf, -np.inf
+        for i in range(n):
+            phase[s, i] = _mod_one(sign * phase_points[s, i, axis])
+            o0, o1 = points[s, i, 0] - centres[0, s], points[s, i, 1] - centres[1, s]
+            residuals[s, i] = o0 * n0 + o1 * n1
+            along[s, i] = o0 * tangent[s, 0] + o1 * tangent[s, 1]
+            if weights[s, i] > 0:
+                low, high = min(low, along[s, i]), max(high, along[s, i])
+        spans[s] = abs(tangent[s, axis]) * (high - low)
+    if spans.max() < min_period_span_px:
+        return True
+    columns = 8 + 2 * harmonics
+    design = np.zeros((sides * n, columns))
+    cosines, sines = np.empty((sides, n, harmonics)), np.empty((sides, n, harmonics))
+    for s in range(sides):
+        sampled = 1.0 if spans[s] >= min_phase_span_px else 0.0
+        for i in range(n):
+            r = s * n + i
+            design[r, s] = along[s, i]
+            design[r, 4 + s] = 1.0
+            turn = 2 * np.pi * phase[s, i]
+            for h in range(harmonics):
+                angle = turn * float(h + 1)
+                cosines[s, i, h], sines[s, i, h] = math.cos(angle), math.sin(angle)
+                design[r, 8 + 2 * h] = -cosines[s, i, h] * sampled
+                design[r, 9 + 2 * h] = -sines[s, i, h] * sampled
+    normal_matrix = np.zeros((columns, columns))
+    rhs = np.zeros(columns)
+    for s in range(sides):
+        for i in range(n):
+            r = s * n + i
+            w = weights[s, i]
+            for a in range(columns):
+                weighted = design[r, a] * w
+                for b in range(columns):
+                    normal_matrix[a, b] += weighted * design[r, b]
+                rhs[a] += weighted * residuals[s, i]
+    rhs = -rhs
+    solution = rhs.copy()
+    if not _lu_solve(normal_matrix.copy(), solution):
+        return False
+    moments = np.empty((3, sides))
+    for s in range(sides):
+        moments[0, s], moments[1, s], moments[2, s] = normal_matrix[s + 4, s + 4], normal_matrix[s, s + 4], \
+            normal_matrix[s, s]  # fmt: skip
+    row_turn, row_shift = np.empty(n), np.empty(n)
+    locking = np.empty((sides, n))
+    for s in range(sides):
+        for i in range(n):
+            value = cosines[s, i, 0] * solution[8]
+            for h in range(1, harmonics):
+                value = _fma(cosines[s, i, h], solution[8 + 2 * h], value)
+            term = sines[s, i, 0] * solution[9]
+            for h in range(1, harmonics):
+                term = _fma(sines[s, i, h], solution[9 + 2 * h], term)
+            locking[s, i] = value + term
+            target = locking[s, i] - residuals[s, i]
+            row_turn[i] = weights[s, i] * along[s, i] * target
+            row_shift[i] = weights[s, i] * target
+        rhs_turn, rhs_shift = _row_sum(row_turn), _row_sum(row_shift)
+        moment_0, moment_1, moment_2 = moments[0, s], moments[1, s], moments[2, s]
+        determinant = moment_2 * moment_0 - moment_1**2
+        if determinant == 0:  # NaN passes, as in the reference
+            return False
+        turn = (moment_0 * rhs_turn - moment_1 * rhs_shift) / determinant
+        shift = (moment_2 * rhs_shift - moment_1 * rhs_turn) / determinant
+        new_0, new_1 = lines[s, 0] + turn * tangent[s, 0], lines[s, 1] + turn * tangent[s, 1]
+        scale = math.sqrt(new_0 * new_0 + new_1 * new_1)
+        c = lines[s, 2] + shift - turn * (tangent[s, 0] * centres[0, s] + tangent[s, 1] * centres[1, s])
+        lines[s, 0], lines[s, 1], lines[s, 2] = new_0 / scale, new_1 / scale, c / scale
+        for i in range(n):
+            residuals[s, i] = (
+                points[s, i, 0] * lines[s, 0] + points[s, i, 1] * lines[s, 1] + lines[s, 2] - locking[s, i]
+            )
+    return True
+
+
+@njit(cache=True)
+def _line_offset_sigma(residuals, weights, rms):
+    """`server.vision.subpixel._line_offset_sigma` with its 8 chunks."""
+    chunks = 8
+    sides, n = weights.shape
+    length = n // chunks
+    products = np.empty(n)
+    chunk_weights, means = np.empty(chunks), np.empty(chunks)
+    total = np.empty(sides)
+    for s in range(sides):
+        count = _row_sum(weights[s])
+        for i in range(n):
+            products[i] = weights[s, i] * residuals[s, i]
+        for k in range(chunks):
+            chunk_weights[k] = _sum(weights[s], k * length, length)
+            means[k] = _sum(products, k * length, length) / max(chunk_weights[k], 1.0)
+        for k in range(chunks):
+            means[k] = chunk_weights[k] * means[k] ** 2
+        wave = _row_sum(means) / max(_row_sum(chunk_weights), 1.0)
+        wave = max(wave - chunks * rms[s] ** 2 / count, 0.0)
+        total[s] = rms[s] ** 2 / count + wave
+    return math.sqrt(_row_sum(total) / sides)
