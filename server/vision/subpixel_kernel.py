@@ -5,7 +5,7 @@ array calls whose fixed cost, not their arithmetic, is most of its time. These a
 operations element by element, a call each. `server.vision.subpixel`'s NumPy functions stay the
 reference (tests/server/vision/test_subpixel_kernel.py holds the two equal on the benches'
 frames): every operation here is theirs, in their order and without fast-math; a reduction over
-a row sums pairwise as NumPy's does (`_sum`), a 2-vector product is fused as OpenBLAS's is
+a row sums in eight running sums as NumPy's does (`_sum`), a 2-vector product is fused as OpenBLAS's is
 (`server.pose.outline_kernel._fma`). What is left different: the 12 x 12 normal equations of the
 pixel-locking fit, summed here in row order where OpenBLAS's GEMM blocks them (last bits), and
 solved by OpenCV's own LU (`cv2.solve`'s `DECOMP_LU`, written out).
@@ -22,13 +22,14 @@ from numba import njit
 
 from server.pose.outline_kernel import _fma
 
-_BLOCK = 128  # NumPy's pairwise summation: below it, eight running sums
+ROW_LIMIT = 128  # crossings a side: NumPy sums a row of up to this many as one block (`_sum`)
 
 
 @njit(cache=True)
-def _block_sum(values, start, count):
-    """values[start:start + count], count <= 128, summed as NumPy's `pairwise_sum` sums a block:
-    in order below 8 values, else in eight interleaved running sums, then the rest in order."""
+def _sum(values, start, count):
+    """values[start:start + count] summed as NumPy's `add.reduce` sums a contiguous row of up to
+    `ROW_LIMIT` values (`pairwise_sum`'s block: in order below 8 values, else in eight interleaved
+    running sums, then the rest in order; a longer row it sums in halves, which is not done here)."""
     if count < 8:
         total = 0.0
         for i in range(start, start + count):
@@ -56,40 +57,35 @@ def _block_sum(values, start, count):
 
 
 @njit(cache=True)
-def _sum(values, start, count):
-    """values[start:start + count] summed as NumPy's `add.reduce` sums a contiguous row
-    (`pairwise_sum`: blocks of up to 128, above that the sum of two halves, the first a multiple
-    of 8). Its recursion is walked with a stack of its own: numba's cache does not load a
-    recursive function."""
-    if count <= _BLOCK:
-        return _block_sum(values, start, count)
-    starts, counts = np.empty(64, np.int64), np.empty(64, np.int64)
-    stages, lefts = np.zeros(64, np.int64), np.empty(64)  # stage: 0 new, 1 left half summed
-    starts[0], counts[0], top, value = start, count, 0, 0.0
-    while top >= 0:
-        first, size = starts[top], counts[top]
-        if size <= _BLOCK or stages[top] == 1:
-            # a block, or a left half's sum and its right one's, just returned
-            value = _block_sum(values, first, size) if size <= _BLOCK else lefts[top] + value
-            top -= 1
-            if top >= 0 and stages[top] == 0:  # a left half: now its right one
-                lefts[top], stages[top] = value, 1
-                half = counts[top] // 2
-                half -= half % 8
-                top += 1
-                starts[top], counts[top], stages[top] = starts[top - 1] + half, counts[top - 1] - half, 0
-            continue
-        half = size // 2
-        half -= half % 8
-        top += 1
-        starts[top], counts[top], stages[top] = first, half, 0
-    return value
-
-
-@njit(cache=True)
 def _row_sum(values):
     """A 1-D array summed as NumPy sums it."""
     return _sum(values, 0, values.shape[0])
+
+
+@njit(cache=True)
+def _kth_smallest(values, k):
+    """The k-th smallest of `values` (1-D, no NaN; 0-based): what a sort puts at k. Quickselect in
+    place, not np.sort, whose compiled sort costs numba more than the rest of a kernel."""
+    low, high = 0, values.shape[0] - 1
+    while low < high:
+        pivot = values[(low + high) // 2]
+        i, j = low, high
+        while i <= j:
+            while values[i] < pivot:
+                i += 1
+            while values[j] > pivot:
+                j -= 1
+            if i <= j:
+                values[i], values[j] = values[j], values[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            high = j
+        elif k >= i:
+            low = i
+        else:
+            break
+    return values[k]
 
 
 @njit(cache=True)
@@ -165,10 +161,12 @@ def _lu_solve(matrix, rhs):
 @njit(cache=True)
 def fit_lines(points, weights, outward, phase_points, harmonics, min_phase_span_px, min_period_span_px):
     """`server.vision.subpixel._fit_lines` with its pixel-locking refit and offset sigma:
-    (lines (4, 3), rms (4,), line sigma, solved). `solved` False: the locking fit's normal
-    equations or a side's turn and shift were singular, nothing else is to be read (the
-    reference says what then)."""
+    (lines (4, 3), rms (4,), line sigma, solved). `solved` False: the reference is to be asked,
+    for a side of more than `ROW_LIMIT` crossings or equations that are singular (nothing else
+    is then to be read)."""
     sides, n = weights.shape
+    if n > ROW_LIMIT:
+        return np.zeros((sides, 3)), np.zeros(sides), 0.0, False
     weights = weights.copy()
     centres = np.empty((2, sides))
     deltas = np.empty((2, sides, n))
@@ -204,8 +202,7 @@ def fit_lines(points, weights, outward, phase_points, harmonics, min_phase_span_
                 if weights[s, i] > 0:
                     kept_distances[kept] = abs(residuals[s, i])
                     kept += 1
-            ordered = np.sort(kept_distances[:kept])
-            spread = ordered[kept // 2] * 1.4826 if kept > 0 else np.inf
+            spread = _kth_smallest(kept_distances[:kept], kept // 2) * 1.4826 if kept > 0 else np.inf
             bound = 3.5 * max(spread, 1e-3)
             for i in range(n):
                 weights[s, i] = weights[s, i] * (1.0 if abs(residuals[s, i]) <= bound else 0.0)
