@@ -135,6 +135,8 @@ def warm_kernels() -> None:
     kernels.fit_lines(
         points, np.ones((4, 12)), outward, points, LOCKING_HARMONICS, MIN_PHASE_SPAN_PX, MIN_LOCKING_PERIOD_PX
     )
+    arcs = np.full((4, 8, 2), 0.1)
+    kernels.arc_growth(_plane(arcs, square_homography(corners)), corners, 0.1, UNIT_SQUARE, CORNER_AXES)
 
 
 def _norms(vectors: np.ndarray) -> np.ndarray:
@@ -533,6 +535,23 @@ def square_homography(corners_px: np.ndarray) -> np.ndarray:
     return cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
 
 
+def _plane(arc_points_px: np.ndarray, homography: np.ndarray) -> np.ndarray:
+    """The arc points (4, m, 2) in the unit square of the sides (`contour_growth`'s plane)."""
+    points = arc_points_px.reshape(-1, 1, 2).astype(np.float64)
+    return cv2.perspectiveTransform(points, homography).reshape(arc_points_px.shape)
+
+
+def _growth(
+    corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float, homography: np.ndarray, rules: EdgeRules
+) -> float | None:
+    """`contour_growth`, by the compiled kernel unless `rules` ask for the reference."""
+    if not rules.compiled:
+        return contour_growth(corners_px, arc_points_px, radius_fraction, homography)
+    plane = _plane(arc_points_px, homography)
+    growth = _kernels().arc_growth(plane, corners_px, radius_fraction, UNIT_SQUARE, CORNER_AXES)
+    return None if math.isnan(growth) else growth
+
+
 def contour_growth(
     corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float, homography: np.ndarray | None = None
 ) -> float | None:
@@ -548,8 +567,7 @@ def contour_growth(
     """
     if homography is None:
         homography = square_homography(corners_px)
-    shape = arc_points_px.shape
-    plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
+    plane = _plane(arc_points_px, homography)
     local = (plane - UNIT_SQUARE[:, None, :]) @ CORNER_AXES  # (4, m, 2): exact, the axes' entries are 0, +-1
     x, y = local[..., 0], local[..., 1]
     usable = (x > 0) & (y > 0)  # NaN compares False
@@ -647,13 +665,13 @@ def refine_edges(
         arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
         square = _intersections(lines_array)
         homography = square_homography(square)
-        growth = contour_growth(square, arc_points, radius_fraction, homography)
+        growth = _growth(square, arc_points, radius_fraction, homography, rules)
         blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
         if growth is not None and blur_px is not None:
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
             arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
-            before, growth = growth, contour_growth(square, arc_points, radius_fraction, homography)
+            before, growth = growth, _growth(square, arc_points, radius_fraction, homography, rules)
             curvature_px = abs(before - growth) if growth is not None else 0.0
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")

@@ -249,31 +249,30 @@ def _remove_pixel_locking(lines, points, weights, phase_points, centres, harmoni
         spans[s] = abs(tangent[s, axis]) * (high - low)
     if spans.max() < min_period_span_px:
         return True
+    # the design's rows (a small turn and a shift of each side, then the series), each added to the
+    # normal equations as it is made
     columns = 8 + 2 * harmonics
-    design = np.zeros((sides * n, columns))
+    design = np.zeros(columns)
     cosines, sines = np.empty((sides, n, harmonics)), np.empty((sides, n, harmonics))
+    normal_matrix = np.zeros((columns, columns))
+    rhs = np.zeros(columns)
     for s in range(sides):
         sampled = 1.0 if spans[s] >= min_phase_span_px else 0.0
         for i in range(n):
-            r = s * n + i
-            design[r, s] = along[s, i]
-            design[r, 4 + s] = 1.0
+            design[:8] = 0.0
+            design[s] = along[s, i]
+            design[4 + s] = 1.0
             turn = 2 * np.pi * phase[s, i]
             for h in range(harmonics):
                 angle = turn * float(h + 1)
                 cosines[s, i, h], sines[s, i, h] = math.cos(angle), math.sin(angle)
-                design[r, 8 + 2 * h] = -cosines[s, i, h] * sampled
-                design[r, 9 + 2 * h] = -sines[s, i, h] * sampled
-    normal_matrix = np.zeros((columns, columns))
-    rhs = np.zeros(columns)
-    for s in range(sides):
-        for i in range(n):
-            r = s * n + i
+                design[8 + 2 * h] = -cosines[s, i, h] * sampled
+                design[9 + 2 * h] = -sines[s, i, h] * sampled
             w = weights[s, i]
             for a in range(columns):
-                weighted = design[r, a] * w
+                weighted = design[a] * w
                 for b in range(columns):
-                    normal_matrix[a, b] += weighted * design[r, b]
+                    normal_matrix[a, b] += weighted * design[b]
                 rhs[a] += weighted * residuals[s, i]
     rhs = -rhs
     solution = rhs.copy()
@@ -337,3 +336,33 @@ def _line_offset_sigma(residuals, weights, rms):
         wave = max(wave - chunks * rms[s] ** 2 / count, 0.0)
         total[s] = rms[s] ** 2 / count + wave
     return math.sqrt(_row_sum(total) / sides)
+
+
+@njit(cache=True)
+def arc_growth(plane, corners_px, radius_fraction, unit_square, corner_axes):
+    """`server.vision.subpixel.contour_growth` from the arc points already in the unit square's
+    plane (4, m, 2): the growth (px), NaN where the reference gives None. `unit_square` (4, 2) and
+    `corner_axes` (4, 2, 2): `server.vision.subpixel`'s (the axes' entries are 0 and +-1: their
+    product is exact in any order)."""
+    corners, points = plane.shape[0], plane.shape[1]
+    radii = np.empty(corners * points)
+    usable = 0
+    for k in range(corners):
+        for i in range(points):
+            d0, d1 = plane[k, i, 0] - unit_square[k, 0], plane[k, i, 1] - unit_square[k, 1]
+            x = d0 * corner_axes[k, 0, 0] + d1 * corner_axes[k, 1, 0]
+            y = d0 * corner_axes[k, 0, 1] + d1 * corner_axes[k, 1, 1]
+            if x > 0 and y > 0:  # NaN compares False
+                radii[usable] = x + y + math.sqrt(2 * x * y)
+                usable += 1
+    if usable < 8:
+        return np.nan
+    scratch = radii[:usable]
+    low, high = _kth_smallest(scratch, (usable - 1) // 2), _kth_smallest(scratch, usable // 2)
+    growth_units = ((low + high) / 2 - radius_fraction) / (1.0 - 2.0 * radius_fraction)
+    lengths = np.empty(corners)
+    for k in range(corners):
+        e0 = corners_px[(k + 1) % corners, 0] - corners_px[k, 0]
+        e1 = corners_px[(k + 1) % corners, 1] - corners_px[k, 1]
+        lengths[k] = math.sqrt(e0 * e0 + e1 * e1)
+    return growth_units * (_row_sum(lengths) / corners)
