@@ -135,6 +135,7 @@ def warm_kernels() -> None:
     kernels.fit_lines(
         points, np.ones((4, 12)), outward, points, LOCKING_HARMONICS, MIN_PHASE_SPAN_PX, MIN_LOCKING_PERIOD_PX
     )
+    _profile_layout(corners, 0.8, offsets, (48, 48), EdgeRules())
     arcs = np.full((4, 8, 2), 0.1)
     kernels.arc_growth(_plane(arcs, square_homography(corners)), corners, 0.1, UNIT_SQUARE, CORNER_AXES)
 
@@ -190,6 +191,13 @@ def profile_offsets(half_window_px: float, step_px: float, dtype=np.float32) -> 
     return np.arange(-half_window_px, half_window_px + 1e-9, step_px, dtype=dtype)
 
 
+def _sample_maps(bases: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`sample_profiles`' sample coordinates (n, m) x and y, float32."""
+    map_x = (bases[:, :1] + offsets[None, :] * normals[:, :1]).astype(np.float32, copy=False)
+    map_y = (bases[:, 1:2] + offsets[None, :] * normals[:, 1:2]).astype(np.float32, copy=False)
+    return map_x, map_y
+
+
 def sample_profiles(image: np.ndarray, bases: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """Grey-level profiles (n, m) float32 across edges, bilinear.
 
@@ -201,8 +209,7 @@ def sample_profiles(image: np.ndarray, bases: np.ndarray, normals: np.ndarray, o
     read straight, each sample rounded to a whole DN (moves a crossing by < 0.005 px, and
     costs less than a float copy of the image); outside the image the border pixels repeat.
     """
-    map_x = (bases[:, :1] + offsets[None, :] * normals[:, :1]).astype(np.float32, copy=False)
-    map_y = (bases[:, 1:2] + offsets[None, :] * normals[:, 1:2]).astype(np.float32, copy=False)
+    map_x, map_y = _sample_maps(bases, normals, offsets)
     profiles = cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     return profiles.astype(np.float32, copy=False)
 
@@ -268,6 +275,35 @@ def _arc_profiles(corners, directions, radius_px, rules):
     centres = corners + radius_px * (u + v)
     bases = centres[:, None, :] + radius_px * outward
     return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
+
+
+def _profile_layout(
+    corners: np.ndarray, straight_fraction: float, offsets: np.ndarray, shape: tuple[int, ...], rules: EdgeRules
+) -> tuple:
+    """Where the stage samples the ROI of `shape` (height, width): the sides' unit directions, outward
+    normals and lengths (4, 2), (4, 2), (4,), the corner radius (px), each profile's base point and
+    outward normal (n, 2) (the sides' profiles, then the corners' when the radius is measurable),
+    their counts per side and per corner (0: no corners), the sample maps (n, m) float32 that
+    `sample_profiles` makes of them, and which profiles lie wholly inside the ROI (n,)."""
+    if rules.compiled:
+        return _kernels().profile_layout(
+            corners, straight_fraction, offsets, shape[1], shape[0], rules.corner_margin,
+            rules.max_profiles_per_side, rules.max_profiles_per_corner, rules.arc_span_deg,
+            rules.min_corner_radius_px,
+        )  # fmt: skip
+    directions, normals, lengths = _outward_normals(corners)
+    radius_px = (1.0 - straight_fraction) / 2 * float(lengths.mean())
+    bases, across, n_along = _side_profiles(corners, directions, normals, lengths, straight_fraction, rules)
+    n_arc = 0
+    if radius_px >= rules.min_corner_radius_px:
+        arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
+        bases, across = np.concatenate([bases, arc_bases]), np.concatenate([across, arc_normals])
+    bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
+    map_x, map_y = _sample_maps(bases32, across32, offsets)
+    height, width = shape
+    ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
+    inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
+    return directions, normals, lengths, radius_px, bases, across, n_along, n_arc, map_x, map_y, inside
 
 
 def _fit_lines(
@@ -597,29 +633,20 @@ def refine_edges(
     the share of each side that is straight (1 - 2 r / side). Returns None when a side has
     too few edge points to fit.
     """
-    directions, normals, lengths = _outward_normals(corners)
     radius_fraction = (1.0 - straight_fraction) / 2
-    radius_px = radius_fraction * float(lengths.mean())
-    side_bases, side_normals, n_along = _side_profiles(corners, directions, normals, lengths, straight_fraction, rules)
-    use_arcs = radius_px >= rules.min_corner_radius_px
-    if use_arcs:
-        arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
-        bases, across = np.concatenate([side_bases, arc_bases]), np.concatenate([side_normals, arc_normals])
-    else:
-        bases, across, n_arc = side_bases, side_normals, 0
     offsets = profile_offsets(rules.half_window_px, rules.step_px)
-    bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
+    directions, normals, lengths, radius_px, bases, across, n_along, n_arc, map_x, map_y, inside = _profile_layout(
+        corners, straight_fraction, offsets, roi.shape, rules
+    )
+    use_arcs = n_arc > 0
     # straight from the 8-bit pixels (see `sample_profiles`)
-    profiles = sample_profiles(roi, bases32, across32, offsets)
+    profiles = cv2.remap(roi, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float32)
     crossings = _crossings(profiles, offsets, levels.threshold, rules)
     warnings: list[str] = []
     side_levels = pedestal_levels(profiles[: 4 * n_along], offsets, crossings[: 4 * n_along], levels)
     if side_levels != levels:
         levels = side_levels
         crossings = _crossings(profiles, offsets, levels.threshold, rules)
-    height, width = roi.shape
-    ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
-    inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
     valid = np.isfinite(crossings) & inside
     quarter_level = (levels.threshold + levels.background) / 2
     level_gap = _crossings(profiles[: 4 * n_along], offsets, quarter_level, rules) - crossings[: 4 * n_along]

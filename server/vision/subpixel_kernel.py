@@ -366,3 +366,86 @@ def arc_growth(plane, corners_px, radius_fraction, unit_square, corner_axes):
         e1 = corners_px[(k + 1) % corners, 1] - corners_px[k, 1]
         lengths[k] = math.sqrt(e0 * e0 + e1 * e1)
     return growth_units * (_row_sum(lengths) / corners)
+
+
+@njit(cache=True)
+def _linspace(start, stop, num):
+    """`server.vision.subpixel._linspace` (np.linspace's values, num >= 2)."""
+    values = np.empty(num)
+    step = (stop - start) / (num - 1)
+    for i in range(num):
+        values[i] = float(i) * step + start
+    values[num - 1] = stop
+    return values
+
+
+@njit(cache=True)
+def profile_layout(corners, straight_fraction, offsets, width, height, corner_margin, max_profiles_per_side,
+                   max_profiles_per_corner, arc_span_deg, min_corner_radius_px):  # fmt: skip
+    """`server.vision.subpixel._profile_layout`'s reference (`_outward_normals`, `_side_profiles`,
+    `_arc_profiles`, `sample_profiles`' maps and the test of each profile's ends against the ROI
+    of `width` x `height`): (directions, normals, lengths, radius_px, bases (n, 2), across (n, 2),
+    n_along, n_arc, map_x, map_y (n, m) float32, inside (n,)). No arcs when the radius is under
+    `min_corner_radius_px`."""
+    directions, normals, lengths = np.empty((4, 2)), np.empty((4, 2)), np.empty(4)
+    mean_x = corners[0, 0] + corners[1, 0] + corners[2, 0] + corners[3, 0]
+    mean_y = corners[0, 1] + corners[1, 1] + corners[2, 1] + corners[3, 1]
+    mean_x, mean_y = mean_x / 4, mean_y / 4
+    for s in range(4):
+        e = (s + 1) % 4
+        d0, d1 = corners[e, 0] - corners[s, 0], corners[e, 1] - corners[s, 1]
+        lengths[s] = math.sqrt(d0 * d0 + d1 * d1)
+        d0, d1 = d0 / lengths[s], d1 / lengths[s]
+        directions[s, 0], directions[s, 1] = d0, d1
+        n0, n1 = d1 * 1.0, d0 * -1.0
+        mid0, mid1 = (corners[s, 0] + corners[e, 0]) / 2 - mean_x, (corners[s, 1] + corners[e, 1]) / 2 - mean_y
+        flip = _sign(n0 * mid0 + n1 * mid1)
+        normals[s, 0], normals[s, 1] = n0 * flip, n1 * flip
+    radius_fraction = (1.0 - straight_fraction) / 2
+    radius_px = radius_fraction * (_row_sum(lengths) / 4)
+    n_along = int(min(max(lengths.min() / 2, 12), max_profiles_per_side))
+    start = (1.0 - straight_fraction) / 2 + corner_margin
+    along = _linspace(start, 1.0 - start, n_along)
+    n_arc = 0
+    if radius_px >= min_corner_radius_px:
+        n_arc = int(min(max(np.pi / 2 * radius_px * arc_span_deg / 90.0, 6), max_profiles_per_corner))
+    count = 4 * (n_along + n_arc)
+    bases, across = np.empty((count, 2)), np.empty((count, 2))
+    for s in range(4):
+        for i in range(n_along):
+            r = s * n_along + i
+            for c in range(2):
+                bases[r, c] = corners[s, c] + along[i] * (lengths[s] * directions[s, c])
+                across[r, c] = normals[s, c]
+    if n_arc:
+        half_span = math.radians(arc_span_deg) / 2
+        turns = _linspace(-half_span, half_span, n_arc)
+        for k in range(4):
+            p = (k + 3) % 4
+            u0, u1, v0, v1 = directions[k, 0], directions[k, 1], -directions[p, 0], -directions[p, 1]
+            centre_0, centre_1 = corners[k, 0] + radius_px * (u0 + v0), corners[k, 1] + radius_px * (u1 + v1)
+            for i in range(n_arc):
+                t = np.pi / 4 + turns[i]
+                cos_t, sin_t = math.cos(t), math.sin(t)
+                o0, o1 = -(cos_t * v0 + sin_t * u0), -(cos_t * v1 + sin_t * u1)
+                norm = math.sqrt(o0 * o0 + o1 * o1)
+                o0, o1 = o0 / norm, o1 / norm
+                r = 4 * n_along + k * n_arc + i
+                across[r, 0], across[r, 1] = o0, o1
+                bases[r, 0], bases[r, 1] = centre_0 + radius_px * o0, centre_1 + radius_px * o1
+    samples = offsets.shape[0]
+    map_x, map_y = np.empty((count, samples), np.float32), np.empty((count, samples), np.float32)
+    inside = np.empty(count, np.bool_)
+    right, bottom = np.float32(width - 1), np.float32(height - 1)
+    for r in range(count):
+        b0, b1 = np.float32(bases[r, 0]), np.float32(bases[r, 1])
+        a0, a1 = np.float32(across[r, 0]), np.float32(across[r, 1])
+        for j in range(samples):
+            map_x[r, j] = b0 + offsets[j] * a0
+            map_y[r, j] = b1 + offsets[j] * a1
+        inside[r] = True
+        for j in (0, samples - 1):
+            x, y = b0 + offsets[j] * a0, b1 + offsets[j] * a1
+            if not (x >= 0 and x <= right and y >= 0 and y <= bottom):
+                inside[r] = False
+    return directions, normals, lengths, radius_px, bases, across, n_along, n_arc, map_x, map_y, inside

@@ -13,7 +13,7 @@ import server.pipeline as pipeline
 from server.locator import locate
 from server.options import LocateOptions
 from server.vision import subpixel_kernel
-from server.vision.subpixel import EdgeRules, _fit_lines, refine_edges
+from server.vision.subpixel import EdgeRules, _fit_lines, _profile_layout, profile_offsets, refine_edges
 from simulator.bench_shapes import ShapesConfig, shape_frame
 from simulator.benchmarks import AccuracyConfig, accuracy_frame
 
@@ -47,6 +47,12 @@ def test_the_compiled_stage_is_the_numpy_stage_on_bench_frames(monkeypatch):
         np.testing.assert_allclose(compiled.lines, reference.lines, rtol=0, atol=1e-12)
         for name in ("edge_shift_px", "line_rms_px", "line_sigma_px", "curvature_px", "uneven_px", "locking_px"):
             assert getattr(compiled, name) == pytest.approx(getattr(reference, name), rel=1e-12, abs=1e-15)
+        offsets = profile_offsets(rules.half_window_px, rules.step_px)
+        layouts = [
+            _profile_layout(args[2], args[4], offsets, args[0].shape, replace(rules, compiled=on)) for on in (1, 0)
+        ]
+        for made, expected in zip(*layouts, strict=True):  # where the profiles are sampled: the very same
+            assert np.array_equal(made, expected)
         assert (compiled.points_per_side, compiled.arc_points, compiled.warnings) == (
             reference.points_per_side,
             reference.arc_points,
