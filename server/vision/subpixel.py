@@ -32,6 +32,7 @@ from the image itself, in the way of AprilTag's edge refinement:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -112,6 +113,7 @@ class EdgeFit:
     locking_px: float | None = None
 
 
+@functools.cache
 def _kernels():
     """`server.vision.subpixel_kernel`, imported at the first refinement: numba takes ~0.7 s to
     import, which a process that never refines edges (the client's CLI, a survey) need not pay."""
