@@ -32,6 +32,7 @@ from the image itself, in the way of AprilTag's edge refinement:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -55,6 +56,7 @@ MIN_PHASE_SPAN_PX = 0.1
 # grid: corners the noise model put at 0.06 px, found by the consistency test, `pose/consistency.py`;
 # 0.8 px across it, the fit takes a two-harmonic L out to 0.01 px, tests/server/vision/test_subpixel.py).
 MIN_LOCKING_PERIOD_PX = 0.5
+LOCKING_HARMONICS = 2  # terms of the pixel-locking series
 # A gap between two level crossings along a pixel row or column is off by their pixel-locking
 # errors (~0.06 px rms each, `PoseRules.pixel_locking_sigma_px`), which do not average out there.
 LOCKING_GAP_PX = 0.085
@@ -78,6 +80,9 @@ class EdgeRules:
     # walking at 1.2 m/s gives 3-52 % (quarter resolution, 24 frames): the share is a compromise
     uneven_blur_sigmas: float = 4.0
     uneven_blur_fraction: float = 0.15
+    # the crossings and the line fits by the compiled kernels (`server.vision.subpixel_kernel`);
+    # False: by the NumPy functions here, the reference they equal
+    compiled: bool = True
 
 
 @dataclass(frozen=True)
@@ -106,6 +111,35 @@ class EdgeFit:
     # rms of a crossing's pixel-locking error at this frame's blur and growth (`locking_sigma_px`;
     # px), None when the corners measured neither
     locking_px: float | None = None
+
+
+@functools.cache
+def _kernels():
+    """`server.vision.subpixel_kernel`, imported at the first refinement: numba takes ~0.7 s to
+    import, which a process that never refines edges (the client's CLI, a survey) need not pay."""
+    from server.vision import subpixel_kernel
+
+    return subpixel_kernel
+
+
+def warm_kernels() -> None:
+    """Load the compiled kernels (compile them, on a cold cache: seconds) with the stage's own
+    argument types, so that the first frame does not wait for them (`server.api.main` at start-up)."""
+    kernels = _kernels()
+    offsets = profile_offsets(EdgeRules().half_window_px, EdgeRules().step_px)
+    profiles = np.linspace(255.0, 0.0, len(offsets), dtype=np.float32)[None, :]
+    kernels.level_crossings(profiles, offsets, 128.0, _nearest_first(offsets), np.empty(1, np.float32))
+    rng = np.random.default_rng(0)
+    corners = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 40.0], [0.0, 40.0]])
+    along = np.linspace(0.1, 0.9, 12)[None, :, None]
+    points = corners[:, None, :] + along * (corners[NEXT] - corners)[:, None, :] + rng.normal(0.0, 0.05, (4, 12, 2))
+    outward = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
+    kernels.fit_lines(
+        points, np.ones((4, 12)), outward, points, LOCKING_HARMONICS, MIN_PHASE_SPAN_PX, MIN_LOCKING_PERIOD_PX
+    )
+    _profile_layout(corners, 0.8, offsets, (48, 48), EdgeRules())
+    arcs = np.full((4, 8, 2), 0.1)
+    kernels.arc_growth(_plane(arcs, square_homography(corners)), corners, 0.1, UNIT_SQUARE, CORNER_AXES)
 
 
 def _norms(vectors: np.ndarray) -> np.ndarray:
@@ -159,6 +193,13 @@ def profile_offsets(half_window_px: float, step_px: float, dtype=np.float32) -> 
     return np.arange(-half_window_px, half_window_px + 1e-9, step_px, dtype=dtype)
 
 
+def _sample_maps(bases: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`sample_profiles`' sample coordinates (n, m) x and y, float32."""
+    map_x = (bases[:, :1] + offsets[None, :] * normals[:, :1]).astype(np.float32, copy=False)
+    map_y = (bases[:, 1:2] + offsets[None, :] * normals[:, 1:2]).astype(np.float32, copy=False)
+    return map_x, map_y
+
+
 def sample_profiles(image: np.ndarray, bases: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """Grey-level profiles (n, m) float32 across edges, bilinear.
 
@@ -170,10 +211,24 @@ def sample_profiles(image: np.ndarray, bases: np.ndarray, normals: np.ndarray, o
     read straight, each sample rounded to a whole DN (moves a crossing by < 0.005 px, and
     costs less than a float copy of the image); outside the image the border pixels repeat.
     """
-    map_x = (bases[:, :1] + offsets[None, :] * normals[:, :1]).astype(np.float32, copy=False)
-    map_y = (bases[:, 1:2] + offsets[None, :] * normals[:, 1:2]).astype(np.float32, copy=False)
+    map_x, map_y = _sample_maps(bases, normals, offsets)
     profiles = cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     return profiles.astype(np.float32, copy=False)
+
+
+def _nearest_first(offsets: np.ndarray) -> np.ndarray:
+    """The profile's samples but its last in the order a crossing is looked for: the first in the
+    order of nearness to offset 0 (of two as near, the first, as an argmin over the distances takes it)."""
+    return np.argsort(np.abs(offsets[:-1]), kind="stable")
+
+
+def _crossings(profiles: np.ndarray, offsets: np.ndarray, level: float, rules: EdgeRules) -> np.ndarray:
+    """`level_crossings`, by the compiled kernel unless `rules` ask for the reference."""
+    if not rules.compiled:
+        return level_crossings(profiles, offsets, level)
+    return _kernels().level_crossings(
+        profiles, offsets, level, _nearest_first(offsets), np.empty(len(profiles), np.float32)
+    )
 
 
 def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> np.ndarray:
@@ -187,9 +242,7 @@ def level_crossings(profiles: np.ndarray, offsets: np.ndarray, level: float) -> 
     """
     at_or_above = profiles >= level  # profiles are finite (sampled from an image)
     falls = at_or_above[:, :-1] > at_or_above[:, 1:]  # sample j at or above the level, j + 1 below it
-    # The first crossing in the order of nearness to offset 0 (of two as near, the first, as an
-    # argmin over the distances takes it): a gather and a boolean argmax, no float array.
-    nearest_first = np.argsort(np.abs(offsets[:-1]), kind="stable")
+    nearest_first = _nearest_first(offsets)
     j = nearest_first[np.argmax(falls[:, nearest_first], axis=1)]
     rows = np.arange(len(profiles))
     v0, v1 = profiles[rows, j], profiles[rows, j + 1]
@@ -224,6 +277,35 @@ def _arc_profiles(corners, directions, radius_px, rules):
     centres = corners + radius_px * (u + v)
     bases = centres[:, None, :] + radius_px * outward
     return bases.reshape(-1, 2), outward.reshape(-1, 2), n_arc
+
+
+def _profile_layout(
+    corners: np.ndarray, straight_fraction: float, offsets: np.ndarray, shape: tuple[int, ...], rules: EdgeRules
+) -> tuple:
+    """Where the stage samples the ROI of `shape` (height, width): the sides' unit directions, outward
+    normals and lengths (4, 2), (4, 2), (4,), the corner radius (px), each profile's base point and
+    outward normal (n, 2) (the sides' profiles, then the corners' when the radius is measurable),
+    their counts per side and per corner (0: no corners), the sample maps (n, m) float32 that
+    `sample_profiles` makes of them, and which profiles lie wholly inside the ROI (n,)."""
+    if rules.compiled:
+        return _kernels().profile_layout(
+            corners, straight_fraction, offsets, shape[1], shape[0], rules.corner_margin,
+            rules.max_profiles_per_side, rules.max_profiles_per_corner, rules.arc_span_deg,
+            rules.min_corner_radius_px,
+        )  # fmt: skip
+    directions, normals, lengths = _outward_normals(corners)
+    radius_px = (1.0 - straight_fraction) / 2 * float(lengths.mean())
+    bases, across, n_along = _side_profiles(corners, directions, normals, lengths, straight_fraction, rules)
+    n_arc = 0
+    if radius_px >= rules.min_corner_radius_px:
+        arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
+        bases, across = np.concatenate([bases, arc_bases]), np.concatenate([across, arc_normals])
+    bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
+    map_x, map_y = _sample_maps(bases32, across32, offsets)
+    height, width = shape
+    ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
+    inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
+    return directions, normals, lengths, radius_px, bases, across, n_along, n_arc, map_x, map_y, inside
 
 
 def _fit_lines(
@@ -266,7 +348,7 @@ def _remove_pixel_locking(
     weights,
     phase_points,
     centres,
-    harmonics: int = 2,
+    harmonics: int = LOCKING_HARMONICS,
     min_phase_span_px: float = MIN_PHASE_SPAN_PX,
     min_period_span_px: float = MIN_LOCKING_PERIOD_PX,
 ):
@@ -491,6 +573,23 @@ def square_homography(corners_px: np.ndarray) -> np.ndarray:
     return cv2.getPerspectiveTransform(corners_px.astype(np.float32), UNIT_SQUARE.astype(np.float32))
 
 
+def _plane(arc_points_px: np.ndarray, homography: np.ndarray) -> np.ndarray:
+    """The arc points (4, m, 2) in the unit square of the sides (`contour_growth`'s plane)."""
+    points = arc_points_px.reshape(-1, 1, 2).astype(np.float64)
+    return cv2.perspectiveTransform(points, homography).reshape(arc_points_px.shape)
+
+
+def _growth(
+    corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float, homography: np.ndarray, rules: EdgeRules
+) -> float | None:
+    """`contour_growth`, by the compiled kernel unless `rules` ask for the reference."""
+    if not rules.compiled:
+        return contour_growth(corners_px, arc_points_px, radius_fraction, homography)
+    plane = _plane(arc_points_px, homography)
+    growth = _kernels().arc_growth(plane, corners_px, radius_fraction, UNIT_SQUARE, CORNER_AXES)
+    return None if math.isnan(growth) else growth
+
+
 def contour_growth(
     corners_px: np.ndarray, arc_points_px: np.ndarray, radius_fraction: float, homography: np.ndarray | None = None
 ) -> float | None:
@@ -506,8 +605,7 @@ def contour_growth(
     """
     if homography is None:
         homography = square_homography(corners_px)
-    shape = arc_points_px.shape
-    plane = cv2.perspectiveTransform(arc_points_px.reshape(-1, 1, 2).astype(np.float64), homography).reshape(shape)
+    plane = _plane(arc_points_px, homography)
     local = (plane - UNIT_SQUARE[:, None, :]) @ CORNER_AXES  # (4, m, 2): exact, the axes' entries are 0, +-1
     x, y = local[..., 0], local[..., 1]
     usable = (x > 0) & (y > 0)  # NaN compares False
@@ -537,32 +635,23 @@ def refine_edges(
     the share of each side that is straight (1 - 2 r / side). Returns None when a side has
     too few edge points to fit.
     """
-    directions, normals, lengths = _outward_normals(corners)
     radius_fraction = (1.0 - straight_fraction) / 2
-    radius_px = radius_fraction * float(lengths.mean())
-    side_bases, side_normals, n_along = _side_profiles(corners, directions, normals, lengths, straight_fraction, rules)
-    use_arcs = radius_px >= rules.min_corner_radius_px
-    if use_arcs:
-        arc_bases, arc_normals, n_arc = _arc_profiles(corners, directions, radius_px, rules)
-        bases, across = np.concatenate([side_bases, arc_bases]), np.concatenate([side_normals, arc_normals])
-    else:
-        bases, across, n_arc = side_bases, side_normals, 0
     offsets = profile_offsets(rules.half_window_px, rules.step_px)
-    bases32, across32 = bases.astype(np.float32), across.astype(np.float32)
+    directions, normals, lengths, radius_px, bases, across, n_along, n_arc, map_x, map_y, inside = _profile_layout(
+        corners, straight_fraction, offsets, roi.shape, rules
+    )
+    use_arcs = n_arc > 0
     # straight from the 8-bit pixels (see `sample_profiles`)
-    profiles = sample_profiles(roi, bases32, across32, offsets)
-    crossings = level_crossings(profiles, offsets, levels.threshold)
+    profiles = cv2.remap(roi, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float32)
+    crossings = _crossings(profiles, offsets, levels.threshold, rules)
     warnings: list[str] = []
     side_levels = pedestal_levels(profiles[: 4 * n_along], offsets, crossings[: 4 * n_along], levels)
     if side_levels != levels:
         levels = side_levels
-        crossings = level_crossings(profiles, offsets, levels.threshold)
-    height, width = roi.shape
-    ends = bases32 + offsets[[0, -1], None, None] * across32  # (2, n, 2): each profile's first, last sample
-    inside = ((ends >= 0) & (ends <= np.array([width - 1, height - 1], dtype=np.float32))).all(axis=(0, 2))
+        crossings = _crossings(profiles, offsets, levels.threshold, rules)
     valid = np.isfinite(crossings) & inside
     quarter_level = (levels.threshold + levels.background) / 2
-    level_gap = level_crossings(profiles[: 4 * n_along], offsets, quarter_level) - crossings[: 4 * n_along]
+    level_gap = _crossings(profiles[: 4 * n_along], offsets, quarter_level, rules) - crossings[: 4 * n_along]
     every_third = level_gap[::3]  # the common gap from a third of the profiles, as it always was
     level_gap_px = float(_nanmedians(every_third[None, :])[0])
     # A side along the pixel grid keeps its crossings' pixel-locking error as an offset of its gap
@@ -584,9 +673,19 @@ def refine_edges(
     if counts.min() < max(6, n_along // 3):
         return None
     side_points = np.where(side_valid[..., None], points[: 4 * n_along].reshape(4, n_along, 2), 0.0)
-    lines_array, rms, line_sigma = _fit_lines(
-        side_points, side_valid.astype(float), normals, np.where(side_valid[..., None], sensor_points, 0.0)
+    fit_arguments = (
+        side_points,
+        side_valid.astype(float),
+        normals,
+        np.where(side_valid[..., None], sensor_points, 0.0),
     )
+    solved = False
+    if rules.compiled:
+        lines_array, rms, line_sigma, solved = _kernels().fit_lines(
+            *fit_arguments, LOCKING_HARMONICS, MIN_PHASE_SPAN_PX, MIN_LOCKING_PERIOD_PX
+        )
+    if not solved:  # singular equations: the reference says what then
+        lines_array, rms, line_sigma = _fit_lines(*fit_arguments)
 
     shift, curvature_px, uneven_px, locking = 0.0, 0.0, 0.0, None
     side_shifts = np.zeros(4)
@@ -595,13 +694,13 @@ def refine_edges(
         arc_points = np.where(valid[first:, None], points[first:], np.nan).reshape(4, n_arc, 2)
         square = _intersections(lines_array)
         homography = square_homography(square)
-        growth = contour_growth(square, arc_points, radius_fraction, homography)
+        growth = _growth(square, arc_points, radius_fraction, homography, rules)
         blur_px = blur_sigma_px(growth, level_gap_px) if growth is not None else None
         if growth is not None and blur_px is not None:
             # put the corner points back where a straight edge's level would be (see above)
             inward_px = blur_px**2 / (2.0 * (radius_px + max(growth, 0.0)))
             arc_points = arc_points + inward_px * across[first:].reshape(4, n_arc, 2)
-            before, growth = growth, contour_growth(square, arc_points, radius_fraction, homography)
+            before, growth = growth, _growth(square, arc_points, radius_fraction, homography, rules)
             curvature_px = abs(before - growth) if growth is not None else 0.0
         if growth is None:
             warnings.append("too few corner points: sides taken at the mid level")
