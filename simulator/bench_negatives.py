@@ -214,8 +214,10 @@ def bench_maps() -> dict[str, BeaconMap]:
 
 
 def photo_rows(path: Path, sigmas_m: tuple[float, ...] = SIGMAS_M) -> list[dict]:
-    """One row per (map, sigma) of the photo at `path`."""
+    """One row per (map, sigma) of the photo at `path`; a located one with its `frame_outcome` (`bench
+    results` compares it), one refused at a larger sigma without."""
     from server.camera import resolve_profile_args
+    from simulator.bench_results import frame_outcome
 
     profiles, profile = resolve_profile_args([PROFILE])
     frame = read_photo_file(path, profiles, None, profile)[0]
@@ -229,12 +231,13 @@ def photo_rows(path: Path, sigmas_m: tuple[float, ...] = SIGMAS_M) -> list[dict]
                 result = locate(frame, asked, beacon_id=beacon_id)
                 ok, reason = result.ok, None if result.ok else str(result.reason)
                 message = (result.warnings[0] if result.warnings else "") if result.ok else result.message or ""
+                outcome = frame_outcome(result)
                 if not ok:
                     refused = reason
             else:
-                ok, reason, message = False, refused, "refused at a larger sigma"
+                ok, reason, message, outcome = False, refused, "refused at a larger sigma", None
             rows.append({"photo": path.name, "map": name, "sigma_m": sigma, "ok": ok, "reason": reason,
-                         "message": message[:200]})  # fmt: skip
+                         "message": message[:200], "outcome": outcome})  # fmt: skip
     return rows
 
 
@@ -271,9 +274,16 @@ def run_negatives(config: NegativesConfig, workers: int | None = None) -> dict:
     }
 
 
-def run_photos(local: Path | None = None, workers: int = 2, sigmas_m: tuple[float, ...] = SIGMAS_M) -> dict:
-    """Locate every photo of the manifest found here (and in `local`); the fixes by map and sigma."""
+def run_photos(local: Path | None = None, workers: int = 2, sigmas_m: tuple[float, ...] = SIGMAS_M,
+               only: tuple[str, ...] | None = None) -> dict:
+    """Locate every photo of the manifest found here (and in `local`), or `only` those files of it; the
+    fixes by map and sigma."""
     entries = json.loads((PHOTOS / "manifest.json").read_text())["photos"]
+    if only is not None:
+        unknown = set(only) - {entry["file"] for entry in entries}
+        if unknown:
+            raise ValueError(f"not in {PHOTOS / 'manifest.json'}: {', '.join(sorted(unknown))}")
+        entries = [entry for entry in entries if entry["file"] in only]
     paths = []
     for entry in entries:
         where = PHOTOS if entry["shipped"] else local
@@ -315,8 +325,9 @@ def format_negatives(report: dict) -> str:
         refusals = ", ".join(f"{k} {v}" for k, v in row["refusals"].items()) or "-"
         lines.append(
             f"{row['panel']:<12} {row['label']:<28} {row['refused_pct']:7.0f}% {row['fixed_pct']:6.0f}% "
-            f"{table_cell(row, 'mean_mm', 8, 1)} {table_cell(row, 'max_mm', 8, 1)} {table_cell(row, 'inside_95_pct', 5, 0)}"
-            f"{'%' if row.get('inside_95_pct') is not None else ' '} {table_cell(row, 'mean_sigma_mm', 6, 1)}  {refusals}"
+            f"{table_cell(row, 'mean_mm', 8, 1)} {table_cell(row, 'max_mm', 8, 1)} "
+            f"{table_cell(row, 'inside_95_pct', 5, 0)}{'%' if row.get('inside_95_pct') is not None else ' '} "
+            f"{table_cell(row, 'mean_sigma_mm', 6, 1)}  {refusals}"
         )
     if report["photos"] is not None:
         lines.append("real photos (maps " + ", ".join(bench_maps()) + "; required_sigma_m "
@@ -327,8 +338,9 @@ def format_negatives(report: dict) -> str:
 
 def run_negatives_command(args: argparse.Namespace) -> int:
     if args.frames < 1 or args.scale <= 0 or args.required_sigma <= 0 or min(args.sigmas) <= 0:
-        return report_bad_input(BadInput("--frames must be at least 1, --scale, --required-sigma and --sigmas positive"),
-                                args.json)  # fmt: skip
+        return report_bad_input(
+            BadInput("--frames must be at least 1, --scale, --required-sigma and --sigmas positive"), args.json
+        )
     config = NegativesConfig(frames=args.frames, scale=args.scale, required_sigma_m=args.required_sigma,
                              seed=args.seed, photos=not args.no_photos, local=args.local,
                              sigmas_m=tuple(args.sigmas))  # fmt: skip

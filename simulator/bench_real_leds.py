@@ -76,8 +76,9 @@ def fetch_photo(name: str, cache: Path) -> Path:
     return path
 
 
-def id_frame(pixels: np.ndarray) -> LumaFrame:
-    """`pixels` as an ID frame with the set's row time and exposure."""
+def id_frame(pixels: np.ndarray, exposure_s: float = EXPOSURE_S, skew_s: float | None = None) -> LumaFrame:
+    """`pixels` as an ID frame with the set's row time and exposure (or another frame's: `exposure_s`, and
+    `skew_s` from the first row to the last)."""
     height, width = pixels.shape
     camera = CameraIntrinsics(fx=1.2 * width, fy=1.2 * width, cx=width / 2, cy=height / 2)
     meta = FrameMeta(
@@ -85,8 +86,8 @@ def id_frame(pixels: np.ndarray) -> LumaFrame:
         width=width,
         height=height,
         camera=camera,
-        exposure_s=EXPOSURE_S,
-        rolling_shutter_skew_s=(height - 1) / ROW_RATE_HZ,
+        exposure_s=exposure_s,
+        rolling_shutter_skew_s=(height - 1) / ROW_RATE_HZ if skew_s is None else skew_s,
         timestamp_ns=0,
         frame_kind=FrameKind.id,
     )
@@ -95,14 +96,16 @@ def id_frame(pixels: np.ndarray) -> LumaFrame:
     return LumaFrame(pixels, meta, camera)
 
 
-def _read(frame: LumaFrame) -> dict:
+def read_frame(frame: LumaFrame) -> dict:
+    """The blobs of ID frame `frame`, each one's stripes, and what the ID reader makes of them."""
     found = frame_blobs(frame)
     row_time = row_time_s(frame.meta.rolling_shutter_skew_s or 0.0, frame.meta.height)
+    exposure_s = frame.meta.exposure_s or EXPOSURE_S
     blobs = []
     for blob in found.blobs:
         y0, x0, mask = blob_mask(frame.pixels, blob, found)
-        signal = row_signal(frame.pixels, mask, (y0, x0), row_time, EXPOSURE_S)
-        stripes = measure_stripes(*signal, row_time, EXPOSURE_S) if signal is not None else NoStripes("too few rows")
+        signal = row_signal(frame.pixels, mask, (y0, x0), row_time, exposure_s)
+        stripes = measure_stripes(*signal, row_time, exposure_s) if signal is not None else NoStripes("too few rows")
         entry: dict = {"box": list(blob.bounding_box), "hidden_outline": blob.hidden_outline, "cut_off": blob.cut_off}
         if isinstance(stripes, NoStripes):
             entry["stripes"] = stripes.reason
@@ -139,8 +142,8 @@ def bench_real_leds(cache: Path = DEFAULT_CACHE) -> dict:
             "size": list(stored.shape[::-1]),
             "read_transposed": photo.transposed,
             "leds_by_eye": photo.leds_by_eye,
-            "stripes_along_rows": _read(id_frame(readable)),
-            "turned": _read(id_frame(turned)),
+            "stripes_along_rows": read_frame(id_frame(readable)),
+            "turned": read_frame(id_frame(turned)),
         }
         row["seconds"] = round(time.perf_counter() - start, 1)
         print(f"{photo.name}: {len(row['stripes_along_rows']['blobs'])} blobs ({row['seconds']} s)", file=sys.stderr)

@@ -2,7 +2,10 @@
 
 The accuracy, shapes, partial, robustness, vlc (and its cut panels) and office benches run through their
 own run functions at fixed seeds and sizes (`QUICK`: a few frames of each, minutes; `FULL`: every
-configuration of the figures in docs/*.md at reduced frame counts, tens of minutes). Each bench gives its
+configuration of the figures in docs/*.md at reduced frame counts, tens of minutes); so do frames we did not
+make: `bench negatives`' real room photos against its maps (a few in QUICK, every shipped one in FULL), the
+real rolling-shutter frame (tests/fixtures/rolling_shutter/), and with `--real-leds-cache DIR` Luxapose's
+LED photos (`bench real-leds`). Each bench gives its
 per-frame outcomes (`frame_outcome` of every `locate` result, or its trials' decisions) under a key of its
 report; `save` writes them with the benches' summary figures and reports into DIR, `compare` runs the same
 cases again and holds them against DIR:
@@ -209,8 +212,83 @@ def _run_office(params: dict, workers: int | None) -> tuple[list, list, dict]:
     return reports, frames, figures
 
 
+def _run_photos(params: dict, workers: int | None) -> tuple[dict, list, dict]:
+    """`bench negatives`' real room photos, each against each bundled map at each sigma: its decision (a
+    refusal at a larger sigma stands for the smaller ones, not located again) and, for a fix, its position."""
+    from simulator.bench_negatives import SIGMAS_M, run_photos
+
+    only = params.get("photos")
+    report = run_photos(None, workers or os.cpu_count() or 1, tuple(params.get("sigmas_m", SIGMAS_M)),
+                        None if only is None else tuple(only))
+    frames = []
+    for row in report["rows"]:
+        key = f"{row['photo']}/{row['map']}/{row['sigma_m']:g}"
+        if row["outcome"] is None:
+            frames.append({"frame": key, "decision": {"ok": False, "reason": row["reason"], "at_larger_sigma": True},
+                           "positions_m": {}, "figures": {}})
+        else:
+            frames.append(_located(key, row["outcome"]))
+    return report, frames, _figures("photos", report, ("photos", "locates", "fixes"))
+
+
+def _stripes_read(key: str, read: dict, located: dict | None = None) -> dict:
+    """One ID frame's read (`bench_real_leds.read_frame`): the blobs, whether each one's stripes were
+    measured, the refusals and the reader's answer decide; the stripes' numbers are shown."""
+    decision = {"blobs": [[*b["box"], b["hidden_outline"], b["cut_off"], b.get("stripes", "measured")]
+                          for b in read["blobs"]],
+                "refused": read["refused"], "panels_read": read["panels_read"], "problem": read["problem"]}
+    figures = {f"blob {i} {name}": b[name] for i, b in enumerate(read["blobs"])
+               for name in ("frequency_hz", "duty") if name in b}
+    record = {"frame": key, "decision": decision, "positions_m": {}, "figures": figures}
+    if located is not None:
+        fix = _located(key, located)
+        record |= {"decision": decision | {"locate": fix["decision"]}, "positions_m": fix["positions_m"]}
+    return record
+
+
+def _run_real_leds(params: dict, workers: int | None) -> tuple[dict, list, dict]:
+    """Luxapose's real LED photos (`bench real-leds`) from the cache `params["cache"]` (fetched there if
+    missing), each read as stored and turned."""
+    from simulator.bench_real_leds import bench_real_leds
+
+    report = bench_real_leds(Path(params["cache"]))
+    frames = [_stripes_read(f"{row['photo']}/{how}", row[how])
+              for row in report["photos"] for how in ("stripes_along_rows", "turned")]
+    return report, frames, _figures("real LEDs", report, ("leds_found",))
+
+
+# tests/fixtures/rolling_shutter/README.md: its exposure and readout, and the room its test locates in
+ROLLING_SHUTTER_FRAME = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "rolling_shutter" / \
+    "nikon1j1_1000hz_luma.png"
+ROLLING_SHUTTER_EXPOSURE_S = 1 / 16000
+ROLLING_SHUTTER_SKEW_S = 15.730e-3
+
+
+def _run_rolling_shutter(params: dict, workers: int | None) -> tuple[dict, list, dict]:
+    """The real rolling-shutter frame (an LED at 1 kHz through a diffuser), as taken and turned: its read
+    as an ID frame and `locate`'s decision in a two-panel room."""
+    import cv2
+
+    from server.locator import locate
+    from shared_schemas import Beacon, BeaconMap
+    from simulator.bench_real_leds import id_frame, read_frame
+
+    pixels = cv2.imread(str(ROLLING_SHUTTER_FRAME), cv2.IMREAD_UNCHANGED)
+    if pixels is None:
+        raise FileNotFoundError(f"cannot read {ROLLING_SHUTTER_FRAME}")
+    room = BeaconMap(name="room", beacons=[Beacon(id=i, center_m=[2.0 * i, 0.0, 2.5], side_m=0.6) for i in (17, 42)])
+    reports: dict = {}
+    frames = []
+    for how, view in (("as taken", pixels), ("turned", pixels.T)):
+        frame = id_frame(view, ROLLING_SHUTTER_EXPOSURE_S, ROLLING_SHUTTER_SKEW_S)
+        reports[how] = read_frame(frame)
+        frames.append(_stripes_read(f"nikon1j1/{how}", reports[how], frame_outcome(locate(frame, room))))
+    return reports, frames, {}
+
+
 RUNNERS = {"accuracy": _run_accuracy, "shapes": _run_shapes, "partial": _run_partial, "robustness": _run_robustness,
-           "vlc": _run_vlc, "vlc-cut": _run_vlc_cut, "office": _run_office}
+           "vlc": _run_vlc, "vlc-cut": _run_vlc_cut, "office": _run_office, "photos": _run_photos,
+           "real-leds": _run_real_leds, "rolling-shutter": _run_rolling_shutter}
 BENCHES = tuple(RUNNERS)
 
 # A few frames of every bench: minutes on two loaded cores, for a branch's every change.
@@ -228,10 +306,17 @@ QUICK = (
     Case("vlc-circle", "vlc", {"distances_m": [1.5], "trials": 3, "shape": "circle", "sides_m": [0.2]}),
     Case("vlc-cut", "vlc-cut", {"shares": {"bottom": [0.5], "side": [0.6]}, "trials": 2}),
     Case("office", "office", {"walks": ["zigzag", "spiral"], "limit": 6}),
+    # slam-ch11_data_7 against the 600 mm square: an outline no view pins down (docs/performance.md)
+    Case("photos", "photos", {"photos": ["slam-ch11_data_7.jpg", "slam-ch5_rgbd_color_1.jpg",
+                                         "exif-heic_mobile_iphone_13_pro_max.jpg",
+                                         "atag-test_data_33369213973_9d9bb4cc96_c.jpg"]}),
+    Case("real-leds", "real-leds"),
+    Case("rolling-shutter", "rolling-shutter"),
 )
 
 # The configurations of the figures in docs/*.md (accuracy.md, vlc.md, performance.md), fewer frames: tens of
-# minutes. Left out: the Blender renderer (needs bpy, minutes a frame), bench negatives, grid, survey.
+# minutes, and every shipped real photo. Left out: the Blender renderer (needs bpy, minutes a frame), bench
+# negatives' wrong maps and its photos not shipped (their licences), grid, survey.
 FULL = (
     Case("accuracy-full", "accuracy", {"distances_m": [1.0, 2.0, 3.0], "frames": 20, "scale": 1.0}),
     Case("accuracy-seed2", "accuracy", {"distances_m": [1.0, 2.0, 3.0], "frames": 10, "seed": 2}),
@@ -258,6 +343,9 @@ FULL = (
     Case("office", "office", {"walks": ["zigzag", "spiral"]}),
     Case("office-quarter", "office", {"walks": ["zigzag"], "pose_scale": 0.25, "limit": 24}),
     Case("office-depth-1", "office", {"walks": ["zigzag"], "limit": 12, "depth": 1.0}),
+    Case("photos", "photos"),
+    Case("real-leds", "real-leds"),
+    Case("rolling-shutter", "rolling-shutter"),
 )
 
 
@@ -298,17 +386,27 @@ def run_cases(cases: tuple[Case, ...], workers: int | None, folder: Path | None 
     return runs
 
 
-def selected(mode: str, benches: list[str] | None) -> tuple[Case, ...]:
-    cases = QUICK if mode == "quick" else FULL
-    return tuple(c for c in cases if benches is None or c.bench in benches)
+def selected(mode: str, benches: list[str] | None, real_leds_cache: Path | None = None) -> tuple[Case, ...]:
+    """The mode's cases (only those of `benches`); Luxapose's photos (not shipped: no licence) only from
+    `real_leds_cache`, skipped with a printed reason without it."""
+    cases = tuple(c for c in (QUICK if mode == "quick" else FULL) if benches is None or c.bench in benches)
+    if real_leds_cache is None:
+        skipped = [c.name for c in cases if c.bench == "real-leds"]
+        if skipped:
+            print(f"bench results: {', '.join(skipped)} skipped: Luxapose's photos are not shipped (no licence); "
+                  "--real-leds-cache DIR reads them from DIR (fetched there when missing)", file=sys.stderr)
+        return tuple(c for c in cases if c.bench != "real-leds")
+    return tuple(replace(c, params=c.params | {"cache": str(real_leds_cache)}) if c.bench == "real-leds" else c
+                 for c in cases)
 
 
-def save(folder: Path | None, mode: str, workers: int | None, benches: list[str] | None = None) -> dict:
+def save(folder: Path | None, mode: str, workers: int | None, benches: list[str] | None = None,
+         real_leds_cache: Path | None = None) -> dict:
     """Run the cases; with `folder`, write them there (RESULTS_FILE and each case's bench reports)."""
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    runs = run_cases(selected(mode, benches), workers, folder)
+    runs = run_cases(selected(mode, benches, real_leds_cache), workers, folder)
     saved = {"mode": mode, "code": code_version(), "workers": workers or os.cpu_count(), "cpu_count": os.cpu_count(),
              "tolerance_mm": TOLERANCE_MM, "wall_s": time.perf_counter() - start, "runs": runs}
     if folder is not None:
@@ -373,16 +471,19 @@ def compare_run(base: dict, now: dict) -> dict:
 
 
 def compare_runs(base: dict, now: dict) -> dict:
-    """Every case of `now` against `base` (a `save`d results.json), and the verdict."""
+    """Every case of `now` against `base` (a `save`d results.json), and the verdict. A case the baseline
+    lacks (saved before the case existed, or without --real-leds-cache) or only it has is listed, not
+    compared: its absence is no changed result."""
     cases = {name: compare_run(base["runs"][name], run) for name, run in now["runs"].items() if name in base["runs"]}
     not_in_baseline = sorted(now["runs"].keys() - base["runs"].keys())
+    not_run = sorted(base["runs"].keys() - now["runs"].keys())
     return {"tolerance_mm": TOLERANCE_MM, "baseline": {k: base.get(k) for k in ("mode", "code")},
             "now": {k: now.get(k) for k in ("mode", "code")}, "cases": cases, "not_in_baseline": not_in_baseline,
-            "ok": bool(cases) and all(c["ok"] for c in cases.values()) and not not_in_baseline}
+            "not_run": not_run, "ok": bool(cases) and all(c["ok"] for c in cases.values())}
 
 
 def compare(folder: Path, mode: str, workers: int | None, benches: list[str] | None = None,
-            save_to: Path | None = None, saved: Path | None = None) -> dict:
+            save_to: Path | None = None, saved: Path | None = None, real_leds_cache: Path | None = None) -> dict:
     """The cases run again against FOLDER's; with `save_to`, this run is saved there as well (`save`); with
     `saved`, that folder's saved run instead of running again."""
     base = json.loads((folder / RESULTS_FILE).read_text())
@@ -393,7 +494,7 @@ def compare(folder: Path, mode: str, workers: int | None, benches: list[str] | N
         now = json.loads((saved / RESULTS_FILE).read_text())
         now["runs"] = {name: run for name, run in now["runs"].items() if benches is None or run["bench"] in benches}
     else:
-        now = save(save_to, mode, workers, benches)
+        now = save(save_to, mode, workers, benches, real_leds_cache)
     report = compare_runs(base, now)
     report["wall_s"] = now["wall_s"]
     return report
@@ -454,7 +555,9 @@ def format_comparison(report: dict, all_figures: bool = False) -> str:
         lines.append(f"  ({shown} differ by more than {FIGURE_EPSILON:g}, {identical} within it; --all-figures shows "
                      f"every one)")
     if report["not_in_baseline"]:
-        lines.append("cases not in the baseline: " + ", ".join(report["not_in_baseline"]))
+        lines.append("cases not in the baseline (run, not compared): " + ", ".join(report["not_in_baseline"]))
+    if report.get("not_run"):
+        lines.append("cases of the baseline not run now (not compared): " + ", ".join(report["not_run"]))
     lines.append(f"results {'unchanged' if report['ok'] else 'CHANGED'} ({report['wall_s']:.0f} s)")
     return "\n".join(lines)
 
@@ -478,6 +581,9 @@ def add_results_bench(benches) -> None:
                          help="compare: also save this run into OUT, as save does (default: not saved)")
     results.add_argument("--saved", type=Path, default=None, metavar="OUT",
                          help="compare: OUT's saved run (save, or compare --save-to) against DIR, running nothing")
+    results.add_argument("--real-leds-cache", type=Path, default=None, metavar="DIR",
+                         help="Luxapose's real LED photos (bench real-leds) from DIR, fetched there when missing "
+                              "(not shipped: without it their case is skipped)")
     add_bench_flags(results, seed=False)
     results.set_defaults(run=run_results_command)
 
@@ -485,7 +591,7 @@ def add_results_bench(benches) -> None:
 def run_results_command(args) -> int:
     mode = "quick" if args.quick else "full"
     if args.action == "save":
-        saved = save(args.folder, mode, args.workers, args.benches)
+        saved = save(args.folder, mode, args.workers, args.benches, args.real_leds_cache)
         frames = sum(len(run.get("frames", [])) for run in saved["runs"].values())
         failed = {name: run["error"] for name, run in saved["runs"].items() if "error" in run}
         if args.json:
@@ -497,7 +603,8 @@ def run_results_command(args) -> int:
                   + "".join(f"\n  {name} FAILED: {error}" for name, error in failed.items()))
         return 1 if failed else 0
     try:
-        report = compare(args.folder, mode, args.workers, args.benches, args.save_to, args.saved)
+        report = compare(args.folder, mode, args.workers, args.benches, args.save_to, args.saved,
+                         args.real_leds_cache)
     except (OSError, ValueError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -26,8 +26,8 @@ points of `server.vision.outline` directly:
   its correlation along the outline measured from the fit's own residuals, a shared offset
   per side or arc, the priors), widened until it explains fits with the growth held low and
   high (growth trades against distance along a curved valley). A fit whose position it does
-  not pin down to `max_sigma_m` (the map's `required_sigma_m`) is refused; two minima it does
-  not explain are `pose_ambiguous`.
+  not pin down to `max_sigma_m` (the map's `required_sigma_m`) is refused (`pose_uncertain`);
+  of one it does, two minima it does not explain are `pose_ambiguous`.
 - evaluation: inside the fits, the residuals, their Jacobian and the Huber loss come from
   compiled kernels (`server.pose.outline_kernel`, numba): the NumPy `_Problem.residuals` and
   `.jacobian` here are their reference, equal to them to the last bit on this machine.
@@ -807,6 +807,27 @@ def _finish(
     if covariance is None:
         return Refusal(FailureReason.beacon_cut_off, "the visible part of the panel does not fix the position")
     position_covariance = _explain_probes(problem, best, probes, covariance[3:6, 3:6], measured, rules.huber_px)
+    fit = OutlineFit(
+        position_m=best[3:6].copy(),
+        rotation_wc=rotation_from_ypr(*np.degrees(best[:3])),
+        covariance_m2=position_covariance,
+        growth_px=float(best[6]),
+        rms_px=rms,
+        point_sigma_px=measured,
+        points=len(distances),
+        orientation_rule=rule,
+        residuals_px=distances,
+    )
+    # Uncertain before ambiguous: a second answer matters only where the best one alone would be a fix.
+    # Where the best one is not pinned down, where along its flat valley the other fits stopped (the
+    # optimiser's last digits) would otherwise decide which of the two is said.
+    if fit.sigma_2d_m > rules.max_sigma_m:
+        return Refusal(
+            FailureReason.pose_uncertain,
+            f"the visible part of the panel ({len(distances)} outline points) fixes the position only to "
+            f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); the map's required_sigma_m is "
+            f"{rules.max_sigma_m * 1000:.3g} mm",
+        )
     for other in minima:
         moved = other[3:6] - best[3:6]
         apart = float(np.linalg.norm(moved))
@@ -820,22 +841,4 @@ def _finish(
                 f"two poses {apart * 1000:.0f} mm apart fit the visible part of the panel almost equally "
                 f"(chi-square {chi2:.0f} and {chi2 + gap:.0f})",
             )
-    fit = OutlineFit(
-        position_m=best[3:6].copy(),
-        rotation_wc=rotation_from_ypr(*np.degrees(best[:3])),
-        covariance_m2=position_covariance,
-        growth_px=float(best[6]),
-        rms_px=rms,
-        point_sigma_px=measured,
-        points=len(distances),
-        orientation_rule=rule,
-        residuals_px=distances,
-    )
-    if fit.sigma_2d_m > rules.max_sigma_m:
-        return Refusal(
-            FailureReason.pose_uncertain,
-            f"the visible part of the panel ({len(distances)} outline points) fixes the position only to "
-            f"{fit.sigma_2d_m * 1000:.0f} mm (1 sigma); the map's required_sigma_m is "
-            f"{rules.max_sigma_m * 1000:.3g} mm",
-        )
     return fit

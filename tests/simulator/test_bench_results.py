@@ -2,7 +2,7 @@
 
 import json
 
-from simulator.bench_results import compare_runs, format_comparison
+from simulator.bench_results import compare_runs, format_comparison, selected
 
 CODE = {"commit": "abc1234", "dirty": False, "server_tree": "1234567", "shared_schemas_tree": "7654321"}
 
@@ -69,3 +69,22 @@ def test_an_unconfident_vlc_guess_is_no_decision_a_confident_id_is():
     assert guess["ok"] and guess["cases"]["vlc"]["guesses_changed"] == ["3m/0"]
     assert not compare_runs(base, trial([149, False], [8, True, 5]))["ok"]  # a confident ID changed
     assert not compare_runs(base, trial([149, False], [7, True, 6]))["ok"]  # one more frame needed
+
+
+def test_a_case_only_one_side_has_is_listed_not_compared():
+    extra = {"bench": "photos", "params": {}, "frames": [_frame("a.jpg/square-600/1", ok=False, reason="x")],
+             "figures": {}, "wall_s": 1.0}
+    report = compare_runs(BASE, {**BASE, "runs": {**BASE["runs"], "photos": extra}})
+    assert report["ok"] and report["not_in_baseline"] == ["photos"] and "photos" not in report["cases"]
+    assert "cases not in the baseline (run, not compared): photos" in format_comparison({**report, "wall_s": 1.0})
+    report = compare_runs({**BASE, "runs": {**BASE["runs"], "photos": extra}}, BASE)
+    assert report["ok"] and report["not_run"] == ["photos"]
+
+
+def test_luxapose_photos_only_from_a_cache_the_shipped_real_frames_always(tmp_path, capsys):
+    without = {c.bench for c in selected("quick", None)}
+    assert "real-leds" not in without and {"photos", "rolling-shutter"} <= without
+    assert "--real-leds-cache" in capsys.readouterr().err
+    (cached,) = selected("full", ["real-leds"], tmp_path)
+    assert cached.params["cache"] == str(tmp_path)
+
