@@ -274,12 +274,13 @@ class _FrameFit:
         self.block = max(
             d for d in range(1, phases + 1) if phases % d == 0 and (d == 1 or d * bins <= BLOCK_PHASE_BINS)
         )
-        self.indices = []  # per clock error: (phases, n, m) each row's table entry
+        self.indices = []  # per clock error: (phases, n, m) each row's table entry, kept for the fits asked later
+        kept = np.int16 if 2 * steps < np.iinfo(np.int16).max else np.int64  # a quarter of the memory; sums of two fit
         for ppm in clock_errors_ppm:
             rate = 1.0 + ppm * 1e-6
             times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
             index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
-            self.indices.append(index)
+            self.indices.append(index.astype(kept))
         self.explained = np.empty((count, phases, len(clock_errors_ppm)))  # C order: decide() sums along phases
         for e, index in enumerate(self.indices):
             self.explained[:, :, e] = self._bound(index).T
