@@ -186,45 +186,186 @@ def _lookup(candidates: tuple[int, ...], exposure_s: float, steps_per_chip: int,
 # phases x bins fitted at once: a block's arrays (about 1 MB) stay in cache and are reused; fresh 10-50 MB arrays
 # for all phases at once cost more in page faults than the sums themselves
 BLOCK_PHASE_BINS = 400
+# a hypothesis whose log-likelihood lies this far below the best one's weighs exactly nothing: exp() of less than
+# -745.13 is 0 in float64 (`decide` sums exp(log-likelihood - best))
+NEGLIGIBLE_LOG_LIKELIHOOD = 750.0
+# the bound's allowance for rounding (relative): the reference's sums of ~50 terms err by ~1e-14 of their size
+ROUNDING_SLACK = 1e-9
+# of the sums' absolute size: the bound's transforms are float32 (half the time); 168 points of entries <= 1 err
+# by ~6e-8 x log2(168) x sqrt(168) = 6e-6 of it at most (3e-7 seen on the bench's frames)
+FFT_SLACK = 1e-4
 
 
-def _frame_log_likelihood(
-    obs: StripeObservation,
-    reference_s: float,
-    candidates: tuple[int, ...],
-    clock_errors_ppm: np.ndarray,
-    rules: StripeRules,
-) -> np.ndarray:
-    """(C, phases, clock errors) log-likelihood of one frame; relative to its best fit."""
-    lut = _lookup(candidates, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz)
-    steps, count = lut.shape
-    chip_s = 1.0 / rules.chip_rate_hz
-    period_s = MESSAGE_CHIPS * chip_s
-    phases_s = np.arange(MESSAGE_CHIPS * rules.phase_steps_per_chip) * chip_s / rules.phase_steps_per_chip
-    # trend basis, whitened by each bin's noise; its orthonormal complement removes gain-free parts
-    weights = 1.0 / obs.sigma_dn
-    basis = np.vander(obs.position, rules.trend_degree + 1) * weights[:, None]
-    q, _ = np.linalg.qr(basis)
-    y = obs.values_dn * weights
-    y_p = y - q @ (q.T @ y)
-    level = float(np.mean(obs.values_dn))
-    bins, rows = obs.row_offsets_s.shape
-    phases = len(phases_s)
-    # blocks of one size, a divisor of the phases; in each, every hypothesis's template is a row fitted by the
-    # same calls as when all were fitted at once: the same numbers to the last bit (codes that fit alike tie
-    # exactly, and the first in ID order is named)
-    block = max(d for d in range(1, phases + 1) if phases % d == 0 and (d == 1 or d * bins <= BLOCK_PHASE_BINS))
-    raw = np.empty((block, bins, count), np.float32)  # gathered as whole rows of the table
-    row = np.empty_like(raw)
-    codes = np.empty((block, count, bins), np.float32)  # (phases, C, n): each bin's share of a 1 chip
-    templates = np.empty((block, count, bins))
-    trend = np.empty_like(templates)
-    explained = np.empty((count, phases, len(clock_errors_ppm)))  # C order as before: decide() sums along phases
-    for e, ppm in enumerate(clock_errors_ppm):
-        rate = 1.0 + ppm * 1e-6
-        times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
-        index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
-        for start in range(0, phases, block):
+@lru_cache(maxsize=4)
+def _table_spectrum(key: tuple, patterns: tuple[tuple[int, ...], ...], stride: int, power: int) -> np.ndarray:
+    """(frequencies, patterns x stride, C): for each of `patterns` the table `_lookup(*key)` averaged over the
+    rows the pattern's entries on (row s: the mean of rows s + pattern, float64), to the `power`, split into
+    `stride` interleaved sequences (rows r, r + stride, ...) and transformed along them (a frame's bins
+    share a few patterns, the frames of one camera the same: ~17 MB for six)."""
+    table = _lookup(*key).astype(np.float64)
+    steps, count = table.shape
+    spectra = []
+    for pattern in patterns:
+        averaged = np.mean([np.roll(table, -k, axis=0) for k in pattern], axis=0) ** power
+        spectra.append(np.fft.rfft(averaged.reshape(steps // stride, stride, count), axis=0).astype(np.complex64))
+    return np.concatenate(spectra, axis=1)
+
+
+def _correlations(sums: np.ndarray, spectrum: np.ndarray) -> np.ndarray:
+    """(frequencies, K, C) the spectra of sum_s sums[k, t, s] table_t[s + stride p, c] over the phases p and the
+    tables t (`sums`: (K, tables, steps); `spectrum`: the tables', `_table_spectrum`): per interleaved sequence
+    a correlation, summed over the sequences and the tables."""
+    count, tables, steps = sums.shape
+    stride = spectrum.shape[1] // tables
+    weights = np.fft.rfft(sums.reshape(count, tables, steps // stride, stride), axis=2).astype(np.complex64)
+    weights = np.ascontiguousarray(weights.transpose(2, 0, 1, 3)).reshape(-1, count, tables * stride)
+    if count == 1:  # one row: numpy's complex vector-matrix path is ~100x slower than two rows' matrix product
+        return np.matmul(np.concatenate([weights.conj(), np.zeros_like(weights)], axis=1), spectrum)[:, :1]
+    return np.matmul(weights.conj(), spectrum)
+
+
+@lru_cache(maxsize=16)
+def _steepest(key: tuple) -> float:
+    """The largest change between neighbouring rows of the table `_lookup(*key)` (cyclic)."""
+    table = _lookup(*key).astype(np.float64)
+    return float(np.abs(np.diff(table, axis=0, append=table[:1])).max())
+
+
+class _FrameFit:
+    """One frame's fits of every hypothesis (C codes x phases x clock errors), the exact ones made on demand.
+
+    `explained[c, p, e]`: the part of the whitened, trend-free bin values that code c at phase p and clock
+    error e explains (0 for an implausible fit: too shallow); exact for the blocks of phases in `exact`
+    (`BLOCK_PHASE_BINS`), each block fitted by the same calls whichever blocks are asked for (so to the last
+    bit what fitting all of them gives, `_frame_log_likelihood`), elsewhere an upper bound (`_bound`). The
+    frame's scale needs its best fit: the blocks are fitted best bound first until no bound is above the
+    best exact value (`log_likelihood`); `_total_log_likelihood` asks for the blocks that can weigh."""
+
+    def __init__(
+        self,
+        obs: StripeObservation,
+        reference_s: float,
+        candidates: tuple[int, ...],
+        clock_errors_ppm: np.ndarray,
+        rules: StripeRules,
+    ) -> None:
+        self.observation, self.reference_s, self.rules = obs, reference_s, rules
+        self.clock_errors_ppm = clock_errors_ppm
+        self._lut_key = (candidates, round(obs.exposure_s, 9), rules.lut_steps_per_chip, rules.chip_rate_hz)
+        self.lut = _lookup(*self._lut_key)
+        steps, count = self.lut.shape
+        chip_s = 1.0 / rules.chip_rate_hz
+        period_s = MESSAGE_CHIPS * chip_s
+        phases_s = np.arange(MESSAGE_CHIPS * rules.phase_steps_per_chip) * chip_s / rules.phase_steps_per_chip
+        # trend basis, whitened by each bin's noise; its orthonormal complement removes gain-free parts
+        self.weights = 1.0 / obs.sigma_dn
+        basis = np.vander(obs.position, rules.trend_degree + 1) * self.weights[:, None]
+        self.q, _ = np.linalg.qr(basis)
+        y = obs.values_dn * self.weights
+        self.y_p = y - self.q @ (self.q.T @ y)
+        self.level = float(np.mean(obs.values_dn))
+        self.total = float(self.y_p @ self.y_p)
+        self.dof = max(1, obs.samples - rules.trend_degree - 2)
+        bins, rows = obs.row_offsets_s.shape
+        phases = len(phases_s)
+        # blocks of one size, a divisor of the phases; in each, every hypothesis's template is a row fitted by the
+        # same calls as when all were fitted at once: the same numbers to the last bit (codes that fit alike tie
+        # exactly, and the first in ID order is named)
+        self.block = max(
+            d for d in range(1, phases + 1) if phases % d == 0 and (d == 1 or d * bins <= BLOCK_PHASE_BINS)
+        )
+        self.indices = []  # per clock error: (phases, n, m) each row's table entry, kept for the fits asked later
+        kept = np.int16 if 2 * steps < np.iinfo(np.int16).max else np.int64  # a quarter of the memory; sums of two fit
+        for ppm in clock_errors_ppm:
+            rate = 1.0 + ppm * 1e-6
+            times = (obs.timestamp_s - reference_s + obs.row_offsets_s) * rate  # (n, m)
+            index = ((phases_s[:, None, None] + times[None]) % period_s / period_s * steps).astype(np.int64) % steps
+            self.indices.append(index.astype(kept))
+        self.explained = np.empty((count, phases, len(clock_errors_ppm)))  # C order: decide() sums along phases
+        for e, index in enumerate(self.indices):
+            self.explained[:, :, e] = self._bound(index).T
+        self.exact = np.zeros((phases // self.block, len(clock_errors_ppm)), bool)
+        self._buffers: tuple[np.ndarray, ...] | None = None
+        self._scale: float | None = None
+        if not np.isfinite(self.explained).all():  # no bound (a bin without noise): every fit made
+            self.fit(np.ones_like(self.exact))
+
+    def _bound(self, index: np.ndarray) -> np.ndarray:
+        """(phases, C) an upper bound of each fit's explained part (`index`: one clock error's table entries).
+
+        T~, the whitened template of each code and phase, reads each row at its entry at the first phase moved
+        by the phase (`stride` entries a phase): the reference's own entries but where rounding moved one by an
+        entry. With T the reference's template and D >= |T - T~| (k entries off: |dT| <= k x the table's
+        steepest step; and its float32 sums), by Cauchy-Schwarz explained = (P T . y)^2 / |P T|^2 <=
+        ((|P T~ . y| + D |y|) / (|P T~| - D))^2 (P: the trend-free part; y is trend-free), and never above
+        |y|^2; every term with an allowance for its rounding. T~'s sums over the bins (T~ . y, T~ . q_k,
+        |T~|^2) are correlations of a table with the bins' weights at their entries: every phase at once by
+        FFT."""
+        steps, count = self.lut.shape
+        phases, bins, rows = index.shape
+        ceiling = self.total * (1.0 + ROUNDING_SLACK)  # Cauchy-Schwarz: no fit explains more than all of y
+        if steps % phases:
+            return np.full((phases, count), ceiling)
+        stride = steps // phases
+        first = index[0, :, 0]
+        # each bin's rows' entries from its first row's at the first phase: a few patterns among the bins
+        offsets = (index[0] - first[:, None] + steps // 2) % steps - steps // 2
+        patterns, kinds = np.unique(offsets, axis=0, return_inverse=True)
+        # each row's entry against T~'s (its first phase's moved by the phase), in entries (cyclic), and the
+        # reference's float32 sums (~7 ulp of a value <= 1)
+        moved = first[None, :, None] + stride * np.arange(phases)[:, None, None] + offsets
+        miss = _steepest(self._lut_key) * np.abs((index - moved + steps // 2) % steps - steps // 2).mean(axis=2)
+        w = self.weights
+        spread = np.sqrt(((miss + 2e-6) * w) ** 2 @ np.ones(bins))  # D per phase
+        vectors = np.vstack([w * self.y_p, (w[:, None] * self.q).T, w**2])  # (2 + k, n): y, q_k and |T~|^2
+        # the sums over the bins as correlations of a table with the vectors' weights at the bins' entries: the
+        # linear ones of the table itself at each row's entry, |T~|^2 of each bin's pattern's averaged table
+        linear = np.zeros((len(vectors) - 1, 1, steps))
+        for k, vector in enumerate(vectors[:-1]):
+            np.add.at(linear[k, 0], index[0].ravel(), np.repeat(vector / rows, rows))
+        square = np.zeros((1, len(patterns), steps))
+        np.add.at(square[0], (kinds.ravel(), first), vectors[-1])
+        spectrum = np.concatenate(
+            [
+                _correlations(linear, _table_spectrum(self._lut_key, ((0,),), stride, 1)),
+                _correlations(square, _table_spectrum(self._lut_key, tuple(map(tuple, patterns.tolist())), stride, 2)),
+            ],
+            axis=1,
+        )
+        sums_fft = np.fft.irfft(spectrum, n=phases, axis=0).astype(np.float64)  # (phases, 2 + k, C)
+        linear, square = sums_fft[:, :-1], sums_fft[:, -1]
+        # the transforms' rounding: far below this share of each vector's absolute sum (table entries <= 1)
+        error = FFT_SLACK * np.abs(vectors).sum(axis=1)
+        trend_of_y = np.abs(self.q.T @ self.y_p)  # ~0: y is trend-free up to rounding
+        dots = np.abs(linear[:, 1:]) + error[1:-1, None]  # >= |T~ . q_k|
+        along = np.abs(linear[:, 0]) + error[0] + np.einsum("pkc,k->pc", dots, trend_of_y)  # >= |P T~ . y|
+        trend = np.einsum("pkc,pkc->pc", dots, dots)  # >= |T~'s trend|^2
+        perp = np.sqrt(np.maximum(square - error[-1] - trend - 1e-10 * square, 0.0))  # <= |P T~|
+        size = np.sqrt(np.maximum(square, 0.0) + error[-1])  # >= |T~|
+        y_size = float(np.sqrt(self.total))
+        numerator = along + (spread[:, None] + ROUNDING_SLACK * size) * y_size
+        denominator = perp - spread[:, None] - ROUNDING_SLACK * size
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fitted = np.where(denominator > 0, (numerator / denominator) ** 2 * (1.0 + ROUNDING_SLACK), ceiling)
+        return np.minimum(fitted, ceiling)
+
+    def fit(self, blocks: np.ndarray) -> None:
+        """The exact fits of the blocks (phase block, clock error) marked in `blocks` (bool, as `exact`)."""
+        rules, lut, weights, q, y_p = self.rules, self.lut, self.weights, self.q, self.y_p
+        steps, count = lut.shape
+        block = self.block
+        if self._buffers is None:
+            bins, rows = self.indices[0].shape[1:]
+            raw = np.empty((block, bins, count), np.float32)  # gathered as whole rows of the table
+            templates = np.empty((block, count, bins))
+            # codes (phases, C, n): each bin's share of a 1 chip
+            self._buffers = (raw, np.empty_like(raw), np.empty((block, count, bins), np.float32), templates,
+                             np.empty_like(templates))  # fmt: skip
+        raw, row, codes, templates, trend = self._buffers
+        rows = self.indices[0].shape[2]
+        for b, e in zip(*np.nonzero(blocks & ~self.exact), strict=True):
+            index = self.indices[e]
+            start = b * block
             # each bin's mean over its rows, summed in order as numpy's mean sums them; the indices are in range
             # already: "clip" writes straight into `out` ("raise" buffers it, a copy more)
             np.take(lut, index[start : start + block, :, 0], axis=0, out=raw, mode="clip")
@@ -240,13 +381,76 @@ def _frame_log_likelihood(
             # frame's own levels give it (the dark level = the panel's mean less the gain times the code's
             # mean share; depth = gain / (dark level + gain), the background counted as light: a shade low)
             gain = along / np.maximum(norm, 1e-12)
-            bright = level + gain * (1.0 - codes.mean(axis=-1))
+            bright = self.level + gain * (1.0 - codes.mean(axis=-1))
             plausible = (gain >= rules.min_depth * bright) & (norm > 1e-12)
-            explained[:, start : start + block, e] = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0).T
-    result = float(y_p @ y_p) - explained
-    dof = max(1, obs.samples - rules.trend_degree - 2)
-    scale = max(1.0, float(result.min()) / dof)  # residuals beyond the pixel noise: the model's own error
-    return -0.5 * result / scale
+            explained = np.where(plausible, along**2 / np.maximum(norm, 1e-12), 0.0)
+            self.explained[:, start : start + block, e] = explained.T
+            self.exact[b, e] = True
+
+    def log_likelihood(self) -> np.ndarray:
+        """(C, phases, clock errors) log-likelihood relative to the frame's best fit: exact in the `exact` blocks,
+        elsewhere an upper bound. The best fit is fitted first (best bound first, until no bound is above it)."""
+        if self._scale is None:
+            per_block = self.explained.reshape(self.explained.shape[0], -1, self.block, self.exact.shape[1])
+            bounds = per_block.max(axis=(0, 2))  # (blocks, clock errors)
+            while True:
+                best = float(per_block.max(axis=(0, 2))[self.exact].max(initial=-np.inf))
+                left = ~self.exact & (bounds >= best)
+                if not left.any():
+                    break
+                top = np.zeros_like(left)
+                top[np.unravel_index(np.argmax(np.where(left, bounds, -np.inf)), left.shape)] = True
+                self.fit(top)
+            result = self.total - self.explained
+            self._scale = max(1.0, float(result.min()) / self.dof)  # residuals beyond the pixel noise: the model's own
+        return -0.5 * (self.total - self.explained) / self._scale
+
+    def exact_phases(self) -> np.ndarray:
+        """(phases, clock errors) True where `log_likelihood` is exact."""
+        return np.repeat(self.exact, self.block, axis=0)
+
+    def fit_phases(self, phases: np.ndarray) -> None:
+        """The exact fits of the blocks holding the phases marked in `phases` (phases, clock errors)."""
+        self.fit(np.asarray(phases.reshape(self.exact.shape[0], self.block, -1).any(axis=1)))
+
+    def release(self) -> None:
+        """Drop the fits' working arrays (a few MB), kept from one block to the next."""
+        self._buffers = None
+
+
+def _frame_log_likelihood(
+    obs: StripeObservation,
+    reference_s: float,
+    candidates: tuple[int, ...],
+    clock_errors_ppm: np.ndarray,
+    rules: StripeRules,
+) -> np.ndarray:
+    """(C, phases, clock errors) log-likelihood of one frame, every hypothesis fitted; relative to its best fit."""
+    fit = _FrameFit(obs, reference_s, candidates, clock_errors_ppm, rules)
+    fit.fit(np.ones_like(fit.exact))
+    return fit.log_likelihood()
+
+
+def _total_log_likelihood(fits: list[_FrameFit]) -> np.ndarray:
+    """(C, phases, clock errors) the frames' log-likelihoods summed, exact wherever exp(it - its maximum) is
+    not 0 (as if every hypothesis were fitted in every frame): a phase that some frame holds only as a bound is
+    fitted in every frame (its block) unless its bounds sum to `NEGLIGIBLE_LOG_LIKELIHOOD` below the best exact
+    total, where the exact value, lower still, weighs exactly nothing too. (Each frame has its own blocks.)"""
+    while True:
+        total: np.ndarray = np.zeros(())  # broadcasts to the first frame's shape
+        for fit in fits:
+            total = total + fit.log_likelihood()
+        exact = np.logical_and.reduce([fit.exact_phases() for fit in fits])  # (phases, clock errors)
+        best = total.max(axis=0)  # (phases, clock errors) over the codes
+        # nothing exact in every frame yet: the best phases first
+        floor = float(best[exact].max()) - NEGLIGIBLE_LOG_LIKELIHOOD if exact.any() else float(best.max())
+        needed = ~exact & (best >= floor)
+        if not needed.any():
+            for fit in fits:
+                fit.release()
+            return total
+        for fit in fits:
+            fit.fit_phases(needed)
 
 
 def _normalised(log_weights: np.ndarray) -> np.ndarray:
@@ -299,16 +503,17 @@ class IdEvidence:
             return IdDecision(None, 0.0, False, 0, 0.0, "no stripes read yet")
         reference = usable[0].timestamp_s
         errors = self._clock_errors()
-        total = np.zeros(())  # broadcasts to the first frame's shape
         setting = (reference, tuple(np.round(errors, 6)))
         cache = {}
+        fits = []
         for obs in usable:
             cached = self._cache.get(id(obs))
             if cached is None or cached[0] is not obs or cached[1] != setting:
-                cached = (obs, setting, _frame_log_likelihood(obs, reference, ALL_IDS, errors, self.rules))
+                cached = (obs, setting, _FrameFit(obs, reference, ALL_IDS, errors, self.rules))
             cache[id(obs)] = cached
-            total = total + cached[2]
+            fits.append(cached[2])
         self._cache = cache  # only the frames still in the window
+        total = _total_log_likelihood(fits)
         flat = total.reshape(len(ALL_IDS), -1)
         peak = flat.max()
         evidence = np.log(np.maximum(np.exp(flat - peak).sum(axis=1), 1e-300))  # each ID's, over phase and clock

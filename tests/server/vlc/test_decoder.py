@@ -181,3 +181,44 @@ def test_the_frame_likelihood_equals_the_reference(make_id_frames, distance_m, b
     # bit for bit: in each block every hypothesis's template is a row fitted by the same calls (exact ties kept)
     np.testing.assert_array_equal(fast, reference)
     assert fast.flags.c_contiguous  # decide() sums along the phases: a strided layout sums them in another order
+
+
+def test_the_bounded_likelihood_weighs_every_hypothesis_as_fitting_them_all(make_id_frames):
+    """Fits whose upper bounds lie `NEGLIGIBLE_LOG_LIKELIHOOD` below the best are not made: exp(value - best),
+    all that `decide` reads of them, is 0 either way; every other value is the full fit's, bit for bit.
+    Frames of two sizes (blocks of their own), three clock errors, a frame that shows fewer than a message."""
+    from server.vlc.decoder import (ALL_IDS, NEGLIGIBLE_LOG_LIKELIHOOD, StripeRules, _frame_log_likelihood,
+                                    _FrameFit, _total_log_likelihood)
+
+    frames = make_id_frames(77, 1.0, 1 / 8000, 3, seed=5) + make_id_frames(77, 2.5, 1 / 8000, 2, seed=6)
+    observations = [next(p.observation for p in read_id_frame(f).panels if p.observation is not None) for f in frames]
+    rules, errors, reference = StripeRules(), np.array([-40.0, 0.0, 40.0]), observations[0].timestamp_s
+    for count in (1, 2, len(observations)):
+        fits = [_FrameFit(o, reference, ALL_IDS, errors, rules) for o in observations[:count]]
+        assert count < len(observations) or len({fit.block for fit in fits}) == 2
+        bounded = _total_log_likelihood(fits)
+        full = sum(_frame_log_likelihood(o, reference, ALL_IDS, errors, rules) for o in observations[:count])
+        exact = np.logical_and.reduce([fit.exact_phases() for fit in fits])
+        assert not exact.all()  # the bound spared some fits
+        assert np.all(bounded >= full)
+        np.testing.assert_array_equal(bounded[:, exact], full[:, exact])
+        assert bounded.max() == full.max()
+        assert np.all(bounded[:, ~exact] < full.max() - NEGLIGIBLE_LOG_LIKELIHOOD)
+        np.testing.assert_array_equal(np.exp(bounded - bounded.max()), np.exp(full - full.max()))
+
+
+def test_decisions_are_those_of_fitting_every_hypothesis(make_id_frames, monkeypatch):
+    import dataclasses
+
+    import server.vlc.decoder as decoder
+
+    def every_fit(fits):
+        return sum(decoder._frame_log_likelihood(f.observation, f.reference_s, decoder.ALL_IDS, f.clock_errors_ppm,
+                                                 f.rules) for f in fits)
+
+    frames = make_id_frames(0xA5, 3.0, 1 / 8000, 5, seed=3)  # the faintest stripes: the loosest bounds
+    maps = ((), (0xA5, 3, 200))
+    bounded = {m: [dataclasses.astuple(d) for d in decide(frames, map_ids=m)] for m in maps}
+    monkeypatch.setattr(decoder, "_total_log_likelihood", every_fit)
+    for m in maps:
+        assert [dataclasses.astuple(d) for d in decide(frames, map_ids=m)] == bounded[m]
