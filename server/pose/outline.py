@@ -44,10 +44,10 @@ from functools import cache, cached_property
 from types import ModuleType, SimpleNamespace
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from server.geometry import beacon_rotation, rotation_from_ypr, worst_sigma_2d_m
 from server.outcomes import Refusal
+from server.pose.trust_region import trust_region_fit
 from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
 
@@ -522,45 +522,26 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
     return replace(problem, blur_px=_blur_px(params[6], level_gap_px), on_arc=problem.on_arcs(params))
 
 
-class _Evaluations:
-    """One fit's residuals and Jacobian by the compiled kernel (`_Problem.compiled_residuals`,
-    equal to `residuals` and `jacobian`); the residuals at the start, checked before the fit,
-    are not evaluated again for it."""
-
-    def __init__(self, problem: _Problem, point_sigma_px: float):
-        self.problem, self.point_sigma_px = problem, point_sigma_px
-        self.params: np.ndarray | None = None
-        self.values = np.zeros(0)
-
-    def residuals(self, params: np.ndarray) -> np.ndarray:
-        if self.params is not None and np.array_equal(params, self.params):
-            return self.values.copy()
-        self.params = params.copy()
-        self.values = self.problem.compiled_residuals(params, self.point_sigma_px)[0]
-        return self.values.copy()
-
-    def jacobian(self, params: np.ndarray) -> np.ndarray:
-        return self.problem.compiled_residuals(params, self.point_sigma_px, with_jacobian=True)[1]
-
-
 def _fit(
     problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float, max_evaluations: int
 ) -> SimpleNamespace:
     """The robust least-squares fit from `start` (x, cost, status: 0 when `max_evaluations`
     stopped it); cost infinite when the start itself is not a pose the residuals exist for (the
-    panel's plane behind or edge-on to a ray)."""
+    panel's plane behind or edge-on to a ray). scipy's `least_squares` (TRF, its huber loss
+    compiled) by `server.pose.trust_region`, the same iterates without its wrappers."""
     failed = SimpleNamespace(x=start, cost=math.inf, status=-1)
-    evaluations = _Evaluations(problem, point_sigma_px)
-    if not np.all(np.isfinite(evaluations.residuals(start))):
+    residuals = problem.compiled_residuals(start, point_sigma_px)[0]
+    if not np.all(np.isfinite(residuals)):
         return failed
     try:
-        return least_squares(
-            evaluations.residuals,
+        return trust_region_fit(
+            lambda params: problem.compiled_residuals(params, point_sigma_px)[0],
+            lambda params: problem.compiled_residuals(params, point_sigma_px, with_jacobian=True)[1],
             start,
-            jac=evaluations.jacobian,
+            residuals,
             loss=_kernels().huber_rho,  # scipy's "huber", compiled
             f_scale=huber_px / point_sigma_px,
-            x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
+            x_scale=_X_SCALE,
             max_nfev=max_evaluations,
         )
     except ValueError as error:
@@ -569,6 +550,9 @@ def _fit(
         if "finite" not in str(error) and "infs or NaNs" not in str(error):
             raise
         return failed
+
+
+_X_SCALE = np.array([0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0])  # rad, m, px, px per unit
 
 
 def _fit_starts(
