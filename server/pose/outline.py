@@ -523,12 +523,19 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
 
 
 def _fit(
-    problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float, max_evaluations: int
+    problem: _Problem,
+    start: np.ndarray,
+    point_sigma_px: float,
+    huber_px: float,
+    max_evaluations: int,
+    scout: tuple[int, Callable[[float], bool]] | None = None,
 ) -> SimpleNamespace:
     """The robust least-squares fit from `start` (x, cost, status: 0 when `max_evaluations`
     stopped it); cost infinite when the start itself is not a pose the residuals exist for (the
     panel's plane behind or edge-on to a ray). scipy's `least_squares` (TRF, its huber loss
-    compiled) by `server.pose.trust_region`, the same iterates without its wrappers."""
+    compiled) by `server.pose.trust_region`, the same iterates without its wrappers. With `scout`
+    (evaluations, carry_on): the fit to that many evaluations, and on to `max_evaluations` where
+    `carry_on(its cost)` says so (`trust_region_fit`'s pause: the same as fitting again)."""
     failed = SimpleNamespace(x=start, cost=math.inf, status=-1)
     residuals = problem.compiled_residuals(start, point_sigma_px)[0]
     if not np.all(np.isfinite(residuals)):
@@ -543,6 +550,8 @@ def _fit(
             f_scale=huber_px / point_sigma_px,
             x_scale=_X_SCALE,
             max_nfev=max_evaluations,
+            pause_nfev=None if scout is None else scout[0],
+            carry_on=(lambda cost: True) if scout is None else scout[1],
         )
     except ValueError as error:
         # scipy's own check: the residuals or their Jacobian stopped being finite on the way
@@ -565,10 +574,9 @@ def _fit_starts(
     fits: list[SimpleNamespace | None] = [None] * len(starts)
     best = math.inf
     for index in sorted(range(len(starts)), key=lambda i: _robust_chi2(problem, starts[i], point_sigma_px, huber)):
-        scout = min(rules.scout_evaluations if math.isfinite(best) else math.inf, rules.max_evaluations)
-        fit = _fit(problem, starts[index], point_sigma_px, huber, int(scout))
-        if fit.status == 0 and scout < rules.max_evaluations and not fit.cost > rules.hopeless_cost_ratio * best:
-            fit = _fit(problem, starts[index], point_sigma_px, huber, rules.max_evaluations)
+        scout = (rules.scout_evaluations, lambda cost, best=best: not cost > rules.hopeless_cost_ratio * best)
+        fit = _fit(problem, starts[index], point_sigma_px, huber, rules.max_evaluations,
+                   scout if math.isfinite(best) else None)  # fmt: skip
         if fit.status != 0:
             best = min(best, fit.cost)  # converged: what a left start's cost is held against
         fits[index] = fit

@@ -39,6 +39,8 @@ def trust_region_fit(
     ftol: float = 1e-8,
     xtol: float = 1e-8,
     gtol: float = 1e-8,
+    pause_nfev: int | None = None,
+    carry_on: Callable[[float], bool] = lambda cost: True,
 ) -> SimpleNamespace:
     """`least_squares(fun, x0, jac=jac, loss=loss, f_scale=f_scale, x_scale=x_scale,
     max_nfev=max_nfev)`'s x, cost, status (0: `max_nfev` stopped it), nfev and njev, with
@@ -76,12 +78,17 @@ def trust_region_fit(
         Delta = 1.0
     alpha = 0.0
     termination_status = None
+    cap = max_nfev if pause_nfev is None else min(pause_nfev, max_nfev)
     while True:
         g_norm = norm(g, ord=np.inf)
         if g_norm < gtol:
             termination_status = 1
-        if termination_status is not None or nfev == max_nfev:
+        if termination_status is not None:
             break
+        if nfev == cap:
+            if cap == max_nfev or not carry_on(cost):
+                break
+            cap = max_nfev
         d = scale
         g_h = d * g
         J_h = J * d
@@ -89,7 +96,7 @@ def trust_region_fit(
         V = V.T
         uf = U.T.dot(f)
         actual_reduction = -1
-        while actual_reduction <= 0 and nfev < max_nfev:
+        while actual_reduction <= 0 and nfev < cap:
             step_h, alpha, _ = solve_lsq_trust_region(n, m, uf, s, V, Delta, initial_alpha=alpha)
             Js = J_h.dot(step_h)  # common.evaluate_quadratic
             predicted_reduction = -(0.5 * np.dot(Js, Js) + np.dot(step_h, g_h))
