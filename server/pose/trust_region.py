@@ -18,11 +18,11 @@ from collections.abc import Callable
 from functools import cache
 from types import SimpleNamespace
 
+import math
+
 import numpy as np
-from numpy.linalg import norm
 from scipy.linalg import LinAlgError, get_lapack_funcs
 from scipy.linalg.lapack import _compute_lwork  # the workspace scipy's svd asks for
-from scipy.optimize._lsq.common import solve_lsq_trust_region
 
 EPS = np.finfo(float).eps  # scipy.optimize._lsq.common.EPS
 
@@ -56,7 +56,7 @@ def trust_region_fit(
         z = (f / f_scale) ** 2
         rho = loss(z)
         if cost_only:
-            return 0.5 * f_scale**2 * np.sum(rho[0])
+            return 0.5 * f_scale**2 * np.add.reduce(rho[0])  # np.sum
         rho[0] *= f_scale**2
         rho[2] /= f_scale**2
         return rho
@@ -69,18 +69,18 @@ def trust_region_fit(
     njev = 1
     m, n = J.shape
     rho = loss_function(f)
-    cost = 0.5 * np.sum(rho[0])
+    cost = 0.5 * np.add.reduce(rho[0])
     J, f = _scale_for_robust_loss(J, f, rho)
     g = J.T.dot(f)
     scale, scale_inv = x_scale, 1 / x_scale
-    Delta = norm(x0 * scale_inv)
+    Delta = _norm(x0 * scale_inv)
     if Delta == 0:
         Delta = 1.0
     alpha = 0.0
     termination_status = None
     cap = max_nfev if pause_nfev is None else min(pause_nfev, max_nfev)
     while True:
-        g_norm = norm(g, ord=np.inf)
+        g_norm = np.abs(g).max()  # norm(g, ord=np.inf)
         if g_norm < gtol:
             termination_status = 1
         if termination_status is not None:
@@ -97,15 +97,15 @@ def trust_region_fit(
         uf = U.T.dot(f)
         actual_reduction = -1
         while actual_reduction <= 0 and nfev < cap:
-            step_h, alpha, _ = solve_lsq_trust_region(n, m, uf, s, V, Delta, initial_alpha=alpha)
+            step_h, alpha = _solve_lsq_trust_region(n, m, uf, s, V, Delta, alpha)
             Js = J_h.dot(step_h)  # common.evaluate_quadratic
             predicted_reduction = -(0.5 * np.dot(Js, Js) + np.dot(step_h, g_h))
             step = d * step_h
             x_new = x + step
             f_new = fun(x_new)
             nfev += 1
-            step_h_norm = norm(step_h)
-            if not np.all(np.isfinite(f_new)):
+            step_h_norm = _norm(step_h)
+            if not np.isfinite(f_new).all():
                 Delta = 0.25 * step_h_norm
                 continue
             cost_new = loss_function(f_new, cost_only=True)
@@ -113,8 +113,8 @@ def trust_region_fit(
             Delta_new, ratio = _update_tr_radius(
                 Delta, actual_reduction, predicted_reduction, step_h_norm, step_h_norm > 0.95 * Delta
             )
-            step_norm = norm(step)
-            termination_status = _check_termination(actual_reduction, cost, step_norm, norm(x), ratio, ftol, xtol)
+            step_norm = _norm(step)
+            termination_status = _check_termination(actual_reduction, cost, step_norm, _norm(x), ratio, ftol, xtol)
             if termination_status is not None:
                 break
             alpha *= Delta / Delta_new
@@ -131,6 +131,58 @@ def trust_region_fit(
     if termination_status is None:
         termination_status = 0
     return SimpleNamespace(x=x, cost=cost, status=termination_status, nfev=nfev, njev=njev)
+
+
+def _norm(v: np.ndarray) -> np.float64:
+    """numpy.linalg.norm of a vector: the square root of its dot product with itself, as numpy takes it."""
+    return np.float64(math.sqrt(v.dot(v)))
+
+
+def _solve_lsq_trust_region(n, m, uf, s, V, Delta, initial_alpha, rtol=0.01, max_iter=10):
+    """common.solve_lsq_trust_region (an `initial_alpha` given): the step and its alpha."""
+
+    def phi_and_derivative(alpha, suf, s, Delta):
+        denom = s**2 + alpha
+        p_norm = _norm(suf / denom)
+        phi = p_norm - Delta
+        phi_prime = -np.add.reduce(suf**2 / denom**3) / p_norm  # np.sum
+        return phi, phi_prime
+
+    suf = s * uf
+    if m >= n:
+        threshold = EPS * m * s[0]
+        full_rank = s[-1] > threshold
+    else:
+        full_rank = False
+    if full_rank:
+        p = -V.dot(uf / s)
+        if _norm(p) <= Delta:
+            return p, 0.0
+    alpha_upper = _norm(suf) / Delta
+    if full_rank:
+        phi, phi_prime = phi_and_derivative(0.0, suf, s, Delta)
+        alpha_lower = -phi / phi_prime
+    else:
+        alpha_lower = 0.0
+    if initial_alpha is None or not full_rank and initial_alpha == 0:
+        alpha = max(0.001 * alpha_upper, (alpha_lower * alpha_upper) ** 0.5)
+    else:
+        alpha = initial_alpha
+    for _ in range(max_iter):
+        if alpha < alpha_lower or alpha > alpha_upper:
+            alpha = max(0.001 * alpha_upper, (alpha_lower * alpha_upper) ** 0.5)
+        phi, phi_prime = phi_and_derivative(alpha, suf, s, Delta)
+        if phi < 0:
+            alpha_upper = alpha
+        ratio = phi / phi_prime
+        alpha_lower = max(alpha_lower, alpha - ratio)
+        alpha -= (phi + Delta) * ratio / Delta
+        if np.abs(phi) < rtol * Delta:
+            break
+    p = -V.dot(suf / (s**2 + alpha))
+    # (scipy's own: the norm of p made Delta, so that p stays inside the trust region)
+    p *= Delta / _norm(p)
+    return p, alpha
 
 
 def _scale_for_robust_loss(J: np.ndarray, f: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
