@@ -14,11 +14,10 @@ fits never use: bounds, `x_scale="jac"`, the "lsmr" solver, callbacks, verbosity
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from functools import cache
 from types import SimpleNamespace
-
-import math
 
 import numpy as np
 from scipy.linalg import LinAlgError, get_lapack_funcs
@@ -133,8 +132,9 @@ def trust_region_fit(
     return SimpleNamespace(x=x, cost=cost, status=termination_status, nfev=nfev, njev=njev)
 
 
-def _norm(v: np.ndarray) -> np.float64:
-    """numpy.linalg.norm of a vector: the square root of its dot product with itself, as numpy takes it."""
+def _norm(v: np.ndarray) -> float:
+    """numpy.linalg.norm of a vector: the square root of its dot product with itself, as numpy takes it
+    (a NumPy float: a division by a zero norm gives inf as there, not an exception)."""
     return np.float64(math.sqrt(v.dot(v)))
 
 

@@ -21,26 +21,28 @@ def cases():
             yield problem, start
 
 
+SIGMA = 0.2  # px, the points' noise the fits weigh them by
+
+
+def evaluations(problem):
+    """The residuals and the Jacobian of `problem` as functions of the parameters."""
+    return (lambda p: problem.compiled_residuals(p, SIGMA)[0],
+            lambda p: problem.compiled_residuals(p, SIGMA, with_jacobian=True)[1])  # fmt: skip
+
+
 def fitted(problem, start, max_nfev, **pause):
-    sigma = 0.2
-    return trust_region_fit(
-        lambda p: problem.compiled_residuals(p, sigma)[0],
-        lambda p: problem.compiled_residuals(p, sigma, with_jacobian=True)[1],
-        start, problem.compiled_residuals(start, sigma)[0], _kernels().huber_rho, 1.0 / sigma, _X_SCALE, max_nfev,
-        **pause,
-    )  # fmt: skip
+    residuals, jacobian = evaluations(problem)
+    return trust_region_fit(residuals, jacobian, start, residuals(start), _kernels().huber_rho, 1.0 / SIGMA,
+                            _X_SCALE, max_nfev, **pause)  # fmt: skip
 
 
 @pytest.mark.parametrize("max_nfev", [60, 7])
 def test_the_fit_is_least_squares_to_the_last_bit(max_nfev):
     for problem, start in cases():
         ours = fitted(problem, start, max_nfev)
-        sigma = 0.2
-        theirs = least_squares(
-            lambda p: problem.compiled_residuals(p, sigma)[0], start,
-            jac=lambda p: problem.compiled_residuals(p, sigma, with_jacobian=True)[1],
-            loss=_kernels().huber_rho, f_scale=1.0 / sigma, x_scale=_X_SCALE, max_nfev=max_nfev,
-        )  # fmt: skip
+        residuals, jacobian = evaluations(problem)
+        theirs = least_squares(residuals, start, jac=jacobian, loss=_kernels().huber_rho, f_scale=1.0 / SIGMA,
+                               x_scale=_X_SCALE, max_nfev=max_nfev)  # fmt: skip
         np.testing.assert_array_equal(ours.x, theirs.x)
         assert (ours.cost, ours.status, ours.nfev, ours.njev) == (theirs.cost, theirs.status, theirs.nfev, theirs.njev)
 
