@@ -327,11 +327,17 @@ class _Problem:
     ) -> tuple[np.ndarray, np.ndarray]:
         """`residuals` (n,) and, when asked, `jacobian` (n, 9) of one parameter vector (9,) by the
         compiled kernel (`server.pose.outline_kernel`, equal to them); the Jacobian (0, 9) if not."""
-        rows = len(self.rays[0]) + len(self._priors_jacobian)
-        values, jacobian = np.empty(rows), np.empty((rows if with_jacobian else 0, 9))
+        rows, inputs = self._kernel_rows_and_inputs
+        values, jacobian = np.empty(rows), np.empty((rows, 9)) if with_jacobian else _NO_JACOBIAN
         point = np.ascontiguousarray(params, float)
-        _kernels().outline_residuals(point, *self._kernel_inputs, float(point_sigma_px), values, jacobian)
+        _kernels().outline_residuals(point, *inputs, float(point_sigma_px), values, jacobian)
         return values, jacobian
+
+    @cached_property
+    def _kernel_rows_and_inputs(self) -> tuple[int, tuple]:
+        """The residuals' count (points and priors) and `_kernel_inputs`: looked up once, not at
+        each of a fit's hundred-odd evaluations."""
+        return len(self.rays[0]) + len(self._priors_jacobian), self._kernel_inputs
 
     def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
         """d residuals / d params (n, 9), central differences, all eighteen in one batch: the
@@ -339,6 +345,9 @@ class _Problem:
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
         return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
+
+
+_NO_JACOBIAN = np.empty((0, 9))  # what the kernel is given when only the residuals are asked: it writes none
 
 
 @cache
