@@ -26,13 +26,39 @@ from scipy.linalg.lapack import _compute_lwork  # the workspace scipy's svd asks
 EPS = np.finfo(float).eps  # scipy.optimize._lsq.common.EPS
 
 
+class RobustLoss:
+    """`least_squares`' loss function for a callable loss `rho(z)` (rho (3, m) of z = (f /
+    f_scale)^2; `construct_loss_function`'s closure), and the Jacobian's and residuals' scaling
+    by it (`scale_for_robust_loss_function`). A compiled loss may stand in with the same results."""
+
+    def __init__(self, rho: Callable[[np.ndarray], np.ndarray], f_scale: float):
+        self.rho, self.f_scale = rho, f_scale
+
+    def __call__(self, f: np.ndarray, cost_only: bool = False):
+        """rho (3, m) of the residuals f (m,) in f_scale's units; or, `cost_only`, the cost."""
+        z = (f / self.f_scale) ** 2
+        rho = self.rho(z)
+        if cost_only:
+            return 0.5 * self.f_scale**2 * np.add.reduce(rho[0])  # np.sum
+        rho[0] *= self.f_scale**2
+        rho[2] /= self.f_scale**2
+        return rho
+
+    def scale(self, J: np.ndarray, f: np.ndarray, rho: np.ndarray) -> None:
+        """J (m, n) and f (m,) scaled in place for the loss's rho (`__call__`'s)."""
+        J_scale = rho[1] + 2 * rho[2] * f**2
+        J_scale[J_scale < EPS] = EPS
+        J_scale **= 0.5
+        f *= rho[1] / J_scale
+        J *= J_scale[:, np.newaxis]
+
+
 def trust_region_fit(
     fun: Callable[[np.ndarray], np.ndarray],
     jac: Callable[[np.ndarray], np.ndarray],
     x0: np.ndarray,
     f0: np.ndarray,
-    loss: Callable[[np.ndarray], np.ndarray],
-    f_scale: float,
+    loss_function: RobustLoss,
     x_scale: np.ndarray,
     max_nfev: int,
     ftol: float = 1e-8,
@@ -41,24 +67,21 @@ def trust_region_fit(
     pause_nfev: int | None = None,
     carry_on: Callable[[float], bool] = lambda cost: True,
 ) -> SimpleNamespace:
-    """`least_squares(fun, x0, jac=jac, loss=loss, f_scale=f_scale, x_scale=x_scale,
+    """`least_squares(fun, x0, jac=jac, loss=rho, f_scale=f_scale, x_scale=x_scale,
     max_nfev=max_nfev)`'s x, cost, status (0: `max_nfev` stopped it), nfev and njev, with
-    `f0 = fun(x0)` given (finite). `loss(z)` returns rho (3, m) of z = (f / f_scale)^2. Raises
-    ValueError as scipy does where the Jacobian stops being finite."""
+    `f0 = fun(x0)` given (finite) and `loss_function` the `RobustLoss` of rho and f_scale.
+    Raises ValueError as scipy does where the Jacobian stops being finite.
+
+    With `pause_nfev`: where the fit with `max_nfev=pause_nfev` would stop at that cap,
+    `carry_on(cost)` decides: False returns that fit; True goes on to `max_nfev`, the very fit
+    from `x0` with `max_nfev` (only the cap stopped the first one, and from there the two are
+    the same loop; the one difference, an SVD of the same Jacobian done again, gives the same
+    factors), without its first `pause_nfev` evaluations done twice."""
     x0 = np.atleast_1d(x0).astype(float)
     x_scale = np.asarray(x_scale, dtype=float)
     if not np.all(np.isfinite(f0)):
         raise ValueError("Residuals are not finite in the initial point.")
     J0 = jac(x0)
-
-    def loss_function(f, cost_only=False):  # least_squares.construct_loss_function's
-        z = (f / f_scale) ** 2
-        rho = loss(z)
-        if cost_only:
-            return 0.5 * f_scale**2 * np.add.reduce(rho[0])  # np.sum
-        rho[0] *= f_scale**2
-        rho[2] /= f_scale**2
-        return rho
 
     # trf_no_bounds from here
     x = x0.copy()
@@ -69,7 +92,7 @@ def trust_region_fit(
     m, n = J.shape
     rho = loss_function(f)
     cost = 0.5 * np.add.reduce(rho[0])
-    J, f = _scale_for_robust_loss(J, f, rho)
+    loss_function.scale(J, f, rho)
     g = J.T.dot(f)
     scale, scale_inv = x_scale, 1 / x_scale
     Delta = _norm(x0 * scale_inv)
@@ -125,7 +148,7 @@ def trust_region_fit(
             J = jac(x)
             njev += 1
             rho = loss_function(f)
-            J, f = _scale_for_robust_loss(J, f, rho)
+            loss_function.scale(J, f, rho)
             g = J.T.dot(f)
     if termination_status is None:
         termination_status = 0
@@ -183,16 +206,6 @@ def _solve_lsq_trust_region(n, m, uf, s, V, Delta, initial_alpha, rtol=0.01, max
     # (scipy's own: the norm of p made Delta, so that p stays inside the trust region)
     p *= Delta / _norm(p)
     return p, alpha
-
-
-def _scale_for_robust_loss(J: np.ndarray, f: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """common.scale_for_robust_loss_function: J and f scaled in place."""
-    J_scale = rho[1] + 2 * rho[2] * f**2
-    J_scale[J_scale < EPS] = EPS
-    J_scale **= 0.5
-    f *= rho[1] / J_scale
-    J *= J_scale[:, np.newaxis]
-    return J, f
 
 
 def _update_tr_radius(Delta, actual_reduction, predicted_reduction, step_norm, bound_hit):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from server.pose.outline import _X_SCALE, _kernels
+from server.pose.outline import _X_SCALE, _CompiledHuber, _kernels
 from server.pose.trust_region import trust_region_fit
 from tests.server.pose.test_outline_kernel import TRUTH, problems
 
@@ -32,8 +32,8 @@ def evaluations(problem):
 
 def fitted(problem, start, max_nfev, **pause):
     residuals, jacobian = evaluations(problem)
-    return trust_region_fit(residuals, jacobian, start, residuals(start), _kernels().huber_rho, 1.0 / SIGMA,
-                            _X_SCALE, max_nfev, **pause)  # fmt: skip
+    return trust_region_fit(residuals, jacobian, start, residuals(start), _CompiledHuber(1.0 / SIGMA), _X_SCALE,
+                            max_nfev, **pause)  # fmt: skip
 
 
 @pytest.mark.parametrize("max_nfev", [60, 7])
