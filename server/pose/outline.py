@@ -366,8 +366,11 @@ def warm_kernel() -> None:
     corners = np.array([[90.0, 90.0], [110.0, 90.0], [110.0, 110.0], [90.0, 110.0]])
     camera = np.array([[100.0, 0.0, 100.0], [0.0, 100.0, 100.0], [0.0, 0.0, 1.0]])
     problem = _problem([(square, corners)], 1.0, camera, None, 1.0, None, None, OutlineFitRules())
-    values, _ = problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, True)
+    values, jacobian = problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, True)
     _kernels().huber_rho(values**2)
+    loss = _CompiledHuber(10.0)
+    loss(values, cost_only=True)
+    loss.scale(jacobian, values, loss(values))
 
 
 # d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
