@@ -30,7 +30,9 @@ points of `server.vision.outline` directly:
   not explain are `pose_ambiguous`.
 - evaluation: inside the fits, the residuals, their Jacobian and the Huber loss come from
   compiled kernels (`server.pose.outline_kernel`, numba): the NumPy `_Problem.residuals` and
-  `.jacobian` here are their reference, equal to them to the last bit on this machine.
+  `.jacobian` here are their reference, equal to them to the last bit on this machine. The
+  fits are scipy's `least_squares` (TRF) iteration for iteration, without its wrappers
+  (`server.pose.trust_region`, tested equal to it to the last bit).
 
 All image points here are undistorted pixel coordinates.
 """
