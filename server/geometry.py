@@ -115,12 +115,17 @@ def dense_beacon_outline_m(beacon: Beacon, span_px: float, max_step_px: float = 
     closed = beacon_outline_m(beacon, per_arc)
     closed = np.vstack([closed, closed[:1]])
     steps = np.linalg.norm(np.diff(closed, axis=0), axis=1) / size * span_px / max_step_px
-    return np.concatenate(
-        [
-            np.linspace(a, b, max(1, int(np.ceil(n))), endpoint=False)
-            for a, b, n in zip(closed[:-1], closed[1:], steps, strict=True)
-        ]
-    )
+    # each side and each arc's chord cut as np.linspace(a, b, n, endpoint=False) cuts it, the
+    # same arithmetic in one array (a circle has thousands of chords: a linspace call each cost
+    # more than the rest of its shape test)
+    counts = np.maximum(1, np.ceil(steps).astype(int))
+    chord = np.repeat(np.arange(len(counts)), counts)
+    index = (np.arange(len(chord)) - np.repeat(np.cumsum(counts) - counts, counts)).astype(float)[:, None]
+    delta = np.subtract(closed[1:], closed[:-1])
+    step = delta / counts[:, None]
+    # (linspace's own care for a zero step, gh-5437: the fraction first, then the chord)
+    flat = np.any(step == 0, axis=1)[chord, None]
+    return np.where(flat, index / counts[chord, None] * delta[chord], index * step[chord]) + closed[:-1][chord]
 
 
 def world_to_camera(points_w: np.ndarray, position_m: np.ndarray, rotation_wc: np.ndarray) -> np.ndarray:

@@ -30,7 +30,9 @@ points of `server.vision.outline` directly:
   of one it does, two minima it does not explain are `pose_ambiguous`.
 - evaluation: inside the fits, the residuals, their Jacobian and the Huber loss come from
   compiled kernels (`server.pose.outline_kernel`, numba): the NumPy `_Problem.residuals` and
-  `.jacobian` here are their reference, equal to them to the last bit on this machine.
+  `.jacobian` here are their reference, equal to them to the last bit on this machine. The
+  fits are scipy's `least_squares` (TRF) iteration for iteration, without its wrappers
+  (`server.pose.trust_region`, tested equal to it to the last bit).
 
 All image points here are undistorted pixel coordinates.
 """
@@ -44,10 +46,10 @@ from functools import cache, cached_property
 from types import ModuleType, SimpleNamespace
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from server.geometry import beacon_rotation, rotation_from_ypr, worst_sigma_2d_m
 from server.outcomes import Refusal
+from server.pose.trust_region import EPS, RobustLoss, trust_region_fit
 from server.vision.subpixel import blur_sigma_px
 from shared_schemas import Beacon, FailureReason, OrientationRule
 
@@ -327,11 +329,17 @@ class _Problem:
     ) -> tuple[np.ndarray, np.ndarray]:
         """`residuals` (n,) and, when asked, `jacobian` (n, 9) of one parameter vector (9,) by the
         compiled kernel (`server.pose.outline_kernel`, equal to them); the Jacobian (0, 9) if not."""
-        rows = len(self.rays[0]) + len(self._priors_jacobian)
-        values, jacobian = np.empty(rows), np.empty((rows if with_jacobian else 0, 9))
+        rows, inputs = self._kernel_rows_and_inputs
+        values, jacobian = np.empty(rows), np.empty((rows, 9)) if with_jacobian else _NO_JACOBIAN
         point = np.ascontiguousarray(params, float)
-        _kernels().outline_residuals(point, *self._kernel_inputs, float(point_sigma_px), values, jacobian)
+        _kernels().outline_residuals(point, *inputs, float(point_sigma_px), values, jacobian)
         return values, jacobian
+
+    @cached_property
+    def _kernel_rows_and_inputs(self) -> tuple[int, tuple]:
+        """The residuals' count (points and priors) and `_kernel_inputs`: looked up once, not at
+        each of a fit's hundred-odd evaluations."""
+        return len(self.rays[0]) + len(self._priors_jacobian), self._kernel_inputs
 
     def numeric_jacobian(self, params: np.ndarray, point_sigma_px: float) -> np.ndarray:
         """d residuals / d params (n, 9), central differences, all eighteen in one batch: the
@@ -339,6 +347,9 @@ class _Problem:
         steps = np.diag(_STEPS)
         values = self.residuals(np.vstack([params + steps, params - steps]), point_sigma_px)
         return ((values[:9] - values[9:]) / (2 * _STEPS[:, None])).T
+
+
+_NO_JACOBIAN = np.empty((0, 9))  # what the kernel is given when only the residuals are asked: it writes none
 
 
 @cache
@@ -357,8 +368,11 @@ def warm_kernel() -> None:
     corners = np.array([[90.0, 90.0], [110.0, 90.0], [110.0, 110.0], [90.0, 110.0]])
     camera = np.array([[100.0, 0.0, 100.0], [0.0, 100.0, 100.0], [0.0, 0.0, 1.0]])
     problem = _problem([(square, corners)], 1.0, camera, None, 1.0, None, None, OutlineFitRules())
-    values, _ = problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, True)
+    values, jacobian = problem.compiled_residuals(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), 0.1, True)
     _kernels().huber_rho(values**2)
+    loss = _CompiledHuber(10.0)
+    loss(values, cost_only=True)
+    loss.scale(jacobian, values, loss(values))
 
 
 # d R / d angle at 0 about x, y, z: R(a + da) = R(a) (I + da K) for each elemental rotation
@@ -522,46 +536,35 @@ def _from_first_fit(problem: _Problem, params: np.ndarray, level_gap_px: float) 
     return replace(problem, blur_px=_blur_px(params[6], level_gap_px), on_arc=problem.on_arcs(params))
 
 
-class _Evaluations:
-    """One fit's residuals and Jacobian by the compiled kernel (`_Problem.compiled_residuals`,
-    equal to `residuals` and `jacobian`); the residuals at the start, checked before the fit,
-    are not evaluated again for it."""
-
-    def __init__(self, problem: _Problem, point_sigma_px: float):
-        self.problem, self.point_sigma_px = problem, point_sigma_px
-        self.params: np.ndarray | None = None
-        self.values = np.zeros(0)
-
-    def residuals(self, params: np.ndarray) -> np.ndarray:
-        if self.params is not None and np.array_equal(params, self.params):
-            return self.values.copy()
-        self.params = params.copy()
-        self.values = self.problem.compiled_residuals(params, self.point_sigma_px)[0]
-        return self.values.copy()
-
-    def jacobian(self, params: np.ndarray) -> np.ndarray:
-        return self.problem.compiled_residuals(params, self.point_sigma_px, with_jacobian=True)[1]
-
-
 def _fit(
-    problem: _Problem, start: np.ndarray, point_sigma_px: float, huber_px: float, max_evaluations: int
+    problem: _Problem,
+    start: np.ndarray,
+    point_sigma_px: float,
+    huber_px: float,
+    max_evaluations: int,
+    scout: tuple[int, Callable[[float], bool]] | None = None,
 ) -> SimpleNamespace:
     """The robust least-squares fit from `start` (x, cost, status: 0 when `max_evaluations`
     stopped it); cost infinite when the start itself is not a pose the residuals exist for (the
-    panel's plane behind or edge-on to a ray)."""
+    panel's plane behind or edge-on to a ray). scipy's `least_squares` (TRF, its huber loss
+    compiled) by `server.pose.trust_region`, the same iterates without its wrappers. With `scout`
+    (evaluations, carry_on): the fit to that many evaluations, and on to `max_evaluations` where
+    `carry_on(its cost)` says so (`trust_region_fit`'s pause: the same as fitting again)."""
     failed = SimpleNamespace(x=start, cost=math.inf, status=-1)
-    evaluations = _Evaluations(problem, point_sigma_px)
-    if not np.all(np.isfinite(evaluations.residuals(start))):
+    residuals = problem.compiled_residuals(start, point_sigma_px)[0]
+    if not np.all(np.isfinite(residuals)):
         return failed
     try:
-        return least_squares(
-            evaluations.residuals,
+        return trust_region_fit(
+            lambda params: problem.compiled_residuals(params, point_sigma_px)[0],
+            lambda params: problem.compiled_residuals(params, point_sigma_px, with_jacobian=True)[1],
             start,
-            jac=evaluations.jacobian,
-            loss=_kernels().huber_rho,  # scipy's "huber", compiled
-            f_scale=huber_px / point_sigma_px,
-            x_scale=[0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0],
+            residuals,
+            _CompiledHuber(huber_px / point_sigma_px),
+            x_scale=_X_SCALE,
             max_nfev=max_evaluations,
+            pause_nfev=None if scout is None else scout[0],
+            carry_on=(lambda cost: True) if scout is None else scout[1],
         )
     except ValueError as error:
         # scipy's own check: the residuals or their Jacobian stopped being finite on the way
@@ -569,6 +572,25 @@ def _fit(
         if "finite" not in str(error) and "infs or NaNs" not in str(error):
             raise
         return failed
+
+
+class _CompiledHuber(RobustLoss):
+    """`RobustLoss` of scipy's "huber" at `f_scale`, by the compiled kernels (`huber_terms`,
+    `scale_for_robust_loss`: the same operations point by point, one call instead of ten)."""
+
+    def __init__(self, f_scale: float):
+        super().__init__(_kernels().huber_rho, f_scale)
+        self.f_scale_sq = f_scale**2
+
+    def __call__(self, f: np.ndarray, cost_only: bool = False):
+        rho = _kernels().huber_terms(f, self.f_scale, self.f_scale_sq, cost_only)
+        return 0.5 * self.f_scale_sq * np.add.reduce(rho[0]) if cost_only else rho  # np.sum
+
+    def scale(self, J: np.ndarray, f: np.ndarray, rho: np.ndarray) -> None:
+        _kernels().scale_for_robust_loss(J, f, rho, EPS)
+
+
+_X_SCALE = np.array([0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.5, 1.0, 1.0])  # rad, m, px, px per unit
 
 
 def _fit_starts(
@@ -581,10 +603,9 @@ def _fit_starts(
     fits: list[SimpleNamespace | None] = [None] * len(starts)
     best = math.inf
     for index in sorted(range(len(starts)), key=lambda i: _robust_chi2(problem, starts[i], point_sigma_px, huber)):
-        scout = min(rules.scout_evaluations if math.isfinite(best) else math.inf, rules.max_evaluations)
-        fit = _fit(problem, starts[index], point_sigma_px, huber, int(scout))
-        if fit.status == 0 and scout < rules.max_evaluations and not fit.cost > rules.hopeless_cost_ratio * best:
-            fit = _fit(problem, starts[index], point_sigma_px, huber, rules.max_evaluations)
+        scout = (rules.scout_evaluations, lambda cost, best=best: not cost > rules.hopeless_cost_ratio * best)
+        fit = _fit(problem, starts[index], point_sigma_px, huber, rules.max_evaluations,
+                   scout if math.isfinite(best) else None)  # fmt: skip
         if fit.status != 0:
             best = min(best, fit.cost)  # converged: what a left start's cost is held against
         fits[index] = fit

@@ -196,3 +196,42 @@ def huber_rho(z):
             rho[1, i] = z[i] ** -0.5
             rho[2, i] = -0.5 * z[i] ** -1.5
     return rho
+
+
+@njit(cache=True)
+def huber_terms(f, f_scale, f_scale_sq, cost_only):
+    """`least_squares`' loss function of its "huber" at f_scale (`construct_loss_function`'s,
+    with `huber_rho`): rho (3, m) of the residuals f (m,), rho[0] times f_scale^2 and rho[2] over
+    it; or, `cost_only`, rho (1, m) of rho[0] as the loss gives it (the cost is 0.5 f_scale^2 times
+    its sum: NumPy's pairwise sum, taken by the caller). The same operations, point by point."""
+    rho = np.empty((1 if cost_only else 3, f.shape[0]))
+    for i in range(f.shape[0]):
+        q = f[i] / f_scale
+        z = q * q  # NumPy's ** 2
+        if z <= 1:
+            rho[0, i] = z
+            if not cost_only:
+                rho[1, i], rho[2, i] = 1.0, 0.0
+        else:
+            rho[0, i] = 2 * math.sqrt(z) - 1
+            if not cost_only:
+                rho[1, i] = z**-0.5
+                rho[2, i] = -0.5 * z**-1.5
+        if not cost_only:
+            rho[0, i] *= f_scale_sq
+            rho[2, i] /= f_scale_sq
+    return rho
+
+
+@njit(cache=True)
+def scale_for_robust_loss(J, f, rho, eps):
+    """scipy's `scale_for_robust_loss_function` in place: f and the rows of J (m, n) by the loss's
+    rho (3, m); `eps` the machine epsilon the scale is held above."""
+    for i in range(f.shape[0]):
+        scale = rho[1, i] + 2 * rho[2, i] * (f[i] * f[i])
+        if scale < eps:
+            scale = eps
+        scale = math.sqrt(scale)  # NumPy's ** 0.5
+        f[i] *= rho[1, i] / scale
+        for j in range(J.shape[1]):
+            J[i, j] *= scale

@@ -1,15 +1,16 @@
 """The compiled outline kernels are their references: the residuals and Jacobian the NumPy ones,
 on random poses of one and two panels (every branch: sides, arcs, inside, the arcs frozen or not,
 the priors with and without gravity and heading, a panel behind the camera); the loss scipy's
-"huber"."""
+"huber", and the loss function and the scaling least_squares makes of it."""
 
 import math
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize._lsq.least_squares import huber
+from scipy.optimize._lsq.common import scale_for_robust_loss_function
+from scipy.optimize._lsq.least_squares import construct_loss_function, huber
 
-from server.pose.outline import BEHIND_PX, OutlineFitRules, _problem
+from server.pose.outline import BEHIND_PX, OutlineFitRules, _CompiledHuber, _problem
 from server.pose.outline_kernel import huber_rho
 from shared_schemas import Beacon
 from tests.server.pose.test_outline import SQUARE, K, gravity, outline_points
@@ -58,3 +59,20 @@ def test_the_compiled_loss_is_scipys_huber():
     rho = np.empty((3, len(z)))
     huber(z, rho, cost_only=False)
     np.testing.assert_array_equal(huber_rho(z), rho)
+
+
+def test_the_compiled_loss_function_and_scaling_are_least_squares_own():
+    rng = np.random.default_rng(9)
+    for f_scale in (2.0, 1 / 0.07, 1 / 0.3):
+        f = rng.normal(0.0, 3.0, 600) * rng.choice([1.0, 1e-8], 600)
+        expected = construct_loss_function(len(f), huber_rho, f_scale)
+        loss = _CompiledHuber(f_scale)
+        assert loss(f, cost_only=True) == expected(f, cost_only=True)
+        rho = expected(f)
+        np.testing.assert_array_equal(loss(f), rho)
+        jacobian = rng.normal(size=(len(f), 9))
+        scaled, scaled_f = scale_for_robust_loss_function(jacobian.copy(), f.copy(), rho)
+        ours, ours_f = jacobian.copy(), f.copy()
+        loss.scale(ours, ours_f, rho)
+        np.testing.assert_array_equal(ours, scaled)
+        np.testing.assert_array_equal(ours_f, scaled_f)
