@@ -10,6 +10,10 @@ arrays in the same order, the SVD by the same LAPACK routine (`gesdd` with scipy
 so that every iterate, the cost, the status and the evaluation count are scipy's to the last bit
 (tests/server/pose/test_trust_region.py holds them equal). What is left out is only what these
 fits never use: bounds, `x_scale="jac"`, the "lsmr" solver, callbacks, verbosity.
+
+A derived work of SciPy (scipy/optimize/_lsq/trf.py and least_squares.py, BSD 3-Clause,
+Copyright (c) 2001-2002 Enthought, Inc. 2003, SciPy Developers): its licence is in
+server/pose/LICENSE-scipy.txt (shipped with the package).
 """
 
 from __future__ import annotations
