@@ -16,7 +16,7 @@ from simulator.bench_vlc import plot_cut, plot_vlc
 from simulator.cli import plot_sample_evaluation
 from simulator.reports import Outcome, nice_length, plot_heatmap, plot_scatter, plot_sweep
 
-DOCS = Path(__file__).parents[2] / "docs"
+RESULTS = Path(__file__).parents[2] / "docs" / "results"
 
 
 def _decodes(path: Path) -> tuple[int, int]:
@@ -83,7 +83,7 @@ def test_sweep_and_fidelity_plots_decode(tmp_path):
     ("partial-quarter-2026-11-27.json", plot_partial, "partial.png"),
 ])
 def test_recorded_reports_replot(tmp_path, recorded, plot, name):
-    plot(json.loads((DOCS / recorded).read_text()), tmp_path / name)
+    plot(json.loads((RESULTS / recorded).read_text()), tmp_path / name)
     assert _decodes(tmp_path / name)[0] > 500
 
 
