@@ -32,9 +32,7 @@ def test_the_editable_build_raises_no_backend_warning(tmp_path):
     pytest.importorskip("setuptools", minversion="70.1")
     hooks = pytest.importorskip("pip._vendor.pyproject_hooks")
     source = project_copy(tmp_path / "project")
-    caller = hooks.BuildBackendHookCaller(
-        str(source), "setuptools.build_meta", runner=hooks.quiet_subprocess_runner
-    )
+    caller = hooks.BuildBackendHookCaller(str(source), "setuptools.build_meta", runner=hooks.quiet_subprocess_runner)
     (tmp_path / "wheel").mkdir()
     with warnings.catch_warnings(record=True) as raised:
         warnings.simplefilter("always")

@@ -30,6 +30,7 @@ from tests.dashboard.live_room import (
     BENCH_DARK,
     BENCH_STORED,
     DEVICES,
+    SCREENSHOTS,
     TIMEOUT_MS,
     Walk,
     open_view,
@@ -355,3 +356,56 @@ def unexpected_console_errors(record) -> list[str]:
         if missing in lines:
             lines.remove(missing)
     return lines
+
+
+READABLE_PX = 12.0  # the smallest tick label readable on the page at a laptop's 1400 px (issue 31)
+WIDE = {"width": 1400, "height": 900}
+
+
+def label_sizes(page, figure: str, labels: str = "text") -> list[dict]:
+    """Each label (`labels`, a selector) of the SVG `figure` (data-testid) as the screen shows it: its font size
+    in CSS px (the text's own size times the figure's scale to the screen) and its box's height, px."""
+    return page.evaluate("""([figure, labels]) => {
+        const svg = document.querySelector(`[data-testid="${figure}"]`);
+        const scale = svg.getScreenCTM().a;
+        return [...svg.querySelectorAll(labels)].map((text) => ({
+            text: text.textContent,
+            font_px: parseFloat(getComputedStyle(text).fontSize) * scale,
+            box_px: text.getBoundingClientRect().height,
+        }));
+    }""", [figure, labels])
+
+
+def test_axis_labels_are_readable_at_1400_px(browser, live, bench):
+    """Every figure's axis labels (the room map's also its scale bar and device names) at least 12 CSS px on a
+    1400 px wide window, and the room map's still at 1100 px: they keep their size on screen."""
+    context = browser.new_context(viewport=WIDE)
+    try:
+        page = context.new_page()
+        open_view(page, live.url, "live")
+        page.get_by_test_id("room-map").locator(".tick").first.wait_for(timeout=TIMEOUT_MS)
+        sizes = {"room-map": label_sizes(page, "room-map", ".tick, .axis-name, .scalebar text, .device-label")}
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        page.get_by_test_id("room-map").screenshot(path=str(SCREENSHOTS / "room-map-1400px.png"))
+        scale = "document.querySelector('[data-testid=\"room-map\"]').getScreenCTM().a"
+        wide_scale = page.evaluate(scale)
+        page.set_viewport_size({"width": 1100, "height": 900})  # still two columns (one below 1000 px)
+        page.wait_for_function(f"() => {scale} < {wide_scale * 0.9}", timeout=TIMEOUT_MS)
+        sizes["room-map at 1100 px"] = label_sizes(page, "room-map", ".tick, .axis-name")
+        page.set_viewport_size(WIDE)
+        open_view(page, live.url, "maps")
+        page.locator('[data-testid="map-row"][data-map="office"]').click()
+        page.get_by_test_id("map-view").get_by_test_id("map-panel").first.wait_for(timeout=TIMEOUT_MS)
+        sizes["map-view"] = label_sizes(page, "map-view", ".tick, .axis-name, .scalebar text")
+        if not httpx.get(f"{bench.url}/v1/samples/evaluation").json()["samples"]:
+            store_bench_samples(bench.url, bench.frames)  # this test run alone: figures need samples
+        open_view(page, bench.url, "bench")
+        page.get_by_test_id("bench-cell").first.wait_for(timeout=TIMEOUT_MS)
+        for figure in ("bench-heatmap", "bench-scatter"):
+            sizes[figure] = label_sizes(page, figure)
+    finally:
+        context.close()
+    for figure, labels in sizes.items():
+        assert labels, figure
+        small = [label for label in labels if label["font_px"] < READABLE_PX or label["box_px"] < READABLE_PX]
+        assert small == [], figure

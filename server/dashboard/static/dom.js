@@ -50,3 +50,21 @@ export function fmtAgo(seconds) {
 
 /** Readable form of a machine reason: "beacon_cut_off" -> "beacon cut off". */
 export const humanize = (reason) => String(reason).replaceAll("_", " ");
+
+const scaledFigures = new WeakSet();
+
+/** Sets `--px` on `svg`, its user units per CSS pixel, now and whenever it is drawn wider or narrower: a figure
+ * scaled to its card would shrink its labels with it, so its CSS sizes them in screen pixels instead
+ * (`font-size: max(11px, calc(13px * var(--px, 1)))`: 13 CSS px, larger only when the figure is). */
+export function holdLabelSize(svg) {
+  const update = () => {
+    // the drawing's own scale, not the box's: a figure held by max-height is letterboxed inside its box
+    const scale = svg.getBoundingClientRect().width > 0 ? svg.getScreenCTM()?.a : 0;
+    if (scale > 0) svg.style.setProperty("--px", (1 / scale).toFixed(4));
+  };
+  if (!scaledFigures.has(svg)) {
+    scaledFigures.add(svg);
+    new ResizeObserver(update).observe(svg); // a hidden view's figure has no width until it is shown
+  }
+  update();
+}

@@ -1,6 +1,6 @@
 // A beacon map drawn to scale in an SVG: map X to the right, Y up (the SVG's y is flipped).
 
-import { svgEl } from "./dom.js";
+import { holdLabelSize, svgEl } from "./dom.js";
 
 const VIEW_WIDTH_PX = 1000;
 const MIN_MARGIN_M = 0.4;
@@ -74,9 +74,10 @@ function gridLayer(proj) {
     layer.append(svgEl("line", { x1: 0, x2: proj.width, y1: proj.py(y), y2: proj.py(y), class: cls }));
     layer.append(svgEl("text", { x: 4, y: proj.py(y) - 4, class: "tick", text: label(y) }));
   }
-  layer.append(svgEl("text", { x: proj.width - 8, y: proj.height - 5, class: "axis-name", "text-anchor": "end",
-    text: "X (m) →" }));
-  layer.append(svgEl("text", { x: 8, y: 16, class: "axis-name", text: "↑ Y (m)" }));
+  // a line above the X ticks and below the top edge, in ems: the labels' size follows the map's scale on screen
+  layer.append(svgEl("text", { x: proj.width - 8, y: proj.height - 5, dy: "-1.3em", class: "axis-name",
+    "text-anchor": "end", text: "X (m) →" }));
+  layer.append(svgEl("text", { x: 8, y: 4, dy: "1em", class: "axis-name", text: "↑ Y (m)" }));
   return layer;
 }
 
@@ -120,6 +121,7 @@ export function drawRoom(svg, beaconMap, points = [], panelTestId = "panel") {
   const proj = projectionFor(beaconMap.beacons, points);
   svg.replaceChildren();
   svg.setAttribute("viewBox", `0 0 ${proj.width} ${proj.height.toFixed(1)}`);
+  holdLabelSize(svg);
   const panels = beaconMap.beacons.map((beacon) => panelNode(beacon, proj, panelTestId));
   svg.append(gridLayer(proj), svgEl("g", { class: "panels" }, panels), scaleBar(proj));
   return proj;
