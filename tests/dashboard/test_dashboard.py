@@ -364,21 +364,28 @@ WIDE = {"width": 1400, "height": 900}
 
 def label_sizes(page, figure: str, labels: str = "text") -> list[dict]:
     """Each label (`labels`, a selector) of the SVG `figure` (data-testid) as the screen shows it: its font size
-    in CSS px (the text's own size times the figure's scale to the screen) and its box's height, px."""
+    in CSS px (the text's own size times the figure's scale to the screen), its box's height, px, and whether
+    that box lies inside the figure's (a label cut by the figure's edge is not read either)."""
     return page.evaluate("""([figure, labels]) => {
         const svg = document.querySelector(`[data-testid="${figure}"]`);
-        const scale = svg.getScreenCTM().a;
-        return [...svg.querySelectorAll(labels)].map((text) => ({
-            text: text.textContent,
-            font_px: parseFloat(getComputedStyle(text).fontSize) * scale,
-            box_px: text.getBoundingClientRect().height,
-        }));
+        const [scale, frame] = [svg.getScreenCTM().a, svg.getBoundingClientRect()];
+        return [...svg.querySelectorAll(labels)].map((text) => {
+            const box = text.getBoundingClientRect();
+            return {
+                text: text.textContent,
+                font_px: parseFloat(getComputedStyle(text).fontSize) * scale,
+                box_px: box.height,
+                inside: box.left >= frame.left - 1 && box.right <= frame.right + 1 && box.top >= frame.top - 1
+                    && box.bottom <= frame.bottom + 1,
+            };
+        });
     }""", [figure, labels])
 
 
 def test_axis_labels_are_readable_at_1400_px(browser, live, bench):
     """Every figure's axis labels (the room map's also its scale bar and device names) at least 12 CSS px on a
-    1400 px wide window, and the room map's still at 1100 px: they keep their size on screen."""
+    1400 px wide window and inside the figure, and the room map's still at 1100 px: they keep their size on
+    screen."""
     context = browser.new_context(viewport=WIDE)
     try:
         page = context.new_page()
@@ -407,5 +414,6 @@ def test_axis_labels_are_readable_at_1400_px(browser, live, bench):
         context.close()
     for figure, labels in sizes.items():
         assert labels, figure
-        small = [label for label in labels if label["font_px"] < READABLE_PX or label["box_px"] < READABLE_PX]
-        assert small == [], figure
+        unread = [label for label in labels
+                  if label["font_px"] < READABLE_PX or label["box_px"] < READABLE_PX or not label["inside"]]
+        assert unread == [], figure

@@ -274,8 +274,9 @@ function axisLabels(iRange, jRange, size, left, top, gridW, gridH) {
   }
   nodes.push(svgEl("text", { x: left + gridW / 2, y: top + gridH + 34, "text-anchor": "middle", style: FONT,
     text: "cell i (along X)" }));
-  nodes.push(svgEl("text", { x: 12, y: top + gridH / 2, "text-anchor": "middle", style: FONT,
-    transform: `rotate(-90 12 ${top + gridH / 2})`, text: "cell j (along Y)" }));
+  const jMiddle = Math.max(top + gridH / 2, 62); // a row or two is shorter than the label: it hangs below them
+  nodes.push(svgEl("text", { x: 12, y: jMiddle, "text-anchor": "middle", style: FONT,
+    transform: `rotate(-90 12 ${jMiddle})`, text: "cell j (along Y)" }));
   return nodes;
 }
 
@@ -291,10 +292,10 @@ function colourBar(x, top, height, maxMm) {
   for (const t of [0, 0.5, 1]) {
     nodes.push(svgEl("text", { x: x + 19, y: top + barH * (1 - t) + 4, style: FONT, text: (maxMm * t).toFixed(2) }));
   }
-  nodes.push(svgEl("text", { x, y: top + barH + 14, style: FONT, text: "mm" }));
+  nodes.push(svgEl("text", { x, y: top + barH + 20, style: FONT, text: "mm" })); // a line below the bar's "0.00"
   const key = (y, fill, label) => [svgEl("rect", { x, y, width: 14, height: 14, fill, stroke: "#ccd" }),
     svgEl("text", { x: x + 19, y: y + 11, style: FONT, text: label })];
-  nodes.push(...key(top + barH + 22, NO_FIX, "no fix"), ...key(top + barH + 42, "url(#hatch)", "not sampled"));
+  nodes.push(...key(top + barH + 28, NO_FIX, "no fix"), ...key(top + barH + 48, "url(#hatch)", "not sampled"));
   return nodes;
 }
 

@@ -105,7 +105,7 @@ export function panelNode(beacon, proj, testId) {
 function scaleBar(proj) {
   const metres = gridStep(proj.x1 - proj.x0);
   const length = metres * proj.scale;
-  const [x, y] = [proj.width - length - 20, 24];
+  const [x, y] = [proj.width - length - 20, 36]; // room for its label at 13 CSS px on a narrow map
   return svgEl("g", { class: "scalebar" },
     svgEl("line", { x1: x, x2: x + length, y1: y, y2: y }),
     svgEl("line", { x1: x, x2: x, y1: y - 5, y2: y + 5 }),
