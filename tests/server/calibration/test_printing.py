@@ -1,6 +1,8 @@
 """The printed board read back from its PDF: the paper's page, vectors at the spec's sizes, the check bar, the spec
 in words, and the page rasterized as a printer would found as the spec says (issue 31)."""
 
+from pathlib import Path
+
 import numpy as np
 import pdfplumber
 import pytest
@@ -115,3 +117,11 @@ def test_a_board_too_large_for_the_paper_is_bad_input(tmp_path, capsys):
     assert main(["calibrate", "board", "--out", str(out), "--square-mm", "30", "--paper", "letter"]) == 2
     assert "a 330.0 x 240.0 mm board does not fit on US Letter (215.9 x 279.4 mm)" in capsys.readouterr().err
     assert not out.exists() and not (tmp_path / "big.json").exists()
+
+
+def test_the_docs_quote_what_calibrate_board_prints(tmp_path, capsys, monkeypatch):
+    doc = (Path(__file__).parents[3] / "docs" / "calibration.md").read_text()
+    quoted = [line.strip() for line in doc.split("```")[1].splitlines() if line.strip()]
+    monkeypatch.chdir(tmp_path)
+    assert main(["calibrate", "board", "--out", "board.pdf"]) == 0
+    assert capsys.readouterr().out.splitlines() == quoted
