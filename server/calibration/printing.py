@@ -23,12 +23,14 @@ MM_PER_INCH = 25.4
 PT_PER_MM = 72 / MM_PER_INCH
 PAPERS_MM = {"a4": (210.0, 297.0), "letter": (215.9, 279.4)}  # portrait width x height
 PAGE_MARGIN_MM = 5.0  # most printers leave 3-5 mm of the edge unprinted
-BAND_MM = 8.0  # below the board: 2 mm of paper, then the check bar and two lines of words
+# below the board, after 2 mm of paper: the check bar, and two lines of words beside it or, when they would be
+# smaller than MIN_FONT_PT there, under it
+BAND_BESIDE_MM, BAND_UNDER_MM = 8.0, 13.0
 CHECK_BAR_MM = 100.0
 CHECK_BAR_HEIGHT_MM = 1.5
 SCREEN_MARGIN_MM = 10.0  # white around a PNG board: the outer squares' corners need paper around them
 MAX_BOARD_PIXELS = 200_000_000
-MAX_FONT_PT = 6.5
+MAX_FONT_PT, MIN_FONT_PT = 6.5, 5.0
 
 Rect = tuple[float, float, float, float]  # x, y, width, height in metres from the board's top-left, y down
 
@@ -42,6 +44,8 @@ class PageLayout:
     height_mm: float
     board_left_mm: float
     board_top_mm: float
+    words_beside: bool  # the words beside the check bar, or under it
+    font_pt: float
 
     @property
     def landscape(self) -> bool:
@@ -79,19 +83,27 @@ def spec_json(spec: BoardSpec) -> str:
     return spec.model_dump_json(by_alias=True, indent=2, exclude=at_default)
 
 
-def page_layout(spec: BoardSpec, paper: str) -> PageLayout:
+def page_layout(spec: BoardSpec, paper: str, lines: list[str]) -> PageLayout:
     """The board and its band on `paper` ("a4", "letter"): landscape or portrait, whichever the board's shape
-    asks for and fits; centred. Raises ValueError when it fits neither way."""
+    asks for and fits; centred; `lines` beside the check bar or under it. Raises ValueError when it fits
+    neither way."""
+    from reportlab.pdfbase.pdfmetrics import stringWidth
+
     board_w, board_h = spec.squares_x * spec.square_m * 1000, spec.squares_y * spec.square_m * 1000
+    widest_pt = max(stringWidth(line, "Helvetica", 1.0) for line in lines)  # at 1 pt
     short, long = PAPERS_MM[paper]
     turns = [(long, short), (short, long)]
     for width, height in turns if board_w >= board_h else turns[::-1]:
-        spare_w, spare_h = width - board_w - 2 * PAGE_MARGIN_MM, height - board_h - BAND_MM - 2 * PAGE_MARGIN_MM
-        if spare_w >= 0 and spare_h >= 0:
-            return PageLayout(paper, width, height, PAGE_MARGIN_MM + spare_w / 2, PAGE_MARGIN_MM + spare_h / 2)
+        for beside, band in ((True, BAND_BESIDE_MM), (False, BAND_UNDER_MM)):
+            spare_w, spare_h = width - board_w - 2 * PAGE_MARGIN_MM, height - board_h - band - 2 * PAGE_MARGIN_MM
+            left = PAGE_MARGIN_MM + spare_w / 2
+            room_mm = width - PAGE_MARGIN_MM - left - (CHECK_BAR_MM + 4.0) * beside
+            font_pt = min(MAX_FONT_PT, room_mm * PT_PER_MM / widest_pt)
+            if spare_w >= 0 and spare_h >= 0 and (font_pt >= MIN_FONT_PT or not beside):
+                return PageLayout(paper, width, height, left, PAGE_MARGIN_MM + spare_h / 2, beside, font_pt)
     raise ValueError(
         f"a {board_w:.1f} x {board_h:.1f} mm board does not fit on {paper_name(paper)} ({short:g} x {long:g} mm) "
-        f"with {PAGE_MARGIN_MM:g} mm margins and the {BAND_MM:g} mm for its check bar: give smaller squares "
+        f"with {PAGE_MARGIN_MM:g} mm margins and the {BAND_BESIDE_MM:g} mm for its check bar: give smaller squares "
         "(--square-mm) or fewer (--squares)"
     )
 
@@ -176,17 +188,21 @@ def board_command(spec: BoardSpec, out: str, paper: str) -> str:
 
 def write_pdf(spec: BoardSpec, path: Path, paper: str) -> PageLayout:
     """The board on one page of `paper` (vectors: filled rectangles), the check bar and the spec below it."""
-    from reportlab.pdfbase.pdfmetrics import stringWidth
     from reportlab.pdfgen.canvas import Canvas
 
-    layout = page_layout(spec, paper)
+    label = board_label(spec)
+    lines = [f"check bar: {CHECK_BAR_MM:g} mm (print at 100 %, no 'fit to page'). {label}"]
+    lines.append(f"made by: {board_command(spec, path.name, paper)}")
+    layout = page_layout(spec, paper, lines)
     page_h = layout.height_mm * PT_PER_MM
 
     def at(x_mm: float, top_mm: float, w_mm: float, h_mm: float) -> tuple[float, float, float, float]:
         """A rectangle from the page's top-left in mm, in PDF points from its bottom-left."""
         return x_mm * PT_PER_MM, page_h - (top_mm + h_mm) * PT_PER_MM, w_mm * PT_PER_MM, h_mm * PT_PER_MM
 
-    label, command = board_label(spec), f"made by: {board_command(spec, path.name, paper)}"
+    def baseline(top_mm: float) -> float:
+        return page_h - top_mm * PT_PER_MM
+
     canvas = Canvas(str(path), pagesize=(layout.width_mm * PT_PER_MM, page_h), invariant=1, pageCompression=1)
     canvas.setTitle(f"calibration board: {label}")
     canvas.setCreator("lumipose calibrate board")
@@ -204,20 +220,13 @@ def write_pdf(spec: BoardSpec, path: Path, paper: str) -> PageLayout:
     canvas.setFillGray(0)
     bar_top = top + board_h + 2.0
     canvas.rect(*at(left, bar_top, CHECK_BAR_MM, CHECK_BAR_HEIGHT_MM), stroke=0, fill=1)
-    text_left = left + CHECK_BAR_MM + 4.0
-    lines = [f"check bar: {CHECK_BAR_MM:g} mm (print at 100 %, no 'fit to page'). {label}", command]
-    room_pt = (layout.width_mm - PAGE_MARGIN_MM - text_left) * PT_PER_MM
-    size = min([MAX_FONT_PT] + [MAX_FONT_PT * room_pt / stringWidth(line, "Helvetica", MAX_FONT_PT) for line in lines])
-    canvas.setFont("Helvetica", size)
-
-    def baseline(top_mm: float) -> float:
-        return page_h - top_mm * PT_PER_MM
-
-    under_bar = baseline(bar_top + CHECK_BAR_HEIGHT_MM + 2.6)
-    canvas.drawString(left * PT_PER_MM, under_bar, "0")
-    canvas.drawRightString((left + CHECK_BAR_MM) * PT_PER_MM, under_bar, f"{CHECK_BAR_MM:g} mm")
+    canvas.setFont("Helvetica", layout.font_pt)
+    under_bar = bar_top + CHECK_BAR_HEIGHT_MM + 2.6
+    canvas.drawString(left * PT_PER_MM, baseline(under_bar), "0")
+    canvas.drawRightString((left + CHECK_BAR_MM) * PT_PER_MM, baseline(under_bar), f"{CHECK_BAR_MM:g} mm")
+    text_left, text_top = (left + CHECK_BAR_MM + 4.0, bar_top + 1.6) if layout.words_beside else (left, under_bar + 3)
     for k, line in enumerate(lines):
-        canvas.drawString(text_left * PT_PER_MM, baseline(bar_top + 1.6 + k * 2.8), line)
+        canvas.drawString(text_left * PT_PER_MM, baseline(text_top + k * 2.8), line)
     canvas.showPage()
     canvas.save()
     return layout

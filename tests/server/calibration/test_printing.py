@@ -38,7 +38,7 @@ def test_the_page_is_the_papers_and_the_board_is_vectors_at_the_specs_sizes(tmp_
             (r["x0"] / PT_PER_MM, r["top"] / PT_PER_MM, r["width"] / PT_PER_MM, r["height"] / PT_PER_MM)
             for r in page.rects
         ]
-        text, images = page.extract_text(), page.images
+        text, images, font_pt = page.extract_text(), page.images, min(char["size"] for char in page.chars)
     assert images == []
     squares = [r for r in mm if abs(r[2] - 24) < 0.01 and abs(r[3] - 24) < 0.01]
     assert len(squares) == 44  # 88 squares, half of them black
@@ -49,7 +49,7 @@ def test_the_page_is_the_papers_and_the_board_is_vectors_at_the_specs_sizes(tmp_
     (bar,) = [r for r in mm if r[2] > 90]
     assert bar[2] == pytest.approx(100, abs=1e-4) and bar[1] > top + 8 * 24  # below the board
     assert f"ChArUco board, 11 x 8 squares of 24.00 mm, markers 14.40 mm, DICT_5X5_100, first marker id 0" in text
-    assert "check bar: 100 mm" in text
+    assert "check bar: 100 mm" in text and font_pt >= 5  # readable: 1.8 mm capitals
     command = f"lumipose calibrate board --out board.pdf --paper {paper} --squares 11x8 --square-mm 24"
     assert f"made by: {command} --marker-mm 14.4 --dictionary DICT_5X5_100" in text
 
@@ -87,6 +87,8 @@ def test_the_page_rasterized_shows_the_spec_at_its_size(tmp_path, capsys, args, 
     view = find_board(page, spec, "page")  # cv2.aruco's CharucoDetector (findChessboardCornersSB for a chessboard)
     assert view is not None and len(view.corner_ids) == spec.inner_corners and not view.mirrored
     assert view.inverted == spec.inverted
+    with pdfplumber.open(out) as pdf:  # the words beside the bar, or under it where they would be too small
+        assert min(char["size"] for char in pdf.pages[0].chars) >= 5
     # the corners' spacing is the square's size on paper
     corners = np.asarray(view.corners_px)
     per_row = spec.squares_x - 1
