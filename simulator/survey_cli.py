@@ -24,7 +24,8 @@ def add_survey_bench(benches) -> None:
                        help="panels' luminances spread evenly over +- this share (0.15: +-15 %%); the walk keeps the scene's")
     bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
     bench.add_argument("--fixtures", type=Path, default=None,
-                       help="also write each office's frames, labels.json and sketch.json here (for `lumipose survey`)")
+                       help="also write each office's frames/, labels.json and sketch.json into DIR/SCENE (for `lumipose "
+                            "survey`; `lumipose simulate SCENE OUT --survey N` writes one set without the bench)")
     add_bench_flags(bench, workers=False)
     bench.set_defaults(run=_run_survey_bench)
 
