@@ -122,9 +122,11 @@ def _run_bearing_bench(args) -> int:
     for run in report["runs"]:
         print(f"{run['seed']:>4} {run['frames_used']:>6} {run['bearing_deg']:8.1f} {run['sigma_deg']:6.1f} "
               f"{run['error_deg']:+6.1f} {run['error_over_sigma']:+11.2f}")
+    for refused in report["refused"]:
+        print(f"{refused['seed']:>4} refused: {refused['why']}")
     within = report["within_sigma_pct"]
     print(f"within    1 / 2 / 3 sigma: {within['1']:.0f} / {within['2']:.0f} / {within['3']:.0f} % of "
-          f"{plural(report['seeds'], 'survey')} (a sigma that holds: 68 / 95 / 99.7); RMS error/sigma "
+          f"{plural(len(report['runs']), 'survey')} (a sigma that holds: 68 / 95 / 99.7); RMS error/sigma "
           f"{report['rms_error_over_sigma']:.2f}, RMS error {report['rms_error_deg']:.1f} deg, mean sigma "
           f"{report['mean_sigma_deg']:.1f} deg")
     return 0
