@@ -186,11 +186,15 @@ def survey_set(scene: Scene, frames: int, rng: np.random.Generator, sketch_error
     return truth, sketch_of(truth, anchor, rng, sketch_error_m, sketch_yaw_error_deg), anchor, shots
 
 
-def write_survey_fixtures(folder: Path, shots: list[SurveyShot], sketch: BeaconMap) -> tuple[list[Path], Path, Path]:
-    """The shots as `lumipose survey` reads them: fixtures `frames/frame_NN.json` + `.y`, `labels.json` (a
-    frame's file name -> its labels) and the sketch `sketch.json`; (frame JSON paths, labels path, sketch path)."""
-    (folder / "frames").mkdir(parents=True, exist_ok=True)
-    frames = [write_fixture(folder / "frames" / f"frame_{k:02d}", shot.pixels, shot.meta)[1]
+def write_survey_fixtures(folder: Path, shots: list[SurveyShot], sketch: BeaconMap,
+                          frames_folder: Path | None = None) -> tuple[list[Path], Path, Path]:
+    """The shots as `lumipose survey` reads them: fixtures `frame_NN.json` + `.y` (in `frames_folder`, default
+    `folder`), `labels.json` (a frame's file name -> its labels) and the sketch `sketch.json`; (frame JSON
+    paths, labels path, sketch path)."""
+    frames_folder = folder if frames_folder is None else frames_folder
+    folder.mkdir(parents=True, exist_ok=True)
+    frames_folder.mkdir(parents=True, exist_ok=True)
+    frames = [write_fixture(frames_folder / f"frame_{k:02d}", shot.pixels, shot.meta)[1]
               for k, shot in enumerate(shots)]
     labels = {path.name: [label.model_dump() for label in shot.labels]
               for path, shot in zip(frames, shots, strict=True)}

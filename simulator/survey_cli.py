@@ -24,7 +24,7 @@ def add_survey_bench(benches) -> None:
                        help="panels' luminances spread evenly over +- this share (0.15: +-15 %%); the walk keeps the scene's")
     bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
     bench.add_argument("--fixtures", type=Path, default=None,
-                       help="also write each office's frames/, labels.json and sketch.json into DIR/SCENE (for `lumipose "
+                       help="also write each office's frames, labels.json and sketch.json into DIR/SCENE (for `lumipose "
                             "survey`; `lumipose simulate SCENE OUT --survey N` writes one set without the bench)")
     add_bench_flags(bench, workers=False)
     bench.set_defaults(run=_run_survey_bench)
@@ -46,7 +46,7 @@ def write_survey_inputs(scene, out: Path, frames: int) -> int:
     from simulator.survey import survey_set, write_survey_fixtures
 
     truth, sketch, anchor, shots = survey_set(scene, frames, np.random.default_rng(scene.seed))
-    paths, labels, sketch_path = write_survey_fixtures(out, shots, sketch)
+    paths, labels, sketch_path = write_survey_fixtures(out, shots, sketch, out / "frames")
     (out / "map.json").write_text(truth.model_dump_json(by_alias=True, indent=2) + "\n")
     named = sum(len(shot.labels) for shot in shots)
     print(f"wrote {plural(len(paths), 'survey frame')} into {paths[0].parent} ({paths[0].name} ... {paths[-1].name}), "
