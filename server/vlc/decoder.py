@@ -439,14 +439,17 @@ class _FrameFit:
         if self._scale is None:
             per_block = self.explained.reshape(self.explained.shape[0], -1, self.block, self.exact.shape[1])
             bounds = per_block.max(axis=(0, 2))  # (blocks, clock errors)
+            best = float(bounds[self.exact].max(initial=-np.inf))
             while True:
-                best = float(per_block.max(axis=(0, 2))[self.exact].max(initial=-np.inf))
                 left = ~self.exact & (bounds >= best)
                 if not left.any():
                     break
                 top = np.zeros_like(left)
-                top[np.unravel_index(np.argmax(np.where(left, bounds, -np.inf)), left.shape)] = True
+                b, e = np.unravel_index(np.argmax(np.where(left, bounds, -np.inf)), left.shape)
+                top[b, e] = True
                 self.fit(top)
+                # a fit changes its own block only: the best of the exact ones is the old best or in it
+                best = float(np.maximum(best, per_block[:, b, :, e].max()))
             result = self.total - self.explained
             self._scale = max(1.0, float(result.min()) / self.dof)  # residuals beyond the pixel noise: the model's own
         return -0.5 * (self.total - self.explained) / self._scale
