@@ -69,6 +69,9 @@ def add_commands(commands) -> None:
     simulate.add_argument("--bursts", action="store_true",
                           help="each sample as the app captures it: a pose frame, then ID frames (NAME_0000_0_pose, "
                                "NAME_0000_1_id, ...; the scene's id_frames settings)")
+    simulate.add_argument("--survey", type=int, default=None, metavar="FRAMES",
+                          help="instead: FRAMES survey frames as the app's 'Survey room' screen takes them, for "
+                               "`lumipose survey` (frames/, labels.json, sketch.json, map.json: the truth)")
     simulate.set_defaults(run=_run_simulate)
 
     bench = commands.add_parser("bench", help="benchmarks that print figures")
@@ -341,6 +344,10 @@ def _run_simulate(args) -> int:
                 ratio = args.scale / scene.camera.scale
                 updates["id_frames"] = scene.id_frames.model_copy(update={"scale": scene.id_frames.scale * ratio})
         scene = scene.model_validate(scene.model_copy(update=updates).model_dump(by_alias=True))
+        if args.survey is not None:
+            from simulator.survey_cli import write_survey_inputs
+
+            return write_survey_inputs(scene, args.out, args.survey)
         if args.pose is not None:
             series = SeriesSpec(path=PosesSeries(poses=[PoseSpec(position_m=args.pose, ypr_deg=args.ypr)]))
             scene = scene.model_copy(update={"series": series})

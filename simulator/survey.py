@@ -6,10 +6,15 @@ turned about its optical axis at random (so the cameras' yaws cover the circle);
 more panels have their centres in view. Panels partly in view stay in the frame, cut by its
 border. Every frame (`render_survey`) is a pose frame of the scene's sensor (its gravity reading
 with the scene's sensor error), with a compass reading: the true bearing of the image's +x laid
-level (`true_bearing_deg` of the map's +X minus the camera's yaw) plus an indoor compass error
-(normal, `compass_sigma_deg`), and labels from the true projection: for every panel with
-`min_label_px` or more of its image in view, the centroid of its visible part (inside it: the
-visible part of a convex panel is convex).
+level (`true_bearing_deg` of the map's +X minus the camera's yaw) plus an indoor compass error,
+and labels from the true projection: for every panel with `min_label_px` or more of its image in
+view, the centroid of its visible part (inside it: the visible part of a convex panel is convex).
+
+The compass error is a bias shared by every frame of one survey plus each frame's own noise: a
+building's steel and wiring deflect the field alike over a room (the slowly varying "systematic
+deviations" of Ettlinger, Wieser and Neuner, NAVIGATION 71(1), 2024, navi.632, whose best indoor
+heading still errs by 17.4 degrees RMS), while the hand's motion and local anomalies scatter each
+reading. 10 degrees of each: 14 degrees per frame, as the 15 degrees (all independent) before.
 """
 
 from __future__ import annotations
@@ -38,7 +43,8 @@ class SurveyShots:
     neighbour_m: float = 1.9  # panels at most this far apart count as neighbours to aim between
     min_label_px: float = 400.0  # visible area (px^2) of a panel for it to be labelled
     true_bearing_deg: float = 30.0  # the compass bearing of the map's +X
-    compass_sigma_deg: float = 15.0  # a phone compass indoors
+    compass_bias_sigma_deg: float = 10.0  # a phone compass indoors: one error for the whole survey ...
+    compass_noise_sigma_deg: float = 10.0  # ... plus each frame's own
 
 
 def _visible_part(beacon: Beacon, scene: Scene, pose: CameraPose) -> np.ndarray | None:
@@ -132,19 +138,25 @@ class SurveyShot:
     pose: CameraPose
 
 
-def compass_reading_deg(pose: CameraPose, shots: SurveyShots, rng: np.random.Generator) -> float:
-    """The compass bearing of the image's +x laid level, with an indoor error, in [0, 360)."""
+def compass_reading_deg(pose: CameraPose, shots: SurveyShots, rng: np.random.Generator, bias_deg: float = 0.0) -> float:
+    """The compass bearing of the image's +x laid level, off by the survey's `bias_deg` and the frame's own
+    noise, in [0, 360)."""
     yaw = math.degrees(math.atan2(pose.rotation_wc[1, 0], pose.rotation_wc[0, 0]))
-    return (shots.true_bearing_deg - yaw + rng.normal(0.0, shots.compass_sigma_deg)) % 360.0
+    return (shots.true_bearing_deg - yaw + bias_deg + rng.normal(0.0, shots.compass_noise_sigma_deg)) % 360.0
+
+
+def compass_readings_deg(poses: list[CameraPose], shots: SurveyShots, rng: np.random.Generator) -> list[float]:
+    """The compass readings of one survey's `poses`: one bias drawn for them all, then each frame's noise."""
+    bias_deg = rng.normal(0.0, shots.compass_bias_sigma_deg)
+    return [compass_reading_deg(pose, shots, rng, bias_deg) for pose in poses]
 
 
 def render_survey(scene: Scene, poses: list[CameraPose], rng: np.random.Generator,
                   shots: SurveyShots = SurveyShots()) -> list[SurveyShot]:
-    """The pose frames of `poses`, with gravity, a compass reading and labels."""
+    """The pose frames of `poses`, with gravity, a compass reading (`compass_readings_deg`) and labels."""
     rendered = []
-    for k, pose in enumerate(poses):
-        pixels, meta = render_sample(scene, pose, rng, t_s=k * 2.0,
-                                     compass_bearing_deg=compass_reading_deg(pose, shots, rng))
+    for k, (pose, compass) in enumerate(zip(poses, compass_readings_deg(poses, shots, rng), strict=True)):
+        pixels, meta = render_sample(scene, pose, rng, t_s=k * 2.0, compass_bearing_deg=compass)
         rendered.append(SurveyShot(pixels, meta, labels_for(scene, pose, shots), pose))
     return rendered
 
@@ -164,11 +176,26 @@ def sketch_of(beacon_map: BeaconMap, anchor: int, rng: np.random.Generator, erro
     return beacon_map.model_copy(update={"name": f"{beacon_map.name}-sketch", "beacons": beacons})
 
 
-def write_survey_fixtures(folder: Path, shots: list[SurveyShot], sketch: BeaconMap) -> tuple[list[Path], Path, Path]:
-    """The shots as `lumipose survey` reads them: fixtures `frame_NN.json` + `.y`, `labels.json` (a frame's
-    file name -> its labels) and the sketch `sketch.json`; (frame JSON paths, labels path, sketch path)."""
+def survey_set(scene: Scene, frames: int, rng: np.random.Generator, sketch_error_m: float = 0.05,
+               sketch_yaw_error_deg: float = 5.0) -> tuple[BeaconMap, BeaconMap, int, list[SurveyShot]]:
+    """(true map, sketch, anchor ID, shots): `frames` rendered survey frames of `scene` and a tape-measure
+    sketch of its map, anchored at its first panel."""
+    shots = render_survey(scene, survey_poses(scene, frames, rng), rng)
+    truth = scene.beacon_map()
+    anchor = truth.beacons[0].id
+    return truth, sketch_of(truth, anchor, rng, sketch_error_m, sketch_yaw_error_deg), anchor, shots
+
+
+def write_survey_fixtures(folder: Path, shots: list[SurveyShot], sketch: BeaconMap,
+                          frames_folder: Path | None = None) -> tuple[list[Path], Path, Path]:
+    """The shots as `lumipose survey` reads them: fixtures `frame_NN.json` + `.y` (in `frames_folder`, default
+    `folder`), `labels.json` (a frame's file name -> its labels) and the sketch `sketch.json`; (frame JSON
+    paths, labels path, sketch path)."""
+    frames_folder = folder if frames_folder is None else frames_folder
     folder.mkdir(parents=True, exist_ok=True)
-    frames = [write_fixture(folder / f"frame_{k:02d}", shot.pixels, shot.meta)[1] for k, shot in enumerate(shots)]
+    frames_folder.mkdir(parents=True, exist_ok=True)
+    frames = [write_fixture(frames_folder / f"frame_{k:02d}", shot.pixels, shot.meta)[1]
+              for k, shot in enumerate(shots)]
     labels = {path.name: [label.model_dump() for label in shot.labels]
               for path, shot in zip(frames, shots, strict=True)}
     labels_path, sketch_path = folder / "labels.json", folder / "sketch.json"

@@ -24,9 +24,35 @@ def add_survey_bench(benches) -> None:
                        help="panels' luminances spread evenly over +- this share (0.15: +-15 %%); the walk keeps the scene's")
     bench.add_argument("--walk-limit", type=int, default=None, help="only the first N captures of the walk")
     bench.add_argument("--fixtures", type=Path, default=None,
-                       help="also write each office's frames, labels.json and sketch.json here (for `lumipose survey`)")
+                       help="also write each office's frames, labels.json and sketch.json into DIR/SCENE (for `lumipose "
+                            "survey`; `lumipose simulate SCENE OUT --survey N` writes one set without the bench)")
     add_bench_flags(bench, workers=False)
     bench.set_defaults(run=_run_survey_bench)
+
+    bearing = benches.add_parser("survey-bearing",
+                                 help="the survey's compass bearing over many seeds: its error against its sigma")
+    bearing.add_argument("--seeds", type=int, default=40, help="surveys, of seeds --seed, --seed + 1, ...")
+    bearing.add_argument("--panels", type=int, default=4, choices=[4, 9], help="the office, by panel count")
+    bearing.add_argument("--frames", type=int, default=12, help="survey frames per survey")
+    bearing.add_argument("--scale", type=float, default=0.25, help="of the Mi 8 front resolution")
+    add_bench_flags(bearing, workers=False)
+    bearing.set_defaults(run=_run_bearing_bench)
+
+
+def write_survey_inputs(scene, out: Path, frames: int) -> int:
+    """`lumipose simulate SCENE OUT --survey FRAMES`: what `lumipose survey` reads, as the app uploads it."""
+    import numpy as np
+
+    from simulator.survey import survey_set, write_survey_fixtures
+
+    truth, sketch, anchor, shots = survey_set(scene, frames, np.random.default_rng(scene.seed))
+    paths, labels, sketch_path = write_survey_fixtures(out, shots, sketch, out / "frames")
+    (out / "map.json").write_text(truth.model_dump_json(by_alias=True, indent=2) + "\n")
+    named = sum(len(shot.labels) for shot in shots)
+    print(f"wrote {plural(len(paths), 'survey frame')} into {paths[0].parent} ({paths[0].name} ... {paths[-1].name}), "
+          f"{labels} ({plural(named, 'panel label')}), {sketch_path} (the panels a few cm off; anchor: beacon "
+          f"{anchor}) and {out / 'map.json'} (the truth)")
+    return 0
 
 
 def _fmt(value) -> str:
@@ -81,4 +107,26 @@ def _run_survey_bench(args) -> int:
         return 0
     for report in reports:
         _print(report)
+    return 0
+
+
+def _run_bearing_bench(args) -> int:
+    from simulator.bench_survey import SurveyBenchConfig, run_bearing_bench
+
+    config = SurveyBenchConfig(panels=args.panels, frames=args.frames, scale=args.scale, seed=args.seed, walk=None)
+    report = run_bearing_bench(config, args.seeds)
+    if args.json:
+        print(json.dumps({"survey_bearing": report}, indent=2))
+        return 0
+    print(f"{'seed':>4} {'frames':>6} {'bearing':>8} {'sigma':>6} {'error':>6} {'error/sigma':>11}")
+    for run in report["runs"]:
+        print(f"{run['seed']:>4} {run['frames_used']:>6} {run['bearing_deg']:8.1f} {run['sigma_deg']:6.1f} "
+              f"{run['error_deg']:+6.1f} {run['error_over_sigma']:+11.2f}")
+    for refused in report["refused"]:
+        print(f"{refused['seed']:>4} refused: {refused['why']}")
+    within = report["within_sigma_pct"]
+    print(f"within    1 / 2 / 3 sigma: {within['1']:.0f} / {within['2']:.0f} / {within['3']:.0f} % of "
+          f"{plural(len(report['runs']), 'survey')} (a sigma that holds: 68 / 95 / 99.7); RMS error/sigma "
+          f"{report['rms_error_over_sigma']:.2f}, RMS error {report['rms_error_deg']:.1f} deg, mean sigma "
+          f"{report['mean_sigma_deg']:.1f} deg")
     return 0

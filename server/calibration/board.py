@@ -93,19 +93,26 @@ def corner_points_m(spec: BoardSpec, corner_ids: list[int] | np.ndarray) -> np.n
 
 
 def describe_board(spec: BoardSpec) -> str:
-    """A spec in words: "7 x 5 DICT_4X4_50 board (squares 40.000 mm, markers 28.000 mm)",
-    "10 x 7 chessboard (9 x 6 inner corners, squares 25.000 mm)"."""
-    square = f"squares {spec.square_m * 1000:.3f} mm"
+    """A spec in words: "7 x 5 DICT_4X4_50 board (squares 40.00 mm, markers 28.00 mm)",
+    "10 x 7 chessboard (9 x 6 inner corners, squares 25.40 mm)"; a size off the 0.01 mm grid (a PNG's whole
+    pixels) with 3 decimals."""
+    square = f"squares {format_mm(spec.square_m)}"
     if spec.kind == BoardKind.chessboard or spec.marker_m is None:
         name = f"{spec.squares_x} x {spec.squares_y} chessboard"
         details = [f"{spec.squares_x - 1} x {spec.squares_y - 1} inner corners", square]
     else:
         name = f"{spec.squares_x} x {spec.squares_y} {spec.dictionary.value} board"
-        details = [square, f"markers {spec.marker_m * 1000:.3f} mm"]
+        details = [square, f"markers {format_mm(spec.marker_m)}"]
         details += ["legacy layout"] * spec.legacy + [f"first marker {spec.first_marker_id}"] * bool(
             spec.first_marker_id
         )
     return f"{name} ({', '.join(details + ['inverted'] * spec.inverted)})"
+
+
+def format_mm(metres: float) -> str:
+    """A printed size in mm: "24.00 mm" when it is a whole 0.01 mm, as a PDF board's are, else "24.003 mm"."""
+    mm = metres * 1000
+    return f"{mm:.2f} mm" if abs(mm - round(mm, 2)) < 1e-6 else f"{mm:.3f} mm"
 
 
 def _grey(image: np.ndarray) -> np.ndarray:

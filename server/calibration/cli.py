@@ -35,8 +35,8 @@ def add_commands(commands) -> None:
     board.add_argument(
         "--squares",
         default="11x8",
-        help="squares across x down (default: 11x8, A4 landscape); OpenCV's '9x6' chessboard pattern (inner "
-        "corners) has 10x7 squares",
+        help="squares across x down (default: 11x8, on A4 or Letter landscape); OpenCV's '9x6' chessboard pattern "
+        "(inner corners) has 10x7 squares",
     )
     board.add_argument("--square-mm", type=float, default=24.0, help="side of a square")
     board.add_argument("--marker-mm", type=float, default=None, help="side of a marker (default: 0.6 of a square)")
@@ -48,7 +48,8 @@ def add_commands(commands) -> None:
     )
     board.add_argument("--first-marker", type=int, default=0, help="id of the top-left marker")
     board.add_argument("--inverted", action="store_true", help="printed inverted: white markers on black")
-    board.add_argument("--dpi", type=float, default=600.0, help="resolution of the board's pixels")
+    board.add_argument("--paper", default="a4", choices=("a4", "letter"), help="a PDF's page, turned as the board fits")
+    board.add_argument("--dpi", type=float, default=600.0, help="resolution of a PNG board's pixels")
     board.set_defaults(run=_run_board)
     camera = steps.add_parser("camera", help="calibrate a camera from photos of the board")
     camera.add_argument(
@@ -74,8 +75,8 @@ def _fail(message: str, as_json: bool = False, field: str | None = None) -> int:
 def _run_board(args) -> int:
     from pydantic import ValidationError
 
-    from server.calibration.board import describe_board
-    from server.calibration.printing import write_board
+    from server.calibration.board import describe_board, format_mm
+    from server.calibration.printing import paper_name, write_board
     from shared_schemas.calibration import BoardSpec
 
     try:
@@ -98,15 +99,23 @@ def _run_board(args) -> int:
             inverted=args.inverted,
             **given,
         )
-        printed = write_board(spec, args.out, args.dpi)
+        printed, page = write_board(spec, args.out, args.dpi, args.paper)
     except ValidationError as error:
         return _fail(describe_validation_error(error, "board"))
     except (ValueError, OSError) as error:
         return _fail(str(error))
-    print(f"wrote {args.out} and {args.out.with_suffix('.json')}: {describe_board(printed)}")
+    on = (
+        f" on a {page.width_mm:g} x {page.height_mm:g} mm page ({paper_name(page.paper)} "
+        + ("landscape)" if page.landscape else "portrait)")
+        if page is not None
+        else ""
+    )
+    print(f"wrote {args.out} and {args.out.with_suffix('.json')}: {describe_board(printed)}{on}")
+    check = "the check bar (100 mm) and a square" if page is not None else "a square"
     print(
-        "print at 100 % (no 'fit to page'), glue it flat, and measure a square: if it is not "
-        f"{printed.square_m * 1000:.2f} mm, write the measured sizes into {args.out.with_suffix('.json')}"
+        f"print at 100 % (no 'fit to page'), glue it flat, and measure {check}: if a square is not "
+        f"{format_mm(printed.square_m)}, write the measured sizes into "
+        f"{args.out.with_suffix('.json')}"
     )
     return EXIT_OK
 

@@ -21,6 +21,15 @@ class UnreadablePhotos(PhotoError):
     sent to /v1/calibrations/views is."""
 
 
+UNREADABLE = "unreadable: "  # how a left-out photo's note starts when it cannot be read
+
+
+def _none_readable(skipped: list[ViewFit]) -> UnreadablePhotos:
+    """The error when not one photo can be read: each one named with why (bad input, exit 2 / 400)."""
+    reasons = [(view.note or "").removeprefix(UNREADABLE) for view in skipped]
+    return UnreadablePhotos(f"no photo is readable ({len(skipped)} given): " + "; ".join(reasons))
+
+
 def photo_sizes(
     photos: Sequence[tuple[str, bytes]], max_pixels: int = MAX_PHOTO_PIXELS
 ) -> tuple[dict[str, tuple[int, int]], list[ViewFit]]:
@@ -32,9 +41,9 @@ def photo_sizes(
         try:
             sizes[name] = photo_size(data, name, max_pixels)
         except PhotoError as error:
-            skipped.append(ViewFit(name=name, corners=0, note=f"unreadable: {error}"))
+            skipped.append(ViewFit(name=name, corners=0, note=f"{UNREADABLE}{error}"))
     if not sizes:
-        raise UnreadablePhotos("no photo is readable: " + "; ".join(view.note or "" for view in skipped))
+        raise _none_readable(skipped)
     distinct = sorted(set(sizes.values()))
     if len(distinct) > 1:
         examples = ", ".join(f"{w}x{h} ('{next(n for n, s in sizes.items() if s == (w, h))}')" for w, h in distinct)
@@ -60,7 +69,7 @@ def find_views(
         try:
             pixels = read_grey(data, name, max_pixels)
         except PhotoError as error:
-            skipped.append(ViewFit(name=name, corners=0, note=f"unreadable: {error}"))
+            skipped.append(ViewFit(name=name, corners=0, note=f"{UNREADABLE}{error}"))
             continue
         decoded += 1
         view = find_board(pixels, spec, name, first=first)
@@ -76,5 +85,5 @@ def find_views(
             views.append(view)
             first = (view.inverted, view.mirrored)
     if not decoded:  # every header read, no pixels: as unreadable as no header
-        raise UnreadablePhotos("no photo is readable: " + "; ".join(view.note or "" for view in skipped))
+        raise _none_readable(skipped)
     return views, skipped

@@ -18,6 +18,7 @@ from pydantic import ValidationError
 from server.calibration.board import BoardRules
 from server.calibration.fit import Fit, FitRules, fit_views
 from server.calibration.lens import DISTORTION_NAMES, PINHOLE_NAMES
+from server.calibration.photos import UNREADABLE
 from server.calibration.quality import CORNER_CELLS, coverage_grid, distortion_sigma_px, image_part, tilt_deg
 from shared_schemas import DeviceProfile
 from shared_schemas.calibration import BoardSpec, BoardView, CalibrationReport, FittedCamera, ViewFit
@@ -166,9 +167,23 @@ def _fitted(fit: Fit, size: tuple[int, int], trusted: bool) -> FittedCamera:
     )
 
 
+def _some(names: list[str], shown: int = 3) -> str:
+    """A few names and how many more: the report's message is bounded (the contract's 1000 characters)."""
+    more = len(names) - shown
+    return ", ".join(names[:shown]) + (f" and {more} more" if more > 0 else "")
+
+
 def no_board_report(skipped: list[ViewFit]) -> CalibrationReport:
-    """The refusal when no photo shows the board: most likely a board spec that does not match the print."""
+    """The refusal when no photo shows the board: most likely a board spec that does not match the print. Some
+    photos may be unreadable (when none is, `find_views` raises instead): they are named, as they are no clue
+    to the spec."""
+    unreadable = [view.name for view in skipped if (view.note or "").startswith(UNREADABLE)]
     message = "no photo shows the board: does the board spec match the printed board (dictionary, squares)?"
+    if unreadable:
+        message = (
+            f"no readable photo shows the board ({len(skipped) - len(unreadable)} read, {len(unreadable)} "
+            f"unreadable: {_some(unreadable)}): does the board spec match the printed board (dictionary, squares)?"
+        )
     return CalibrationReport(
         ok=False,
         coverage=0.0,

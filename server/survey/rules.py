@@ -58,6 +58,10 @@ class SurveyRules:
     # times the median of all sightings' marks a wrong label or a smeared panel: the sighting is left
     # out and the fit repeated (`run._without_outliers`)
     outlier_factor: float = 6.0
+    # The compass error every frame of one survey shares (a building's steel deflects the field alike
+    # over a room): the frames cannot measure it, so the bearing's sigma is never below it. Indoor phone
+    # headings err by 10-20 degrees (docs/survey.md, the bearing); a room known to be clean may state less
+    compass_bias_sigma_deg: float = 10.0
     max_evaluations: int = 200
     pipeline: PipelineOptions = PipelineOptions(blobs=SURVEY_BLOBS)
     room: RoomRules = RoomRules(candidates=CandidateRules(blobs=SURVEY_BLOBS))

@@ -104,7 +104,9 @@ def survey(
             raise SurveyRefused("the fit leaves every frame's panels far off: " + dropped[0].why)
         used, skipped = kept, skipped + dropped
         adjusted = adjust(used, chain_start(used, sketch, anchor), anchor, rules)
-    bearing = map_bearing([c.rotation_wc for c in adjusted.cameras], [f.compass_bearing_deg for f in used])
+    bearing = map_bearing(
+        [c.rotation_wc for c in adjusted.cameras], [f.compass_bearing_deg for f in used], rules.compass_bias_sigma_deg
+    )
     beacons = []
     for beacon in sketch.beacons:
         estimate = adjusted.panels[beacon.id]

@@ -69,8 +69,15 @@ def _run_stripes(args) -> int:
     import numpy as np
 
     from server.tone import SRGB_TO_LINEAR_DN
-    from server.vlc.decoder import row_time_s
-    from server.vlc.stripes import NoStripes, measure_stripes, row_signal, stripe_axis, turned_frame_problem
+    from server.vlc.decoder import panel_pixels, row_time_s
+    from server.vlc.stripes import (
+        NoStripes,
+        TurnedRules,
+        measure_stripes,
+        row_signal,
+        stripe_axis,
+        turned_frame_problem,
+    )
 
     try:
         pixels = _luma(args.frame)
@@ -93,10 +100,11 @@ def _run_stripes(args) -> int:
         return report_bad_input(problem, as_json=args.json)
     values = cv2.LUT(pixels, SRGB_TO_LINEAR_DN) if args.tone_curve == "srgb" else pixels
     mask = np.ones((h, w), bool)
-    axis = stripe_axis(values, [((y, x), mask)])
+    panel = panel_pixels(values, mask, (y, x), TurnedRules().edge_margin_px)
+    axis = stripe_axis([panel])
     signal = row_signal(values, mask, (y, x), row_time, args.exposure_s)
     measured = NoStripes("too few rows") if signal is None else measure_stripes(*signal, row_time, args.exposure_s)
-    turned = turned_frame_problem(values, [((y, x), mask)], [(x, y, w, h)])
+    turned = turned_frame_problem(values, [panel], [(x, y, w, h)])
     if args.json:
         body = {
             "frame": str(args.frame),

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from server.ingest import LumaFrame
 from server.vision.beacons import BeaconBlob, CandidateRules, Candidates, blob_mask
 from server.vlc.capture import frame_blobs, id_frame_problem
-from server.vlc.decoder import StripeObservation, StripeRules, read_stripes, row_time_s
+from server.vlc.decoder import StripeObservation, StripeRules, panel_pixels, read_panel_stripes, row_time_s
 from server.vlc.stripes import TurnedRules, turned_frame_problem
 
 
@@ -42,15 +42,16 @@ def read_id_frame(
     first_row_s = timestamp_ns * 1e-9 + meta.full_offset[1] * row_time
     found = frame_blobs(frame, candidates, rules) if found is None else found  # dark rows between stripes bridged
     masks = [blob_mask(frame.pixels, blob, found, candidates) for blob in found.blobs]
+    # each mask shrunk once, for both the turned-frame test and the row reader
+    shrunk = [panel_pixels(frame.pixels, mask, (y0, x0), rules.edge_margin_px) for y0, x0, mask in masks]
     # stripes along the columns read as nonsense along the rows: say so instead, before reading them
-    regions = [((y0, x0), mask) for y0, x0, mask in masks]
     boxes = [blob.bounding_box for blob in found.blobs]
-    turned = turned_frame_problem(frame.pixels, regions, boxes, TurnedRules(edge_margin_px=rules.edge_margin_px))
+    turned = turned_frame_problem(frame.pixels, shrunk, boxes, TurnedRules(edge_margin_px=rules.edge_margin_px))
     if turned is not None:
         return IdFrameReading((), turned)
     panels = []
-    for blob, (y0, x0, mask) in zip(found.blobs, masks, strict=True):
-        observation = read_stripes(frame.pixels, mask, (y0, x0), first_row_s, row_time, exposure_s, rules)
+    for blob, panel in zip(found.blobs, shrunk, strict=True):
+        observation = read_panel_stripes(panel, first_row_s, row_time, exposure_s, rules)
         centroid = meta.fraction_of_full_frame(*blob.centroid_px)
         panels.append(PanelStripes(blob, centroid, observation))
     return IdFrameReading(tuple(panels), None)

@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from server.vlc.decoder import StripeRules, read_stripes
+from server.vlc.decoder import PanelPixels, StripeRules, panel_pixels, read_stripes
 
 # 10-90 % of a linear ramp: what a box exposure makes of a step
 RAMP_10_90 = 0.8
@@ -266,16 +266,17 @@ def measure_stripes(
     )
 
 
-def _profile_roughness(inside: np.ndarray, inner: np.ndarray, axis: int, trim: int) -> tuple[float, int]:
-    """(sum of squared central differences, their count) of the means over `inner` (bool) of a window
-    (`inside`: its pixels there, 0 elsewhere) along `axis` (1: each row's mean, a profile down the rows; 0: each
-    column's), without the `trim` first and last means (what is left there of the blurred outline)."""
-    counts = inner.sum(axis=axis)
+def _profile_roughness(panel: PanelPixels, axis: int, trim: int) -> tuple[float, int]:
+    """(sum of squared central differences, their count) of the means over a panel's shrunk mask (`panel.inner`)
+    along `axis` (1: each row's mean, a profile down the rows; 0: each column's), without the `trim` first and
+    last means (what is left there of the blurred outline)."""
+    counts = panel.column_counts if axis == 0 else panel.row_counts
     used = np.flatnonzero(counts > 0)
     if len(used) < 2 * trim + 3:
         return 0.0, 0
     span = slice(used[0] + trim, used[-1] + 1 - trim)
-    means = inside.sum(axis=axis)[span] / np.maximum(counts[span], 1)
+    sums = panel.inside.sum(axis=0) if axis == 0 else panel.row_sums
+    means = sums[span] / np.maximum(counts[span], 1)
     both = (counts[span][2:] > 0) & (counts[span][:-2] > 0)
     differences = (means[2:] - means[:-2])[both]
     return float(np.sum(differences**2)), int(both.sum())
@@ -315,33 +316,27 @@ class TurnedRules:
     min_bars: int = 3
 
 
-def stripe_axis(
-    pixels: np.ndarray, regions: list[tuple[tuple[int, int], np.ndarray]], rules: TurnedRules = TurnedRules()
-) -> StripeAxis:
-    """The profiles' roughness pooled over `regions` ((y0, x0), mask (bool)) of `pixels`.
+def stripe_axis(panels: list[PanelPixels], rules: TurnedRules = TurnedRules()) -> StripeAxis:
+    """The profiles' roughness pooled over `panels` (`decoder.panel_pixels`, shrunk by `rules.edge_margin_px`).
 
     The rolling shutter's stripes run along the rows: the rows' means step at every edge while the
     columns' means, each over the same stripes, stay smooth, so the ratio is well below 1. A frame
     turned by 90 degrees shows its stripes along the columns: well above 1. Means, not pixels: the
     pixels' noise, alike in both directions, would pull both towards 1.
     """
-    size = 2 * rules.edge_margin_px + 1
-    kernel = np.ones((size, size), np.uint8)
     rough = [0.0, 0.0]
     counts = [0, 0]
     level_sum, level_count = 0.0, 0
-    for (y0, x0), mask in regions:
-        h, w = mask.shape
-        mask = np.ascontiguousarray(mask, dtype=bool)  # viewed as uint8 for OpenCV
-        inner = cv2.erode(mask.view(np.uint8), kernel).view(bool) if rules.edge_margin_px > 0 else mask
-        if not inner.any():
+    for panel in panels:
+        if panel.edge_margin_px != rules.edge_margin_px:
+            raise ValueError(f"a panel is shrunk by {panel.edge_margin_px} px, the rules say {rules.edge_margin_px}")
+        inner_count = cv2.countNonZero(panel.inner.view(np.uint8))
+        if inner_count == 0:
             continue
-        inside = pixels[y0 : y0 + h, x0 : x0 + w].astype(np.float32)
-        level_sum += float(inside[inner].sum())
-        level_count += int(inner.sum())
-        inside[~inner] = 0.0  # both profiles sum the same values
-        for axis in (0, 1):
-            total, count = _profile_roughness(inside, inner, axis, rules.trim)
+        level_sum += float(panel.inside[panel.inner].sum())
+        level_count += inner_count
+        for axis in (0, 1):  # both profiles sum the same values
+            total, count = _profile_roughness(panel, axis, rules.trim)
             rough[axis] += total
             counts[axis] += count
     return StripeAxis(
@@ -368,17 +363,14 @@ def side_by_side_bars(boxes: list[tuple[int, int, int, int]], rules: TurnedRules
     return max((sum(top <= (a + b) / 2 < bottom for top, bottom in bars) for a, b in bars), default=0)
 
 
-def _comb_region(
-    region: tuple[tuple[int, int], np.ndarray], box: tuple[int, int, int, int]
-) -> tuple[tuple[int, int], np.ndarray]:
-    """`region` ((y0, x0), mask), or its blob's whole `box` (x, y, w, h) when the mask spans under half the
-    box's columns: a turned LED keyed fully off, whose mask is one upright bar of the comb the box holds
-    (its own columns smooth, the box's stepping from bar to bar)."""
-    (_, _), mask = region
+def _comb_region(pixels: np.ndarray, panel: PanelPixels, box: tuple[int, int, int, int]) -> PanelPixels:
+    """`panel`, or its blob's whole `box` (x, y, w, h) of `pixels` when the mask spans under half the box's columns:
+    a turned LED keyed fully off, whose mask is one upright bar of the comb the box holds (its own columns
+    smooth, the box's stepping from bar to bar)."""
     x, y, w, h = box
-    if 2 * np.count_nonzero(mask.any(axis=0)) >= w:
-        return region
-    return (y, x), np.ones((h, w), bool)
+    if 2 * np.count_nonzero(panel.mask.any(axis=0)) >= w:
+        return panel
+    return panel_pixels(pixels, np.ones((h, w), bool), (y, x), panel.edge_margin_px)
 
 
 TURNED = "is the frame turned 90 degrees? Send it as the sensor reads it, rows in readout order"
@@ -386,17 +378,18 @@ TURNED = "is the frame turned 90 degrees? Send it as the sensor reads it, rows i
 
 def turned_frame_problem(
     pixels: np.ndarray,
-    regions: list[tuple[tuple[int, int], np.ndarray]],
+    panels: list[PanelPixels],
     boxes: list[tuple[int, int, int, int]],
     rules: TurnedRules = TurnedRules(),
 ) -> str | None:
-    """The sentence saying that the stripes of a frame's panels (`regions`: (y0, x0), mask; `boxes`: their
-    bounding boxes (x, y, w, h)) run along the columns, as in a frame turned by 90 degrees, or None.
+    """The sentence saying that the stripes of a frame's panels (`panels`: their pixels in their masks, shrunk by
+    `rules.edge_margin_px`, `decoder.panel_pixels`; `boxes`: their bounding boxes (x, y, w, h)) run along the
+    columns, as in a frame turned by 90 degrees, or None.
 
     Either the panels' columns step like stripes and their rows do not (`stripe_axis`), or the panels'
     rows are plain and `side_by_side_bars` finds at least `rules.min_bars`: an LED keyed fully off,
     its stripes along the columns, each a blob of its own."""
-    axis = stripe_axis(pixels, [_comb_region(region, box) for region, box in zip(regions, boxes, strict=True)], rules)
+    axis = stripe_axis([_comb_region(pixels, panel, box) for panel, box in zip(panels, boxes, strict=True)], rules)
     step_dn = rules.min_relative_step * axis.level_dn
     if axis.ratio >= rules.max_ratio and np.sqrt(axis.along_columns_dn2) >= step_dn:
         return (

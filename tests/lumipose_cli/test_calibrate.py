@@ -44,14 +44,12 @@ def test_board_pdf_is_at_true_scale_with_its_spec(tmp_path, capsys):
     assert main(["calibrate", "board", "--out", str(out), "--squares", "5x4", "--square-mm", "30", "--dpi", "300"]) == 0
     spec = BoardSpec.model_validate_json((tmp_path / "board.json").read_text())
     assert (spec.squares_x, spec.squares_y, spec.dictionary.value) == (5, 4, "DICT_5X5_100")
-    assert spec.square_m == pytest.approx(0.030, abs=0.0254 / 300)  # whole pixels at 300 dpi
-    assert spec.marker_m == pytest.approx(0.018, abs=0.0254 / 300)
+    assert (spec.square_m, spec.marker_m) == (0.030, 0.018)  # vectors: the sizes asked, --dpi is a PNG's
     text = out.read_bytes()
     assert text.startswith(b"%PDF")
-    # the page is the board plus a 10 mm margin each side, in points (1/72 inch)
+    # an A4 page, landscape, in points (1/72 inch); tests/server/calibration/test_printing.py reads it whole
     box = [float(v) for v in text.split(b"/MediaBox [")[1].split(b"]")[0].split()]
-    assert box[2] / 72 * 25.4 == pytest.approx(spec.square_m * 5000 + 20, abs=0.2)
-    assert box[3] / 72 * 25.4 == pytest.approx(spec.square_m * 4000 + 20, abs=0.2)
+    assert (box[2] / 72 * 25.4, box[3] / 72 * 25.4) == (pytest.approx(297, abs=1e-3), pytest.approx(210, abs=1e-3))
     assert "print at 100 %" in capsys.readouterr().out
 
 
@@ -188,3 +186,44 @@ def test_the_default_boards_json_keeps_its_fields(tmp_path):
     assert main(["calibrate", "board", "--out", str(tmp_path / "b.png"), "--dpi", "60"]) == 0
     written = json.loads((tmp_path / "b.json").read_text())
     assert set(written) == {"schema", "squares_x", "squares_y", "square_m", "marker_m", "dictionary"}
+
+
+def test_only_unreadable_photos_are_bad_input_naming_each(tmp_path, shots, capsys):
+    # a file that is no image, and a PNG whose header reads but whose pixels are cut off
+    junk, cut = tmp_path / "junk.jpg", tmp_path / "cut.png"
+    junk.write_bytes(b"not a photo")
+    cut.write_bytes(encoded(photo_set(PoseSet.good)[0][0])[:3000])
+    assert _camera(shots, [junk, cut]) == 2
+    err = capsys.readouterr().err
+    assert f"no photo is readable (2 given): '{junk}' is not a readable JPEG, PNG or HEIC photo" in err, err
+    assert f"; '{cut}' cannot be decoded (damaged or truncated" in err
+
+
+def test_readable_photos_without_the_board_are_refused_naming_the_unreadable_ones(tmp_path, shots, capsys):
+    # exit 1 (the spec may not match the print), but the unreadable photos are no clue to the spec: named
+    junk, blank = tmp_path / "junk.jpg", tmp_path / "blank.png"
+    junk.write_bytes(b"not a photo")
+    blank.write_bytes(encoded(np.full((480, 640), 100, np.uint8)))
+    assert _camera(shots, [junk, blank]) == 1
+    out = capsys.readouterr().out
+    assert "refused: no readable photo shows the board (1 read, 1 unreadable: " in out and "junk.jpg): does" in out
+
+
+def test_photos_are_turned_upright_by_their_exif_orientation(shots, tmp_path, capsys):
+    # the set as a phone held in portrait stores it: the rows turned a quarter, EXIF orientation 6 to show it
+    # upright; the profile is of the upright photos, as the same photos stored upright give
+    stored, profiles = [], {}
+    for k, photo in enumerate(photo_set(PoseSet.good)[0]):
+        exif = Image.Exif()
+        exif[0x0112] = 6
+        stored.append(tmp_path / f"turned{k:02d}.png")
+        Image.fromarray(np.ascontiguousarray(np.rot90(photo, 1))).save(stored[-1], "PNG", exif=exif.tobytes())
+    for name, photos in (("upright", shots[1]), ("turned", stored)):
+        assert _camera(shots, photos, "--out", str(tmp_path / f"{name}.json")) == 0
+        profiles[name] = DeviceProfile.model_validate_json((tmp_path / f"{name}.json").read_text())
+    assert (profiles["turned"].width, profiles["turned"].height) == (640, 480)
+    assert profiles["turned"].intrinsics.fx == pytest.approx(profiles["upright"].intrinsics.fx, rel=1e-3)
+    assert profiles["turned"].intrinsics.cx == pytest.approx(profiles["upright"].intrinsics.cx, abs=0.5)
+    capsys.readouterr()
+    doc = (Path(__file__).parents[2] / "docs" / "calibration.md").read_text()
+    assert "each photo is turned upright by its exif orientation" in " ".join(doc.lower().split())

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import glob
 import json
+import re
+import shlex
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -92,3 +96,40 @@ def test_bad_input_exits_2_naming_it(recorded, tmp_path, capsys, change, expecte
     args += ["--out", tmp_path / "map.json", *(["--name", change["name"]] if "name" in change else [])]
     assert _survey(*args) == 2
     assert expected in capsys.readouterr().err
+
+
+QUICKSTART = Path(__file__).resolve().parents[3] / "docs" / "quickstart.md"
+NUMBER = re.compile(r"[-+]?\d+(?:\.(\d+))?")
+
+
+def _step_5() -> tuple[list[str], list[str]]:
+    """The integrator's step 5 of docs/quickstart.md: its commands and the output it quotes."""
+    step = QUICKSTART.read_text().split("**5. Survey the room**", 1)[1].split("**6.", 1)[0]
+    commands, output = re.findall(r"```(?:bash)?\n(.*?)```", step, re.S)
+    return [line for line in commands.splitlines() if line.strip()], output.splitlines()
+
+
+def _same_but_numbers(printed: str, quoted: str) -> bool:
+    """The same text, each number within two units of its last quoted digit."""
+    if NUMBER.sub("#", printed) != NUMBER.sub("#", quoted):
+        return False
+    pairs = zip(NUMBER.finditer(printed), NUMBER.finditer(quoted), strict=True)
+    return all(abs(float(p[0]) - float(q[0])) <= 2 * 10.0 ** -len(q[1] or "") + 1e-9 for p, q in pairs)
+
+
+def test_the_quickstarts_survey_step_runs_as_written_and_prints_what_it_quotes(tmp_path, capsys, monkeypatch):
+    """From an empty folder, step 5's commands as the page writes them (the shell's glob expanded; the
+    `client` lines need the service of step 2: tests/test_quickstart.py): the simulated set is written
+    where the survey reads it, the survey writes room.json, and both print the page's lines."""
+    monkeypatch.chdir(tmp_path)
+    commands, quoted = _step_5()
+    local = [shlex.split(line) for line in commands if not line.startswith("lumipose client")]
+    assert [argv[:2] for argv in local] == [["lumipose", "simulate"], ["lumipose", "survey"]]
+    for argv in local:
+        expanded = [match for arg in argv[1:] for match in (sorted(glob.glob(arg)) if "*" in arg else [arg])]
+        assert main(expanded) == 0, argv
+    printed = capsys.readouterr().out.splitlines()
+    assert len(printed) == len(quoted)
+    for line, quote in zip(printed, quoted, strict=True):
+        assert _same_but_numbers(line, quote), (line, quote)
+    assert load_map("room.json").name == "room" and load_map("out/survey/map.json").beacon(17) is not None

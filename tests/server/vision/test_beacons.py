@@ -133,3 +133,14 @@ def test_components_give_opencvs_labels_stats_and_centroids():
         assert np.array_equal(own_stats[1:], stats[1:])
         for label in range(1, count):
             assert np.array_equal(_centroid(labels, label, int(stats[label, cv2.CC_STAT_AREA])), centroids[label])
+
+
+def test_a_vertical_closing_by_running_extremes_is_opencvs():
+    from server.vision.beacons import _closed, _closed_columns
+
+    rng = np.random.default_rng(5)
+    for trial in range(400):
+        height, width, half = int(rng.integers(1, 80)), int(rng.integers(1, 12)), int(rng.integers(1, 40))
+        mask = np.where(rng.random((height, width)) < rng.uniform(0.01, 0.9), 255, 0).astype(np.uint8)
+        expected = _closed(mask, np.ones((2 * half + 1, 1), np.uint8))
+        assert np.array_equal(_closed_columns(mask, half), expected), trial

@@ -222,3 +222,16 @@ def test_decisions_are_those_of_fitting_every_hypothesis(make_id_frames, monkeyp
     monkeypatch.setattr(decoder, "_total_log_likelihood", every_fit)
     for m in maps:
         assert [dataclasses.astuple(d) for d in decide(frames, map_ids=m)] == bounded[m]
+
+
+def test_a_panel_s_pixels_are_counted_and_summed_as_numpy_does():
+    from server.vlc.decoder import panel_pixels
+
+    rng = np.random.default_rng(7)
+    pixels = rng.integers(0, 256, (60, 80), dtype=np.uint8)
+    mask = rng.random((40, 50)) < 0.9
+    panel = panel_pixels(pixels, mask, (5, 7), 2)
+    assert np.array_equal(panel.row_counts, panel.inner.sum(axis=1))
+    assert np.array_equal(panel.column_counts, panel.inner.sum(axis=0))
+    assert np.array_equal(panel.inside[panel.inner], pixels[5:45, 7:57][panel.inner].astype(np.float32))
+    assert not panel.inside[~panel.inner].any() and np.array_equal(panel.row_sums, panel.inside.sum(axis=1))
