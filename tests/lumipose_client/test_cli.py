@@ -137,7 +137,7 @@ def test_json_errors_are_the_contracts_error_body(server_url, capsys, tmp_path):
 
 def test_map_names_or_files_and_maps_delete(server_url, capsys, tmp_path):
     url = ["--url", server_url, "--api-key", API_KEY]
-    assert main(["client", "locate", str(FIXTURE), "--map", str(DEMO_MAP_PATH), *url, "--json"]) == 0  # its name is sent
+    assert main(["client", "locate", str(FIXTURE), "--map", str(DEMO_MAP_PATH), *url, "--json"]) == 0  # its name
     assert json.loads(capsys.readouterr().out)["ok"]
     room = tmp_path / "cli-room.json"
     room.write_text(load_map().model_copy(update={"name": "cli-room"}).model_dump_json(by_alias=True))

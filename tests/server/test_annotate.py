@@ -207,7 +207,7 @@ def test_the_label_of_a_panel_at_the_frames_top_is_whole_and_off_the_panel(tmp_p
     assert result.ok and diagnostics.panels[0].cut and diagnostics.panels[0].contour_px[:, 1].min() == 0
     [(text, (x, y), (height, width))] = [entry for entry in drawn if entry[0] == "beacon 0"]
     (text_width, text_height), below = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)
-    assert 0 <= x and x + text_width <= width and 0 <= y - text_height and y + below <= height
+    assert x >= 0 and x + text_width <= width and y - text_height >= 0 and y + below <= height
     part = enlarged_part(diagnostics.panels, result, frame.pixels.shape[::-1])
     scale = display_scale(part[2] - part[0], part[3] - part[1])
     [sight] = diagnostics.panels
