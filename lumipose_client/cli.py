@@ -1,5 +1,6 @@
 """`lumipose client ...`: the service from the command line, through the Python client.
 
+`client locate` prints as `lumipose locate` does (`shared_schemas.captures.print_outcome`).
 Exit codes as `lumipose locate`: 0 success (a fix), 1 no fix, 2 a refused request or bad input. Several
 photos: one the service refuses (or that cannot be read) is its own line, its error body, and the others go on.
 Only the client and the contract are imported here; the figures of `samples evaluate --figures`
@@ -23,10 +24,14 @@ from lumipose_client.client import AnnotatedResult, Client, LumiposeError, read_
 from shared_schemas import BeaconMap, DeviceProfile, ErrorBody, LocateResult
 from shared_schemas.api import Evaluation
 from shared_schemas.captures import (
+    PHOTO_CAMERA_FLAGS,
+    PHOTO_CAMERA_QUERY,
     add_frame_series_arguments,
     all_located,
     annotation_paths,
     bursts_in_upload_order,
+    print_outcome,
+    write_picture,
 )
 from shared_schemas.cli import (
     EXIT_BAD_INPUT,
@@ -95,7 +100,7 @@ def add_commands(commands, plot_evaluation: PlotEvaluation | None = None) -> Non
     locate.add_argument("--map", help=MAP_HELP + " (default: the service's active map)")
     locate.add_argument("--compress", choices=["gzip", "zstd", "none"], default="gzip", help="upload compression")
     locate.add_argument(
-        "--annotate", type=Path, metavar="PNG", help="also write the service's picture of what its pipeline saw"
+        "--annotate", type=Path, metavar="PNG", help="also write the service's picture (PNG) of what its pipeline saw"
     )
     locate.add_argument(
         "--profile",
@@ -218,6 +223,8 @@ def _locate_photos(
     if not all(photo_types):
         raise BadInput("give either photos or recorded frames, not both in one call", field="frames")
     profile = _photo_profile(args.profile)
+    beacon_map = _printed_map(client, args, map_name)
+    several = len(args.frames) > 1
     results, unreadable = [], 0
     for content_type, path, picture in zip(photo_types, args.frames, pictures, strict=True):
         assert content_type is not None  # all() above
@@ -232,32 +239,63 @@ def _locate_photos(
                 device=args.device,
                 annotate=picture is not None,
             )
-        except (LumiposeError, OSError) as error:
-            body = _photo_fault(error, path, given={"camera": args.camera, "profile": profile})
-            if body is None or len(args.frames) == 1:
-                raise  # the call's fault (a key, a map, the service), or the one photo's: `_run` reports it
-            named = body.model_copy(update={"message": f"{path.name}: {body.message}"})  # the service saw no name
-            print(named.model_dump_json() if args.json else f"{path.name}  error: {body.message}")
+        except LumiposeError as error:
+            fault = _with_flags(error)
+            body = _photo_fault(fault, path, given={"camera": args.camera, "profile": profile})
+            if body is None or not several:
+                raise fault from None  # the call's fault (a key, a map, the service), or the one photo's
+            _print_photo_fault(path, body, args.json)
             unreadable += 1
             continue
-        if isinstance(answer, AnnotatedResult):
-            assert picture is not None  # asked for with --annotate
-            picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
-            answer = answer.result
-        print(answer.model_dump_json(by_alias=True, indent=2 if len(args.frames) == 1 else None))
+        except OSError as error:
+            if not several:
+                raise
+            _print_photo_fault(path, BadInput(f"cannot read {path}: {error}", field="frames").body, args.json)
+            unreadable += 1
+            continue
+        answer = _kept(answer, picture)
+        print_outcome(path.name, answer, None, as_json=args.json, several=several, beacon_map=beacon_map)
         results.append(answer)
     if unreadable:
         return EXIT_BAD_INPUT
     return 0 if all(result.ok for result in results) else 1
 
 
-def _photo_fault(error: LumiposeError | OSError, path: Path, given: dict[str, str | None]) -> ErrorBody | None:
+def _print_photo_fault(path: Path, body: ErrorBody, as_json: bool) -> None:
+    """A photo of several the service refused: its line; the JSON body with the file's name before its message
+    (the service saw no name)."""
+    named = body.model_copy(update={"message": f"{path.name}: {body.message}"}) if as_json else body
+    print_outcome(path.name, named, None, as_json=as_json, several=True)
+
+
+def _with_flags(error: LumiposeError) -> LumiposeError:
+    """The service's refusal with the query parameters it asks for (`?profile=ID`) said as this command's flags
+    (`--profile ID`): the user of the command line passes those."""
+    message = error.body.message
+    for query, flag in zip(PHOTO_CAMERA_QUERY, PHOTO_CAMERA_FLAGS, strict=True):
+        message = message.replace(query, flag)
+    return LumiposeError(error.status, error.body.model_copy(update={"message": message}))
+
+
+def _kept(answer: LocateResult | AnnotatedResult, picture: Path | None) -> LocateResult:
+    """The result of an answer; an annotated one's picture written to `picture` (as `lumipose locate` does)."""
+    if isinstance(answer, AnnotatedResult):
+        assert picture is not None  # asked for with --annotate
+        write_picture(picture, answer.png)
+        return answer.result
+    return answer
+
+
+def _printed_map(client: Client, args, map_name: str | None) -> BeaconMap | None:
+    """The map located in, for the summary's focal uncertainty at the fix's distance; not fetched for --json."""
+    return None if args.json else client.get_map(map_name or client.active_map().name)
+
+
+def _photo_fault(error: LumiposeError, path: Path, given: dict[str, str | None]) -> ErrorBody | None:
     """The error body of a photo of several that the service could not take (as `lumipose locate` prints a
     frame it cannot read: its line, and the others go on), or None when the fault is the whole call's: one
     naming an option the call `given` (`--camera` is every photo's; without it, field camera is a photo's
     unknown camera)."""
-    if isinstance(error, OSError):
-        return BadInput(f"cannot read {path}: {error}", field="frames").body
     if error.status not in PHOTO_FAULT_STATUSES or given.get(error.body.field or "") is not None:
         return None
     return error.body
@@ -270,7 +308,8 @@ def _print_json(value: list[BaseModel] | dict) -> None:
 
 
 def _locate(client: Client, args) -> int:
-    """One result (indented JSON) for one frame; for several, one JSON line each, in the order given.
+    """As `lumipose locate` prints: a summary for one frame, one line each for several, in the order used (a
+    capture's ID frames, then its pose frame); `--json`: the contract's result (several: one JSON line each).
     `--annotate PNG`: the service's picture of each frame (several: PNG-<frame>.png each)."""
     photos = [photo_type(path) for path in args.frames]
     frames = [] if any(photos) else [read_fixture_files(path) for path in args.frames]
@@ -283,27 +322,27 @@ def _locate(client: Client, args) -> int:
         return report_bad_input(problem, as_json=args.json)
     if any(photos):
         return _locate_photos(client, args, photos, map_name, pictures)
-    results: dict[int, LocateResult] = {}
+    beacon_map = _printed_map(client, args, map_name)
+    results: list[LocateResult] = []
     for capture in bursts_in_upload_order([meta.frame_kind for meta, _ in frames]):
         for index in capture:
+            meta, data = frames[index]
             answer = client.locate(
-                frames[index][1],
-                frames[index][0],
+                data,
+                meta,
                 map=map_name,
                 beacon_id=args.beacon_id,
                 device=args.device,
                 compress=None if args.compress == "none" else args.compress,
                 annotate=args.annotate is not None,
             )
-            if isinstance(answer, AnnotatedResult):
-                answer_picture = pictures[index]
-                assert answer_picture is not None  # asked for with --annotate
-                answer_picture.write_bytes(answer.png)  # an OSError is reported as bad input by `_run`
-                answer = answer.result
-            results[index] = answer
-        for index in sorted(capture):
-            print(results[index].model_dump_json(by_alias=True, indent=2 if len(frames) == 1 else None))
-    return 0 if all_located(list(results.values())) else 1
+            result = _kept(answer, pictures[index])
+            name = args.frames[index].name
+            print_outcome(
+                name, result, meta.ground_truth, as_json=args.json, several=len(frames) > 1, beacon_map=beacon_map
+            )
+            results.append(result)
+    return 0 if all_located(results) else 1
 
 
 def _store_samples(client: Client, args) -> int:

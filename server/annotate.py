@@ -22,8 +22,9 @@ import numpy as np
 
 from server.diagnostics import Diagnostics, PanelSight
 from server.ingest import LumaFrame
-from server.outcomes import Fix
-from shared_schemas import LocateResult
+from server.outcomes import Fix, Refusal
+from shared_schemas import FailureReason, LocateResult
+from shared_schemas.cli import plural
 
 # BGR colours; the corner colour is pure green so that tests (and eyes) can find the corners
 CORNER = (0, 255, 0)
@@ -289,19 +290,38 @@ def _draw_fix(image: np.ndarray, corners_px, center_px, to_display, labels: bool
             cv2.putText(image, str(number), (int(x) - 4, int(y) + 5), FONT, FONT_SCALE, CORNER, 1, cv2.LINE_AA)
 
 
+def _panel_label(sight: PanelSight, name: str) -> str:
+    """A panel's label: its name, and when refused the reason; a refusal that found no beacon, or none it could
+    name, names none (the sight's beacon is only the template it was measured against)."""
+    outcome = sight.outcome
+    if isinstance(outcome, Fix):
+        return name
+    if outcome.reason is FailureReason.no_beacon:
+        return outcome.reason.value
+    if outcome.reason is FailureReason.unknown_beacon:
+        return f"panel: {outcome.reason.value}"
+    return f"{name}: {outcome.reason.value}"
+
+
 def _label_panel(image: np.ndarray, sight: PanelSight, to_display, name: str) -> None:
-    """The panel's name above it (and, when refused, the reason)."""
+    """The panel's label above it, or below it when the view has no room above (a panel at the frame's top
+    edge), kept inside the view, on the band's colour so that it reads over a bright panel too."""
     points = [p for p in (sight.contour_px, sight.outline_px, sight.polygon_px) if p is not None and len(p)]
     if isinstance(sight.outcome, Fix) and sight.outcome.corners_px is not None:
         points.append(sight.outcome.corners_px)
     if not points:
         return
-    top = to_display(np.vstack(points)) >> SHIFT
-    x, y = int(top[:, 0].min()), int(top[:, 1].min()) - 22
-    outcome = sight.outcome
-    text = name + ("" if isinstance(outcome, Fix) else f": {outcome.reason}")
-    colour = CORNER if isinstance(outcome, Fix) else REFUSED
-    cv2.putText(image, _ascii(text), (max(2, x), max(14, y)), FONT, FONT_SCALE, colour, 1, cv2.LINE_AA)
+    shown = to_display(np.vstack(points)) >> SHIFT
+    text = _ascii(_panel_label(sight, name))
+    (width, height), below = cv2.getTextSize(text, FONT, FONT_SCALE, 1)
+    x = min(max(2, int(shown[:, 0].min())), max(2, image.shape[1] - width - 2))
+    y = int(shown[:, 1].min()) - 22  # clear of the corner numbers above the panel
+    if y - height < 2:
+        y = int(shown[:, 1].max()) + 22 + height
+    y = min(max(y, height + 2), image.shape[0] - below - 2)
+    cv2.rectangle(image, (x - 2, y - height - 2), (x + width + 2, y + below), BAND, -1)
+    colour = CORNER if isinstance(sight.outcome, Fix) else REFUSED
+    cv2.putText(image, text, (x, y), FONT, FONT_SCALE, colour, 1, cv2.LINE_AA)
 
 
 def _ascii(text: str) -> str:
@@ -335,7 +355,7 @@ def _caption(
         texts.extend((line, TEXT) for line in textwrap.wrap(f"warning: {warning}", WRAP_CHARS))
     x0, y0, x1, y1 = part
     zoom = f"x{scale:.3g}" if scale != 1 else "not enlarged"
-    panels = f"{len(sights)} panel{'s' if len(sights) != 1 else ''} tried"
+    panels = _panel_count(result, sights)
     close_ups = f", corners x{CLOSE_UP_BLOCK:g}" if result.corners_px is not None else ""
     texts.append((f"frame pixels x {x0}-{x1 - 1}, y {y0}-{y1 - 1}, {zoom}{close_ups}; {panels}", TEXT))
     thresholds = sorted({round(s.threshold_dn) for s in sights if s.threshold_dn is not None})
@@ -354,6 +374,16 @@ def _caption(
         (any(s.roi_px is not None for s in sights), "region read", REGION),
     ]
     return [[text] for text in texts] + _flowed([(label, colour) for shown, label, colour in drawn if shown])
+
+
+def _panel_count(result: LocateResult, sights: list[PanelSight]) -> str:
+    """How many panels the frame showed (the result's `beacons_in_view`, when the path counts them) and how many
+    were measured (a sight that found no beacon measured none): a room refused for want of an ID saw its
+    panels and measured none."""
+    measured = sum(not (isinstance(s.outcome, Refusal) and s.outcome.reason is FailureReason.no_beacon) for s in sights)
+    if result.beacons_in_view is None:
+        return f"{plural(measured, 'panel')} measured"
+    return f"{plural(result.beacons_in_view, 'panel')} in view, {measured} measured"
 
 
 def _flowed(items: list[tuple[str, Colour]], width_px: int = 640) -> list[Line]:

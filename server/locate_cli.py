@@ -2,7 +2,8 @@
 
 Several frames (a walk, listed as shot) go through `server.locator.locate` in turn, with `--device`
 through one session as the service's do for a device: a burst's ID frames before its pose frame, as
-the app sends them (`shared_schemas.captures`). One line (or JSON line) per frame, in the order given.
+the app sends them (`shared_schemas.captures`). One line (or JSON line) per frame, in the order used (a
+capture's ID frames, then its pose frame), printed as `lumipose client locate` prints them.
 
 Each step is its own function (inputs, options, printing) so the command's flags stay readable.
 Exit codes: 0 a fix (several frames: `captures.all_located`), 1 no fix (the reason is printed), 2 bad input.
@@ -14,12 +15,10 @@ it: no frame moves into another capture); the exit code is the worst of them (2 
 
 from __future__ import annotations
 
-import math
-import sys
 from pathlib import Path
 
 from shared_schemas import DEMO_MAP_NAME
-from shared_schemas.captures import add_frame_series_arguments, annotation_paths
+from shared_schemas.captures import add_frame_series_arguments, annotation_paths, print_outcome, write_picture
 from shared_schemas.cli import (
     EXIT_BAD_INPUT,
     EXIT_NO_FIX,
@@ -27,7 +26,6 @@ from shared_schemas.cli import (
     BadInput,
     add_profile_argument,
     check_beacon_id,
-    number,
     read_map_argument,
     reads_environment,
     report_bad_input,
@@ -73,7 +71,7 @@ def add_locate_command(commands) -> None:
         "--annotate",
         type=Path,
         metavar="PNG",
-        help="also write a picture of what the pipeline saw (panel, contour, sides, corners, centre, the result); "
+        help="also write a PNG of what the pipeline saw (panel, contour, sides, corners, centre, the result); "
         "several frames: one PNG each, named PNG-<frame>.png",
     )
     parser.set_defaults(run=run_locate)
@@ -102,14 +100,19 @@ def run_locate(args) -> int:
         return report_bad_input(unreadable[0], as_json=args.json)
     options = LocateOptions(pipeline=pipeline_options(args))
     devices = Devices() if args.device is not None else None
-    results: dict[int, LocateResult] = {}
+    several = len(args.frames) > 1
+    results: list[LocateResult] = []
     # an unreadable frame's kind is unknown: it ends the capture before it, so it moves no frame into another
     kinds = [frames[index].meta.frame_kind if index in frames else FrameKind.pose for index in range(len(args.frames))]
     for capture in bursts_in_upload_order(kinds):
-        for index in (index for index in capture if index in frames):
+        for index in capture:  # printed as used: a capture's ID frames, then the pose frame they name
+            name = args.frames[index].name
+            if index in unreadable:
+                print_outcome(name, unreadable[index].body, None, as_json=args.json, several=several)
+                continue
             picture = pictures[index]
             diagnostics = Diagnostics() if picture is not None else None
-            results[index] = locate(
+            result = locate(
                 frames[index],
                 beacon_map,
                 replace(options, pipeline=replace(options.pipeline, diagnostics=diagnostics)),
@@ -120,20 +123,15 @@ def run_locate(args) -> int:
             if picture is not None and diagnostics is not None:
                 try:
                     in_session = in_device_session(beacon_map, args.beacon_id, args.device)
-                    write_annotation(picture, frames[index], diagnostics, results[index], in_session)
+                    write_annotation(picture, frames[index], diagnostics, result, in_session)
                 except BadInput as problem:
                     return report_bad_input(problem, as_json=args.json)
-    if len(args.frames) == 1:
-        print_result(results[0], frames[0], as_json=args.json, beacon_map=beacon_map)
-    else:
-        for index, path in enumerate(args.frames):
-            if index in unreadable:
-                print_error_line(path, unreadable[index], as_json=args.json)
-            else:
-                print_line(path, results[index], frames[index], as_json=args.json)
+            truth = frames[index].meta.ground_truth
+            print_outcome(name, result, truth, as_json=args.json, several=several, beacon_map=beacon_map)
+            results.append(result)
     if unreadable:
         return EXIT_BAD_INPUT
-    return EXIT_OK if all_located(list(results.values())) else EXIT_NO_FIX
+    return EXIT_OK if all_located(results) else EXIT_NO_FIX
 
 
 def read_frames(paths: list[Path], profiles, profile=None, camera=None):
@@ -203,86 +201,4 @@ def write_annotation(path: Path, frame, diagnostics, result, in_session: bool = 
     """The picture of what the pipeline saw (`server.annotate`) as a PNG file at `path`."""
     from server.annotate import annotate
 
-    try:
-        path.write_bytes(annotate(frame, diagnostics, result, in_session))
-    except OSError as error:
-        raise BadInput(f"cannot write the picture {path}: {error.strerror or error}", field="annotate") from None
-    print(f"picture: {path}", file=sys.stderr)  # stdout stays the result alone (--json)
-
-
-def print_result(result, frame, as_json: bool, beacon_map=None) -> None:
-    """The contract's LocateResult as JSON, or a few lines for people (with the error against the
-    frame's ground truth when it has one, and the intrinsics used and how sure they are)."""
-    if as_json:
-        print(result.model_dump_json(by_alias=True, indent=2))
-        return
-    if frame.camera_used is not None:
-        print_camera_used(frame.camera_used, result, beacon_map)
-    if not result.ok:
-        print(f"no fix: {result.reason}: {result.message}")
-        return
-    assert result.position_m is not None and result.yaw_pitch_roll_deg is not None  # outcomes.located sets both
-    x, y, z = result.position_m
-    yaw, pitch, roll = result.yaw_pitch_roll_deg
-    print(f"position  x={x:+.4f} m  y={y:+.4f} m  z={z:+.4f} m   (beacon {result.beacon_id})")
-    print(
-        f"attitude  yaw={yaw:+.2f}  pitch={pitch:+.2f}  roll={roll:+.2f} deg"
-        f"   gravity prior {'used' if result.gravity_used else 'not used'}"
-    )
-    # an outline fit (a cut panel, a rectangle, a circle) has no square's two poses to compare
-    ambiguity = "n/a" if result.ambiguity_ratio is None else number(result.ambiguity_ratio)
-    reprojection = "n/a" if result.reprojection_error_px is None else f"{number(result.reprojection_error_px, 3)} px"
-    print(f"quality   reprojection {reprojection}, ambiguity ratio {ambiguity}, {result.timing_ms['total']:.1f} ms")
-    errors = truth_errors_mm(result.position_m, frame)
-    if errors is not None:
-        print(f"truth     error 2D {errors[0]:.2f} mm, 3D {errors[1]:.2f} mm")
-    for warning in result.warnings:
-        print(f"warning   {warning}")
-
-
-def print_camera_used(camera_used, result, beacon_map) -> None:
-    """Which intrinsics a photo was located with, and what their focal uncertainty means at the fix's distance
-    (a relative focal error scales the distance along the ray by as much)."""
-    k = camera_used
-    print(f"camera    fx={k.fx:.1f} fy={k.fy:.1f} cx={k.cx:.1f} cy={k.cy:.1f} px from {k.detail}")
-    sigma = camera_used.focal_sigma_rel
-    if sigma is None:
-        print("          focal uncertainty unknown (intrinsics as given, not checked here)")
-        return
-    line = f"          focal uncertainty {100 * sigma:.2g} %"
-    beacon = beacon_map.beacon(result.beacon_id) if beacon_map and result.beacon_id is not None else None
-    if result.position_m is not None and beacon is not None:
-        distance_m = math.dist(result.position_m, beacon.center_m)
-        line += f", about {1000 * sigma * distance_m:.1f} mm along the ray at this fix's {distance_m:.2f} m"
-    print(line)
-
-
-def print_line(path: Path, result, frame, as_json: bool) -> None:
-    """One frame of several: its result as one JSON line, or its name and fix (or reason) on one line."""
-    if as_json:
-        print(result.model_dump_json(by_alias=True))
-        return
-    if not result.ok:
-        print(f"{path.name}  no fix: {result.reason}: {result.message}")
-        return
-    assert result.position_m is not None  # outcomes.located sets it
-    x, y, z = result.position_m
-    errors = truth_errors_mm(result.position_m, frame)
-    error = "" if errors is None else f"  truth error 2D {errors[0]:.1f} mm"
-    print(f"{path.name}  x={x:+.4f} y={y:+.4f} z={z:+.4f} m  beacon {result.beacon_id}{error}")
-
-
-def print_error_line(path: Path, problem: BadInput, as_json: bool) -> None:
-    """One frame of several that cannot be read: its error body as one JSON line, or its name and the error."""
-    if as_json:
-        print(problem.body.model_dump_json())
-        return
-    print(f"{path.name}  error: {problem.body.message}")
-
-
-def truth_errors_mm(position_m, frame) -> tuple[float, float] | None:
-    """The fix's 2-D and 3-D distance from the frame's ground truth, in mm; None for a frame without one."""
-    truth = frame.meta.ground_truth
-    if truth is None:
-        return None
-    return 1000 * math.dist(position_m[:2], truth.position_m[:2]), 1000 * math.dist(position_m, truth.position_m)
+    write_picture(path, annotate(frame, diagnostics, result, in_session))

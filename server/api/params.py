@@ -21,6 +21,7 @@ from server.api.upload import FRAME_HEADER, FrameUpload, PhotoUpload, receive_bo
 from server.options import LocateOptions
 from server.pipeline import CornerMethod
 from server.pose.solve import GravityMode
+from shared_schemas.captures import PHOTO_CAMERA_QUERY
 
 FRAME_REQUEST_BODY = {
     "requestBody": {
@@ -128,8 +129,8 @@ def _photo_frame(services, upload: PhotoUpload, profile_id: str | None, camera_t
         )
     profile = None if profile_id is None else profiles[profile_id]
     limit = photo_pixel_limit(services)
-    ask = ("?profile=ID", "?camera=fx,fy,cx,cy")
-    frame, _ = decode_photo(bytes(upload.data), "the photo", profiles, camera, profile, limit, ask)
+    # the query's way to give a camera; `lumipose client` says its flags instead (PHOTO_CAMERA_FLAGS)
+    frame, _ = decode_photo(bytes(upload.data), "the photo", profiles, camera, profile, limit, PHOTO_CAMERA_QUERY)
     return FrameUpload(meta=frame.meta, data=frame.pixels.reshape(-1).data, camera_used=frame.camera_used)
 
 

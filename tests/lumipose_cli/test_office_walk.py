@@ -28,6 +28,11 @@ def _frames(folder: Path) -> list[Path]:
     return sorted(folder.glob("office_*.json"))  # as shot: each pose frame, then its ID frames
 
 
+def _as_used(frames: list[Path]) -> list[Path]:
+    """The order the commands send and print them: each capture's ID frames, then its pose frame."""
+    return sorted(frames, key=lambda path: (path.stem.split("_")[1], path.stem.endswith("_pose")))
+
+
 def _truth(path: Path) -> list[float]:
     return json.loads(path.read_text())["ground_truth"]["position_m"]
 
@@ -61,11 +66,12 @@ def test_locate_walks_the_office_through_one_device_session(walk, capsys):
     frames = _frames(walk)
     room = ["--map", str(walk / "map.json")]
     assert main(["locate", *map(str, frames), *room, "--device", "phone", "--json"]) == 0
-    _check_fixes(frames, [json.loads(line) for line in capsys.readouterr().out.splitlines()])
+    _check_fixes(_as_used(frames), [json.loads(line) for line in capsys.readouterr().out.splitlines()])
     assert main(["locate", *map(str, frames), *room, "--device", "phone"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [line.split()[0] for line in lines] == [path.name for path in frames]  # one line each, as given
-    assert "beacon" in lines[0] and "truth error 2D" in lines[0]
+    assert [line.split()[0] for line in lines] == [path.name for path in _as_used(frames)]  # one line each, as used
+    assert "(1 waiting)" in lines[0] and "(4 waiting)" in lines[3]  # kept for the pose frame on the next line
+    assert "beacon" in lines[4] and "truth error 2D" in lines[4]
     # without a device a pose frame cannot carry the code: no beacon ID
     assert main(["locate", str(frames[0]), *room]) == 1
     assert "unknown_beacon" in capsys.readouterr().out
@@ -100,9 +106,25 @@ def test_client_locate_walks_the_office_as_the_app_sends_it(walk, server_url, ca
         client.put_map(load_map(walk / "map.json").model_copy(update={"name": name}))
     frames = _frames(walk)
     url = ["client", "--url", server_url, "locate"]
-    assert main([*url, *map(str, frames), "--map", name, "--device", f"walker-{uuid.uuid4().hex[:8]}"]) == 0
-    _check_fixes(frames, [json.loads(line) for line in capsys.readouterr().out.splitlines()])
-    assert main([*url, str(frames[0]), "--map", name, "--beacon-id", "17"]) == 0
+    assert main([*url, *map(str, frames), "--map", name, "--device", f"walker-{uuid.uuid4().hex[:8]}", "--json"]) == 0
+    _check_fixes(_as_used(frames), [json.loads(line) for line in capsys.readouterr().out.splitlines()])
+    assert main([*url, str(frames[0]), "--map", name, "--beacon-id", "17", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["beacon_id"] == 17
     assert main([*url, str(frames[0]), "--map", name, "--beacon-id", "5"]) == 2
     assert f"beacon 5 is not in map '{name}'" in capsys.readouterr().err
+
+
+def test_client_locate_prints_the_walk_as_locate_does(walk, server_url, capsys):
+    """One printing for the verb (issue 31): a line per frame in the order used, the same here and over HTTP."""
+    from lumipose_client import Client
+
+    name = "office-walk-lines"
+    with Client(server_url, api_key=API_KEY) as client:
+        client.put_map(load_map(walk / "map.json").model_copy(update={"name": name}))
+    frames = list(map(str, _frames(walk)))
+    assert main(["locate", *frames, "--map", str(walk / "map.json"), "--device", "phone"]) == 0
+    local = capsys.readouterr().out
+    device = f"walker-{uuid.uuid4().hex[:8]}"
+    assert main(["client", "--url", server_url, "locate", *frames, "--map", name, "--device", device]) == 0
+    assert capsys.readouterr().out == local
+    assert local.splitlines()[4].startswith(_frames(walk)[0].name)  # the pose frame after the ID frames it used

@@ -1,6 +1,7 @@
 """`lumipose client ...` against the real server: exit codes and what it prints."""
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -16,9 +17,20 @@ from shared_schemas.api import cell_truth_m
 from tests.conftest import API_KEY, FIXTURE
 
 
+def _without_time(summary: str) -> str:
+    return re.sub(r", [0-9.]+ ms$", "", summary, flags=re.MULTILINE)
+
+
 def test_client_locate_prints_the_result(server_url, capsys):
+    """As `lumipose locate` prints it (issue 31): the summary, or with --json the contract's result."""
+    assert main(["locate", str(FIXTURE)]) == 0
+    local = capsys.readouterr().out
     assert main(["client", "--url", server_url, "locate", str(FIXTURE)]) == 0
-    assert '"ok": true' in capsys.readouterr().out
+    served = capsys.readouterr().out
+    assert served.startswith("camera ") and "\nposition  x=" in served and "\ntruth     error 2D" in served, served
+    assert _without_time(served) == _without_time(local)
+    assert main(["client", "--url", server_url, "locate", str(FIXTURE), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ok"]
 
 
 def test_client_store_list_evaluate(server_url, capsys, tmp_path):
@@ -52,7 +64,7 @@ def test_client_locate_sends_a_png_beside_a_json_that_says_y8(server_url, capsys
     assert json.loads(capsys.readouterr().out)["ok"]
     results = []
     for path in (tmp_path / "frame.json", FIXTURE):
-        assert main(["client", "--url", server_url, "locate", str(path)]) == 0
+        assert main(["client", "--url", server_url, "locate", str(path), "--json"]) == 0
         results.append(json.loads(capsys.readouterr().out))
     png, y8 = results
     assert png["ok"] and png["position_m"] == y8["position_m"]  # the same pixels, the same fix
@@ -81,7 +93,7 @@ def test_client_profiles_put_list_get_delete(server_url, capsys, tmp_path):
 
 
 def test_url_and_key_after_the_verb_or_from_the_environment(server_url, capsys, monkeypatch):
-    assert main(["client", "locate", str(FIXTURE), "--url", server_url, "--compress", "none"]) == 0
+    assert main(["client", "locate", str(FIXTURE), "--url", server_url, "--compress", "none", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["ok"]
     monkeypatch.setenv("LUMIPOSE_URL", server_url)
     monkeypatch.setenv("LUMIPOSE_API_KEY", "wrong")
@@ -125,7 +137,7 @@ def test_json_errors_are_the_contracts_error_body(server_url, capsys, tmp_path):
 
 def test_map_names_or_files_and_maps_delete(server_url, capsys, tmp_path):
     url = ["--url", server_url, "--api-key", API_KEY]
-    assert main(["client", "locate", str(FIXTURE), "--map", str(DEMO_MAP_PATH), *url]) == 0  # the file's name is sent
+    assert main(["client", "locate", str(FIXTURE), "--map", str(DEMO_MAP_PATH), *url, "--json"]) == 0  # its name
     assert json.loads(capsys.readouterr().out)["ok"]
     room = tmp_path / "cli-room.json"
     room.write_text(load_map().model_copy(update={"name": "cli-room"}).model_dump_json(by_alias=True))

@@ -17,7 +17,7 @@ from server.outcomes import located
 from server.pipeline import PipelineOptions
 from server.rooms import locate_panel
 from server.vision.beacons import find_beacon_blobs
-from shared_schemas import DEMO_MAP_PATH, BeaconIdSource, FailureReason, load_map
+from shared_schemas import DEMO_MAP_PATH, BeaconIdSource, FailureReason, LocateResult, load_map
 from tests.conftest import FIXTURE
 from tests.helpers import TWO_PANELS, WIDTH, two_panel_frame
 
@@ -120,6 +120,18 @@ def test_locate_annotate_writes_the_picture_and_says_when_it_cannot(tmp_path, ca
     assert error["field"] == "annotate" and str(nowhere) in error["message"]
 
 
+def test_locate_refuses_a_picture_name_that_asks_for_another_format(tmp_path, capsys):
+    """Issue 31: `--annotate seen.jpg` wrote PNG bytes under a JPEG's name; the picture is a PNG (lossless: the
+    contour's pixels as drawn), so another suffix is refused, by the flag, before any work."""
+    for name in ("seen.jpg", "seen.JPEG", "seen"):
+        assert main(["locate", str(FIXTURE), "--annotate", str(tmp_path / name)]) == 2
+        captured = capsys.readouterr()
+        assert captured.out == "" and f"--annotate {tmp_path / name}: the picture is a PNG" in captured.err
+        assert not (tmp_path / name).exists()
+    assert main(["locate", str(FIXTURE), "--annotate", str(tmp_path / "seen.PNG")]) == 0
+    assert capsys.readouterr().err == f"picture: {tmp_path / 'seen.PNG'}\n"
+
+
 def test_panels_are_named_by_the_result_in_a_device_session_and_by_their_own_beacon_elsewhere():
     from server.annotate import _panel_name
     from server.diagnostics import PanelSight
@@ -135,3 +147,69 @@ def test_panels_are_named_by_the_result_in_a_device_session_and_by_their_own_bea
     assert _panel_name(other, refused, True) == "panel"
     single = LocateResult(ok=True, beacon_id=17, center_px=[300.0, 50.0])
     assert (_panel_name(fixed, single, False), _panel_name(other, single, False)) == ("beacon 17", "beacon 17")
+
+
+def _texts_drawn(monkeypatch) -> list[tuple[str, tuple[int, int], tuple[int, int]]]:
+    """Every text the picture draws: (text, origin, the image's height and width), recorded as drawn."""
+    drawn, put_text = [], cv2.putText
+
+    def record(image, text, origin, *args):
+        drawn.append((text, tuple(origin), image.shape[:2]))
+        return put_text(image, text, origin, *args)
+
+    monkeypatch.setattr(cv2, "putText", record)
+    return drawn
+
+
+def test_a_refusal_that_found_no_beacon_names_none(monkeypatch):
+    """Issue 31: 'beacon 0: no_beacon' said a beacon was there and was not; a panel whose ID is unknown is a
+    panel, not the template beacon it was measured against."""
+    from server.diagnostics import PanelSight
+    from server.outcomes import Refusal
+
+    frame = read_fixture(FIXTURE)
+    blob = np.array([[400.0, 600.0], [420.0, 600.0], [420.0, 620.0], [400.0, 620.0]])  # too small to be a panel
+    labels = {}
+    for reason in (FailureReason.no_beacon, FailureReason.unknown_beacon, FailureReason.not_a_square):
+        diagnostics = Diagnostics()
+        diagnostics.add(PanelSight(0, Refusal(reason, "why"), contour_px=blob))
+        drawn = _texts_drawn(monkeypatch)
+        annotate(frame, diagnostics, LocateResult(ok=False, reason=reason, message="why"))
+        labels[reason] = drawn[0][0]
+    assert labels == {
+        FailureReason.no_beacon: "no_beacon",
+        FailureReason.unknown_beacon: "panel: unknown_beacon",
+        FailureReason.not_a_square: "beacon 0: not_a_square",
+    }
+
+
+def test_the_caption_counts_the_panels_as_the_result_does(monkeypatch):
+    """Issue 31: a room refused for want of an ID said '0 panels tried' while its result's beacons_in_view was 2:
+    the panels were seen, none was measured."""
+    frame = two_panel_frame()
+    drawn = _texts_drawn(monkeypatch)
+    result, diagnostics, _ = _annotated(frame, TWO_PANELS)
+    assert result.reason is FailureReason.unknown_beacon and result.beacons_in_view == 2 and not diagnostics.panels
+    captions = [text for text, _, _ in drawn if text.startswith("frame pixels")]
+    assert len(captions) == 1 and captions[0].endswith("; 2 panels in view, 0 measured"), captions
+    drawn.clear()
+    _annotated(read_fixture(FIXTURE))  # one panel's map: its path counts no blobs, it measured one
+    assert [text for text, _, _ in drawn if text.startswith("frame pixels")][0].endswith("; 1 panel measured")
+
+
+def test_the_label_of_a_panel_at_the_frames_top_is_whole_and_off_the_panel(tmp_path, monkeypatch):
+    """Issue 31: at quarter scale a panel cut by the frame's top edge had its label drawn over it, cut off."""
+    stem = tmp_path / "top"
+    assert main(["render", str(stem), "--scale", "0.25", "--position", "0", "0.6", "0"]) == 0
+    frame = read_fixture(stem.with_suffix(".json"))
+    drawn = _texts_drawn(monkeypatch)
+    result, diagnostics, _ = _annotated(frame)
+    assert result.ok and diagnostics.panels[0].cut and diagnostics.panels[0].contour_px[:, 1].min() == 0
+    [(text, (x, y), (height, width))] = [entry for entry in drawn if entry[0] == "beacon 0"]
+    (text_width, text_height), below = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)
+    assert x >= 0 and x + text_width <= width and y - text_height >= 0 and y + below <= height
+    part = enlarged_part(diagnostics.panels, result, frame.pixels.shape[::-1])
+    scale = display_scale(part[2] - part[0], part[3] - part[1])
+    [sight] = diagnostics.panels
+    panel_y = display_px(np.vstack([sight.contour_px, sight.outline_px]), part, scale)[:, 1]  # to the frame's edge
+    assert y - text_height > panel_y.max() or y + below < panel_y.min()  # beside the panel, not over it

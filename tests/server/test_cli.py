@@ -5,6 +5,7 @@ import json
 import server.locator
 from lumipose_cli.main import main
 from shared_schemas import FrameKind
+from shared_schemas.captures import bursts_in_upload_order
 from simulator.fixtures import write_fixture
 from tests.helpers import CALIBRATED, FRONT, ROOM, calibrated_lens_frame, dark_frame
 
@@ -41,6 +42,10 @@ def test_locate_prints_an_outline_fix_which_has_no_ambiguity_ratio(tmp_path, cap
     assert "ambiguity ratio n/a" in out and "pose from the visible outline" in out
 
 
+def _kind(name: str) -> FrameKind:
+    return FrameKind.id if name.endswith("_id.json") else FrameKind.pose
+
+
 def test_the_quickstart_walk_does_not_name_a_panel_after_stripes_outside_the_map(tmp_path, capsys):
     # docs/quickstart.md's walk: the fifth capture's ID frames read as 74 (the map holds 17, 42, 99, 200);
     # they were called confident, the track's 42 taken and nothing said
@@ -51,8 +56,9 @@ def test_the_quickstart_walk_does_not_name_a_panel_after_stripes_outside_the_map
     # exit 1: the fourth capture's cut panel is refused shape_mismatch (a walking frame's smear leaves 93 % of
     # its outline within 4 sigma, the shape test asks 97 %: a false refusal, docs/reliability.md)
     assert main(["locate", *frames, "--map", str(tmp_path / "map.json"), "--device", "phone", "--json"]) in (0, 1)
-    results = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
-    poses = [r for r, name in zip(results, frames, strict=True) if name.endswith("_pose.json")]
+    results = [json.loads(line) for line in capsys.readouterr().out.splitlines()]  # in the order used
+    used = [frames[i] for capture in bursts_in_upload_order([_kind(name) for name in frames]) for i in capture]
+    poses = [r for r, name in zip(results, used, strict=True) if name.endswith("_pose.json")]
     assert sum(r["ok"] for r in poses) >= 4, [r.get("reason") for r in poses]
     # (with the fourth capture refused, the fifth's ID frames no longer read as 74: docs/vlc.md has that
     # case as it was; the decoder's own tests hold an out-of-map code never confident)
@@ -84,4 +90,4 @@ def test_an_unreadable_frame_moves_no_frame_into_another_capture(tmp_path, capsy
         (FrameKind.id, 3),
     ]
     lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
-    assert len(lines) == 4 and lines[2]["error"] == "bad_frame"
+    assert len(lines) == 4 and lines[3]["error"] == "bad_frame"  # printed as used: id A, pose A, id B, pose B

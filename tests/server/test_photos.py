@@ -180,16 +180,18 @@ def test_fov_takes_a_profile_name_or_file(capsys):
 def test_photo_over_http_with_a_profile_name(server_url, capsys, tmp_path):
     photo = tmp_path / "photo.jpg"
     photo.write_bytes(jpeg(upright_frame()))  # no EXIF camera: the profile comes from the query
-    assert main(["client", "--url", server_url, "locate", str(photo), "--profile", "xiaomi-mi8-rear"]) == 0
+    assert main(["client", "--url", server_url, "locate", str(photo), "--profile", "xiaomi-mi8-rear", "--json"]) == 0
     assert_near_truth(json.loads(capsys.readouterr().out), 0.005)
     exif = tmp_path / "exif.jpg"
     exif.write_bytes(jpeg(np.ascontiguousarray(np.rot90(upright_frame())), make="Xiaomi", model="MI 8", orientation=6))
-    assert main(["client", "--url", server_url, "locate", str(exif)]) == 0
+    assert main(["client", "--url", server_url, "locate", str(exif), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert_near_truth(result, 0.005)
     assert result["camera_used"]["source"] == "exif_profile" and "EXIF orientation 6" in result["camera_used"]["detail"]
     assert main(["client", "--url", server_url, "locate", str(photo)]) == 2
-    assert "?profile=" in capsys.readouterr().err  # the service's message names its query parameters
+    # the command's message names its flags (issue 31); the API's own names its query parameters (below)
+    error = capsys.readouterr().err
+    assert "pass --profile ID (known: " in error and " or --camera fx,fy,cx,cy" in error and "?" not in error, error
     truncated = tmp_path / "truncated.jpg"
     truncated.write_bytes(photo.read_bytes()[:2000])
     assert main(["client", "--url", server_url, "locate", str(truncated), "--profile", "xiaomi-mi8-rear"]) == 2
@@ -342,9 +344,14 @@ def test_client_locate_photo_keeps_its_options(server_url, capsys, tmp_path):
     photo.write_bytes(jpeg(upright_frame(), make="Xiaomi", model="MI 8"))
     picture = tmp_path / "seen.png"
     url = ["client", "--url", server_url, "locate", str(photo)]
-    assert main([*url, "--annotate", str(picture), "--device", "phone-1"]) == 0
-    assert_near_truth(json.loads(capsys.readouterr().out), 0.005)
-    assert Image.open(picture).format == "PNG"
+    assert main([*url, "--annotate", str(picture), "--device", "phone-1", "--json"]) == 0
+    captured = capsys.readouterr()
+    assert_near_truth(json.loads(captured.out), 0.005)
+    assert Image.open(picture).format == "PNG" and captured.err == f"picture: {picture}\n"  # as `locate` says
+    assert main([*url, "--annotate", str(picture)]) == 0  # the summary, as `lumipose locate PHOTO` prints it
+    assert "focal uncertainty 1.5 %, about " in capsys.readouterr().out  # the fix's distance from the map
+    assert main([*url, "--annotate", str(tmp_path / "seen.jpg")]) == 2  # not PNG bytes under a JPEG's name
+    assert "--annotate" in capsys.readouterr().err and not (tmp_path / "seen.jpg").exists()
     assert main([*url, "--beacon-id", "200", "--json"]) == 2
     assert json.loads(capsys.readouterr().out)["field"] == "beacon_id"
     profile = tmp_path / "mine.json"

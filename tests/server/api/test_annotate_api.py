@@ -67,6 +67,7 @@ def test_the_client_and_its_command_line_write_the_picture(server_url, client, f
     answer = client.locate(data, meta, annotate=True)
     assert isinstance(answer, AnnotatedResult) and answer.result.ok and _image(answer.png).ndim == 3
     picture = tmp_path / "seen.png"
-    assert main(["client", "--url", server_url, "locate", str(FIXTURE), "--annotate", str(picture)]) == 0
-    assert json.loads(capsys.readouterr().out)["ok"]
+    assert main(["client", "--url", server_url, "locate", str(FIXTURE), "--annotate", str(picture), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["ok"] and captured.err == f"picture: {picture}\n"  # as `lumipose locate` says
     assert _image(picture.read_bytes()).shape[0] > 500
