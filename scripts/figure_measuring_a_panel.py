@@ -14,8 +14,8 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.patches import Circle, FancyBboxPatch, Rectangle  # noqa: E402
+import matplotlib.pyplot as plt
+from matplotlib.patches import Circle, FancyBboxPatch, Rectangle
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures" / "measuring-a-panel.png"
 SIDE_M, RADIUS_M = 0.6, 0.02

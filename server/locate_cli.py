@@ -182,8 +182,9 @@ def read_truth(path: Path, frame_count: int):
     except ValidationError as error:
         problem = error.errors()[0]
         where = ".".join(map(str, problem["loc"])) or "the file"
-        raise BadInput(f"{path} is not a pose (position_m, rotation_wc): {where}: {problem['msg']}",
-                       field="truth") from None
+        raise BadInput(
+            f"{path} is not a pose (position_m, rotation_wc): {where}: {problem['msg']}", field="truth"
+        ) from None
 
 
 def read_profiles(values: list[str]):

@@ -67,7 +67,7 @@ def same_line(quoted: str, printed: str) -> bool:
     words = _NUMBER.split(quoted)
     if words != _NUMBER.split(printed):
         return False
-    for after, a, b in zip(words[1:], _NUMBER.findall(quoted), _NUMBER.findall(printed)):
+    for after, a, b in zip(words[1:], _NUMBER.findall(quoted), _NUMBER.findall(printed), strict=True):
         if after.startswith(" ms"):
             continue
         last_digit = 10.0 ** -len(a.partition(".")[2]) if "." in a else 0.0
@@ -206,3 +206,40 @@ def test_quoted_lines_are_compared_by_words_and_numbers():
     assert same_line("quality   75.8 ms", "quality   1090.1 ms")
     assert not same_line("beacon 17", "beacon 42")
     assert missing_lines("a 1\nc 3", "a 1\nb 2\nc 3") == [] and missing_lines("c 3\na 1", "a 1\nc 3") == ["a 1"]
+
+
+def test_the_sample_photo_is_a_phone_jpeg_made_by_the_renderer_with_its_truth_beside_it():
+    from PIL import Image
+
+    from simulator.sample_photo import sample_photo
+
+    photo, truth_path = ROOT / "samples" / "panel-photo.jpg", ROOT / "samples" / "panel-photo.truth.json"
+    assert photo.stat().st_size < 300_000
+    with Image.open(photo) as image:
+        exif, stored = image.getexif(), image.size
+    shot = exif.get_ifd(0x8769)
+    assert (exif[0x010F], exif[0x0110], exif[0x0112]) == ("Xiaomi", "MI 8", 6)  # make, model, orientation
+    assert float(shot[0x920A]) == 4.22 and stored == (1008, 756) == (shot[0xA002], shot[0xA003])  # landscape rows
+    data, truth = sample_photo()  # what `python -m simulator.sample_photo` writes, again
+    assert json.loads(truth_path.read_text()) == json.loads(json.dumps(truth))
+    with Image.open(io.BytesIO(data)) as again, Image.open(photo) as shipped:
+        assert again.size == shipped.size and again.getexif() == shipped.getexif()
+
+
+def test_a_wrong_truth_file_is_bad_input_naming_it(fresh_folder, capsys):
+    (fresh_folder / "pose.json").write_text('{"position_m": [0, 0]}')
+    assert main(["locate", "samples/panel-photo.jpg", "--map", "test-bench", "--truth", "pose.json"]) == 2
+    assert "pose.json is not a pose (position_m, rotation_wc): position_m" in capsys.readouterr().err
+    assert main(["locate", "samples/panel-photo.jpg", "samples/panel-photo.jpg", "--truth",
+                 "samples/panel-photo.truth.json"]) == 2
+    assert "--truth is one frame's pose" in capsys.readouterr().err
+
+
+def test_the_measuring_figure_is_drawn_by_its_script(tmp_path):
+    import runpy
+
+    assert "](figures/measuring-a-panel.png)" in QUICKSTART.read_text()
+    assert (ROOT / "docs" / "figures" / "measuring-a-panel.png").is_file()
+    draw = runpy.run_path(str(ROOT / "scripts" / "figure_measuring_a_panel.py"))["draw"]
+    draw(tmp_path / "figure.png")
+    assert (tmp_path / "figure.png").stat().st_size > 20_000
