@@ -155,7 +155,7 @@ def follow(path: str, folder: Path, monkeypatch, servers) -> Reader:
         if block.path != path:
             continue
         if block.language == "json":
-            names = re.findall(r"save it as `([^`]+\.json)`", block.before)
+            names = re.findall(r"save (?:it )?as `([^`]+\.json)`", block.before)
             assert names, f"the page does not say where to save the JSON block:\n{block.text}"
             (folder / names[-1]).write_text(block.text)
         elif block.language == "bash":
@@ -179,7 +179,7 @@ def fresh_folder(tmp_path, monkeypatch):
 
 
 def test_the_map_the_page_shows_is_the_one_the_sample_photo_was_rendered_for():
-    (block,) = [block for block in page_blocks() if block.language == "json"]
+    (block,) = [block for block in page_blocks() if block.language == "json" and block.path == "researcher"]
     assert BeaconMap.model_validate(json.loads(block.text)) == MY_PANEL
 
 
