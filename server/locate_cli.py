@@ -59,6 +59,13 @@ def add_locate_command(commands) -> None:
         action="store_true",
         help="print the contract's result (or error) as JSON; several frames: one result per line (JSON lines)",
     )
+    parser.add_argument(
+        "--truth",
+        type=Path,
+        metavar="JSON",
+        help="the camera's true pose (position_m, rotation_wc in the map frame, as samples/*.truth.json): print "
+        "the fix's error against it, as for a rendered frame (one frame only; default: the frame's own, if any)",
+    )
     parser.add_argument("--square-corners", action="store_true", help="the paper's square-corner path")
     parser.add_argument("--no-subpixel", action="store_true", help="corners from the polygon stage only")
     parser.add_argument(
@@ -93,9 +100,12 @@ def run_locate(args) -> int:
         check_beacon_id(args.beacon_id, beacon_map)
         pictures = annotation_paths(args.annotate, args.frames)
         camera = None if args.camera is None else read_camera(args.camera)  # its fault is the call's, not a frame's
+        truth = None if args.truth is None else read_truth(args.truth, len(args.frames))
     except BadInput as problem:
         return report_bad_input(problem, as_json=args.json)
     frames, unreadable = read_frames(args.frames, profiles, profile, camera)
+    if truth is not None and frames:
+        frames[0] = replace(frames[0], meta=frames[0].meta.model_copy(update={"ground_truth": truth}))
     if len(args.frames) == 1 and unreadable:  # one frame: its fault is the call's
         return report_bad_input(unreadable[0], as_json=args.json)
     options = LocateOptions(pipeline=pipeline_options(args))
@@ -153,6 +163,26 @@ def read_camera(camera_text: str):
         return parse_camera_arg(camera_text)
     except ValueError as error:
         raise BadInput(str(error), field="camera") from None
+
+
+def read_truth(path: Path, frame_count: int):
+    """`--truth`'s pose (a GroundTruth: position_m, rotation_wc; other keys ignored), or BadInput naming the fault."""
+    from pydantic import ValidationError
+
+    from shared_schemas.models import GroundTruth
+
+    if frame_count != 1:
+        raise BadInput("--truth is one frame's pose: give one frame with it", field="truth")
+    try:
+        return GroundTruth.model_validate_json(path.read_bytes())
+    except OSError as error:
+        raise BadInput(f"cannot read the truth {path}: {error.strerror or error}", field="truth") from None
+    except ValidationError as error:
+        problem = error.errors()[0]
+        where = ".".join(map(str, problem["loc"])) or "the file"
+        raise BadInput(
+            f"{path} is not a pose (position_m, rotation_wc): {where}: {problem['msg']}", field="truth"
+        ) from None
 
 
 def read_profiles(values: list[str]):

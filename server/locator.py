@@ -33,10 +33,12 @@ from server.ingest import LumaFrame
 from server.options import LocateOptions
 from server.outcomes import Refusal, located, refused, with_camera
 from server.pipeline import locate_beacon
+from server.plausibility import odd_fix_warning
 from server.rooms import locate_in_room
 from server.tone import linearized
 from server.tracking.devices import DeviceSessions
 from shared_schemas import BeaconIdSource, BeaconMap, FailureReason, LocateResult
+from shared_schemas.models import MAX_WARNINGS
 
 LOG = logging.getLogger("lumipose.pipeline")
 # What the stages' arithmetic raises on numbers it cannot handle: OpenCV's checks, a singular or
@@ -63,6 +65,9 @@ def locate(
     """
     try:
         result = _dispatch(frame, beacon_map, options, beacon_id, device_id, devices)
+        odd = odd_fix_warning(result, beacon_map)
+        if odd is not None:
+            result = result.model_copy(update={"warnings": [*result.warnings, odd][-MAX_WARNINGS:]})
         # every result says which intrinsics it rests on (a photo's may be a rough EXIF guess): a refused
         # photo's user needs it most, to see whether the camera was the trouble
         return with_camera(result, frame.camera_used)
