@@ -1,10 +1,11 @@
 """Whether a fix is physically odd for its map: a warning a user needs, not a refusal.
 
 One rule, for a map whose panels all hang above its z = 0 (the floor, or the phone's height: the map frame of
-docs/quickstart.md): a camera well below z = 0 sees its panel from farther than the map allows. The usual cause
+docs/quickstart.md): a camera farther below z = 0 than its panel hangs above it sees the panel from more than
+twice as far as z = 0 is, which no one holding a phone under a ceiling does, while a phone held lower than z = 0
+(the floor's 0.3 m under a bench's grid, the knee under a z = 0 taken at the hand) stays within it. The usual cause
 is the panel's size: a fix's distance scales with it (a 0.6 m panel in the map for a 0.174 m one in the photo puts
-the camera 3.45 times as far), as it does with the focal length. "Well below" is a share of that distance
-(`BELOW_ZERO_SHARE`), since both causes move the fix along the ray in proportion to it.
+the camera 3.45 times as far), as it does with the focal length.
 """
 
 from __future__ import annotations
@@ -13,22 +14,19 @@ import math
 
 from shared_schemas import Beacon, BeaconMap, LocateResult
 
-# a focal length or panel size 10 % off moves the fix by 10 % of its distance; a 1.5 % datasheet focal stays well
-# inside, and a camera held somewhat below the map's z = 0 too
-BELOW_ZERO_SHARE = 0.10
-
 
 def odd_fix_warning(result: LocateResult, beacon_map: BeaconMap) -> str | None:
-    """The warning for a fix below z = 0 of a map whose panels are all above it, else None."""
+    """The warning for a fix farther below z = 0 than its panel hangs above it, in a map whose panels are all
+    above z = 0; else None."""
     if not result.ok or result.position_m is None or result.beacon_id is None:
         return None
     beacon = beacon_map.beacon(result.beacon_id)
     if beacon is None or min(b.center_m[2] for b in beacon_map.beacons) <= 0:
         return None
     depth_m = -result.position_m[2]
-    distance_m = math.dist(result.position_m, beacon.center_m)
-    if depth_m <= BELOW_ZERO_SHARE * distance_m:
+    if depth_m <= beacon.center_m[2]:
         return None
+    distance_m = math.dist(result.position_m, beacon.center_m)
     return (
         f"the camera is {depth_m:.2f} m below the map's z = 0, {distance_m:.2f} m from panel {beacon.id} that the map "
         f"hangs {beacon.center_m[2]:.2f} m above it: a fix's distance scales with the panel's size, so check "

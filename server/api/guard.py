@@ -48,6 +48,9 @@ class GuardedRoute(APIRoute):
         handler = super().get_route_handler()
         needs_key = any(getattr(d, "dependency", None) is require_api_key for d in self.dependencies)
         takes_frame = any(d.call in (frame_upload, board_upload, photos_body) for d in self.dependant.dependencies)
+        skipped = [d for d in self.dependencies if getattr(d, "dependency", None) is not require_api_key]
+        if self.endpoint in _READERS and skipped:  # its reader would skip them silently: refuse at start instead
+            raise TypeError(f"{self.path}: a route answered directly cannot have route dependencies {skipped}")
 
         async def guarded(request: Request) -> Response:
             services = request.app.state.services

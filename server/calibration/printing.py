@@ -97,9 +97,11 @@ def page_layout(spec: BoardSpec, paper: str, lines: list[str]) -> PageLayout:
         for beside, band in ((True, BAND_BESIDE_MM), (False, BAND_UNDER_MM)):
             spare_w, spare_h = width - board_w - 2 * PAGE_MARGIN_MM, height - board_h - band - 2 * PAGE_MARGIN_MM
             left = PAGE_MARGIN_MM + spare_w / 2
-            room_mm = width - PAGE_MARGIN_MM - left - (CHECK_BAR_MM + 4.0) * beside
+            # beside the bar the words start after it; under it they take the page's width (a small board's
+            # own width would shrink them below MIN_FONT_PT)
+            room_mm = width - PAGE_MARGIN_MM - left - CHECK_BAR_MM - 4.0 if beside else width - 2 * PAGE_MARGIN_MM
             font_pt = min(MAX_FONT_PT, room_mm * PT_PER_MM / widest_pt)
-            if spare_w >= 0 and spare_h >= 0 and (font_pt >= MIN_FONT_PT or not beside):
+            if spare_w >= 0 and spare_h >= 0 and font_pt >= MIN_FONT_PT:
                 return PageLayout(paper, width, height, left, PAGE_MARGIN_MM + spare_h / 2, beside, font_pt)
     raise ValueError(
         f"a {board_w:.1f} x {board_h:.1f} mm board does not fit on {paper_name(paper)} ({short:g} x {long:g} mm) "
@@ -224,7 +226,9 @@ def write_pdf(spec: BoardSpec, path: Path, paper: str) -> PageLayout:
     under_bar = bar_top + CHECK_BAR_HEIGHT_MM + 2.6
     canvas.drawString(left * PT_PER_MM, baseline(under_bar), "0")
     canvas.drawRightString((left + CHECK_BAR_MM) * PT_PER_MM, baseline(under_bar), f"{CHECK_BAR_MM:g} mm")
-    text_left, text_top = (left + CHECK_BAR_MM + 4.0, bar_top + 1.6) if layout.words_beside else (left, under_bar + 3)
+    text_left, text_top = (
+        (left + CHECK_BAR_MM + 4.0, bar_top + 1.6) if layout.words_beside else (PAGE_MARGIN_MM, under_bar + 3)
+    )
     for k, line in enumerate(lines):
         canvas.drawString(text_left * PT_PER_MM, baseline(text_top + k * 2.8), line)
     canvas.showPage()

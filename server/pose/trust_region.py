@@ -81,6 +81,8 @@ def trust_region_fit(
     from `x0` with `max_nfev` (only the cap stopped the first one, and from there the two are
     the same loop; the one difference, an SVD of the same Jacobian done again, gives the same
     factors), without its first `pause_nfev` evaluations done twice."""
+    if max_nfev < 1 or (pause_nfev is not None and pause_nfev < 1):  # as least_squares refuses them: no cap, no end
+        raise ValueError(f"max_nfev and pause_nfev must be >= 1, not {max_nfev} and {pause_nfev}")
     x0 = np.atleast_1d(x0).astype(float)
     x_scale = np.asarray(x_scale, dtype=float)
     if not np.all(np.isfinite(f0)):

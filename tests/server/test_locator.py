@@ -167,3 +167,17 @@ def test_the_options_for_a_map_are_made_once_for_the_same_objects_and_anew_for_o
     assert made.options(options, strict).pipeline.outline_fit.max_sigma_m == 0.001
     assert made.options(LocateOptions(), beacon_map) is not first  # equal options, another object
     assert made.options(options, beacon_map) is not first  # the first pair was dropped: two kept
+
+
+def test_a_requests_own_options_take_no_place_among_the_kept_ones():
+    from dataclasses import replace
+
+    from server.diagnostics import Diagnostics
+    from server.locator import _OptionsForMap
+
+    made, options, beacon_map = _OptionsForMap(keep=2), LocateOptions(), load_map()
+    first = made.options(options, beacon_map)
+    for _ in range(3):  # annotated requests, each with its own diagnostics
+        watched = replace(options, pipeline=replace(options.pipeline, diagnostics=Diagnostics()))
+        assert made.options(watched, beacon_map).pipeline.diagnostics is watched.pipeline.diagnostics
+    assert made.options(options, beacon_map) is first  # still kept

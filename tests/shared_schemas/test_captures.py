@@ -43,3 +43,22 @@ def test_annotation_paths_one_picture_per_frame_and_no_two_on_one_file():
     with pytest.raises(BadInput) as refused:
         annotation_paths(Path("seen.png"), [Path("a/x.json"), Path("b/x.json")])
     assert refused.value.body.field == "annotate" and "a/x.json and b/x.json" in str(refused.value)
+
+
+def test_a_walks_line_carries_the_results_warnings(capsys):
+    from shared_schemas import LocateResult
+    from shared_schemas.captures import print_line
+
+    result = LocateResult(ok=True, position_m=[0.1, 0.2, -2.4], beacon_id=0, warnings=["the camera is 2.40 m below"])
+    print_line("f.json", result, None)
+    (line,) = capsys.readouterr().out.splitlines()  # one line a frame, its warnings on it
+    assert line.endswith("beacon 0  warning: the camera is 2.40 m below")
+
+
+def test_a_summary_without_timings_prints_and_does_not_crash(capsys):
+    from shared_schemas import LocateResult
+    from shared_schemas.captures import print_result
+
+    result = LocateResult(ok=True, position_m=[0.1, 0.2, 0.0], yaw_pitch_roll_deg=[0.0, 0.0, 0.0], beacon_id=0)
+    print_result(result, None, None)  # timing_ms defaults to {} in the contract
+    assert "time n/a" in capsys.readouterr().out

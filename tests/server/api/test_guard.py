@@ -1,5 +1,6 @@
 """Every API route is guarded: write routes check their key before any body is read."""
 
+import pytest
 import time
 
 import httpx
@@ -67,3 +68,16 @@ def test_the_locate_route_s_direct_reader_reads_every_parameter_fastapi_would():
     assert {(p.where, p.alias) for params in direct for p in params.values()} == by_fastapi
     assert [name for name in inspect.signature(locate_frame).parameters if name not in direct[2]] == [
         "request", "services", "upload", "query"]
+
+
+def test_a_route_answered_directly_refuses_route_dependencies_its_reader_would_skip():
+    from fastapi import APIRouter, Depends
+
+    from server.api.guard import GuardedRoute
+    from server.api.routes.locate import locate_frame
+
+    def audit() -> None: ...
+
+    router = APIRouter(route_class=GuardedRoute)
+    with pytest.raises(TypeError, match="cannot have route dependencies"):  # at the app's start, not a request
+        router.add_api_route("/v1/locate", locate_frame, methods=["POST"], dependencies=[Depends(audit)])

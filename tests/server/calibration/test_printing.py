@@ -127,3 +127,16 @@ def test_the_docs_quote_what_calibrate_board_prints(tmp_path, capsys, monkeypatc
     monkeypatch.chdir(tmp_path)
     assert main(["calibrate", "board", "--out", "board.pdf"]) == 0
     assert capsys.readouterr().out.splitlines() == quoted
+
+
+@pytest.mark.parametrize("paper", ["a4", "letter"])
+def test_a_small_boards_words_stay_readable(tmp_path, capsys, paper):
+    # a 15 mm board centred on the page left its words the board's own width: 4.8 / 4.4 pt before
+    args = ["--paper", paper, "--squares", "3x3", "--square-mm", "5", "--legacy", "--first-marker", "17", "--inverted"]
+    out, _, _ = _board(tmp_path, capsys, *args)
+    with pdfplumber.open(out) as pdf:
+        (page,) = pdf.pages
+        chars = page.chars
+    assert min(char["size"] for char in chars) >= 5
+    assert min(char["x0"] for char in chars) >= 5 * PT_PER_MM - 1e-6  # within the page's margins
+    assert max(char["x1"] for char in chars) <= page.width - 5 * PT_PER_MM + 1e-6

@@ -57,3 +57,9 @@ def test_a_paused_fit_that_goes_on_is_the_fit_without_the_pause_and_one_left_sto
         np.testing.assert_array_equal(left.x, short.x)
         assert (left.cost, left.status, left.nfev) == (short.cost, short.status, short.nfev)
         assert math.isfinite(whole.cost)
+
+
+def test_a_cap_that_could_never_stop_the_fit_is_refused():
+    for caps in ({"max_nfev": 0}, {"max_nfev": 60, "pause_nfev": 0}):
+        with pytest.raises(ValueError, match="max_nfev"):
+            trust_region_fit(lambda x: x, lambda x: np.eye(1), np.ones(1), np.ones(1), None, np.ones(1), **caps)
