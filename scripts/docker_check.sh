@@ -30,7 +30,7 @@ for _ in $(seq 60); do
   sleep 0.5
 done
 "$work/venv/bin/python" -c "import urllib.request; urllib.request.urlopen($healthcheck, timeout=2)"
-"$work/venv/bin/lumipose" client --url "http://127.0.0.1:$port" locate tests/fixtures/bench_1m.json > "$work/result.json"
+"$work/venv/bin/lumipose" client --url "http://127.0.0.1:$port" locate tests/fixtures/bench_1m.json --json > "$work/result.json"
 grep -q '"ok": true' "$work/result.json"
 # the operator's page ships in the package: every file of the repository's page is installed and served
 "$work/venv/bin/python" -I - "http://127.0.0.1:$port" server/dashboard/static <<'PY'
