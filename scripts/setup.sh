@@ -9,3 +9,6 @@ PYTHON="${PYTHON:-$(command -v python3.11 || command -v python3)}"
 .venv/bin/python -m pip install --quiet --upgrade pip
 EXTRAS="${1:-test}"
 .venv/bin/python -m pip install --quiet -e ".[$EXTRAS]"
+# numba compiles the pipeline's kernels once into __pycache__: here, not in a user's first `lumipose locate`
+echo "setup: compiling the pipeline's kernels (numba, once: about 15 s; cached afterwards)"
+.venv/bin/python -c "from server.pipeline import warm_kernels; warm_kernels()"

@@ -46,7 +46,7 @@ from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.pose.consistency import ConsistencyRules, check_fit
 from server.pose.ordering import OrderedCorners, order_corners
-from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
+from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines, warm_kernel
 from server.pose.shape import ShapeRules, shape_refusal, shape_test
 from server.pose.solve import GravityMode, PoseRules, PoseSolution, side_errors, solve_pose
 from server.vision.binarize import Levels, blur, threshold
@@ -56,6 +56,7 @@ from server.vision.polygon import PolygonRules, Quad, intersect_lines, rounded_s
 from server.vision.readout import undo_readout_turn
 from server.vision.roi import FrameView, Roi, RoiRules, brightest_blob_px, find_roi
 from server.vision.subpixel import EdgeFit, EdgeRules, refine_edges
+from server.vision.subpixel import warm_kernels as warm_edge_kernels
 from shared_schemas import Beacon, BeaconIdSource, FailureReason, ToneCurve
 
 # The app asks for a linear tone curve (docs/android.md); the edge model assumes one.
@@ -766,3 +767,11 @@ def _distorted(points: np.ndarray, matrix: np.ndarray, distortion: np.ndarray | 
     normalized = np.column_stack([points, np.ones(len(points))]) @ np.linalg.inv(matrix).T
     projected, _ = cv2.projectPoints(normalized, np.zeros(3), np.zeros(3), matrix, distortion)
     return projected.reshape(-1, 2)
+
+
+def warm_kernels() -> None:
+    """Load the pipeline's compiled kernels (numba; on a cold cache it compiles them: ~15 s CPU, then cached in
+    `__pycache__`): the service at its start (`server.api.main`), setup once (`scripts/setup.sh`), so that no
+    request and no first `lumipose locate` waits for them."""
+    warm_edge_kernels()  # every frame's corners need these
+    warm_kernel()

@@ -22,10 +22,9 @@ from server.api.metrics import Metrics, MetricsMiddleware, StatusWindow
 from server.api.routes import calibrations, health, live, locate, maps, profiles, samples, surveys
 from server.dashboard import STATIC_DIR
 from server.live import LiveBoard
-from server.pose.outline import warm_kernel
+from server.pipeline import warm_kernels
 from server.store import MapBackend, MapStore, ProfileStore, SampleStore
 from server.tracking.devices import Devices, DeviceSessions
-from server.vision.subpixel import warm_kernels as warm_edge_kernels
 from shared_schemas.api import RESULT_HEADER
 
 PICTURES_WAITING = 8  # the live page asks for a few at a time; a flood is refused rather than queued
@@ -36,13 +35,8 @@ async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
     # the sub-pixel stage's and the outline fit's compiled kernels loaded (on a cold cache compiled,
     # seconds) beside the first requests rather than in the first frame; a frame that comes sooner
     # waits for them
-    threading.Thread(target=_warm_kernels, name="warm-kernel", daemon=True).start()
+    threading.Thread(target=warm_kernels, name="warm-kernel", daemon=True).start()
     yield
-
-
-def _warm_kernels() -> None:
-    warm_edge_kernels()  # every frame's corners need these
-    warm_kernel()
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
