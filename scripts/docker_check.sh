@@ -6,7 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-$(command -v python3.11 || command -v python3)}"
 work="$(mktemp -d)"
-trap 'kill "${server:-0}" 2>/dev/null || true; rm -rf "$work"' EXIT
+# the service stopped and waited for before its folder goes: its start-up thread may still be writing numba's cache
+trap 'kill "${server:-0}" 2>/dev/null || true; wait "${server:-0}" 2>/dev/null || true; rm -rf "$work"' EXIT
 
 mkdir -p "$work/src" "$work/data"
 # COPY lines of the build stage: "COPY a b ./" or "COPY dir ./dir"
@@ -19,8 +20,9 @@ done
 "$work/venv/bin/pip" install --quiet "$work/src[redis]"  # the image installs the redis extra
 
 port=$("$PYTHON" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+# the image's environment: its NUMBA_CACHE_DIR too (the installed package is not the service user's to write)
 (cd "$work/data" && LUMIPOSE_HOST=127.0.0.1 LUMIPOSE_PORT=$port LUMIPOSE_DATA_DIR="$work/data" \
-  "$work/venv/bin/lumipose" serve --log-level warning) &
+  NUMBA_CACHE_DIR="$work/numba-cache" exec "$work/venv/bin/lumipose" serve --log-level warning) &
 server=$!
 healthcheck=$(grep -oE "urllib.request.urlopen\('[^']+'" docker/Dockerfile | sed "s/8000/$port/; s/urllib.request.urlopen(//")
 for _ in $(seq 60); do
