@@ -46,7 +46,8 @@ from server.ingest import LumaFrame
 from server.outcomes import Fix, Refusal
 from server.pose.consistency import ConsistencyRules, check_fit
 from server.pose.ordering import OrderedCorners, order_corners
-from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines, warm_kernel
+from server.pose.outline import OutlineFit, OutlineFitRules, fit_outline, fit_outlines
+from server.pose.outline import warm_kernels as warm_outline_kernels
 from server.pose.shape import ShapeRules, shape_refusal, shape_test
 from server.pose.solve import GravityMode, PoseRules, PoseSolution, side_errors, solve_pose
 from server.vision.binarize import Levels, blur, threshold
@@ -774,4 +775,4 @@ def warm_kernels() -> None:
     `__pycache__`): the service at its start (`server.api.main`), setup once (`scripts/setup.sh`), so that no
     request and no first `lumipose locate` waits for them."""
     warm_edge_kernels()  # every frame's corners need these
-    warm_kernel()
+    warm_outline_kernels()

@@ -361,7 +361,7 @@ def _kernels() -> ModuleType:
     return outline_kernel
 
 
-def warm_kernel() -> None:
+def warm_kernels() -> None:
     """Load the compiled kernels (compile them, on a cold cache: seconds) with a fit's own argument
     types, so that the first fit does not wait for them (`server.api.main` at start-up)."""
     square = Beacon(id=1, center_m=[0.0, 0.0, 1.0], side_m=0.2)
